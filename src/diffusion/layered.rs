@@ -1,0 +1,197 @@
+//! Layers combined in the Hankel domain by the adding equations (DJ05; model.md section 6.1):
+//! R12 = R1+ + T1+ R2 T1- / (1 - R2 R1-), applied from the bottom layer up.
+
+use serde::{Deserialize, Serialize};
+
+use super::multipole::{MultipoleTerms, Slab};
+use crate::error::SkinError;
+use crate::numeric::safe_div;
+
+/// Index of refraction of the medium above the stack (air).
+pub const AMBIENT_IOR: f64 = 1.0;
+/// Smallest denominator of the adding equation; it is 1 - R2 R1- with both below 1 unless nothing is absorbed.
+const MIN_ADDING_DENOMINATOR: f64 = 1e-300;
+
+/// One layer's optics at one wavelength (top to bottom in a stack).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Layer {
+    /// Thickness, mm; `f64::INFINITY` for a semi-infinite last layer.
+    pub thickness_mm: f64,
+    /// Absorption coefficient, mm^-1.
+    pub sigma_a_per_mm: f64,
+    /// Reduced scattering coefficient sigma_s (1 - g), mm^-1.
+    pub sigma_s_reduced_per_mm: f64,
+    /// Index of refraction.
+    pub ior: f64,
+}
+
+/// Which transport through the top layer the combination uses (model.md section 6.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Combination {
+    /// R-, T- computed with the layer's boundaries swapped: light returning from below sees the layer from below.
+    #[default]
+    Directional,
+    /// DJ05's published form: the same R1, T1 (those seen from above) for both directions.
+    Symmetric,
+}
+
+/// Largest index of refraction accepted for a layer.
+const MAX_IOR: f64 = 4.0;
+
+impl Layer {
+    fn validate(&self, index: usize, is_last: bool) -> Result<(), SkinError> {
+        let name = format!("layer {index}");
+        let bad = |reason: String| Err(SkinError::invalid(name.clone(), reason));
+        let t = self.thickness_mm;
+        if t.is_nan() || t <= 0.0 || (t.is_infinite() && !is_last) {
+            return bad(format!(
+                "thickness_mm must be > 0 (infinity only for the last layer); got {t}"
+            ));
+        }
+        if !(self.sigma_a_per_mm.is_finite() && self.sigma_a_per_mm >= 0.0) {
+            return bad(format!("sigma_a_per_mm must be finite and >= 0; got {}", self.sigma_a_per_mm));
+        }
+        if !(self.sigma_s_reduced_per_mm.is_finite() && self.sigma_s_reduced_per_mm >= 0.0) {
+            return bad(format!("sigma_s_reduced_per_mm must be finite and >= 0; got {}", self.sigma_s_reduced_per_mm));
+        }
+        if self.sigma_a_per_mm + self.sigma_s_reduced_per_mm <= 0.0 {
+            return bad("sigma_a_per_mm + sigma_s_reduced_per_mm must be > 0 (a layer must interact with light)".into());
+        }
+        if !(self.ior.is_finite() && (1.0..=MAX_IOR).contains(&self.ior)) {
+            return bad(format!("ior must be in [1, {MAX_IOR}]; got {}", self.ior));
+        }
+        Ok(())
+    }
+}
+
+/// A validated stack of layers under air, reduced to slabs seen from above (`down`) and from below (`up`).
+#[derive(Debug, Clone)]
+pub struct LayerStack {
+    down: Vec<Slab>,
+    up: Vec<Slab>,
+}
+
+impl LayerStack {
+    /// Validate the layers (top to bottom) and set up their boundaries. A finite last layer rests on a medium of its
+    /// own index; the medium above the first layer is air.
+    pub fn new(layers: &[Layer]) -> Result<LayerStack, SkinError> {
+        if layers.is_empty() {
+            return Err(SkinError::invalid("layers", "need at least one layer"));
+        }
+        let last = layers.len() - 1;
+        for (i, layer) in layers.iter().enumerate() {
+            layer.validate(i, i == last)?;
+        }
+        let (mut down, mut up) = (Vec::with_capacity(layers.len()), Vec::with_capacity(layers.len()));
+        for (i, layer) in layers.iter().enumerate() {
+            let n_above = if i == 0 { AMBIENT_IOR } else { layers[i - 1].ior };
+            let n_below = if i == last { layer.ior } else { layers[i + 1].ior };
+            let slab = Slab::new(
+                layer.sigma_a_per_mm,
+                layer.sigma_s_reduced_per_mm,
+                layer.thickness_mm,
+                layer.ior / n_above,
+                layer.ior / n_below,
+            );
+            down.push(slab);
+            up.push(slab.flipped());
+        }
+        Ok(LayerStack { down, up })
+    }
+
+    /// The top layer's slab, seen from above.
+    pub fn top(&self) -> &Slab {
+        &self.down[0]
+    }
+
+    /// The slabs, top to bottom, each seen from above.
+    pub fn slabs(&self) -> &[Slab] {
+        &self.down
+    }
+
+    /// `R~12(s) - R~1+(s)`: light that has crossed the top layer at least twice. Its inverse transform is smooth and
+    /// decays fast in s, unlike R~1+ whose real-space form is known (see `hankel`).
+    pub fn below_top_hat(&self, s_per_mm: f64, combination: Combination, terms: MultipoleTerms) -> f64 {
+        if self.down.len() == 1 {
+            return 0.0;
+        }
+        let below = self.reflectance_hat_from(1, s_per_mm, combination, terms);
+        self.bounce_term(0, below, s_per_mm, combination, terms)
+    }
+
+    /// `R~(s)` of the whole stack; `R~(0)` is the total diffuse reflectance.
+    pub fn reflectance_hat(&self, s_per_mm: f64, combination: Combination, terms: MultipoleTerms) -> f64 {
+        self.reflectance_hat_from(0, s_per_mm, combination, terms)
+    }
+
+    /// `R~` of the layers from `first` down (adding equation, bottom up).
+    fn reflectance_hat_from(&self, first: usize, s: f64, combination: Combination, terms: MultipoleTerms) -> f64 {
+        let last = self.down.len() - 1;
+        let mut below = self.down[last].reflectance_hat(s, terms);
+        for i in (first..last).rev() {
+            below = self.down[i].reflectance_hat(s, terms) + self.bounce_term(i, below, s, combination, terms);
+        }
+        below
+    }
+
+    /// `T~i+ R~below T~i- / (1 - R~below R~i-)`: every path that crosses layer i, returns from below and crosses it again.
+    fn bounce_term(&self, i: usize, below: f64, s: f64, combination: Combination, terms: MultipoleTerms) -> f64 {
+        let from_above = &self.down[i];
+        let from_below = match combination {
+            Combination::Directional => &self.up[i],
+            Combination::Symmetric => &self.down[i],
+        };
+        let t_down = from_above.transmittance_hat(s, terms);
+        let t_up = from_below.transmittance_hat(s, terms);
+        let r_up = from_below.reflectance_hat(s, terms);
+        let denominator = (1.0 - below * r_up).max(MIN_ADDING_DENOMINATOR);
+        safe_div(t_down * below * t_up, denominator, 0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn layer(t: f64, sa: f64, ss: f64, n: f64) -> Layer {
+        Layer { thickness_mm: t, sigma_a_per_mm: sa, sigma_s_reduced_per_mm: ss, ior: n }
+    }
+
+    #[test]
+    fn validation_names_layer_and_field() {
+        let e = LayerStack::new(&[layer(f64::INFINITY, 0.1, 1.0, 1.4), layer(1.0, 0.1, 1.0, 1.4)]).unwrap_err();
+        assert!(e.to_string().contains("layer 0") && e.to_string().contains("thickness_mm"), "{e}");
+        let e = LayerStack::new(&[layer(1.0, -0.1, 1.0, 1.4)]).unwrap_err();
+        assert!(e.to_string().contains("sigma_a_per_mm"), "{e}");
+        let e = LayerStack::new(&[layer(1.0, 0.1, f64::NAN, 1.4)]).unwrap_err();
+        assert!(e.to_string().contains("sigma_s_reduced_per_mm"), "{e}");
+        let e = LayerStack::new(&[layer(1.0, 0.1, 1.0, 0.5)]).unwrap_err();
+        assert!(e.to_string().contains("ior"), "{e}");
+        assert!(LayerStack::new(&[]).is_err());
+        assert!(LayerStack::new(&[layer(1.0, 0.0, 0.0, 1.4)]).is_err());
+    }
+
+    /// A very thick slab is the semi-infinite medium.
+    #[test]
+    fn thick_slab_is_semi_infinite() {
+        let thick = LayerStack::new(&[layer(200.0, 0.05, 2.0, 1.4)]).unwrap();
+        let semi = LayerStack::new(&[layer(f64::INFINITY, 0.05, 2.0, 1.4)]).unwrap();
+        for s in [0.0, 0.5, 5.0] {
+            let a = thick.reflectance_hat(s, Combination::Directional, MultipoleTerms::All);
+            let b = semi.reflectance_hat(s, Combination::Directional, MultipoleTerms::All);
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+    }
+
+    /// Two stacked identical index-matched layers are one layer of the summed thickness (the adding equation is exact
+    /// for the image series only approximately, so this holds to the accuracy of diffusion's layer splitting).
+    #[test]
+    fn split_layer_matches_whole() {
+        let whole = LayerStack::new(&[layer(f64::INFINITY, 0.05, 2.0, 1.4)]).unwrap();
+        let split = LayerStack::new(&[layer(0.3, 0.05, 2.0, 1.4), layer(f64::INFINITY, 0.05, 2.0, 1.4)]).unwrap();
+        let a = whole.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
+        let b = split.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
+        assert!(((a - b) / a).abs() < 0.05, "whole {a} split {b}");
+    }
+}

@@ -1,0 +1,39 @@
+//! Diffusion: the multipole slab model, the layer combination and radial profiles (model.md sections 5-6).
+
+pub mod boundary;
+pub mod hankel;
+pub mod layered;
+pub mod multipole;
+
+pub use hankel::{reflectance_profiles, HankelQuadrature};
+pub use layered::{Combination, Layer, LayerStack};
+pub use multipole::{MultipoleTerms, Slab};
+
+use crate::error::SkinError;
+
+/// Total diffuse reflectance and the radial profile (mm^-2) at `radii_mm` of a stack of layers under air, top to bottom,
+/// with the default combination, the whole multipole series and the default quadrature. This exposes the solver alone,
+/// for checks against other solvers.
+pub fn layered_reflectance(layers: &[Layer], radii_mm: &[f64]) -> Result<(f64, Vec<f64>), SkinError> {
+    validate_radii(radii_mm)?;
+    let stack = LayerStack::new(layers)?;
+    let total = stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
+    let profile = reflectance_profiles(
+        std::slice::from_ref(&stack),
+        radii_mm,
+        Combination::Directional,
+        MultipoleTerms::All,
+        &HankelQuadrature::default(),
+    )
+    .pop()
+    .unwrap_or_default();
+    Ok((total, profile))
+}
+
+/// Radii must be finite and >= 0.
+pub fn validate_radii(radii_mm: &[f64]) -> Result<(), SkinError> {
+    if let Some((i, r)) = radii_mm.iter().enumerate().find(|(_, r)| !(r.is_finite() && **r >= 0.0)) {
+        return Err(SkinError::invalid("radii_mm", format!("radii must be finite and >= 0; radii_mm[{i}] = {r}")));
+    }
+    Ok(())
+}

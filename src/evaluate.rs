@@ -1,0 +1,315 @@
+//! The request-driven entry point: parameters and a [`Request`] in, only the requested outputs computed.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::color::{spectral_rgb_weights, spectrum_to_rgb, WavelengthGrid, WorkingSpace};
+use crate::diffusion::{reflectance_profiles, Combination, HankelQuadrature, LayerStack, MultipoleTerms};
+use crate::error::{check_range, SkinError};
+use crate::fit::burley::{fit_burley, fit_frequencies, BurleyFit};
+use crate::fit::random_walk::{random_walk_base_color, random_walk_radius_scale};
+use crate::fit::{SubsurfaceMethod, DEFAULT_METHOD};
+use crate::skin::{skin_layers, SkinModel, SkinParams};
+use crate::surface::{specular_from_oiliness, SpecularParams};
+
+/// Which outputs to compute. Each costs only what it needs: albedo is one transform value per wavelength, the radius
+/// a few dozen, a radial profile an inverse transform per wavelength.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub struct Outputs {
+    /// RGB total diffuse reflectance (Base Color for Christensen-Burley).
+    pub albedo: bool,
+    /// Subsurface Radius (and Base Color) per Cycles method.
+    pub radius: bool,
+    /// RGB radial profile R(r) on the profile grid.
+    pub profile_rgb: bool,
+    /// Radial profile per wavelength.
+    pub profile_spectral: bool,
+    /// Total diffuse reflectance per wavelength.
+    pub spectrum: bool,
+    /// Principled specular inputs from the oiliness.
+    pub specular: bool,
+}
+
+impl Outputs {
+    pub fn all() -> Outputs {
+        Outputs { albedo: true, radius: true, profile_rgb: true, profile_spectral: true, spectrum: true, specular: true }
+    }
+    /// What a material needs: albedo, radius and specular.
+    pub fn material() -> Outputs {
+        Outputs { albedo: true, radius: true, specular: true, ..Outputs::default() }
+    }
+}
+
+/// Radii of radial profiles: `count` log-spaced values from `r_min_mm` to `r_max_mm`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ProfileGrid {
+    pub r_min_mm: f64,
+    pub r_max_mm: f64,
+    pub count: usize,
+}
+
+impl Default for ProfileGrid {
+    /// 0.001 to 20 mm spans dark-skin blue (~0.02 mm wide) to light-skin red tails (model.md 6.2, pitfall 10).
+    fn default() -> Self {
+        ProfileGrid { r_min_mm: 0.001, r_max_mm: 20.0, count: 64 }
+    }
+}
+
+impl ProfileGrid {
+    pub fn radii_mm(&self) -> Vec<f64> {
+        if self.count == 1 {
+            return vec![self.r_min_mm];
+        }
+        let ratio = (self.r_max_mm / self.r_min_mm).ln() / (self.count - 1) as f64;
+        (0..self.count).map(|i| self.r_min_mm * (ratio * i as f64).exp()).collect()
+    }
+}
+
+/// Accuracy settings: every knob that trades time for accuracy.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Accuracy {
+    /// Wavelength step, nm (samples from 380 to 780 nm).
+    pub wavelength_step_nm: f64,
+    /// Image-source pairs of the multipole.
+    pub multipole_terms: MultipoleTerms,
+    /// Radii of radial profiles.
+    pub profile_grid: ProfileGrid,
+    /// Inverse Hankel quadrature of radial profiles.
+    pub hankel: HankelQuadrature,
+    /// Frequencies per decade of the radius fit.
+    pub fit_frequencies_per_decade: f64,
+}
+
+impl Default for Accuracy {
+    fn default() -> Self {
+        Accuracy {
+            wavelength_step_nm: 5.0,
+            multipole_terms: MultipoleTerms::All,
+            profile_grid: ProfileGrid::default(),
+            hankel: HankelQuadrature::default(),
+            fit_frequencies_per_decade: 10.0,
+        }
+    }
+}
+
+impl Accuracy {
+    fn validate(&self) -> Result<(), SkinError> {
+        check_range("wavelength_step_nm", "wavelength step", self.wavelength_step_nm, 0.5, 100.0)?;
+        if let MultipoleTerms::Pairs(n) = self.multipole_terms {
+            check_range("multipole_pairs", "image pairs per side", n as f64, 0.0, 10_000.0)?;
+        }
+        let g = &self.profile_grid;
+        check_range("profile r_min_mm", "smallest profile radius", g.r_min_mm, 1e-6, 1e4)?;
+        check_range("profile r_max_mm", "largest profile radius", g.r_max_mm, g.r_min_mm, 1e4)?;
+        check_range("profile count", "number of profile radii", g.count as f64, 1.0, 100_000.0)?;
+        check_range("hankel gauss_order", "nodes per panel", self.hankel.gauss_order as f64, 2.0, 64.0)?;
+        check_range("hankel refinement", "panel refinement", self.hankel.refinement, 0.1, 100.0)?;
+        check_range("hankel cutoff", "transform cutoff", self.hankel.cutoff, 1e-20, 1e-3)?;
+        check_range("fit_frequencies_per_decade", "fit frequencies per decade", self.fit_frequencies_per_decade, 2.0, 200.0)?;
+        Ok(())
+    }
+}
+
+/// What to compute, how accurately, and with which model choices.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct Request {
+    pub outputs: Outputs,
+    pub accuracy: Accuracy,
+    pub model: SkinModel,
+    pub combination: Combination,
+    pub working_space: WorkingSpace,
+}
+
+impl Request {
+    pub fn new(outputs: Outputs) -> Request {
+        Request { outputs, ..Request::default() }
+    }
+}
+
+/// Base Color and Subsurface Radius for one Cycles subsurface method.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MethodParams {
+    /// Principled Base Color, linear RGB in the request's working space.
+    pub base_color: [f64; 3],
+    /// Principled Subsurface Radius x Subsurface Scale, mm per channel.
+    pub subsurface_radius_mm: [f64; 3],
+    /// The flat-slab albedo Cycles is expected to render with these inputs (equals the model's for Burley; for Random
+    /// Walk, lower where the target is out of the method's reach).
+    pub expected_albedo: [f64; 3],
+}
+
+/// Base Color and radius for every supported method.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Methods {
+    pub burley: MethodParams,
+    pub random_walk: MethodParams,
+}
+
+impl Methods {
+    pub fn get(&self, method: SubsurfaceMethod) -> &MethodParams {
+        match method {
+            SubsurfaceMethod::Burley => &self.burley,
+            SubsurfaceMethod::RandomWalk => &self.random_walk,
+        }
+    }
+}
+
+/// Radial profiles on a radius grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RadialProfile {
+    pub radii_mm: Vec<f64>,
+    /// R(r) per RGB channel, mm^-2 (if requested).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rgb_per_mm2: Option<Vec<[f64; 3]>>,
+    /// R(r) per wavelength: `spectral_per_mm2[k][i]` at wavelength k and radius i, mm^-2 (if requested).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spectral_per_mm2: Option<Vec<Vec<f64>>>,
+}
+
+/// How much work an evaluation did (so callers and tests can see that only what was asked was computed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+pub struct Work {
+    pub wavelengths: usize,
+    /// Hankel-domain reflectance values evaluated (wavelength x frequency).
+    pub transform_samples: usize,
+    /// Radial profiles inverted (one per wavelength).
+    pub radial_profiles: usize,
+}
+
+/// The result of [`evaluate`]; fields not requested are `None`. Serialises to the CLI's stable JSON.
+#[derive(Debug, Clone, Serialize)]
+pub struct Evaluation {
+    pub params: SkinParams,
+    pub color_space: &'static str,
+    pub accuracy: Accuracy,
+    pub model: SkinModel,
+    pub combination: Combination,
+    /// The model's total diffuse reflectance (subsurface only): what a rendered flat slab must show.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub diffuse_reflectance_rgb: Option<[f64; 3]>,
+    pub default_method: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub methods: Option<Methods>,
+    /// The Burley fit per channel (d, radius, edge residual).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radius_fit: Option<[BurleyFit; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub specular: Option<SpecularParams>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelengths_nm: Option<Vec<f64>>,
+    /// Total diffuse reflectance per wavelength.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spectral_reflectance: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub profile: Option<RadialProfile>,
+    pub work: Work,
+    pub seconds: f64,
+}
+
+/// Compute what `request.outputs` asks for, and nothing else.
+pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, SkinError> {
+    let start = Instant::now();
+    request.accuracy.validate()?;
+    validate_model(&request.model)?;
+    let params = SkinParams::new(params.melanin, params.melanin_blend, params.hemoglobin, params.oiliness)?;
+    let out = request.outputs;
+    let acc = &request.accuracy;
+    let (terms, comb) = (acc.multipole_terms, request.combination);
+
+    let needs_layers = out.albedo || out.radius || out.spectrum || out.profile_rgb || out.profile_spectral;
+    let grid = WavelengthGrid::uniform(acc.wavelength_step_nm);
+    let stacks: Vec<LayerStack> = if needs_layers {
+        grid.wavelengths_nm
+            .iter()
+            .map(|&w| LayerStack::new(&skin_layers(&params, &request.model, w)))
+            .collect::<Result<_, _>>()?
+    } else {
+        Vec::new()
+    };
+    let weights = if needs_layers { spectral_rgb_weights(&grid, request.working_space) } else { Vec::new() };
+    let mut work = Work { wavelengths: stacks.len(), ..Work::default() };
+
+    let totals: Vec<f64> = stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect();
+    work.transform_samples += totals.len();
+    let albedo = spectrum_to_rgb(&totals, &weights);
+    let needs_albedo = out.albedo || out.radius;
+
+    let (methods, radius_fit) = if out.radius {
+        let s = fit_frequencies(acc.fit_frequencies_per_decade);
+        let transforms: Vec<Vec<f64>> =
+            stacks.par_iter().map(|st| s.iter().map(|&x| st.reflectance_hat(x, comb, terms)).collect()).collect();
+        work.transform_samples += transforms.len() * s.len();
+        let fits = [0, 1, 2].map(|c| {
+            let normalized: Vec<f64> = (0..s.len())
+                .map(|i| {
+                    let column: Vec<f64> = transforms.iter().map(|t| t[i]).collect();
+                    crate::numeric::safe_div(spectrum_to_rgb(&column, &weights)[c], albedo[c], 0.0)
+                })
+                .collect();
+            fit_burley(&s, &normalized)
+        });
+        (Some(methods_from(albedo, &fits)), Some(fits))
+    } else {
+        (None, None)
+    };
+
+    let profile = if out.profile_rgb || out.profile_spectral {
+        let radii = acc.profile_grid.radii_mm();
+        let spectral = reflectance_profiles(&stacks, &radii, comb, terms, &acc.hankel);
+        work.radial_profiles = spectral.len();
+        let rgb = out.profile_rgb.then(|| {
+            (0..radii.len())
+                .map(|i| spectrum_to_rgb(&spectral.iter().map(|p| p[i]).collect::<Vec<_>>(), &weights))
+                .collect()
+        });
+        Some(RadialProfile { radii_mm: radii, rgb_per_mm2: rgb, spectral_per_mm2: out.profile_spectral.then_some(spectral) })
+    } else {
+        None
+    };
+
+    Ok(Evaluation {
+        params,
+        color_space: request.working_space.name(),
+        accuracy: *acc,
+        model: request.model,
+        combination: comb,
+        diffuse_reflectance_rgb: needs_albedo.then_some(albedo),
+        default_method: DEFAULT_METHOD.name(),
+        methods,
+        radius_fit,
+        specular: out.specular.then(|| specular_from_oiliness(params.oiliness)),
+        wavelengths_nm: (out.spectrum || out.profile_spectral).then(|| grid.wavelengths_nm.clone()),
+        spectral_reflectance: out.spectrum.then_some(totals),
+        profile,
+        work,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Burley takes the albedo and the fitted radius as they are; Random Walk gets a compensated Base Color and a radius
+/// scaled for its wider profile (see `fit::random_walk`).
+fn methods_from(albedo: [f64; 3], fits: &[BurleyFit; 3]) -> Methods {
+    let burley = MethodParams {
+        base_color: albedo,
+        subsurface_radius_mm: fits.map(|f| f.radius_mm),
+        expected_albedo: albedo,
+    };
+    let rw = [0, 1, 2].map(|c| random_walk_base_color(albedo[c]));
+    let random_walk = MethodParams {
+        base_color: rw.map(|r| r.base_color),
+        subsurface_radius_mm: [0, 1, 2].map(|c| fits[c].radius_mm * random_walk_radius_scale(rw[c].base_color)),
+        expected_albedo: rw.map(|r| r.achieved_albedo),
+    };
+    Methods { burley, random_walk }
+}
+
+fn validate_model(m: &SkinModel) -> Result<(), SkinError> {
+    check_range("eumelanin_k_per_mm", "eumelanin constant K_em", m.eumelanin_k_per_mm, 0.0, 1e13)?;
+    check_range("epidermis_thickness_mm", "epidermis thickness", m.epidermis_thickness_mm, 1e-4, 10.0)?;
+    if !(m.dermis_thickness_mm.is_infinite() && m.dermis_thickness_mm > 0.0) {
+        check_range("dermis_thickness_mm", "dermis thickness (or infinity)", m.dermis_thickness_mm, 1e-3, 1e4)?;
+    }
+    Ok(())
+}

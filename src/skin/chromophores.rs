@@ -1,0 +1,91 @@
+//! Absorption spectra of the skin's chromophores, in mm^-1 (DJ2006 eqs. 3-5; model.md section 2).
+
+use std::sync::OnceLock;
+
+use crate::table::SpectralTable;
+
+/// Eumelanin constant `K_em` of DJ2006 eq. 3, in mm^-1 (with wavelength in nm). The printed 6.6e11 is Jacques' cm^-1 value;
+/// every implementation uses 6.6e10 mm^-1 (model.md section 2.1, pitfall 1).
+pub const K_EM_PER_MM: f64 = 6.6e10;
+/// Eumelanin wavelength exponent (DJ2006 eq. 3).
+const EUMELANIN_EXPONENT: f64 = -3.33;
+/// Pheomelanin constant of DJ2006 eq. 4, in mm^-1 (consensus 2.9e14 mm^-1 = 2.9e15 cm^-1; model.md section 2.1).
+pub const K_PM_PER_MM: f64 = 2.9e14;
+/// Pheomelanin wavelength exponent (DJ2006 eq. 4).
+const PHEOMELANIN_EXPONENT: f64 = -4.75;
+/// Oxygenated share of the blood, `gamma` (DJ2006, fixed at 0.75; model.md section 1).
+pub const OXY_FRACTION: f64 = 0.75;
+/// Haemoglobin concentration of whole blood, g/L (Prahl's conversion; model.md section 2.3).
+pub const HEMOGLOBIN_G_PER_L: f64 = 150.0;
+/// Molar mass of haemoglobin, g/mol (Prahl; model.md section 2.3).
+pub const HEMOGLOBIN_G_PER_MOL: f64 = 64_500.0;
+
+const HEMOGLOBIN_CSV: &str = include_str!("../../data/hemoglobin_extinction.csv");
+
+fn hemoglobin_table() -> &'static SpectralTable {
+    static TABLE: OnceLock<SpectralTable> = OnceLock::new();
+    TABLE.get_or_init(|| SpectralTable::parse(HEMOGLOBIN_CSV))
+}
+
+/// `sigma_a_em(lambda)`: eumelanin absorption, mm^-1, with the given `K_em` (DJ2006 eq. 3).
+pub fn sigma_a_eumelanin_per_mm(wavelength_nm: f64, k_em_per_mm: f64) -> f64 {
+    k_em_per_mm * wavelength_nm.powf(EUMELANIN_EXPONENT)
+}
+
+/// `sigma_a_pm(lambda)`: pheomelanin absorption, mm^-1 (DJ2006 eq. 4).
+pub fn sigma_a_pheomelanin_per_mm(wavelength_nm: f64) -> f64 {
+    K_PM_PER_MM * wavelength_nm.powf(PHEOMELANIN_EXPONENT)
+}
+
+/// `sigma_a_baseline(lambda)`: melanin- and blood-free tissue absorption, mm^-1 (DJ2006 eq. 5; Jacques 1998 divided by 10).
+pub fn sigma_a_baseline_per_mm(wavelength_nm: f64) -> f64 {
+    0.0244 + 8.53 * (-(wavelength_nm - 154.0) / 66.2).exp()
+}
+
+/// Whole-blood absorption from a decadic molar extinction in cm^-1/M: ln(10) eps c / M, then /10 for mm^-1 (model.md 2.3).
+fn blood_sigma_a_per_mm(extinction_per_cm_per_molar: f64) -> f64 {
+    std::f64::consts::LN_10 * extinction_per_cm_per_molar * (HEMOGLOBIN_G_PER_L / HEMOGLOBIN_G_PER_MOL) / 10.0
+}
+
+/// `sigma_a_oxy(lambda)`: absorption of fully oxygenated whole blood, mm^-1 (Prahl's HbO2 table, linearly interpolated).
+pub fn sigma_a_oxy_blood_per_mm(wavelength_nm: f64) -> f64 {
+    blood_sigma_a_per_mm(hemoglobin_table().interpolate(0, wavelength_nm))
+}
+
+/// `sigma_a_deoxy(lambda)`: absorption of fully deoxygenated whole blood, mm^-1 (Prahl's Hb table, linearly interpolated).
+pub fn sigma_a_deoxy_blood_per_mm(wavelength_nm: f64) -> f64 {
+    blood_sigma_a_per_mm(hemoglobin_table().interpolate(1, wavelength_nm))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: f64, b: f64, rel: f64) -> bool {
+        ((a - b) / b).abs() < rel
+    }
+
+    /// model.md section 11.1, computed by an independent script from the same equations.
+    #[test]
+    fn coefficients_match_spec_table() {
+        let rows = [
+            (450.0, 0.12192, 96.460, 72.383, 33.637, 55.311),
+            (550.0, 0.04593, 49.447, 27.905, 23.034, 28.601),
+            (650.0, 0.02915, 28.349, 12.620, 0.1971, 2.0081),
+        ];
+        for (w, base, em, pm, oxy, deoxy) in rows {
+            assert!(close(sigma_a_baseline_per_mm(w), base, 1e-3), "baseline {w}");
+            assert!(close(sigma_a_eumelanin_per_mm(w, K_EM_PER_MM), em, 1e-4), "em {w}");
+            assert!(close(sigma_a_pheomelanin_per_mm(w), pm, 1e-4), "pm {w}");
+            assert!(close(sigma_a_oxy_blood_per_mm(w), oxy, 1e-3), "oxy {w}: {}", sigma_a_oxy_blood_per_mm(w));
+            assert!(close(sigma_a_deoxy_blood_per_mm(w), deoxy, 1e-3), "deoxy {w}");
+        }
+    }
+
+    /// Prahl's table peaks (model.md section 12): HbO2 Soret at 414 nm.
+    #[test]
+    fn soret_peak() {
+        let peak = sigma_a_oxy_blood_per_mm(414.0);
+        assert!(peak > sigma_a_oxy_blood_per_mm(406.0) && peak > sigma_a_oxy_blood_per_mm(422.0));
+    }
+}

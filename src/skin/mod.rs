@@ -1,0 +1,9 @@
+//! Skin optics: parameters, chromophore spectra, scattering and the two-layer geometry (DJ2006 section 2).
+
+pub mod chromophores;
+pub mod optics;
+pub mod params;
+pub mod scattering;
+
+pub use optics::{skin_layers, SkinModel, EPIDERMIS_THICKNESS_MM, SKIN_IOR};
+pub use params::{Preset, SkinParams, PRESETS};

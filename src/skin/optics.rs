@@ -1,0 +1,81 @@
+//! Per-wavelength optics of the two skin layers from the four parameters (DJ2006 eqs. 6-8; model.md sections 2-4).
+
+use serde::{Deserialize, Serialize};
+
+use super::chromophores::*;
+use super::params::SkinParams;
+use super::scattering::{sigma_s_reduced_dermis_per_mm, sigma_s_reduced_epidermis_per_mm};
+use crate::diffusion::Layer;
+
+/// Index of refraction of all skin, "a constant index of refraction of 1.4 throughout the skin" (DJ2006; model.md section 1).
+pub const SKIN_IOR: f64 = 1.4;
+/// Epidermis thickness, mm (DJ2006; model.md section 4).
+pub const EPIDERMIS_THICKNESS_MM: f64 = 0.25;
+
+/// Model choices that are not accuracy settings. The defaults are the spec's recommendations.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SkinModel {
+    /// `K_em` of DJ2006 eq. 3 in mm^-1 (default [`K_EM_PER_MM`]; 6.6e11 is the literal printed value, see model.md 2.1).
+    pub eumelanin_k_per_mm: f64,
+    /// Epidermis thickness, mm.
+    pub epidermis_thickness_mm: f64,
+    /// Dermis thickness, mm; `f64::INFINITY` (the default) is a semi-infinite dermis (model.md section 4).
+    pub dermis_thickness_mm: f64,
+}
+
+impl Default for SkinModel {
+    fn default() -> Self {
+        SkinModel {
+            eumelanin_k_per_mm: K_EM_PER_MM,
+            epidermis_thickness_mm: EPIDERMIS_THICKNESS_MM,
+            dermis_thickness_mm: f64::INFINITY,
+        }
+    }
+}
+
+/// `sigma_a_epi(lambda)`, mm^-1: melanin blend plus baseline (DJ2006 eq. 6). No haemoglobin in the DJ2006 epidermis.
+pub fn sigma_a_epidermis_per_mm(p: &SkinParams, wavelength_nm: f64, k_em_per_mm: f64) -> f64 {
+    let melanin = p.melanin_blend * sigma_a_eumelanin_per_mm(wavelength_nm, k_em_per_mm)
+        + (1.0 - p.melanin_blend) * sigma_a_pheomelanin_per_mm(wavelength_nm);
+    p.melanin * melanin + (1.0 - p.melanin) * sigma_a_baseline_per_mm(wavelength_nm)
+}
+
+/// `sigma_a_derm(lambda)`, mm^-1: oxygenated/deoxygenated blood blend plus baseline (DJ2006 eq. 7).
+pub fn sigma_a_dermis_per_mm(p: &SkinParams, wavelength_nm: f64) -> f64 {
+    let blood = OXY_FRACTION * sigma_a_oxy_blood_per_mm(wavelength_nm)
+        + (1.0 - OXY_FRACTION) * sigma_a_deoxy_blood_per_mm(wavelength_nm);
+    p.hemoglobin * blood + (1.0 - p.hemoglobin) * sigma_a_baseline_per_mm(wavelength_nm)
+}
+
+/// The two layers, top to bottom, at one wavelength: epidermis over dermis, both with index 1.4.
+pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [Layer; 2] {
+    [
+        Layer {
+            thickness_mm: model.epidermis_thickness_mm,
+            sigma_a_per_mm: sigma_a_epidermis_per_mm(p, wavelength_nm, model.eumelanin_k_per_mm),
+            sigma_s_reduced_per_mm: sigma_s_reduced_epidermis_per_mm(wavelength_nm),
+            ior: SKIN_IOR,
+        },
+        Layer {
+            thickness_mm: model.dermis_thickness_mm,
+            sigma_a_per_mm: sigma_a_dermis_per_mm(p, wavelength_nm),
+            sigma_s_reduced_per_mm: sigma_s_reduced_dermis_per_mm(wavelength_nm),
+            ior: SKIN_IOR,
+        },
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// model.md section 11.1: Caucasian at 550 nm.
+    #[test]
+    fn caucasian_550() {
+        let p = SkinParams::preset("caucasian").unwrap();
+        let [epi, derm] = skin_layers(&p, &SkinModel::default(), 550.0);
+        assert!((epi.sigma_a_per_mm - 0.26062).abs() < 3e-4, "{}", epi.sigma_a_per_mm);
+        assert!((derm.sigma_a_per_mm - 0.16783).abs() < 3e-4, "{}", derm.sigma_a_per_mm);
+        assert!((derm.sigma_s_reduced_per_mm - 3.04113).abs() < 3e-4);
+    }
+}
