@@ -35,6 +35,11 @@ impl Default for HankelQuadrature {
 
 /// Widest panel relative to its start frequency, near s = 0 (before refinement).
 const RELATIVE_PANEL_WIDTH: f64 = 0.5;
+/// Most panels limited by the J0 oscillation at the largest radius (628 mm^-1 at 20 mm). Skin needs a few hundred:
+/// its remainder is below 1e-9 of the total there. Thin, nearly transparent layers can push the cut to 1e5 mm^-1 and
+/// beyond; past this bound panels grow with s, which keeps the cost finite and leaves an aliasing error in the far
+/// tail of the order of the remainder's size at the bound.
+const MAX_OSCILLATION_PANELS: f64 = 4000.0;
 /// Smallest structural frequency scale considered, mm^-1.
 const MIN_STRUCTURE_PER_MM: f64 = 1e-4;
 /// Log-spaced probe frequencies used to find where the remainder becomes negligible, mm^-1.
@@ -62,7 +67,9 @@ pub fn reflectance_profiles(
     let s_cut = cuts.iter().cloned().fold(0.0, f64::max);
     let structure = stacks.iter().map(structure_frequency).fold(f64::INFINITY, f64::min);
     let r_max = radii_mm.iter().cloned().fold(0.0, f64::max);
-    let (nodes, weights) = panel_grid(s_cut, structure, r_max, quadrature);
+    let oscillation_budget = MAX_OSCILLATION_PANELS * PI / r_max.max(f64::MIN_POSITIVE);
+    let s_oscillation = oscillation_budget.min(s_cut);
+    let (nodes, weights) = panel_grid(s_cut, s_oscillation, structure, r_max, quadrature);
 
     // Remainder at the nodes, per stack, zero beyond the stack's own cut.
     let samples: Vec<Vec<f64>> = stacks
@@ -122,15 +129,17 @@ fn cutoff_frequency(f: impl Fn(f64) -> f64, tolerance: f64) -> f64 {
         .unwrap_or(0.0)
 }
 
-/// Gauss-Legendre nodes and weights on panels covering [0, s_cut].
-fn panel_grid(s_cut: f64, structure: f64, r_max: f64, q: &HankelQuadrature) -> (Vec<f64>, Vec<f64>) {
+/// Gauss-Legendre nodes and weights on panels covering [0, s_cut]; below `s_oscillation` no panel is wider than half
+/// a period of J0 at `r_max`.
+fn panel_grid(s_cut: f64, s_oscillation: f64, structure: f64, r_max: f64, q: &HankelQuadrature) -> (Vec<f64>, Vec<f64>) {
     let (x, w) = gauss_legendre(q.gauss_order.max(1));
     let refine = q.refinement.max(1e-3);
     let oscillation_limit = if r_max > 0.0 { PI / r_max / refine } else { f64::INFINITY };
     let (mut nodes, mut weights) = (Vec::new(), Vec::new());
     let mut a = 0.0;
     while a < s_cut {
-        let width = oscillation_limit.min(RELATIVE_PANEL_WIDTH * a.max(structure) / refine);
+        let relative = RELATIVE_PANEL_WIDTH * a.max(structure) / refine;
+        let width = if a < s_oscillation { oscillation_limit.min(relative) } else { relative };
         let half = 0.5 * width;
         for (xi, wi) in x.iter().zip(&w) {
             nodes.push(a + half * (xi + 1.0));
@@ -166,7 +175,7 @@ mod tests {
         let radii: Vec<f64> = (0..=40).map(|i| 1e-3 * 10f64.powf(i as f64 * 0.1)).filter(|r| *r <= 20.0).collect();
         let r_max = radii.iter().cloned().fold(0.0, f64::max);
         let cut = cutoff_frequency(f, 1e-16);
-        let (nodes, weights) = panel_grid(cut, structure_frequency(&stack), r_max, &HankelQuadrature::default());
+        let (nodes, weights) = panel_grid(cut, cut, structure_frequency(&stack), r_max, &HankelQuadrature::default());
         let peak = slab.reflectance(0.0, t);
         for &r in &radii {
             let numeric: f64 =

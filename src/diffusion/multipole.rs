@@ -22,9 +22,9 @@ pub enum MultipoleTerms {
 }
 
 /// Cap on image pairs for real-space sums of the whole series (reached only for near-zero absorption).
-const MAX_REAL_SPACE_PAIRS: i64 = 100_000;
+const MAX_REAL_SPACE_PAIRS: i64 = 20_000;
 /// Relative size of an image pair below which the real-space series is considered converged.
-const REAL_SPACE_TOLERANCE: f64 = 1e-16;
+const REAL_SPACE_TOLERANCE: f64 = 1e-13;
 
 /// One homogeneous slab between two boundaries, reduced to the quantities the multipole needs (model.md section 5.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,7 +85,7 @@ impl Slab {
 
     /// Depths of the real and virtual source of image pair i (DJ05; model.md 5.2), measured from the entry face.
     fn image_depths_mm(&self, i: i64) -> (f64, f64) {
-        let shift = 2.0 * i as f64 * self.half_period_mm();
+        let shift = if i == 0 { 0.0 } else { 2.0 * i as f64 * self.half_period_mm() };
         let l = self.source_depth_mm;
         (shift + l, shift - l - 2.0 * self.zb_top_mm)
     }
