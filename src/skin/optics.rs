@@ -20,7 +20,36 @@ pub struct SkinModel {
     /// Epidermis thickness, mm.
     pub epidermis_thickness_mm: f64,
     /// Dermis thickness, mm; `f64::INFINITY` (the default) is a semi-infinite dermis (model.md section 4).
+    /// In JSON an infinite thickness is the string "inf".
+    #[serde(with = "finite_or_inf")]
     pub dermis_thickness_mm: f64,
+}
+
+/// Serde for a length that may be infinite: a number, or the string "inf" (JSON has no infinity).
+mod finite_or_inf {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_infinite() && *v > 0.0 {
+            s.serialize_str("inf")
+        } else {
+            s.serialize_f64(*v)
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Value {
+            Number(f64),
+            Text(String),
+        }
+        match Value::deserialize(d)? {
+            Value::Number(v) => Ok(v),
+            Value::Text(t) if t == "inf" => Ok(f64::INFINITY),
+            Value::Text(t) => Err(serde::de::Error::custom(format!("expected a number or \"inf\", got {t:?}"))),
+        }
+    }
 }
 
 impl Default for SkinModel {
@@ -68,6 +97,14 @@ pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [La
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn model_json_round_trip_keeps_infinity() {
+        let m = SkinModel::default();
+        let text = serde_json::to_string(&m).unwrap();
+        assert!(text.contains("\"dermis_thickness_mm\":\"inf\""), "{text}");
+        assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m);
+    }
 
     /// model.md section 11.1: Caucasian at 550 nm.
     #[test]

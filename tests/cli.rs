@@ -1,0 +1,75 @@
+//! The `spectral-skin` command line: the stable JSON of `eval`, the CSV of `profile`, and clear errors.
+
+use std::process::Command;
+
+fn run(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_spectral-skin")).args(args).output().expect("run spectral-skin")
+}
+
+fn eval_json(preset: &str) -> serde_json::Value {
+    let out = run(&["eval", "--preset", preset, "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).expect("valid JSON")
+}
+
+fn triple(v: &serde_json::Value) -> [f64; 3] {
+    let a = v.as_array().expect("array of 3");
+    assert_eq!(a.len(), 3);
+    [0, 1, 2].map(|i| a[i].as_f64().expect("number"))
+}
+
+#[test]
+fn eval_json_has_the_stable_keys() {
+    let mut luminance = Vec::new();
+    for preset in ["african", "asian", "caucasian"] {
+        let j = eval_json(preset);
+        for key in ["params", "color_space", "accuracy", "diffuse_reflectance_rgb", "default_method", "methods", "specular"] {
+            assert!(j.get(key).is_some(), "{preset}: missing {key}");
+        }
+        assert_eq!(j["color_space"], "Linear Rec.709");
+        let default = j["default_method"].as_str().unwrap();
+        assert!(default == "burley" || default == "random_walk");
+        let albedo = triple(&j["diffuse_reflectance_rgb"]);
+        assert!(albedo.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 1.0), "{albedo:?}");
+        for method in ["burley", "random_walk"] {
+            let radius = triple(&j["methods"][method]["subsurface_radius_mm"]);
+            let base = triple(&j["methods"][method]["base_color"]);
+            assert!(radius.iter().all(|v| v.is_finite() && *v > 0.0), "{preset} {method}: {radius:?}");
+            assert!(base.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
+        }
+        assert_eq!(triple(&j["methods"]["burley"]["base_color"]), albedo, "Burley renders Base Color as the albedo");
+        luminance.push(0.2126 * albedo[0] + 0.7152 * albedo[1] + 0.0722 * albedo[2]);
+    }
+    assert!(luminance[0] < luminance[1] && luminance[1] < luminance[2], "{luminance:?}");
+}
+
+#[test]
+fn profile_csv() {
+    let out = run(&["profile", "--preset", "caucasian", "--csv", "--count", "16"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "r_mm,r_per_mm2,g_per_mm2,b_per_mm2");
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 16);
+    assert!(rows.windows(2).all(|w| w[1][1] <= w[0][1]), "red profile decreases with r");
+    let spectral = run(&["profile", "--preset", "african", "--spectral", "--count", "4", "--wavelength-step-nm", "20"]);
+    let text = String::from_utf8(spectral.stdout).unwrap();
+    assert!(text.lines().next().unwrap().starts_with("r_mm,nm380_per_mm2"));
+}
+
+#[test]
+fn bad_input_is_a_clear_error() {
+    for (args, needle) in [
+        (vec!["eval", "--preset", "martian"], "known presets"),
+        (vec!["eval", "--melanin", "0.9", "--melanin-blend", "0.5", "--hemoglobin", "0.01", "--oiliness", "0.2"], "melanin must be in [0, 0.5]"),
+        (vec!["eval", "--melanin", "0.1"], "melanin-blend"),
+        (vec!["eval", "--preset", "asian", "--wavelength-step-nm", "0"], "wavelength_step_nm"),
+    ] {
+        let out = run(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!err.contains("panicked"));
+    }
+}
