@@ -8,5 +8,5 @@ if [ ! -x .venv/bin/python ]; then
     "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q "maturin>=1.5,<2" pytest "numpy<2"
+.venv/bin/python -m pip install -q "maturin>=1.5,<2" pytest mypy "numpy<2"
 VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release -q

@@ -6,3 +6,4 @@ cd "$(dirname "$0")/.."
 bash scripts/setup-python.sh
 cargo test --release
 .venv/bin/python -m pytest tests/python -q
+.venv/bin/python -m mypy.stubtest spectral_skin._core

@@ -101,12 +101,12 @@ impl Accuracy {
             check_range("multipole_pairs", "image pairs per side", n as f64, 0.0, 10_000.0)?;
         }
         let g = &self.profile_grid;
-        check_range("profile r_min_mm", "smallest profile radius", g.r_min_mm, 1e-6, 1e4)?;
-        check_range("profile r_max_mm", "largest profile radius", g.r_max_mm, g.r_min_mm, 1e4)?;
-        check_range("profile count", "number of profile radii", g.count as f64, 1.0, 100_000.0)?;
-        check_range("hankel gauss_order", "nodes per panel", self.hankel.gauss_order as f64, 2.0, 64.0)?;
-        check_range("hankel refinement", "panel refinement", self.hankel.refinement, 0.1, 100.0)?;
-        check_range("hankel cutoff", "transform cutoff", self.hankel.cutoff, 1e-20, 1e-3)?;
+        check_range("profile_r_min_mm", "smallest profile radius", g.r_min_mm, 1e-6, 1e4)?;
+        check_range("profile_r_max_mm", "largest profile radius", g.r_max_mm, g.r_min_mm, 1e4)?;
+        check_range("profile_count", "number of profile radii", g.count as f64, 1.0, 100_000.0)?;
+        check_range("hankel_gauss_order", "nodes per panel", self.hankel.gauss_order as f64, 2.0, 64.0)?;
+        check_range("hankel_refinement", "panel refinement", self.hankel.refinement, 0.1, 100.0)?;
+        check_range("hankel_cutoff", "transform cutoff", self.hankel.cutoff, 1e-20, 1e-3)?;
         check_range("fit_frequencies_per_decade", "fit frequencies per decade", self.fit_frequencies_per_decade, 2.0, 200.0)?;
         Ok(())
     }

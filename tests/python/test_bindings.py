@@ -1,0 +1,297 @@
+"""Tests of the Python bindings: shapes, dtypes, presets, errors, the GIL, and the diffusion solver against Jensen et
+al. 2001's dipole written out here in numpy (independent of the Rust code)."""
+
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import spectral_skin
+from spectral_skin import SpectralSkinError
+
+PRESET_NAMES = ("caucasian", "asian", "african")
+ALL_OUTPUTS = ("albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular")
+# Rec.709 luminance weights (ITU-R BT.709-6), for ordering the presets by lightness.
+REC709_LUMA = np.array([0.2126, 0.7152, 0.0722])
+
+
+def assert_float_array(a, shape):
+    assert isinstance(a, np.ndarray), type(a)
+    assert a.dtype == np.float64, a.dtype
+    assert a.shape == shape, (a.shape, shape)
+    assert np.all(np.isfinite(a)), a
+
+
+# --- Jensen et al. 2001, computed here --------------------------------------------------------------------------------
+
+
+def fdr(eta):
+    """Diffuse Fresnel reflectance, Jensen et al. 2001 (Egan & Hilgeman fit), eta >= 1."""
+    return -1.440 / eta**2 + 0.710 / eta + 0.668 + 0.0636 * eta
+
+
+def jensen_total(sigma_a, sigma_s_reduced, eta):
+    """R_d = (a'/2)(1 + exp(-(4/3) A sqrt(3(1-a')))) exp(-sqrt(3(1-a'))), Jensen et al. 2001 eq. 5 integrated."""
+    a = sigma_s_reduced / (sigma_a + sigma_s_reduced)
+    big_a = (1 + fdr(eta)) / (1 - fdr(eta))
+    root = math.sqrt(3 * (1 - a))
+    return a / 2 * (1 + math.exp(-4 / 3 * big_a * root)) * math.exp(-root)
+
+
+def jensen_dipole(r_mm, sigma_a, sigma_s_reduced, eta):
+    """R(r) in mm^-2 of a semi-infinite medium, Jensen et al. 2001 eq. 4."""
+    r = np.asarray(r_mm, dtype=float)
+    sigma_t = sigma_a + sigma_s_reduced
+    alpha = sigma_s_reduced / sigma_t
+    sigma_tr = math.sqrt(3 * sigma_a * sigma_t)
+    big_a = (1 + fdr(eta)) / (1 - fdr(eta))
+    diffusion = 1 / (3 * sigma_t)
+    z_r = 1 / sigma_t
+    z_v = z_r + 4 * big_a * diffusion
+    d_r = np.sqrt(r**2 + z_r**2)
+    d_v = np.sqrt(r**2 + z_v**2)
+    pole = lambda z, d: z * (sigma_tr * d + 1) * np.exp(-sigma_tr * d) / d**3  # noqa: E731
+    return alpha / (4 * math.pi) * (pole(z_r, d_r) + pole(z_v, d_v))
+
+
+# --- layered_reflectance ------------------------------------------------------------------------------------------
+
+
+def test_readme_line_matches_jensen_closed_form():
+    total, profile = spectral_skin.layered_reflectance([(float("inf"), 0.01, 1.0, 1.4)], [0.5, 1.0])
+    assert isinstance(total, float)
+    assert_float_array(profile, (2,))
+    expected = jensen_total(0.01, 1.0, 1.4)
+    assert total == pytest.approx(expected, rel=1e-12), (total, expected)
+
+
+@pytest.mark.parametrize("sigma_a, sigma_s_reduced", [(0.01, 1.0), (0.2, 3.0), (1.0, 0.5)])
+def test_semi_infinite_profile_is_jensen_dipole(sigma_a, sigma_s_reduced):
+    radii = np.concatenate([[0.0], np.geomspace(1e-3, 20.0, 30)])
+    total, profile = spectral_skin.layered_reflectance([(math.inf, sigma_a, sigma_s_reduced, 1.4)], radii)
+    expected = jensen_dipole(radii, sigma_a, sigma_s_reduced, 1.4)
+    np.testing.assert_allclose(profile, expected, rtol=1e-9, atol=0)
+    assert total == pytest.approx(jensen_total(sigma_a, sigma_s_reduced, 1.4), rel=1e-12)
+
+
+def test_layered_reflectance_accepts_array_likes():
+    layers = np.array([[0.25, 0.3, 6.0, 1.4], [np.inf, 0.2, 3.0, 1.4]])
+    total, profile = spectral_skin.layered_reflectance(layers, np.array([0, 1, 2]))  # int radii are converted
+    assert 0 < total < 1
+    assert_float_array(profile, (3,))
+    assert spectral_skin.layered_reflectance(layers, [])[1].shape == (0,)
+
+
+# --- evaluate, profile, presets -----------------------------------------------------------------------------------
+
+
+def test_presets():
+    presets = spectral_skin.presets()
+    assert set(presets) == set(PRESET_NAMES)
+    for name, p in presets.items():
+        assert set(p) == {"melanin", "melanin_blend", "hemoglobin", "oiliness", "description"}
+        assert 0 <= p["melanin"] <= 0.5 and 0 <= p["melanin_blend"] <= 1
+        assert 0 <= p["hemoglobin"] <= 0.1 and 0 <= p["oiliness"] <= 1
+        assert isinstance(p["description"], str) and p["description"]
+        params = spectral_skin.evaluate(preset=name, outputs=())["params"]
+        assert params == {k: p[k] for k in ("melanin", "melanin_blend", "hemoglobin", "oiliness")}
+
+
+def test_explicit_parameters_override_preset():
+    asian = spectral_skin.presets()["asian"]
+    params = spectral_skin.evaluate(preset="Asian", melanin=0.2, outputs=())["params"]
+    assert params["melanin"] == 0.2
+    assert params["hemoglobin"] == asian["hemoglobin"]
+    assert params["melanin_blend"] == asian["melanin_blend"]
+
+
+def test_default_outputs_shapes_and_dtypes():
+    ev = spectral_skin.evaluate(0.1, 0.5, 0.02, 0.2)
+    assert_float_array(ev["diffuse_reflectance_rgb"], (3,))
+    for method in ("burley", "random_walk"):
+        for key in ("base_color", "subsurface_radius_mm", "expected_albedo"):
+            assert_float_array(ev["methods"][method][key], (3,))
+        assert np.all(ev["methods"][method]["subsurface_radius_mm"] > 0)
+    assert len(ev["radius_fit"]) == 3
+    assert set(ev["specular"]) >= {"specular_ior_level", "roughness", "ior"}
+    assert ev["default_method"] == "burley"
+    assert ev["color_space"] == "Linear Rec.709"
+    assert ev["combination"] == "directional"
+    assert ev["model"]["dermis_thickness_mm"] == math.inf
+    assert "profile" not in ev and "spectral_reflectance" not in ev
+    assert ev["work"]["radial_profiles"] == 0
+
+
+def test_all_outputs_shapes_and_dtypes():
+    step = 10.0
+    k = int(round(400 / step)) + 1  # 380..780 nm
+    ev = spectral_skin.evaluate(preset="african", outputs=ALL_OUTPUTS, wavelength_step_nm=step, profile_count=16)
+    assert_float_array(ev["wavelengths_nm"], (k,))
+    assert ev["wavelengths_nm"][0] == 380 and ev["wavelengths_nm"][-1] == 780
+    assert_float_array(ev["spectral_reflectance"], (k,))
+    assert_float_array(ev["profile"]["radii_mm"], (16,))
+    assert_float_array(ev["profile"]["rgb_per_mm2"], (16, 3))
+    assert_float_array(ev["profile"]["spectral_per_mm2"], (k, 16))
+    assert ev["work"]["radial_profiles"] == k
+    assert ev["accuracy"]["wavelength_step_nm"] == step
+
+
+def test_profile_function_matches_evaluate():
+    knobs = dict(preset="caucasian", wavelength_step_nm=10.0, profile_r_min_mm=0.01, profile_r_max_mm=10.0,
+                 profile_count=12)
+    rgb = spectral_skin.profile(**knobs)
+    assert set(rgb) == {"radii_mm", "rgb_per_mm2"}
+    assert_float_array(rgb["rgb_per_mm2"], (12, 3))
+    np.testing.assert_allclose(rgb["radii_mm"][[0, -1]], [0.01, 10.0], rtol=1e-12)
+    spectral = spectral_skin.profile(**knobs, spectral=True)
+    assert set(spectral) == {"radii_mm", "spectral_per_mm2", "wavelengths_nm"}
+    assert_float_array(spectral["spectral_per_mm2"], (41, 12))
+    ev = spectral_skin.evaluate(**knobs, outputs=("profile_rgb",))
+    np.testing.assert_array_equal(ev["profile"]["rgb_per_mm2"], rgb["rgb_per_mm2"])
+    # R(r) >= 0 per wavelength and falls off with radius. (RGB tails may dip below 0: at large r only red light is left,
+    # which is out of the Rec.709 gamut.)
+    assert np.all(spectral["spectral_per_mm2"] >= 0)
+    assert np.all(rgb["rgb_per_mm2"][0] > 10 * np.abs(rgb["rgb_per_mm2"][-1]))
+
+
+def test_preset_albedos_ordered_by_lightness():
+    luma = {}
+    for name in PRESET_NAMES:
+        ev = spectral_skin.evaluate(preset=name, outputs=("albedo",))
+        rgb = ev["diffuse_reflectance_rgb"]
+        assert_float_array(rgb, (3,))
+        assert np.all((rgb > 0) & (rgb < 1)), (name, rgb)
+        assert ev["work"]["radial_profiles"] == 0
+        assert "methods" not in ev and "specular" not in ev
+        luma[name] = float(REC709_LUMA @ rgb)
+    assert luma["african"] < luma["asian"] < luma["caucasian"], luma
+
+
+def test_model_choices_are_passed_through():
+    base = dict(preset="asian", outputs=("albedo",), wavelength_step_nm=10.0)
+    rec709 = spectral_skin.evaluate(**base)["diffuse_reflectance_rgb"]
+    rec2020 = spectral_skin.evaluate(**base, working_space="Linear Rec.2020")
+    assert rec2020["color_space"] == "Linear Rec.2020"
+    assert not np.allclose(rec709, rec2020["diffuse_reflectance_rgb"])
+    symmetric = spectral_skin.evaluate(**base, combination="symmetric")
+    assert symmetric["combination"] == "symmetric"
+    pairs = spectral_skin.evaluate(**base, multipole_pairs=10)
+    assert pairs["accuracy"]["multipole_terms"] == {"pairs": 10}
+
+
+# --- errors -------------------------------------------------------------------------------------------------------
+
+EVALUATE_ERRORS = [
+    (dict(melanin=0.7, melanin_blend=0.5, hemoglobin=0.01, oiliness=0.3), ["melanin", "[0, 0.5]", "0.7"]),
+    (dict(preset="asian", hemoglobin=float("nan")), ["hemoglobin", "[0, 0.1]", "NaN"]),
+    (dict(preset="martian"), ["preset", "martian", "caucasian", "asian", "african"]),
+    (dict(preset="asian", outputs=("albedo", "colour")), ["colour", "albedo", "profile_rgb", "spectrum"]),
+    (dict(melanin=0.1), ["preset", "missing", "melanin_blend", "hemoglobin", "oiliness"]),
+    (dict(), ["preset", "melanin"]),
+    (dict(preset="asian", wavelength_step_nm=0.0), ["wavelength_step_nm", "[0.5, 100]"]),
+    (dict(preset="asian", multipole_pairs=-1), ["multipole_pairs", "-1"]),
+    (dict(preset="asian", combination="sideways"), ["combination", "sideways", "directional", "symmetric"]),
+    (dict(preset="asian", working_space="sRGB"), ["working_space", "sRGB", "Linear Rec.709", "Linear Rec.2020"]),
+]
+
+
+@pytest.mark.parametrize("kwargs, fragments", EVALUATE_ERRORS)
+def test_evaluate_errors(kwargs, fragments):
+    with pytest.raises(SpectralSkinError) as info:
+        spectral_skin.evaluate(**kwargs)
+    assert isinstance(info.value, ValueError)
+    message = str(info.value)
+    assert all(f in message for f in fragments), (message, fragments)
+
+
+def test_profile_errors():
+    with pytest.raises(SpectralSkinError, match="profile count"):
+        spectral_skin.profile(preset="asian", profile_count=0)
+    with pytest.raises(SpectralSkinError, match="r_max_mm"):
+        spectral_skin.profile(preset="asian", profile_r_min_mm=1.0, profile_r_max_mm=0.5)
+
+
+SEMI = (math.inf, 0.1, 1.0, 1.4)
+LAYER_ERRORS = [
+    ([(1.0, -0.1, 1.0, 1.4)], [1.0], ["layer 0", "sigma_a_per_mm", ">= 0", "-0.1"]),
+    ([SEMI, (1.0, 0.1, 1.0, 1.4)], [1.0], ["layer 0", "thickness_mm", "infinity only for the last layer", "inf"]),
+    ([], [1.0], ["layers", "at least one layer"]),
+    ([SEMI], [0.5, -1.0], ["radii_mm", ">= 0", "radii_mm[1]", "-1"]),
+    ([SEMI], [float("nan")], ["radii_mm", "NaN"]),
+    ([(1.0, 0.1, 1.0, 1.4), (math.inf, 0.1, 1.0)], [1.0], ["layer 1", "4 values", "got 3"]),
+    ([(1.0, 0.1, 1.0, 0.5)], [1.0], ["layer 0", "ior", "0.5"]),
+]
+
+
+@pytest.mark.parametrize("layers, radii, fragments", LAYER_ERRORS)
+def test_layered_reflectance_errors(layers, radii, fragments):
+    with pytest.raises(SpectralSkinError) as info:
+        spectral_skin.layered_reflectance(layers, radii)
+    assert isinstance(info.value, ValueError)
+    message = str(info.value)
+    assert all(f in message for f in fragments), (message, fragments)
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: spectral_skin.evaluate(preset="asian", outputs="albedo"),
+        lambda: spectral_skin.layered_reflectance("layers", [1.0]),
+        lambda: spectral_skin.layered_reflectance([(1.0, 0.1, "x", 1.4)], [1.0]),
+        lambda: spectral_skin.layered_reflectance([SEMI], [[1.0, 2.0]]),
+        lambda: spectral_skin.layered_reflectance([SEMI], "1.0"),
+    ],
+)
+def test_wrong_types_are_type_errors(call):
+    with pytest.raises(TypeError):
+        call()
+
+
+def test_error_class_is_exported():
+    assert issubclass(SpectralSkinError, ValueError)
+    assert spectral_skin.SpectralSkinError is spectral_skin._core.SpectralSkinError
+    assert set(spectral_skin.__all__) == {
+        "SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "presets", "profile"
+    }
+
+
+# --- the GIL ------------------------------------------------------------------------------------------------------
+
+
+def test_gil_is_released_during_a_core_call():
+    """While the core computes, this thread keeps running Python: it could not if the call held the GIL."""
+    span = []
+
+    def work():
+        start = time.perf_counter()
+        spectral_skin.profile(preset="caucasian")
+        span.extend([start, time.perf_counter()])
+
+    worker = threading.Thread(target=work)
+    ticks = []
+    worker.start()
+    while worker.is_alive():
+        ticks.append(time.perf_counter())
+        time.sleep(0.0005)
+    worker.join()
+    start, end = span
+    quarter = (end - start) / 4
+    inside = [t for t in ticks if start + quarter < t < end - quarter]
+    assert len(inside) >= 3, (end - start, len(ticks), len(inside))
+
+
+def test_concurrent_calls_finish_and_agree():
+    results = [None, None]
+
+    def work(i):
+        results[i] = spectral_skin.profile(preset="african", wavelength_step_nm=10.0, profile_count=16)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=60)
+    assert not any(t.is_alive() for t in threads)
+    np.testing.assert_array_equal(results[0]["rgb_per_mm2"], results[1]["rgb_per_mm2"])
