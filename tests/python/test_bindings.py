@@ -207,7 +207,7 @@ def test_evaluate_errors(kwargs, fragments):
 
 
 def test_profile_errors():
-    with pytest.raises(SpectralSkinError, match="profile count"):
+    with pytest.raises(SpectralSkinError, match="profile_count"):
         spectral_skin.profile(preset="asian", profile_count=0)
     with pytest.raises(SpectralSkinError, match="r_max_mm"):
         spectral_skin.profile(preset="asian", profile_r_min_mm=1.0, profile_r_max_mm=0.5)
