@@ -160,7 +160,9 @@ impl Methods {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RadialProfile {
     pub radii_mm: Vec<f64>,
-    /// R(r) per RGB channel, mm^-2 (if requested).
+    /// R(r) per RGB channel, mm^-2 (if requested). Far in the tail only red light is left, which lies outside the
+    /// Rec.709 gamut: the green and blue channels there can be slightly negative (about 1e-6 of the peak), as the
+    /// colour transform demands; the spectral profiles are never negative.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rgb_per_mm2: Option<Vec<[f64; 3]>>,
     /// R(r) per wavelength: `spectral_per_mm2[k][i]` at wavelength k and radius i, mm^-2 (if requested).
