@@ -123,7 +123,8 @@ fn cutoff_frequency(f: impl Fn(f64) -> f64, tolerance: f64) -> f64 {
         .rev()
         .find(|&j| {
             let s = probe(j);
-            !(f(s).abs() * s * s <= tolerance) // NaN counts as significant
+            let weight = f(s).abs() * s * s;
+            weight > tolerance || weight.is_nan() // NaN counts as significant
         })
         .map(|j| probe((j + 1).min(n)))
         .unwrap_or(0.0)
