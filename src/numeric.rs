@@ -73,7 +73,7 @@ mod tests {
     fn expm1_ratio_limits() {
         assert_eq!(expm1_ratio(1.0, 4.0, 0.0), 0.25);
         assert!((expm1_ratio(1.0, 4.0, 1e-300) - 0.25).abs() < 1e-15);
-        let q = 0.3;
+        let q: f64 = 0.3;
         let direct = (1.0 - (-q).exp()) / (1.0 - (-4.0 * q).exp());
         assert!((expm1_ratio(1.0, 4.0, q) - direct).abs() < 1e-15);
         assert_eq!(expm1_ratio(1.0, 4.0, 1e6), 1.0);
