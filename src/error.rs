@@ -18,9 +18,16 @@ pub enum SkinError {
     /// An input that is not a single range (a layer list, a radius grid, a preset name) is invalid.
     #[error("invalid {name}: {reason}")]
     Invalid { name: String, reason: String },
+    /// A file could not be read or written.
+    #[error("{path}: {reason}")]
+    Io { path: String, reason: String },
 }
 
 impl SkinError {
+    pub(crate) fn io(path: &std::path::Path, reason: impl std::fmt::Display) -> Self {
+        SkinError::Io { path: path.display().to_string(), reason: reason.to_string() }
+    }
+
     pub(crate) fn invalid(name: impl Into<String>, reason: impl Into<String>) -> Self {
         SkinError::Invalid { name: name.into(), reason: reason.into() }
     }

@@ -89,7 +89,7 @@ impl Default for Accuracy {
             multipole_terms: MultipoleTerms::All,
             profile_grid: ProfileGrid::default(),
             hankel: HankelQuadrature::default(),
-            fit_frequencies_per_decade: 10.0,
+            fit_frequencies_per_decade: 5.0,
         }
     }
 }
@@ -210,48 +210,102 @@ pub struct Evaluation {
     pub seconds: f64,
 }
 
+/// What a request needs that does not depend on the parameters: the validated request, the wavelength grid, the colour
+/// weights and the fit frequencies. Build it once and evaluate many parameter sets with it (the map pipeline does).
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    request: Request,
+    grid: WavelengthGrid,
+    weights: Vec<[f64; 3]>,
+    fit_s: Vec<f64>,
+}
+
+/// The per-texel outputs of a material: the RGB albedo and both methods' inputs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Material {
+    pub albedo: [f64; 3],
+    pub fits: [BurleyFit; 3],
+    pub methods: Methods,
+}
+
+impl Prepared {
+    pub fn new(request: &Request) -> Result<Prepared, SkinError> {
+        request.accuracy.validate()?;
+        validate_model(&request.model)?;
+        let grid = WavelengthGrid::uniform(request.accuracy.wavelength_step_nm);
+        let weights = spectral_rgb_weights(&grid, request.working_space);
+        let fit_s = fit_frequencies(request.accuracy.fit_frequencies_per_decade);
+        Ok(Prepared { request: *request, grid, weights, fit_s })
+    }
+
+    pub fn request(&self) -> &Request {
+        &self.request
+    }
+
+    pub fn wavelengths_nm(&self) -> &[f64] {
+        &self.grid.wavelengths_nm
+    }
+
+    fn stacks(&self, params: &SkinParams) -> Result<Vec<LayerStack>, SkinError> {
+        self.grid
+            .wavelengths_nm
+            .iter()
+            .map(|&w| LayerStack::new(&skin_layers(params, &self.request.model, w)))
+            .collect()
+    }
+
+    fn totals(&self, stacks: &[LayerStack]) -> Vec<f64> {
+        let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
+        stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect()
+    }
+
+    /// Burley fits per channel from the RGB transfer function on the fit frequencies.
+    fn fits(&self, stacks: &[LayerStack], albedo: [f64; 3], parallel: bool) -> [BurleyFit; 3] {
+        let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
+        let s = &self.fit_s;
+        let transform = |st: &LayerStack| -> Vec<f64> { s.iter().map(|&x| st.reflectance_hat(x, comb, terms)).collect() };
+        let transforms: Vec<Vec<f64>> =
+            if parallel { stacks.par_iter().map(transform).collect() } else { stacks.iter().map(transform).collect() };
+        // RGB transfer function per frequency, normalised by the albedo.
+        let rgb: Vec<[f64; 3]> = (0..s.len())
+            .map(|i| spectrum_to_rgb(&transforms.iter().map(|t| t[i]).collect::<Vec<_>>(), &self.weights))
+            .collect();
+        [0, 1, 2].map(|c| {
+            let normalized: Vec<f64> = rgb.iter().map(|v| crate::numeric::safe_div(v[c], albedo[c], 0.0)).collect();
+            fit_burley(s, &normalized)
+        })
+    }
+
+    /// Albedo and both methods' Base Color and radius for one parameter set, computed on the calling thread (callers
+    /// that evaluate many parameter sets parallelise across them).
+    pub fn material(&self, params: &SkinParams) -> Result<Material, SkinError> {
+        let stacks = self.stacks(params)?;
+        let albedo = spectrum_to_rgb(&self.totals(&stacks), &self.weights);
+        let fits = self.fits(&stacks, albedo, false);
+        Ok(Material { albedo, fits, methods: methods_from(albedo, &fits) })
+    }
+}
+
 /// Compute what `request.outputs` asks for, and nothing else.
 pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, SkinError> {
     let start = Instant::now();
-    request.accuracy.validate()?;
-    validate_model(&request.model)?;
+    let prepared = Prepared::new(request)?;
     let params = SkinParams::new(params.melanin, params.melanin_blend, params.hemoglobin, params.oiliness)?;
     let out = request.outputs;
     let acc = &request.accuracy;
-    let (terms, comb) = (acc.multipole_terms, request.combination);
 
     let needs_layers = out.albedo || out.radius || out.spectrum || out.profile_rgb || out.profile_spectral;
-    let grid = WavelengthGrid::uniform(acc.wavelength_step_nm);
-    let stacks: Vec<LayerStack> = if needs_layers {
-        grid.wavelengths_nm
-            .iter()
-            .map(|&w| LayerStack::new(&skin_layers(&params, &request.model, w)))
-            .collect::<Result<_, _>>()?
-    } else {
-        Vec::new()
-    };
-    let weights = if needs_layers { spectral_rgb_weights(&grid, request.working_space) } else { Vec::new() };
+    let stacks = if needs_layers { prepared.stacks(&params)? } else { Vec::new() };
     let mut work = Work { wavelengths: stacks.len(), ..Work::default() };
 
-    let totals: Vec<f64> = stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect();
+    let totals = prepared.totals(&stacks);
     work.transform_samples += totals.len();
-    let albedo = spectrum_to_rgb(&totals, &weights);
+    let albedo = spectrum_to_rgb(&totals, &prepared.weights);
     let needs_albedo = out.albedo || out.radius;
 
     let (methods, radius_fit) = if out.radius {
-        let s = fit_frequencies(acc.fit_frequencies_per_decade);
-        let transforms: Vec<Vec<f64>> =
-            stacks.par_iter().map(|st| s.iter().map(|&x| st.reflectance_hat(x, comb, terms)).collect()).collect();
-        work.transform_samples += transforms.len() * s.len();
-        let fits = [0, 1, 2].map(|c| {
-            let normalized: Vec<f64> = (0..s.len())
-                .map(|i| {
-                    let column: Vec<f64> = transforms.iter().map(|t| t[i]).collect();
-                    crate::numeric::safe_div(spectrum_to_rgb(&column, &weights)[c], albedo[c], 0.0)
-                })
-                .collect();
-            fit_burley(&s, &normalized)
-        });
+        let fits = prepared.fits(&stacks, albedo, true);
+        work.transform_samples += stacks.len() * prepared.fit_s.len();
         (Some(methods_from(albedo, &fits)), Some(fits))
     } else {
         (None, None)
@@ -259,11 +313,12 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
 
     let profile = if out.profile_rgb || out.profile_spectral {
         let radii = acc.profile_grid.radii_mm();
-        let spectral = reflectance_profiles(&stacks, &radii, comb, terms, &acc.hankel);
+        let spectral =
+            reflectance_profiles(&stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel);
         work.radial_profiles = spectral.len();
         let rgb = out.profile_rgb.then(|| {
             (0..radii.len())
-                .map(|i| spectrum_to_rgb(&spectral.iter().map(|p| p[i]).collect::<Vec<_>>(), &weights))
+                .map(|i| spectrum_to_rgb(&spectral.iter().map(|p| p[i]).collect::<Vec<_>>(), &prepared.weights))
                 .collect()
         });
         Some(RadialProfile { radii_mm: radii, rgb_per_mm2: rgb, spectral_per_mm2: out.profile_spectral.then_some(spectral) })
@@ -276,13 +331,13 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
         color_space: request.working_space.name(),
         accuracy: *acc,
         model: request.model,
-        combination: comb,
+        combination: request.combination,
         diffuse_reflectance_rgb: needs_albedo.then_some(albedo),
         default_method: DEFAULT_METHOD.name(),
         methods,
         radius_fit,
         specular: out.specular.then(|| specular_from_oiliness(params.oiliness)),
-        wavelengths_nm: (out.spectrum || out.profile_spectral).then(|| grid.wavelengths_nm.clone()),
+        wavelengths_nm: (out.spectrum || out.profile_spectral).then(|| prepared.grid.wavelengths_nm.clone()),
         spectral_reflectance: out.spectrum.then_some(totals),
         profile,
         work,

@@ -10,6 +10,7 @@ pub mod diffusion;
 pub mod error;
 pub mod evaluate;
 pub mod fit;
+pub mod maps;
 mod numeric;
 pub mod skin;
 pub mod surface;

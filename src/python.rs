@@ -3,13 +3,18 @@
 //! lives here; names of outputs, combinations and working spaces come from the core's serde names.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::time::Instant;
 
-use numpy::ndarray::Array2;
-use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1};
+use numpy::ndarray::{Array2, Array3, ArrayView2, Axis, Ix2, Ix3};
+use numpy::{
+    AllowTypeChange, Element, PyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayLike1, PyArrayMethods,
+    PyUntypedArray, PyUntypedArrayMethods,
+};
+use rayon::prelude::*;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict, PyList, PyString};
+use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
 use serde::Serialize;
 use serde_json::Value;
 
@@ -17,6 +22,10 @@ use crate::color::WorkingSpace;
 use crate::diffusion::{Combination, Layer, MultipoleTerms};
 use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
+use crate::fit::SubsurfaceMethod;
+use crate::maps::io::{ParamImage, Plane, MAX_TEXELS, PARAM_CHANNELS};
+use crate::maps::lut::TableResolution;
+use crate::maps::pipeline::{check_planes, compute_maps, MapSettings, SpecularOutput, StrategyChoice};
 use crate::{Accuracy, Outputs, Request, SkinParams, PRESETS};
 
 create_exception!(
@@ -444,6 +453,341 @@ fn layered_reflectance_py<'py>(
     Ok((total, PyArray1::from_vec(py, profile)))
 }
 
+// --- maps ---------------------------------------------------------------------------------------------------------
+
+/// The subsurface methods accepted by name (their serde names).
+const SUBSURFACE_METHODS: [SubsurfaceMethod; 2] = [SubsurfaceMethod::Burley, SubsurfaceMethod::RandomWalk];
+/// What `params` of `maps` must be, for messages.
+const PARAMS_ARRAY: &str = "a float32 (H, W, 4) numpy array (channels melanin, melanin_blend, hemoglobin, oiliness)";
+/// What a per-parameter keyword of `maps` must be, for messages.
+const PARAM_ARRAY: &str = "a float32 (H, W) numpy array or a float";
+
+/// A numpy array of float32, or of float64 (converted to float32 while it is copied).
+enum FloatArray<'py> {
+    F32(Bound<'py, PyArrayDyn<f32>>),
+    F64(Bound<'py, PyArrayDyn<f64>>),
+}
+
+impl FloatArray<'_> {
+    fn shape(&self) -> Vec<usize> {
+        match self {
+            FloatArray::F32(a) => a.shape().to_vec(),
+            FloatArray::F64(a) => a.shape().to_vec(),
+        }
+    }
+
+    /// One row-major (H, W) plane as float32: the whole (H, W) array, or channel `c` of an (H, W, C) array. One pass
+    /// over the data (a copy, converting float64); any strides.
+    fn plane(&self, channel: Option<usize>) -> PyResult<Vec<f32>> {
+        match self {
+            FloatArray::F32(a) => plane_of(a, channel, |v| v),
+            FloatArray::F64(a) => plane_of(a, channel, |v| v as f32),
+        }
+    }
+}
+
+fn plane_of<T: Element + Copy>(
+    array: &Bound<'_, PyArrayDyn<T>>,
+    channel: Option<usize>,
+    convert: impl Fn(T) -> f32,
+) -> PyResult<Vec<f32>> {
+    let readonly = array.try_readonly().map_err(|e| PyTypeError::new_err(format!("cannot read the array: {e}")))?;
+    let view = readonly.as_array();
+    let view: ArrayView2<'_, T> = match channel {
+        None => view.into_dimensionality::<Ix2>().map_err(internal)?,
+        Some(c) => view.into_dimensionality::<Ix3>().map_err(internal)?.index_axis_move(Axis(2), c),
+    };
+    Ok(match view.as_slice() {
+        Some(values) => values.iter().map(|&v| convert(v)).collect(),
+        None => view.iter().map(|&v| convert(v)).collect(),
+    })
+}
+
+/// A shape as Python prints it: (8, 8, 4).
+fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => format!("({})", shape.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")),
+    }
+}
+
+/// `obj` as a float32/float64 array of `ndim` dimensions, or None if it is not a numpy array. Another dtype or
+/// an unaligned array is a TypeError; another number of dimensions a SpectralSkinError.
+fn float_array<'py>(name: &str, obj: &Bound<'py, PyAny>, ndim: usize, expected: &str) -> PyResult<Option<FloatArray<'py>>> {
+    let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
+        return Ok(None);
+    };
+    let array = if let Ok(a) = obj.cast::<PyArrayDyn<f32>>() {
+        FloatArray::F32(a.clone())
+    } else if let Ok(a) = obj.cast::<PyArrayDyn<f64>>() {
+        FloatArray::F64(a.clone())
+    } else {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must be {expected}; got an array of dtype {} (float32 and float64 are accepted)",
+            untyped.dtype()
+        )));
+    };
+    if !untyped.is_aligned() {
+        return Err(PyTypeError::new_err(format!("{name} must be an aligned array; pass np.ascontiguousarray({name})")));
+    }
+    if untyped.ndim() != ndim {
+        return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(untyped.shape()))));
+    }
+    Ok(Some(array))
+}
+
+/// A per-parameter input of `maps`.
+enum MapInput<'py> {
+    Array(FloatArray<'py>),
+    Constant(f64),
+}
+
+fn map_input<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<MapInput<'py>> {
+    if let Some(array) = float_array(name, obj, 2, PARAM_ARRAY)? {
+        return Ok(MapInput::Array(array));
+    }
+    let type_error = || {
+        let type_name = obj.get_type().name().map(|n| n.to_string()).unwrap_or_default();
+        PyTypeError::new_err(format!("{name} must be {PARAM_ARRAY}; got {type_name}"))
+    };
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyBytes>() || obj.is_instance_of::<PyBool>() {
+        return Err(type_error());
+    }
+    obj.extract::<f64>().map(MapInput::Constant).map_err(|_| type_error())
+}
+
+/// `table_resolution=`: None for the default, else 3 node counts, each at least 2.
+fn table_resolution(obj: Option<&Bound<'_, PyAny>>) -> PyResult<TableResolution> {
+    const EXPECTED: &str = "a tuple (melanin, melanin_blend, hemoglobin) of node counts";
+    let Some(obj) = obj else {
+        return Ok(TableResolution::default());
+    };
+    reject_string(obj, &format!("table_resolution must be {EXPECTED}"))?;
+    let counts: Vec<i64> = obj
+        .extract()
+        .map_err(|e: PyErr| PyTypeError::new_err(format!("table_resolution must be {EXPECTED}: {e}")))?;
+    let [m, b, h] = counts[..] else {
+        return Err(invalid("table_resolution", format!("expected {EXPECTED}; got {} values", counts.len())));
+    };
+    let count = |axis: &str, n: i64| {
+        usize::try_from(n)
+            .ok()
+            .filter(|&n| n >= 2)
+            .ok_or_else(|| invalid("table_resolution", format!("need at least 2 nodes per axis; {axis} has {n}")))
+    };
+    let r = TableResolution {
+        melanin: count("melanin", m)?,
+        melanin_blend: count("melanin_blend", b)?,
+        hemoglobin: count("hemoglobin", h)?,
+    };
+    r.melanin
+        .checked_mul(r.melanin_blend)
+        .and_then(|n| n.checked_mul(r.hemoglobin))
+        .filter(|&n| n <= MAX_TEXELS)
+        .ok_or_else(|| invalid("table_resolution", format!("at most {MAX_TEXELS} nodes in all; got {m} x {b} x {h}")))?;
+    Ok(r)
+}
+
+/// Planar RGB to one row-major (H, W, 3) buffer, rows in parallel.
+fn interleave(width: usize, planes: [Vec<f32>; 3]) -> Vec<f32> {
+    let [p0, p1, p2] = planes;
+    let mut out = vec![0f32; 3 * p0.len()];
+    out.par_chunks_mut(3 * width).enumerate().for_each(|(y, row)| {
+        let start = y * width;
+        let (r0, r1, r2) = (&p0[start..start + width], &p1[start..start + width], &p2[start..start + width]);
+        for (x, texel) in row.chunks_exact_mut(3).enumerate() {
+            texel[0] = r0[x];
+            texel[1] = r1[x];
+            texel[2] = r2[x];
+        }
+    });
+    out
+}
+
+/// An interleaved (H, W, 3) buffer to numpy, without copying it.
+fn rgb_image(py: Python<'_>, height: usize, width: usize, data: Vec<f32>) -> PyResult<Bound<'_, PyArray3<f32>>> {
+    Ok(PyArray::from_owned_array(py, Array3::from_shape_vec((height, width, 3), data).map_err(internal)?))
+}
+
+/// The check's message names the CLI's flag; here the keyword.
+fn python_clamp_hint(e: SkinError) -> SkinError {
+    match e {
+        SkinError::Invalid { name, reason } => {
+            SkinError::Invalid { name, reason: reason.replace("use --clamp to clamp them", "pass clamp=True to clamp them") }
+        }
+        other => other,
+    }
+}
+
+/// Base Color, Subsurface Radius and specular maps from parameter maps (see the stub in `_core.pyi`).
+#[pyfunction]
+#[pyo3(
+    name = "maps",
+    signature = (
+        params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
+        method = "burley", exact = false, clamp = false, wavelength_step_nm = 5.0,
+        working_space = "Linear Rec.709", table_resolution = None
+    )
+)]
+#[allow(clippy::too_many_arguments)]
+fn maps_py<'py>(
+    py: Python<'py>,
+    params: Option<&Bound<'py, PyAny>>,
+    melanin: Option<&Bound<'py, PyAny>>,
+    melanin_blend: Option<&Bound<'py, PyAny>>,
+    hemoglobin: Option<&Bound<'py, PyAny>>,
+    oiliness: Option<&Bound<'py, PyAny>>,
+    method: &str,
+    exact: bool,
+    clamp: bool,
+    wavelength_step_nm: f64,
+    working_space: &str,
+    table_resolution: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let start = Instant::now();
+    // Settings first: their errors come before any copy.
+    let knobs = Knobs {
+        wavelength_step_nm,
+        multipole_pairs: None,
+        profile_r_min_mm: None,
+        profile_r_max_mm: None,
+        profile_count: None,
+        combination: "directional",
+        working_space,
+    };
+    let settings = MapSettings {
+        method: by_name("method", method, &SUBSURFACE_METHODS)?,
+        strategy: if exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
+        clamp,
+        table: self::table_resolution(table_resolution)?,
+        request: knobs.request(Outputs::material())?,
+    };
+
+    // The inputs and their shapes.
+    let params = match params {
+        None => None,
+        Some(obj) => Some(
+            float_array("params", obj, 3, PARAMS_ARRAY)?
+                .ok_or_else(|| PyTypeError::new_err(format!("params must be {PARAMS_ARRAY} or None")))?,
+        ),
+    };
+    let keywords = [melanin, melanin_blend, hemoglobin, oiliness];
+    let mut inputs: Vec<Option<MapInput<'py>>> = Vec::with_capacity(4);
+    for (name, obj) in PARAM_CHANNELS.iter().zip(keywords) {
+        inputs.push(obj.map(|o| map_input(name, o)).transpose()?);
+    }
+    let mut shapes: Vec<(&str, Vec<usize>)> = Vec::new();
+    if let Some(p) = &params {
+        let shape = p.shape();
+        if shape[2] != 4 {
+            return Err(invalid("params", format!("must be {PARAMS_ARRAY}; got shape {}", shape_text(&shape))));
+        }
+        shapes.push(("params", shape));
+    }
+    for (name, input) in PARAM_CHANNELS.iter().zip(&inputs) {
+        if let Some(MapInput::Array(a)) = input {
+            shapes.push((name, a.shape()));
+        }
+    }
+    let missing: Vec<&str> = (0..4).filter(|&c| params.is_none() && inputs[c].is_none()).map(|c| PARAM_CHANNELS[c]).collect();
+    if !missing.is_empty() {
+        return Err(invalid(
+            "parameters",
+            format!("give params= ({PARAMS_ARRAY}) or each of {}; missing: {}", PARAM_CHANNELS.join(", "), missing.join(", ")),
+        ));
+    }
+    let Some((_, first)) = shapes.first() else {
+        return Err(invalid(
+            "parameters",
+            "give at least one array (params or a per-parameter map): with only constants there is no map size (for one material use evaluate())",
+        ));
+    };
+    let (height, width) = (first[0], first[1]);
+    if shapes.iter().any(|(_, s)| (s[0], s[1]) != (height, width)) {
+        let listed: Vec<String> = shapes.iter().map(|(n, s)| format!("{n} {}", shape_text(s))).collect();
+        return Err(invalid("shapes", format!("the arrays must agree in (H, W); got {}", listed.join(", "))));
+    }
+    if height == 0 || width == 0 || height.saturating_mul(width) > MAX_TEXELS {
+        return Err(invalid(
+            "shapes",
+            format!("a map needs 1 to {MAX_TEXELS} texels; got (H, W) = ({height}, {width})"),
+        ));
+    }
+    // Constants are checked here, with their own message; clamp=True leaves them to the check of the planes.
+    if !clamp {
+        for (c, input) in inputs.iter().enumerate() {
+            if let Some(MapInput::Constant(v)) = input {
+                let (lo, hi) = crate::maps::io::PARAM_RANGES[c];
+                if !(*v >= lo && *v <= hi) {
+                    let name = PARAM_CHANNELS[c];
+                    return Err(invalid(name, format!("must be in [{lo}, {hi}]; got {v} (pass clamp=True to clamp it)")));
+                }
+            }
+        }
+    }
+    let mut planes = Vec::with_capacity(4);
+    for (c, input) in inputs.iter().enumerate() {
+        planes.push(match (input, &params) {
+            (Some(MapInput::Constant(v)), _) => Plane::Constant(*v as f32),
+            (Some(MapInput::Array(a)), _) => Plane::Texels(a.plane(None)?),
+            (None, Some(p)) => Plane::Texels(p.plane(Some(c))?),
+            (None, None) => return Err(internal("a parameter without a source")),
+        });
+    }
+    let planes: [Plane; 4] = planes.try_into().map_err(|_| internal("not four planes"))?;
+    let mut image = ParamImage { width, height, planes };
+    drop(params);
+    drop(inputs);
+
+    // Check, compute and interleave with the GIL released.
+    enum Specular {
+        Map(Vec<f32>),
+        Constant(crate::surface::SpecularParams),
+    }
+    struct Computed {
+        base_color: Vec<f32>,
+        radius_mm: Vec<f32>,
+        specular: Specular,
+        report: crate::maps::MapReport,
+    }
+    let computed = detached(py, move || {
+        let clamped = check_planes(&mut image, clamp).map_err(python_clamp_hint)?;
+        let read = start.elapsed().as_secs_f64();
+        let mut result = compute_maps(&image, &settings, None)?;
+        drop(image);
+        let write = Instant::now();
+        let base_color = interleave(width, std::mem::take(&mut result.base_color));
+        let radius_mm = interleave(width, std::mem::take(&mut result.radius_mm));
+        let specular = match result.specular {
+            SpecularOutput::Map(planes) => Specular::Map(interleave(width, planes)),
+            SpecularOutput::Constant(s) => Specular::Constant(s),
+        };
+        let mut report = result.report;
+        report.clamped = clamped;
+        report.seconds.read = read;
+        report.seconds.write = write.elapsed().as_secs_f64();
+        Ok(Computed { base_color, radius_mm, specular, report })
+    })?;
+
+    let dict = PyDict::new(py);
+    dict.set_item("base_color", rgb_image(py, height, width, computed.base_color)?)?;
+    dict.set_item("radius_mm", rgb_image(py, height, width, computed.radius_mm)?)?;
+    match computed.specular {
+        Specular::Map(map) => dict.set_item("specular", rgb_image(py, height, width, map)?)?,
+        Specular::Constant(constants) => dict.set_item("specular", json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?)?,
+    }
+    let mut report = computed.report;
+    report.seconds.total = start.elapsed().as_secs_f64();
+    let report_dict = json_to_py(py, &serde_json::to_value(&report).map_err(internal)?)?;
+    // JSON has no infinity: serde_json writes a semi-infinite dermis as null. Python floats do.
+    report_dict
+        .get_item("request")?
+        .get_item("model")?
+        .set_item("dermis_thickness_mm", report.request.model.dermis_thickness_mm)?;
+    dict.set_item("report", report_dict)?;
+    Ok(dict)
+}
+
 /// spectral-skin's compiled core: Donner & Jensen 2006's spectral skin BSSRDF.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -453,5 +797,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(profile_py, m)?)?;
     m.add_function(wrap_pyfunction!(presets_py, m)?)?;
     m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
+    m.add_function(wrap_pyfunction!(maps_py, m)?)?;
     Ok(())
 }

@@ -2,7 +2,14 @@
 
 use std::process::ExitCode;
 
+use std::path::PathBuf;
+
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use spectral_skin::fit::SubsurfaceMethod;
+use spectral_skin::maps::example::write_face_params;
+use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource};
+use spectral_skin::maps::{MapSettings, StrategyChoice};
 use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::{evaluate, Evaluation, Outputs, Request, SkinError, SkinParams, PRESETS};
@@ -50,6 +57,81 @@ enum Command {
     },
     /// List the named presets.
     Presets,
+    /// Parameter maps in, Principled texture maps out: albedo.exr, radius.exr, specular.exr, skin_maps.json.
+    Maps(MapsArgs),
+    /// Write the built-in example parameter map (a face-like test card) as one four-channel EXR.
+    Example {
+        /// Output file.
+        #[arg(long, default_value = "face_params.exr")]
+        out: PathBuf,
+        /// Width and height in texels.
+        #[arg(long, default_value_t = 512)]
+        size: usize,
+    },
+}
+
+#[derive(Args)]
+struct MapsArgs {
+    /// One EXR with channels melanin, melanin_blend, hemoglobin, oiliness.
+    #[arg(long, conflicts_with_all = ["melanin_map", "melanin_blend_map", "hemoglobin_map", "oiliness_map"])]
+    params: Option<PathBuf>,
+    /// Melanin map (single-channel EXR, or 8/16-bit PNG/TIFF mapped 0..1 onto 0..0.5), or use --melanin.
+    #[arg(long)]
+    melanin_map: Option<PathBuf>,
+    /// Melanin-blend map (EXR, or PNG/TIFF mapped onto 0..1), or use --melanin-blend.
+    #[arg(long)]
+    melanin_blend_map: Option<PathBuf>,
+    /// Blood map (EXR, or PNG/TIFF mapped onto 0..0.1), or use --hemoglobin.
+    #[arg(long)]
+    hemoglobin_map: Option<PathBuf>,
+    /// Oiliness map (EXR, or PNG/TIFF mapped onto 0..1), or use --oiliness.
+    #[arg(long)]
+    oiliness_map: Option<PathBuf>,
+    /// Constant melanin fraction (also fills a channel missing from --params).
+    #[arg(long)]
+    melanin: Option<f64>,
+    /// Constant eumelanin share.
+    #[arg(long)]
+    melanin_blend: Option<f64>,
+    /// Constant blood fraction.
+    #[arg(long)]
+    hemoglobin: Option<f64>,
+    /// Constant oiliness.
+    #[arg(long)]
+    oiliness: Option<f64>,
+    /// Output folder (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Subsurface method the maps are for (default: the same as `eval`).
+    #[arg(long, value_enum, default_value_t = MethodArg::Burley)]
+    method: MethodArg,
+    /// Evaluate every texel directly instead of through the lookup table.
+    #[arg(long)]
+    exact: bool,
+    /// Clamp NaN, infinite and out-of-range texels (and report them) instead of failing.
+    #[arg(long)]
+    clamp: bool,
+    /// Write 16-bit half floats instead of 32-bit floats.
+    #[arg(long)]
+    half: bool,
+    /// EXR compression.
+    #[arg(long, value_enum, default_value_t = CompressionArg::Zip)]
+    compression: CompressionArg,
+    #[command(flatten)]
+    accuracy: AccuracyArgs,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    Burley,
+    RandomWalk,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum CompressionArg {
+    Zip,
+    Piz,
+    None,
 }
 
 #[derive(Args)]
@@ -154,6 +236,11 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             let ev = evaluate(&params, &request)?;
             print_profile_csv(&ev);
         }
+        Command::Maps(args) => run_maps(args)?,
+        Command::Example { out, size } => {
+            write_face_params(&out, size)?;
+            println!("wrote {} ({size}x{size}, channels melanin, melanin_blend, hemoglobin, oiliness)", out.display());
+        }
         Command::Presets => {
             for p in PRESETS {
                 let q = p.params;
@@ -166,6 +253,81 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     }
     Ok(())
 }
+
+fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let constants = [args.melanin, args.melanin_blend, args.hemoglobin, args.oiliness];
+    let inputs = match &args.params {
+        Some(path) => ParamInputs::Multi { path: path.clone(), constants },
+        None => {
+            let files = [&args.melanin_map, &args.melanin_blend_map, &args.hemoglobin_map, &args.oiliness_map];
+            let mut sources = Vec::new();
+            for (k, (file, constant)) in files.iter().zip(constants).enumerate() {
+                sources.push(match (file, constant) {
+                    (Some(f), None) => ParamSource::File(f.to_path_buf()),
+                    (None, Some(v)) => ParamSource::Constant(v),
+                    (Some(_), Some(_)) => return Err(format!("give either --{0}-map or --{0}, not both", FLAGS[k]).into()),
+                    (None, None) => return Err(format!("missing {0}: give --params, --{0}-map or --{0}", FLAGS[k]).into()),
+                });
+            }
+            ParamInputs::Separate(sources.try_into().map_err(|_| "four sources")?)
+        }
+    };
+    let mut settings = MapSettings {
+        method: match args.method {
+            MethodArg::Burley => SubsurfaceMethod::Burley,
+            MethodArg::RandomWalk => SubsurfaceMethod::RandomWalk,
+        },
+        strategy: if args.exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
+        clamp: args.clamp,
+        ..MapSettings::default()
+    };
+    settings.request = args.accuracy.request(Outputs::material());
+    let exr = ExrOptions {
+        half: args.half,
+        compression: match args.compression {
+            CompressionArg::Zip => Compression::Zip,
+            CompressionArg::Piz => Compression::Piz,
+            CompressionArg::None => Compression::None,
+        },
+    };
+    // A progress bar for work that lasts over a second (hidden until then).
+    let bar = ProgressBar::hidden();
+    let started = std::time::Instant::now();
+    let shown = std::sync::OnceLock::new();
+    let progress = |done: usize, total: usize| {
+        if started.elapsed().as_secs_f64() > 1.0 {
+            shown.get_or_init(|| {
+                bar.set_length(total as u64);
+                bar.set_style(
+                    ProgressStyle::with_template("{bar:40} {percent}% of {len} texels, eta {eta}")
+                        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+                );
+                bar.set_draw_target(ProgressDrawTarget::stderr());
+            });
+        }
+        bar.inc(done as u64);
+    };
+    let report = spectral_skin::maps::run_maps(&inputs, &args.out, &settings, exr, Some(&progress))?;
+    bar.finish_and_clear();
+    println!(
+        "{}x{} texels, strategy {}, {:.2} s (read {:.2}, compute {:.2}, write {:.2}); wrote {}",
+        report.width,
+        report.height,
+        serde_json::to_value(&report.strategy)?["name"].as_str().unwrap_or("?"),
+        report.seconds.total,
+        report.seconds.read,
+        report.seconds.compute,
+        report.seconds.write,
+        args.out.display()
+    );
+    for bad in &report.clamped {
+        println!("clamped {}: {} NaN, {} infinite, {} out of range", bad.parameter, bad.nan, bad.infinite, bad.out_of_range);
+    }
+    Ok(())
+}
+
+/// CLI flag stems of the four parameters, in PARAM_CHANNELS order.
+const FLAGS: [&str; 4] = ["melanin", "melanin-blend", "hemoglobin", "oiliness"];
 
 fn print_summary(ev: &Evaluation) {
     let p = ev.params;

@@ -18,9 +18,10 @@ pub fn burley_transform(s_per_mm: f64, d_mm: f64) -> f64 {
     0.25 * (1.0 / (1.0 + x * x).sqrt() + 3.0 / (1.0 + 9.0 * x * x).sqrt())
 }
 
-/// Frequencies (mm^-1) on which transfer functions are compared: log-spaced, 1e-4 to 1e6 mm^-1.
+/// Frequencies (mm^-1) on which transfer functions are compared: log-spaced, 1e-3 to 1e5 mm^-1 (Burley lengths d
+/// from ~0.005 mm to ~5 mm have their transfer edge, s d ~ 0.03..30, well inside).
 pub fn fit_frequencies(per_decade: f64) -> Vec<f64> {
-    const DECADES: (f64, f64) = (-4.0, 6.0);
+    const DECADES: (f64, f64) = (-3.0, 5.0);
     let n = ((DECADES.1 - DECADES.0) * per_decade).round() as usize;
     (0..=n).map(|i| 10f64.powf(DECADES.0 + (DECADES.1 - DECADES.0) * i as f64 / n as f64)).collect()
 }

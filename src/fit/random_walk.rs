@@ -294,10 +294,25 @@ fn saturation_base_color() -> f64 {
     })
 }
 
+/// Nodes of the RW response on [0, A_sat], (A, random_walk_flat_albedo(A)), computed once.
+fn response_table() -> &'static [(f64, f64)] {
+    const NODES: usize = 257;
+    static TABLE: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let a_sat = saturation_base_color();
+        (0..NODES)
+            .map(|i| {
+                let a = a_sat * i as f64 / (NODES - 1) as f64;
+                (a, random_walk_flat_albedo(a))
+            })
+            .collect()
+    })
+}
+
 /// Base Color A such that [`random_walk_flat_albedo`]`(A)` equals `target_albedo` (dimensionless), the inverse of
 /// Cycles RW's flat-slab response at g = 0.
 ///
-/// Bisection on [0, A_sat], where the response rises monotonically from 0 to its maximum 0.99710 (alpha = 0.999999).
+/// Solved on [0, A_sat], where the response rises monotonically from 0 to its maximum 0.99710 (alpha = 0.999999).
 /// A target above that maximum gives A_sat with `saturated = true`. The target is clamped to [0, 1]; NaN gives
 /// base color 0, achieved 0 and `saturated = true`. The 256-bounce cap is not modelled (see
 /// [`random_walk_flat_albedo`]): above A ~ 0.8 Cycles renders less than `achieved_albedo`.
@@ -314,19 +329,40 @@ pub fn random_walk_base_color(target_albedo: f64) -> RandomWalkColor {
     if target <= 0.0 {
         return RandomWalkColor { base_color: 0.0, achieved_albedo: 0.0, saturated: false };
     }
-    let (mut lo, mut hi) = (0.0, a_sat);
+    // Bracket the root between two nodes of a cached response table, then refine by the Illinois variant of regula
+    // falsi (superlinear on this smooth, monotonic response; a handful of evaluations instead of ~50 bisections).
+    let table = response_table();
+    let k = table.partition_point(|&(_, r)| r < target).clamp(1, table.len() - 1);
+    let ((mut lo, mut f_lo), (mut hi, mut f_hi)) = (table[k - 1], table[k]);
+    f_lo -= target;
+    f_hi -= target;
+    let mut base_color = lo;
+    let mut side = 0;
     for _ in 0..BISECTION_STEPS {
-        let mid = 0.5 * (lo + hi);
-        if random_walk_flat_albedo(mid) < target {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        if hi - lo <= f64::EPSILON * hi {
+        if f_hi == f_lo || hi - lo <= f64::EPSILON * hi {
             break;
         }
+        base_color = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let f = random_walk_flat_albedo(base_color) - target;
+        if f == 0.0 {
+            break;
+        }
+        if (f < 0.0) == (f_lo < 0.0) {
+            lo = base_color;
+            f_lo = f;
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        } else {
+            hi = base_color;
+            f_hi = f;
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        }
     }
-    let base_color = 0.5 * (lo + hi);
     RandomWalkColor { base_color, achieved_albedo: random_walk_flat_albedo(base_color), saturated: false }
 }
 

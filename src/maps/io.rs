@@ -1,0 +1,907 @@
+//! Parameter maps in, texture maps out: reading the four parameter planes (EXR, PNG, TIFF or constants) and writing
+//! scene-linear EXR outputs atomically.
+//!
+//! Conventions shared by every function here:
+//! - Planes are row-major, `width * height` long, row 0 at the top (the first row of the EXR data window, the first
+//!   row of a PNG or TIFF as stored; a TIFF orientation tag is ignored).
+//! - EXR files must be single-part, flat (not deep) and without sub-sampled channels; of a mip- or rip-mapped file
+//!   only the full-resolution level is read. Only the size of the data window matters, not its position.
+//! - Written EXRs are single-part scan-line files whose channels are stored sorted by name (as OpenEXR requires):
+//!   an RGB file holds `B`, `G`, `R` in that order on disk; readers look channels up by name.
+//! - Outputs are written to a hidden temporary file beside the destination (`.<name>.<random>.tmp`) and renamed into
+//!   place only once complete, so a failure never leaves a half-written or clobbered file.
+
+use std::cell::Cell;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+
+use exr::block::reader::ChunksReader;
+use exr::block::writer::ChunksWriter;
+use exr::block::UncompressedBlock;
+use exr::meta::attribute::{ChannelDescription, LineOrder, SampleType, Text};
+use exr::meta::header::Header;
+use exr::meta::{BlockDescription, MetaData};
+use exr::prelude::f16;
+use serde::{Deserialize, Serialize};
+
+use crate::error::SkinError;
+use crate::skin::params::{HEMOGLOBIN_RANGE, MELANIN_BLEND_RANGE, MELANIN_RANGE, OILINESS_RANGE};
+
+/// The four parameters in the order melanin, melanin_blend, hemoglobin, oiliness. These are also the channel names
+/// a multi-channel parameter EXR must use (exact, case-sensitive).
+pub const PARAM_CHANNELS: [&str; 4] = ["melanin", "melanin_blend", "hemoglobin", "oiliness"];
+
+/// The allowed range `(min, max)` of each parameter, in [`PARAM_CHANNELS`] order (unitless volume fractions and
+/// shares). An integer PNG/TIFF value `v` of bit depth `b` maps to `min + (max - min) * v / (2^b - 1)`.
+pub const PARAM_RANGES: [(f64, f64); 4] = [MELANIN_RANGE, MELANIN_BLEND_RANGE, HEMOGLOBIN_RANGE, OILINESS_RANGE];
+
+/// The largest image accepted or written, in texels (16384 x 16384). Larger headers are rejected before any
+/// allocation, so a corrupt size field gives an error instead of an out-of-memory abort.
+pub const MAX_TEXELS: usize = 1 << 28;
+
+/// One parameter's source.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParamSource {
+    /// A single-channel image: an EXR (values taken as the parameter itself) or an 8/16-bit greyscale PNG or TIFF
+    /// (mapped 0..1 onto the parameter's range, see [`PARAM_RANGES`]).
+    File(PathBuf),
+    /// The same value everywhere, in the parameter's own unit (not range-checked here).
+    Constant(f64),
+}
+
+/// Where the four parameters come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParamInputs {
+    /// One EXR with channels named as in [`PARAM_CHANNELS`] (all four required unless `constants` gives the missing
+    /// ones). A constant given for a channel that the file also has overrides that channel (it is not read).
+    Multi { path: PathBuf, constants: [Option<f64>; 4] },
+    /// One source per parameter, in [`PARAM_CHANNELS`] order.
+    Separate([ParamSource; 4]),
+}
+
+/// A parameter plane: per-texel values, or one constant.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Plane {
+    /// `width * height` values, row-major, row 0 at the top.
+    Texels(Vec<f32>),
+    /// One value for every texel.
+    Constant(f32),
+}
+
+impl Plane {
+    /// The value of texel `index` (row-major). Panics if `index` is out of bounds of a `Texels` plane.
+    #[inline]
+    pub fn value(&self, index: usize) -> f32 {
+        match self {
+            Plane::Texels(values) => values[index],
+            Plane::Constant(value) => *value,
+        }
+    }
+
+    /// True for a constant plane.
+    pub fn is_constant(&self) -> bool {
+        matches!(self, Plane::Constant(_))
+    }
+}
+
+/// The loaded parameters: row-major planes of width x height (row 0 at the top, as EXR stores it), in
+/// [`PARAM_CHANNELS`] order, each in the parameter's own unit (volume fraction / share, as in
+/// [`crate::SkinParams`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamImage {
+    pub width: usize,
+    pub height: usize,
+    pub planes: [Plane; 4],
+}
+
+impl ParamImage {
+    /// Number of texels, `width * height`.
+    pub fn texel_count(&self) -> usize {
+        self.width * self.height
+    }
+
+    /// The four parameter values of texel `index` (row-major), in [`PARAM_CHANNELS`] order.
+    #[inline]
+    pub fn texel(&self, index: usize) -> [f32; 4] {
+        [
+            self.planes[0].value(index),
+            self.planes[1].value(index),
+            self.planes[2].value(index),
+            self.planes[3].value(index),
+        ]
+    }
+}
+
+/// Output encoding. The default is float (32-bit) samples with ZIP compression.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct ExrOptions {
+    /// Write 16-bit half floats instead of 32-bit floats (values rounded to nearest; above 65504 become infinite).
+    pub half: bool,
+    /// Lossless compression of the written files.
+    pub compression: Compression,
+}
+
+/// Lossless EXR compression of written files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Compression {
+    /// ZIP, 16 scan lines per block (OpenEXR `ZIP_COMPRESSION`, Blender's "ZIP").
+    #[default]
+    Zip,
+    /// PIZ wavelet compression (Blender's "PIZ").
+    Piz,
+    /// No compression.
+    None,
+}
+
+impl Compression {
+    fn to_exr(self) -> exr::compression::Compression {
+        match self {
+            Compression::Zip => exr::compression::Compression::ZIP16,
+            Compression::Piz => exr::compression::Compression::PIZ,
+            Compression::None => exr::compression::Compression::Uncompressed,
+        }
+    }
+}
+
+// ------------------------------------------------------------------------------------------------------------------
+// Reading
+// ------------------------------------------------------------------------------------------------------------------
+
+/// Read and check the parameter inputs.
+///
+/// Every file is opened and its header checked before any pixel data is decoded: all files exist and are EXR, PNG or
+/// TIFF (recognised by content, not extension); their sizes agree (the error lists each file's size); a multi-channel
+/// EXR has every channel not given as a constant (the error lists the channels found); one-parameter files are
+/// single-channel.
+///
+/// - A one-parameter EXR must have exactly one channel (any name, any sample type), or else a channel named like the
+///   parameter (so a multi-channel parameter EXR can also serve as a separate source). Values are taken as the
+///   parameter itself; f16 and u32 samples are converted to f32.
+/// - A one-parameter PNG or TIFF must be greyscale, 8 or 16 bits (greyscale + alpha is accepted; the alpha is
+///   ignored). RGB(A) and float images are rejected. A value `v` maps to `min + (max - min) * v / (2^bits - 1)` of
+///   the parameter's range ([`PARAM_RANGES`]), computed in f64 (so 255 in an 8-bit melanin map gives exactly 0.5).
+/// - Constants are used as given (converted to f32).
+///
+/// If every source is a constant there is no size to use: that is an error asking for at least one map.
+/// Values are not range-checked here (NaN, infinities and out-of-range values pass through).
+pub fn read_params(inputs: &ParamInputs) -> Result<ParamImage, SkinError> {
+    match inputs {
+        ParamInputs::Multi { path, constants } => read_multi(path, constants),
+        ParamInputs::Separate(sources) => read_separate(sources),
+    }
+}
+
+fn read_multi(path: &Path, constants: &[Option<f64>; 4]) -> Result<ParamImage, SkinError> {
+    let what = "parameter EXR";
+    let probe = probe_exr(path, what)?;
+    let mut wanted: Vec<(usize, usize)> = Vec::new(); // (parameter index, channel index in the file)
+    let mut missing: Vec<&str> = Vec::new();
+    for (p, name) in PARAM_CHANNELS.iter().enumerate() {
+        if constants[p].is_some() {
+            continue;
+        }
+        match probe.channels.iter().position(|(c, _)| c == name) {
+            Some(c) => wanted.push((p, c)),
+            None => missing.push(name),
+        }
+    }
+    if !missing.is_empty() {
+        return Err(SkinError::invalid(
+            what,
+            format!(
+                "{}: missing channel{} {}; expected channels named {} (or a constant for each missing one); found \
+                 channels: {}",
+                path.display(),
+                if missing.len() > 1 { "s" } else { "" },
+                missing.join(", "),
+                PARAM_CHANNELS.join(", "),
+                probe.channel_list()
+            ),
+        ));
+    }
+    let indices: Vec<usize> = wanted.iter().map(|&(_, c)| c).collect();
+    let mut read = read_exr_planes(path, what, &probe, &indices)?.into_iter();
+    let mut planes: [Plane; 4] = std::array::from_fn(|p| Plane::Constant(constants[p].unwrap_or(f64::NAN) as f32));
+    for &(p, _) in &wanted {
+        // One plane was read per wanted channel, in the same order.
+        if let Some(values) = read.next() {
+            planes[p] = Plane::Texels(values);
+        }
+    }
+    Ok(ParamImage { width: probe.width, height: probe.height, planes })
+}
+
+fn read_separate(sources: &[ParamSource; 4]) -> Result<ParamImage, SkinError> {
+    // Phase 1: headers only.
+    let mut probes: Vec<(usize, &Path, FileProbe)> = Vec::new();
+    for (p, source) in sources.iter().enumerate() {
+        if let ParamSource::File(path) = source {
+            probes.push((p, path, probe_param_file(path, p)?));
+        }
+    }
+    let Some((_, _, first)) = probes.first() else {
+        return Err(SkinError::invalid(
+            "parameter inputs",
+            "every parameter is a constant; expected at least one map (a file) to give the output size",
+        ));
+    };
+    let (width, height) = (first.width(), first.height());
+    if probes.iter().any(|(_, _, probe)| probe.width() != width || probe.height() != height) {
+        let sizes: Vec<String> = probes
+            .iter()
+            .map(|(p, path, probe)| {
+                format!("{} {} is {}x{}", PARAM_CHANNELS[*p], path.display(), probe.width(), probe.height())
+            })
+            .collect();
+        return Err(SkinError::invalid(
+            "parameter maps",
+            format!("expected all maps to have the same size (width x height); found {}", sizes.join(", ")),
+        ));
+    }
+
+    // Phase 2: decode.
+    let mut planes: [Plane; 4] = std::array::from_fn(|p| match &sources[p] {
+        ParamSource::Constant(value) => Plane::Constant(*value as f32),
+        ParamSource::File(_) => Plane::Constant(f32::NAN), // replaced below
+    });
+    for (p, path, probe) in &probes {
+        let what = map_name(*p);
+        let values = match probe {
+            FileProbe::Exr { probe, channel } => {
+                read_exr_planes(path, &what, probe, &[*channel])?.pop().unwrap_or_default()
+            }
+            FileProbe::Integer { width, height, .. } => read_integer_image(path, &what, *p, *width, *height)?,
+        };
+        planes[*p] = Plane::Texels(values);
+    }
+    Ok(ParamImage { width, height, planes })
+}
+
+fn map_name(p: usize) -> String {
+    format!("{} map", PARAM_CHANNELS[p])
+}
+
+/// What phase 1 learnt about one file.
+enum FileProbe {
+    /// An EXR and the index of the channel to read.
+    Exr { probe: ExrProbe, channel: usize },
+    /// A greyscale PNG or TIFF.
+    Integer { width: usize, height: usize },
+}
+
+impl FileProbe {
+    fn width(&self) -> usize {
+        match self {
+            FileProbe::Exr { probe, .. } => probe.width,
+            FileProbe::Integer { width, .. } => *width,
+        }
+    }
+    fn height(&self) -> usize {
+        match self {
+            FileProbe::Exr { probe, .. } => probe.height,
+            FileProbe::Integer { height, .. } => *height,
+        }
+    }
+}
+
+/// The header facts of a readable EXR.
+struct ExrProbe {
+    width: usize,
+    height: usize,
+    channels: Vec<(String, SampleType)>,
+}
+
+impl ExrProbe {
+    fn channel_list(&self) -> String {
+        if self.channels.is_empty() {
+            "none".to_string()
+        } else {
+            self.channels.iter().map(|(name, _)| name.as_str()).collect::<Vec<_>>().join(", ")
+        }
+    }
+}
+
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+fn open_file(path: &Path, what: &str) -> Result<File, SkinError> {
+    if path.is_dir() {
+        return Err(SkinError::io(path, format!("cannot read {what}: expected a file, found a directory")));
+    }
+    File::open(path)
+        .map_err(|e| SkinError::io(path, format!("cannot read {what}: {e} (expected an existing, readable file)")))
+}
+
+fn is_exr(path: &Path, what: &str) -> Result<bool, SkinError> {
+    let mut magic = [0u8; 4];
+    let mut file = open_file(path, what)?;
+    let mut filled = 0;
+    while filled < 4 {
+        match file.read(&mut magic[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(SkinError::io(path, format!("cannot read {what}: {e}"))),
+        }
+    }
+    Ok(filled == 4 && magic == EXR_MAGIC)
+}
+
+fn check_size(path: &Path, what: &str, width: usize, height: usize) -> Result<(), SkinError> {
+    if width == 0 || height == 0 || width.checked_mul(height).map_or(true, |n| n > MAX_TEXELS) {
+        return Err(SkinError::invalid(
+            what,
+            format!("{}: expected an image of 1 to {MAX_TEXELS} texels; found {width}x{height}", path.display()),
+        ));
+    }
+    Ok(())
+}
+
+/// Header of an EXR: single part, flat, full-resolution channels.
+fn probe_exr(path: &Path, what: &str) -> Result<ExrProbe, SkinError> {
+    let file = open_file(path, what)?;
+    let meta =
+        guard(|| MetaData::read_from_buffered(BufReader::new(file), false)).and_then(|r| r.map_err(|e| e.to_string()));
+    let meta = meta.map_err(|e| {
+        SkinError::io(path, format!("cannot read {what}: not a valid OpenEXR header ({e}); expected an EXR file"))
+    })?;
+    probe_from_headers(path, what, &meta.headers)
+}
+
+fn probe_from_headers(path: &Path, what: &str, headers: &[Header]) -> Result<ExrProbe, SkinError> {
+    if headers.len() != 1 {
+        let names: Vec<String> = headers
+            .iter()
+            .map(|h| h.own_attributes.layer_name.as_ref().map(|n| n.to_string()).unwrap_or_else(|| "(unnamed)".into()))
+            .collect();
+        return Err(SkinError::invalid(
+            what,
+            format!(
+                "{}: expected a single-part EXR; found {} parts ({})",
+                path.display(),
+                headers.len(),
+                names.join(", ")
+            ),
+        ));
+    }
+    let header = &headers[0];
+    if header.deep {
+        return Err(SkinError::invalid(what, format!("{}: expected a flat EXR; found deep data", path.display())));
+    }
+    for channel in &header.channels.list {
+        if channel.sampling.0 != 1 || channel.sampling.1 != 1 {
+            return Err(SkinError::invalid(
+                what,
+                format!(
+                    "{}: expected full-resolution channels; channel {} is sub-sampled {}x{}",
+                    path.display(),
+                    channel.name,
+                    channel.sampling.0,
+                    channel.sampling.1
+                ),
+            ));
+        }
+    }
+    let (width, height) = (header.layer_size.0, header.layer_size.1);
+    check_size(path, what, width, height)?;
+    Ok(ExrProbe {
+        width,
+        height,
+        channels: header.channels.list.iter().map(|c| (c.name.to_string(), c.sample_type)).collect(),
+    })
+}
+
+/// Header check of a one-parameter file.
+fn probe_param_file(path: &Path, p: usize) -> Result<FileProbe, SkinError> {
+    let what = map_name(p);
+    if is_exr(path, &what)? {
+        let probe = probe_exr(path, &what)?;
+        let channel = if probe.channels.len() == 1 {
+            0
+        } else if let Some(c) = probe.channels.iter().position(|(c, _)| c == PARAM_CHANNELS[p]) {
+            c
+        } else {
+            return Err(SkinError::invalid(
+                what,
+                format!(
+                    "{}: expected a single-channel EXR or one with a channel named {}; found channels: {}",
+                    path.display(),
+                    PARAM_CHANNELS[p],
+                    probe.channel_list()
+                ),
+            ));
+        };
+        return Ok(FileProbe::Exr { probe, channel });
+    }
+    let reader = image_reader(path, &what)?;
+    let decoder = guard(|| {
+        reader.into_decoder().map(|d| (image::ImageDecoder::dimensions(&d), image::ImageDecoder::color_type(&d)))
+    })
+    .and_then(|r| r.map_err(|e| e.to_string()))
+    .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image header ({e})")))?;
+    let ((w, h), color) = decoder;
+    check_color(path, &what, color)?;
+    let (width, height) = (w as usize, h as usize);
+    check_size(path, &what, width, height)?;
+    Ok(FileProbe::Integer { width, height })
+}
+
+/// An image reader for a PNG or TIFF, recognised by content.
+fn image_reader(path: &Path, what: &str) -> Result<image::ImageReader<BufReader<File>>, SkinError> {
+    let file = open_file(path, what)?;
+    let reader = image::ImageReader::new(BufReader::new(file))
+        .with_guessed_format()
+        .map_err(|e| SkinError::io(path, format!("cannot read {what}: {e}")))?;
+    match reader.format() {
+        Some(image::ImageFormat::Png) | Some(image::ImageFormat::Tiff) => Ok(reader),
+        Some(other) => Err(SkinError::invalid(
+            what,
+            format!("{}: expected an EXR, PNG or TIFF file; found {other:?}", path.display()),
+        )),
+        None => Err(SkinError::invalid(
+            what,
+            format!("{}: expected an EXR, PNG or TIFF file; found an unrecognised format", path.display()),
+        )),
+    }
+}
+
+fn check_color(path: &Path, what: &str, color: image::ColorType) -> Result<(), SkinError> {
+    use image::ColorType as C;
+    match color {
+        C::L8 | C::L16 | C::La8 | C::La16 => Ok(()),
+        other => Err(SkinError::invalid(
+            what,
+            format!(
+                "{}: expected a single-channel (greyscale) 8- or 16-bit image; found {} ({} channels, {} bits); \
+                 save it as greyscale or use a single-channel EXR",
+                path.display(),
+                color_name(other),
+                other.channel_count(),
+                other.bits_per_pixel() / u16::from(other.channel_count()),
+            ),
+        )),
+    }
+}
+
+fn color_name(color: image::ColorType) -> &'static str {
+    use image::ColorType as C;
+    match color {
+        C::L8 | C::L16 => "greyscale",
+        C::La8 | C::La16 => "greyscale + alpha",
+        C::Rgb8 | C::Rgb16 => "RGB",
+        C::Rgba8 | C::Rgba16 => "RGBA",
+        C::Rgb32F => "float RGB",
+        C::Rgba32F => "float RGBA",
+        _ => "an unsupported colour type",
+    }
+}
+
+/// Decode a greyscale PNG/TIFF and map its integer values onto parameter `p`'s range.
+fn read_integer_image(path: &Path, what: &str, p: usize, width: usize, height: usize) -> Result<Vec<f32>, SkinError> {
+    let reader = image_reader(path, what)?;
+    let img = guard(|| reader.decode())
+        .and_then(|r| r.map_err(|e| e.to_string()))
+        .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image ({e})")))?;
+    if img.width() as usize != width || img.height() as usize != height {
+        return Err(SkinError::invalid(
+            what,
+            format!(
+                "{}: expected {width}x{height} as its header said; decoded {}x{} (file changed while reading?)",
+                path.display(),
+                img.width(),
+                img.height()
+            ),
+        ));
+    }
+    let (min, max) = PARAM_RANGES[p];
+    let map8 = |v: u8| (min + (max - min) * f64::from(v) / 255.0) as f32;
+    let map16 = |v: u16| (min + (max - min) * f64::from(v) / 65535.0) as f32;
+    let values: Vec<f32> = match img {
+        image::DynamicImage::ImageLuma8(buf) => buf.as_raw().iter().map(|&v| map8(v)).collect(),
+        image::DynamicImage::ImageLumaA8(buf) => buf.as_raw().chunks_exact(2).map(|la| map8(la[0])).collect(),
+        image::DynamicImage::ImageLuma16(buf) => buf.as_raw().iter().map(|&v| map16(v)).collect(),
+        image::DynamicImage::ImageLumaA16(buf) => buf.as_raw().chunks_exact(2).map(|la| map16(la[0])).collect(),
+        other => {
+            return Err(check_color(path, what, other.color()).err().unwrap_or_else(|| {
+                SkinError::invalid(what, format!("{}: expected a greyscale image", path.display()))
+            }))
+        }
+    };
+    if values.len() != width * height {
+        return Err(SkinError::invalid(
+            what,
+            format!("{}: expected {} texels; decoded {}", path.display(), width * height, values.len()),
+        ));
+    }
+    Ok(values)
+}
+
+/// Run a decoder, turning a panic inside a third-party decoder (on a corrupt file) into an error message.
+fn guard<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    catch_unwind(AssertUnwindSafe(f)).map_err(|payload| {
+        let text = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "decoder panicked".to_string());
+        format!("corrupt file: {text}")
+    })
+}
+
+/// Read the channels at `indices` (indices into the file's sorted channel list) of a probed EXR into f32 planes,
+/// decompressing blocks in parallel and writing samples straight into the planes.
+fn read_exr_planes(path: &Path, what: &str, probe: &ExrProbe, indices: &[usize]) -> Result<Vec<Vec<f32>>, SkinError> {
+    let decode_error =
+        |e: String| SkinError::io(path, format!("cannot read {what}: EXR data is truncated or corrupt ({e})"));
+    let (width, height) = (probe.width, probe.height);
+    let texels = width * height;
+    let file = open_file(path, what)?;
+
+    let result = guard(|| -> Result<Vec<Vec<f32>>, ReadFailure> {
+        let reader = exr::block::read(BufReader::new(file), false).map_err(ReadFailure::Exr)?;
+        // Re-check the header: the file could have changed since it was probed.
+        let again = probe_from_headers(path, what, reader.headers()).map_err(ReadFailure::Skin)?;
+        if again.width != width || again.height != height || again.channels != probe.channels {
+            return Err(ReadFailure::Skin(SkinError::invalid(
+                what,
+                format!("{}: the file changed while being read", path.display()),
+            )));
+        }
+        let mut slot_of_channel: Vec<Option<usize>> = vec![None; probe.channels.len()];
+        for (slot, &c) in indices.iter().enumerate() {
+            slot_of_channel[c] = Some(slot);
+        }
+        let types: Vec<SampleType> = probe.channels.iter().map(|(_, t)| *t).collect();
+        let mut planes: Vec<Vec<f32>> = indices.iter().map(|_| vec![0.0f32; texels]).collect();
+        let mut counted = vec![0usize; indices.len()];
+        if indices.is_empty() {
+            return Ok(planes);
+        }
+
+        let chunks = reader
+            .filter_chunks(false, |_, tile, block| block.layer == 0 && tile.is_largest_resolution_level())
+            .map_err(ReadFailure::Exr)?;
+        chunks
+            .decompress_parallel(false, |meta, block| {
+                let channels = &meta.headers[block.index.layer].channels;
+                for line in block.lines(channels) {
+                    let Some(slot) = slot_of_channel.get(line.location.channel).copied().flatten() else {
+                        continue;
+                    };
+                    let (x, y, n) = (line.location.position.0, line.location.position.1, line.location.sample_count);
+                    if y >= height || x.checked_add(n).map_or(true, |end| end > width) {
+                        return Err(exr::error::Error::Invalid("pixel block outside the data window".into()));
+                    }
+                    let start = y * width + x;
+                    let dst = &mut planes[slot][start..start + n];
+                    match types[line.location.channel] {
+                        SampleType::F32 => line.read_samples_into_slice(dst)?,
+                        SampleType::F16 => {
+                            for (d, s) in dst.iter_mut().zip(line.read_samples::<f16>()) {
+                                *d = s?.to_f32();
+                            }
+                        }
+                        SampleType::U32 => {
+                            for (d, s) in dst.iter_mut().zip(line.read_samples::<u32>()) {
+                                *d = s? as f32;
+                            }
+                        }
+                    }
+                    counted[slot] += n;
+                }
+                Ok(())
+            })
+            .map_err(ReadFailure::Exr)?;
+        for (slot, &c) in indices.iter().enumerate() {
+            if counted[slot] != texels {
+                return Err(ReadFailure::Message(format!(
+                    "channel {} has {} of {} texels",
+                    probe.channels[c].0, counted[slot], texels
+                )));
+            }
+        }
+        Ok(planes)
+    });
+    match result {
+        Ok(Ok(planes)) => Ok(planes),
+        Ok(Err(ReadFailure::Skin(e))) => Err(e),
+        Ok(Err(ReadFailure::Exr(e))) => Err(decode_error(e.to_string())),
+        Ok(Err(ReadFailure::Message(m))) => Err(decode_error(m)),
+        Err(panic) => Err(decode_error(panic)),
+    }
+}
+
+enum ReadFailure {
+    Exr(exr::error::Error),
+    Skin(SkinError),
+    Message(String),
+}
+
+/// Read all channels of an EXR as f32 planes by name, in the file's (alphabetical) channel order. Returns
+/// `(width, height, channels)`; planes are row-major, row 0 at the top. f16 and u32 samples are converted to f32.
+/// The file must be a single-part flat EXR (as written by [`write_rgb_exr`] and [`write_channels_exr`]).
+#[allow(clippy::type_complexity)] // the plain tuple is the documented API
+pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<(String, Vec<f32>)>), SkinError> {
+    let what = "EXR";
+    let probe = probe_exr(path, what)?;
+    let indices: Vec<usize> = (0..probe.channels.len()).collect();
+    let planes = read_exr_planes(path, what, &probe, &indices)?;
+    let named = probe.channels.iter().map(|(name, _)| name.clone()).zip(planes).collect();
+    Ok((probe.width, probe.height, named))
+}
+
+// ------------------------------------------------------------------------------------------------------------------
+// Writing
+// ------------------------------------------------------------------------------------------------------------------
+
+/// A finished output file waiting in a temporary file beside its destination. [`commit_all`] (or
+/// [`Staged::commit`]) renames it into place; dropping it un-committed deletes the temporary file and leaves the
+/// destination untouched.
+#[derive(Debug)]
+pub struct Staged {
+    temp: Option<tempfile::TempPath>,
+    target: PathBuf,
+}
+
+impl Staged {
+    /// The final path this file will be renamed to.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// The temporary file currently holding the data.
+    pub fn temp_path(&self) -> Option<&Path> {
+        self.temp.as_deref()
+    }
+
+    /// Rename this one file into place (replacing an existing file).
+    pub fn commit(self) -> Result<(), SkinError> {
+        commit_all(vec![self])
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(temp) = self.temp.take() {
+            // Best effort: the file is in the destination directory, hidden by its leading dot.
+            let _ = temp.close();
+        }
+    }
+}
+
+/// Rename every staged file into place, in order. Before the first rename every destination is checked (not a
+/// directory, not named twice, its directory still exists); a check failure renames nothing and deletes all
+/// temporary files. Each rename is atomic (same directory), so each destination holds either its old or its new
+/// content; if a rename itself fails part-way (rare: e.g. the directory vanished), the files before it are already
+/// replaced, and the remaining temporary files are deleted.
+pub fn commit_all(staged: Vec<Staged>) -> Result<(), SkinError> {
+    for (i, s) in staged.iter().enumerate() {
+        if s.target.is_dir() {
+            return Err(SkinError::io(&s.target, "cannot write output: expected a file path, found a directory"));
+        }
+        if staged[..i].iter().any(|earlier| earlier.target == s.target) {
+            return Err(SkinError::io(&s.target, "cannot write output: the same file is written twice"));
+        }
+        if s.temp.as_ref().map_or(true, |t| !t.exists()) {
+            return Err(SkinError::io(&s.target, "cannot write output: its temporary file has disappeared"));
+        }
+    }
+    let mut dirs: Vec<PathBuf> = Vec::new();
+    for mut s in staged {
+        let Some(temp) = s.temp.take() else { continue };
+        temp.persist(&s.target)
+            .map_err(|e| SkinError::io(&s.target, format!("cannot move the finished file into place: {}", e.error)))?;
+        let dir = parent_dir(&s.target).to_path_buf();
+        if !dirs.contains(&dir) {
+            dirs.push(dir);
+        }
+    }
+    // Make the renames durable (best effort; not supported everywhere).
+    #[cfg(unix)]
+    for dir in dirs {
+        if let Ok(d) = File::open(&dir) {
+            let _ = d.sync_all();
+        }
+    }
+    Ok(())
+}
+
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Create the temporary file beside `path`, after checking that the directory exists and `path` is not a directory.
+fn create_temp(path: &Path) -> Result<tempfile::NamedTempFile, SkinError> {
+    let Some(name) = path.file_name() else {
+        return Err(SkinError::io(path, "cannot write output: expected a file path, found none"));
+    };
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        return Err(SkinError::io(
+            path,
+            format!("cannot write output: expected an existing directory {}; found none", dir.display()),
+        ));
+    }
+    if path.is_dir() {
+        return Err(SkinError::io(path, "cannot write output: expected a file path, found a directory"));
+    }
+    let prefix = format!(".{}.", name.to_string_lossy());
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        // Like a plain File::create: 0666 minus the umask (tempfile's default would be 0600).
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    builder.tempfile_in(dir).map_err(|e| {
+        SkinError::io(path, format!("cannot write output: cannot create a temporary file in {}: {e}", dir.display()))
+    })
+}
+
+/// Write `bytes` to a temporary file beside `path` (flushed to disk); [`commit_all`] renames it into place.
+/// The directory must exist.
+pub fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<Staged, SkinError> {
+    let mut temp = create_temp(path)?;
+    let fail = |e: std::io::Error| SkinError::io(path, format!("cannot write output: {e}"));
+    temp.write_all(bytes).map_err(fail)?;
+    temp.as_file().sync_all().map_err(fail)?;
+    Ok(Staged { temp: Some(temp.into_temp_path()), target: path.to_path_buf() })
+}
+
+/// Write bytes atomically (temp file in the destination directory + rename); used for the JSON sidecar.
+/// The directory must exist.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SkinError> {
+    stage_bytes(path, bytes)?.commit()
+}
+
+/// Stage an RGB EXR (channels `R`, `G`, `B`) from three row-major planes of `width * height` values each (row 0 at
+/// the top; units are the caller's: reflectance for albedo, millimetres for radius). Samples are converted to f16
+/// on the fly when `options.half` is set (no extra copy of the planes is made).
+pub fn stage_rgb_exr(
+    path: &Path,
+    width: usize,
+    height: usize,
+    planes: [&[f32]; 3],
+    options: ExrOptions,
+) -> Result<Staged, SkinError> {
+    stage_channels_exr(path, width, height, &[("R", planes[0]), ("G", planes[1]), ("B", planes[2])], options)
+}
+
+/// Stage an EXR with arbitrary named channels (each a row-major plane of `width * height` values). Names must be
+/// unique, non-empty, at most 255 bytes of Latin-1. They are stored sorted by name.
+pub fn stage_channels_exr(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: &[(&str, &[f32])],
+    options: ExrOptions,
+) -> Result<Staged, SkinError> {
+    let what = format!("output {}", path.display());
+    if width == 0 || height == 0 || width.checked_mul(height).map_or(true, |n| n > MAX_TEXELS) {
+        return Err(SkinError::invalid(
+            what,
+            format!("expected a size of 1 to {MAX_TEXELS} texels; got {width}x{height}"),
+        ));
+    }
+    if channels.is_empty() {
+        return Err(SkinError::invalid(what, "expected at least one channel; got none"));
+    }
+    let texels = width * height;
+    for (i, (name, plane)) in channels.iter().enumerate() {
+        if plane.len() != texels {
+            return Err(SkinError::invalid(
+                what,
+                format!("channel {name}: expected {width}x{height} = {texels} values; got {}", plane.len()),
+            ));
+        }
+        if name.is_empty() || name.len() > 255 || Text::new_or_none(name).is_none() {
+            return Err(SkinError::invalid(
+                what,
+                format!("channel name {name:?}: expected 1 to 255 Latin-1 characters"),
+            ));
+        }
+        if channels[..i].iter().any(|(other, _)| other == name) {
+            return Err(SkinError::invalid(what, format!("channel {name} is given twice")));
+        }
+    }
+
+    let mut temp = create_temp(path)?;
+    {
+        let mut out = BufWriter::with_capacity(1 << 20, temp.as_file_mut());
+        write_exr_to(&mut out, width, height, channels, options)
+            .map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
+        out.flush().map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
+    }
+    temp.as_file().sync_all().map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
+    Ok(Staged { temp: Some(temp.into_temp_path()), target: path.to_path_buf() })
+}
+
+/// Encode an EXR block by block straight from the planes (no full-image copy).
+fn write_exr_to<W: std::io::Write + std::io::Seek>(
+    out: W,
+    width: usize,
+    height: usize,
+    channels: &[(&str, &[f32])],
+    options: ExrOptions,
+) -> Result<(), String> {
+    let sample_type = if options.half { SampleType::F16 } else { SampleType::F32 };
+    let mut order: Vec<usize> = (0..channels.len()).collect();
+    order.sort_by(|&a, &b| channels[a].0.as_bytes().cmp(channels[b].0.as_bytes()));
+    let mut descriptions = Vec::with_capacity(order.len());
+    for &i in &order {
+        let name =
+            Text::new_or_none(channels[i].0).ok_or_else(|| format!("invalid channel name {:?}", channels[i].0))?;
+        descriptions.push(ChannelDescription::named(name, sample_type));
+    }
+    let layer_name = Text::new_or_none("").ok_or("invalid layer name")?;
+    let mut header = Header::new(layer_name, (width, height), descriptions.into_iter().collect()).with_encoding(
+        options.compression.to_exr(),
+        BlockDescription::ScanLines,
+        LineOrder::Increasing,
+    );
+    header.own_attributes.layer_name = None;
+    let sources: Vec<&[f32]> = order.iter().map(|&i| channels[i].1).collect();
+    let failed = Cell::new(false);
+
+    let written = guard(|| {
+        exr::block::write(out, std::iter::once(header).collect(), true, |meta, chunk_writer| {
+            let header = &meta.headers[0];
+            let blocks = meta.collect_ordered_blocks(|block_index| {
+                UncompressedBlock::from_lines(&header.channels, block_index, |line| {
+                    let (x, y, n) = (line.location.position.0, line.location.position.1, line.location.sample_count);
+                    let start = y * width + x;
+                    let Some(row) = sources.get(line.location.channel).and_then(|s| s.get(start..start + n)) else {
+                        failed.set(true);
+                        return;
+                    };
+                    let ok = if options.half {
+                        line.write_samples(|i| f16::from_f32(row[i])).is_ok()
+                    } else {
+                        line.write_samples_from_slice(row).is_ok()
+                    };
+                    if !ok {
+                        failed.set(true);
+                    }
+                })
+            });
+            chunk_writer.on_progress(|_| ()).compress_all_blocks_parallel(&meta, blocks)?;
+            Ok(())
+        })
+    });
+    match written {
+        Ok(Ok(())) if !failed.get() => Ok(()),
+        Ok(Ok(())) => Err("internal error: a pixel line did not match the image layout".to_string()),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(panic) => Err(panic),
+    }
+}
+
+/// Write an RGB EXR (channels R, G, B) from three row-major planes, atomically (temp file in the same directory,
+/// then rename). See [`stage_rgb_exr`]. The directory must exist.
+pub fn write_rgb_exr(
+    path: &Path,
+    width: usize,
+    height: usize,
+    planes: [&[f32]; 3],
+    options: ExrOptions,
+) -> Result<(), SkinError> {
+    stage_rgb_exr(path, width, height, planes, options)?.commit()
+}
+
+/// Write an EXR with arbitrary named f32 channels (for parameter maps: the example generator and tests),
+/// atomically. See [`stage_channels_exr`]. The directory must exist.
+pub fn write_channels_exr(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: &[(&str, &[f32])],
+    options: ExrOptions,
+) -> Result<(), SkinError> {
+    stage_channels_exr(path, width, height, channels, options)?.commit()
+}

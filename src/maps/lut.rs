@@ -1,0 +1,224 @@
+//! A lookup table of the material outputs over (C_m, beta_m, C_h), built once in parallel and interpolated per texel.
+//!
+//! Axes are warped so that equal steps mean similar changes in colour: cube roots for the two concentrations (the
+//! optical effect of a chromophore saturates: from 0.005 to 0.05 changes skin more than from 0.45 to 0.5; Jimenez et
+//! al. 2010 sample C_m and C_h on cube-root axes too), linear for the melanin blend. The table stores the natural
+//! logarithm of each output (all positive, spanning decades) and interpolates trilinearly. Its error against direct
+//! evaluation is measured, not assumed: see `measure_error` and `tests/maps_pipeline.rs`.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::SkinError;
+use crate::evaluate::{Material, Prepared};
+use crate::skin::params::{HEMOGLOBIN_RANGE, MELANIN_BLEND_RANGE, MELANIN_RANGE};
+use crate::skin::SkinParams;
+
+/// Outputs per texel that depend on (C_m, beta_m, C_h): albedo, Burley radius, Random Walk base colour and radius.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TexelMaterial {
+    pub albedo: [f32; 3],
+    pub burley_radius_mm: [f32; 3],
+    pub random_walk_base_color: [f32; 3],
+    pub random_walk_radius_mm: [f32; 3],
+}
+
+impl From<&Material> for TexelMaterial {
+    fn from(m: &Material) -> Self {
+        let f = |v: [f64; 3]| v.map(|x| x as f32);
+        TexelMaterial {
+            albedo: f(m.albedo),
+            burley_radius_mm: f(m.methods.burley.subsurface_radius_mm),
+            random_walk_base_color: f(m.methods.random_walk.base_color),
+            random_walk_radius_mm: f(m.methods.random_walk.subsurface_radius_mm),
+        }
+    }
+}
+
+impl TexelMaterial {
+    fn to_array(self) -> [f32; 12] {
+        let mut a = [0.0; 12];
+        for c in 0..3 {
+            a[c] = self.albedo[c];
+            a[3 + c] = self.burley_radius_mm[c];
+            a[6 + c] = self.random_walk_base_color[c];
+            a[9 + c] = self.random_walk_radius_mm[c];
+        }
+        a
+    }
+
+    fn from_array(a: [f32; 12]) -> Self {
+        TexelMaterial {
+            albedo: [a[0], a[1], a[2]],
+            burley_radius_mm: [a[3], a[4], a[5]],
+            random_walk_base_color: [a[6], a[7], a[8]],
+            random_walk_radius_mm: [a[9], a[10], a[11]],
+        }
+    }
+}
+
+/// Exponent of the warp of the concentration axes: u = (C / C_max)^(1/3).
+const CONCENTRATION_WARP: f64 = 1.0 / 3.0;
+/// Smallest value stored before taking the logarithm (outputs are positive; this guards underflow).
+const MIN_STORED: f32 = 1e-30;
+
+/// Nodes per axis: melanin, melanin blend, haemoglobin.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct TableResolution {
+    pub melanin: usize,
+    pub melanin_blend: usize,
+    pub hemoglobin: usize,
+}
+
+impl Default for TableResolution {
+    /// Chosen by measurement (docs/maps-performance.md): the smallest grid whose worst error over the domain is below
+    /// 0.5 % in albedo and 1 % in radius.
+    fn default() -> Self {
+        TableResolution { melanin: 33, melanin_blend: 7, hemoglobin: 17 }
+    }
+}
+
+impl TableResolution {
+    pub fn node_count(&self) -> usize {
+        self.melanin * self.melanin_blend * self.hemoglobin
+    }
+}
+
+fn warp(value: f64, max: f64) -> f64 {
+    (value / max).clamp(0.0, 1.0).powf(CONCENTRATION_WARP)
+}
+
+fn unwarp(u: f64, max: f64) -> f64 {
+    max * u.powi(3)
+}
+
+/// The table.
+#[derive(Debug, Clone)]
+pub struct MaterialTable {
+    resolution: TableResolution,
+    /// ln of the 12 outputs per node; node (i, j, k) at ((i * nb) + j) * nh + k.
+    log_values: Vec<[f32; 12]>,
+}
+
+impl MaterialTable {
+    /// Evaluate every node (in parallel) with `prepared`.
+    pub fn build(prepared: &Prepared, resolution: TableResolution) -> Result<MaterialTable, SkinError> {
+        let r = resolution;
+        if r.melanin < 2 || r.melanin_blend < 2 || r.hemoglobin < 2 {
+            return Err(SkinError::invalid("table resolution", format!("need at least 2 nodes per axis; got {r:?}")));
+        }
+        let log_values = (0..r.node_count())
+            .into_par_iter()
+            .map(|n| {
+                let p = node_params(r, n);
+                let m = prepared.material(&p)?;
+                Ok(TexelMaterial::from(&m).to_array().map(|v| v.max(MIN_STORED).ln()))
+            })
+            .collect::<Result<Vec<_>, SkinError>>()?;
+        Ok(MaterialTable { resolution, log_values })
+    }
+
+    pub fn resolution(&self) -> TableResolution {
+        self.resolution
+    }
+
+    /// Trilinear interpolation in the warped coordinates of the logarithms. Inputs are clamped to the domain.
+    pub fn lookup(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> TexelMaterial {
+        let r = self.resolution;
+        let axis = |u: f64, n: usize| {
+            let x = u.clamp(0.0, 1.0) * (n - 1) as f64;
+            let i = (x.floor() as usize).min(n - 2);
+            (i, (x - i as f64) as f32)
+        };
+        let (i, ti) = axis(warp(melanin as f64, MELANIN_RANGE.1), r.melanin);
+        let (j, tj) = axis((melanin_blend as f64 - MELANIN_BLEND_RANGE.0) / MELANIN_BLEND_RANGE.1, r.melanin_blend);
+        let (k, tk) = axis(warp(hemoglobin as f64, HEMOGLOBIN_RANGE.1), r.hemoglobin);
+        let index = |a: usize, b: usize, c: usize| (a * r.melanin_blend + b) * r.hemoglobin + c;
+        let mut out = [0.0f32; 12];
+        for (di, wi) in [(0, 1.0 - ti), (1, ti)] {
+            for (dj, wj) in [(0, 1.0 - tj), (1, tj)] {
+                for (dk, wk) in [(0, 1.0 - tk), (1, tk)] {
+                    let w = wi * wj * wk;
+                    if w == 0.0 {
+                        continue;
+                    }
+                    let v = &self.log_values[index(i + di, j + dj, k + dk)];
+                    for q in 0..12 {
+                        out[q] += w * v[q];
+                    }
+                }
+            }
+        }
+        TexelMaterial::from_array(out.map(f32::exp))
+    }
+}
+
+/// The parameters at node n (oiliness does not enter the table).
+fn node_params(r: TableResolution, n: usize) -> SkinParams {
+    let k = n % r.hemoglobin;
+    let j = (n / r.hemoglobin) % r.melanin_blend;
+    let i = n / (r.hemoglobin * r.melanin_blend);
+    let at = |idx: usize, count: usize| idx as f64 / (count - 1) as f64;
+    SkinParams {
+        melanin: unwarp(at(i, r.melanin), MELANIN_RANGE.1),
+        melanin_blend: MELANIN_BLEND_RANGE.0 + at(j, r.melanin_blend) * (MELANIN_BLEND_RANGE.1 - MELANIN_BLEND_RANGE.0),
+        hemoglobin: unwarp(at(k, r.hemoglobin), HEMOGLOBIN_RANGE.1),
+        oiliness: 0.0,
+    }
+}
+
+/// Worst relative error of the table against direct evaluation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct TableError {
+    pub samples: usize,
+    pub max_albedo_relative: f64,
+    pub max_radius_relative: f64,
+    pub max_random_walk_base_color_relative: f64,
+}
+
+/// Measure the table's error at `samples` points: cell centres (where trilinear error peaks) and pseudo-random points
+/// (a fixed low-discrepancy sequence, so the figure is reproducible), against `prepared.material` evaluated directly.
+pub fn measure_error(table: &MaterialTable, prepared: &Prepared, samples: usize) -> Result<TableError, SkinError> {
+    let r = table.resolution;
+    let cells = [r.melanin - 1, r.melanin_blend - 1, r.hemoglobin - 1];
+    let points: Vec<[f64; 3]> = (0..samples)
+        .map(|n| {
+            // Additive recurrence with the plastic-number constants (R3 sequence), offset 0.5.
+            const G: f64 = 1.220_744_084_605_759_5;
+            let alpha = [1.0 / G, 1.0 / (G * G), 1.0 / (G * G * G)];
+            let u = alpha.map(|a| (0.5 + a * (n + 1) as f64).fract());
+            if n % 2 == 0 {
+                // Snap every other point to the centre of its cell.
+                [0, 1, 2].map(|d| ((u[d] * cells[d] as f64).floor().min(cells[d] as f64 - 1.0) + 0.5) / cells[d] as f64)
+            } else {
+                u
+            }
+        })
+        .collect();
+    let errors = points
+        .par_iter()
+        .map(|u| {
+            let p = SkinParams {
+                melanin: unwarp(u[0], MELANIN_RANGE.1),
+                melanin_blend: u[1],
+                hemoglobin: unwarp(u[2], HEMOGLOBIN_RANGE.1),
+                oiliness: 0.0,
+            };
+            let exact = TexelMaterial::from(&prepared.material(&p)?);
+            let approx = table.lookup(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
+            let rel = |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| ((a[c] - b[c]) / b[c]).abs() as f64).fold(0.0, f64::max);
+            Ok([
+                rel(approx.albedo, exact.albedo),
+                rel(approx.burley_radius_mm, exact.burley_radius_mm).max(rel(approx.random_walk_radius_mm, exact.random_walk_radius_mm)),
+                rel(approx.random_walk_base_color, exact.random_walk_base_color),
+            ])
+        })
+        .collect::<Result<Vec<_>, SkinError>>()?;
+    let max = |q: usize| errors.iter().map(|e| e[q]).fold(0.0, f64::max);
+    Ok(TableError {
+        samples,
+        max_albedo_relative: max(0),
+        max_radius_relative: max(1),
+        max_random_walk_base_color_relative: max(2),
+    })
+}

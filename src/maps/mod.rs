@@ -1,0 +1,8 @@
+//! Parameter maps in, texture maps out: input/output, the lookup table and the pipeline.
+
+pub mod example;
+pub mod io;
+pub mod lut;
+pub mod pipeline;
+
+pub use pipeline::{compute_maps, run_maps, MapReport, MapResult, MapSettings, StrategyChoice};

@@ -1,0 +1,426 @@
+//! The map pipeline: parameter planes in, Base Color / Subsurface Radius / specular planes out, by the cheapest
+//! strategy that is exact enough: one evaluation for a constant map, one per distinct parameter tuple for maps with
+//! few of them (8-bit sources, masks), otherwise a lookup table interpolated per texel (or, on request, every texel
+//! evaluated directly). Shared by the CLI (`spectral-skin maps`) and Python (`spectral_skin.maps`).
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::io::{commit_all, read_params, stage_bytes, stage_rgb_exr, ExrOptions, ParamImage, ParamInputs, Plane, PARAM_CHANNELS, PARAM_RANGES};
+use super::lut::{measure_error, MaterialTable, TableError, TableResolution, TexelMaterial};
+use crate::error::SkinError;
+use crate::evaluate::{Outputs, Prepared, Request};
+use crate::fit::SubsurfaceMethod;
+use crate::skin::SkinParams;
+use crate::surface::{specular_from_oiliness, SpecularParams};
+
+/// At most this many distinct (C_m, beta_m, C_h) tuples are evaluated one by one; more use the table.
+pub const MAX_DISTINCT_TUPLES: usize = 2048;
+/// How many bad texels an error message lists by coordinate.
+const LISTED_BAD_TEXELS: usize = 5;
+/// Points at which a freshly built table's error is measured (each a direct evaluation).
+const TABLE_CHECK_SAMPLES: usize = 64;
+
+/// How texels are evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum StrategyChoice {
+    /// Constant, distinct tuples or table, whichever applies first.
+    #[default]
+    Auto,
+    /// Every texel (or distinct tuple) evaluated directly; never the table.
+    Exact,
+}
+
+/// Settings of one map run.
+#[derive(Debug, Clone)]
+pub struct MapSettings {
+    pub method: SubsurfaceMethod,
+    pub strategy: StrategyChoice,
+    /// Clamp NaN, infinite and out-of-range texels into range (and count them) instead of failing.
+    pub clamp: bool,
+    pub table: TableResolution,
+    /// Accuracy, model and working space; its `outputs` are ignored (maps need albedo, radius and specular).
+    pub request: Request,
+}
+
+impl Default for MapSettings {
+    fn default() -> Self {
+        MapSettings {
+            method: crate::fit::DEFAULT_METHOD,
+            strategy: StrategyChoice::Auto,
+            clamp: false,
+            table: TableResolution::default(),
+            request: Request::new(Outputs::material()),
+        }
+    }
+}
+
+/// The strategy used, with its figures.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "name")]
+pub enum Strategy {
+    Constant,
+    DistinctTuples { tuples: usize },
+    Table { resolution: TableResolution, nodes: usize, build_seconds: f64, measured_error: TableError },
+    Exact { evaluations: usize },
+}
+
+/// Texels that were out of range, NaN or infinite, per parameter (counted whether or not they were clamped).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct BadTexels {
+    pub parameter: String,
+    pub nan: usize,
+    pub infinite: usize,
+    pub out_of_range: usize,
+    /// The first few bad texels as (x, y), y = 0 at the top row.
+    pub first: Vec<(usize, usize)>,
+}
+
+/// Specular output: a map when oiliness varies, else the constants.
+#[derive(Debug, Clone)]
+pub enum SpecularOutput {
+    Constant(SpecularParams),
+    /// Planes: Principled Specular IOR Level, Roughness, oiliness.
+    Map([Vec<f32>; 3]),
+}
+
+/// Everything a map run computed, before it is written.
+#[derive(Debug, Clone)]
+pub struct MapResult {
+    pub width: usize,
+    pub height: usize,
+    /// Principled Base Color for the chosen method, linear RGB planes.
+    pub base_color: [Vec<f32>; 3],
+    /// Principled Subsurface Radius x Scale for the chosen method, mm, RGB planes.
+    pub radius_mm: [Vec<f32>; 3],
+    pub specular: SpecularOutput,
+    pub report: MapReport,
+}
+
+/// What was done and how long it took (the sidecar's content, with the inputs and outputs added by `run_maps`).
+#[derive(Debug, Clone, Serialize)]
+pub struct MapReport {
+    pub crate_version: &'static str,
+    pub width: usize,
+    pub height: usize,
+    pub method: SubsurfaceMethod,
+    pub color_space: &'static str,
+    pub strategy: Strategy,
+    pub clamped: Vec<BadTexels>,
+    pub constant_parameters: Vec<&'static str>,
+    pub request: Request,
+    pub seconds: Timings,
+}
+
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Timings {
+    pub read: f64,
+    pub compute: f64,
+    pub write: f64,
+    pub total: f64,
+}
+
+/// Check every plane for NaN, infinities and values outside the parameter's range. Without `clamp` any bad texel is an
+/// error naming the counts and the first coordinates; with `clamp` the planes are clamped (NaN and -inf to the
+/// minimum, +inf to the maximum) and the counts returned.
+pub fn check_planes(image: &mut ParamImage, clamp: bool) -> Result<Vec<BadTexels>, SkinError> {
+    let width = image.width;
+    let mut report = Vec::new();
+    for (p, plane) in image.planes.iter_mut().enumerate() {
+        let (lo, hi) = (PARAM_RANGES[p].0 as f32, PARAM_RANGES[p].1 as f32);
+        let mut bad = BadTexels { parameter: PARAM_CHANNELS[p].to_string(), ..BadTexels::default() };
+        let note = |i: usize, v: f32, bad: &mut BadTexels| {
+            if v.is_nan() {
+                bad.nan += 1;
+            } else if v.is_infinite() {
+                bad.infinite += 1;
+            } else {
+                bad.out_of_range += 1;
+            }
+            if bad.first.len() < LISTED_BAD_TEXELS {
+                bad.first.push((i % width, i / width));
+            }
+        };
+        let fix = |v: f32| if v.is_nan() { lo } else { v.clamp(lo, hi) };
+        match plane {
+            Plane::Constant(v) => {
+                if !(*v >= lo && *v <= hi) {
+                    note(0, *v, &mut bad);
+                    *v = fix(*v);
+                }
+            }
+            Plane::Texels(values) => {
+                for (i, v) in values.iter_mut().enumerate() {
+                    if !(*v >= lo && *v <= hi) {
+                        note(i, *v, &mut bad);
+                        *v = fix(*v);
+                    }
+                }
+            }
+        }
+        if bad.nan + bad.infinite + bad.out_of_range > 0 {
+            if !clamp {
+                return Err(SkinError::invalid(
+                    format!("{} map", bad.parameter),
+                    format!(
+                        "values must be in [{lo}, {hi}]; found {} NaN, {} infinite and {} out-of-range texels, first at (x, y) {:?} (use --clamp to clamp them)",
+                        bad.nan, bad.infinite, bad.out_of_range, bad.first
+                    ),
+                ));
+            }
+            report.push(bad);
+        }
+    }
+    Ok(report)
+}
+
+/// Compute the maps of a checked image (see [`check_planes`]). `progress(done, total)` is told, row by row, how many
+/// more texels are done out of how many.
+pub fn compute_maps(
+    image: &ParamImage,
+    settings: &MapSettings,
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+) -> Result<MapResult, SkinError> {
+    let start = Instant::now();
+    let prepared = Prepared::new(&settings.request)?;
+    let (w, h) = (image.width, image.height);
+    let n = image.texel_count();
+    let [m, b, hb, oil] = &image.planes;
+    let evaluate_one = |t: [f32; 3]| -> Result<TexelMaterial, SkinError> {
+        // Texels passed `check_planes` in f32; widening can step just past a bound (0.1f32 > 0.1), so round back in.
+        let v = |k: usize| (t[k] as f64).clamp(PARAM_RANGES[k].0, PARAM_RANGES[k].1);
+        let p = SkinParams::new(v(0), v(1), v(2), 0.0)?;
+        Ok(TexelMaterial::from(&prepared.material(&p)?))
+    };
+    let tuple = |i: usize| [m.value(i), b.value(i), hb.value(i)];
+
+    let mut base_color = [vec![0f32; n], vec![0f32; n], vec![0f32; n]];
+    let mut radius = [vec![0f32; n], vec![0f32; n], vec![0f32; n]];
+    let method = settings.method;
+    let select = |t: &TexelMaterial| match method {
+        SubsurfaceMethod::Burley => (t.albedo, t.burley_radius_mm),
+        SubsurfaceMethod::RandomWalk => (t.random_walk_base_color, t.random_walk_radius_mm),
+    };
+
+    let all_constant = m.is_constant() && b.is_constant() && hb.is_constant();
+    let strategy = if all_constant {
+        let (c, r) = select(&evaluate_one(tuple(0))?);
+        for k in 0..3 {
+            base_color[k].fill(c[k]);
+            radius[k].fill(r[k]);
+        }
+        Strategy::Constant
+    } else if let Some(tuples) = distinct_tuples(image, MAX_DISTINCT_TUPLES) {
+        let keys: Vec<[u32; 3]> = tuples.keys().cloned().collect();
+        let values = keys
+            .par_iter()
+            .map(|k| evaluate_one(k.map(f32::from_bits)).map(|t| select(&t)))
+            .collect::<Result<Vec<_>, SkinError>>()?;
+        let index: HashMap<[u32; 3], usize> = keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
+        fill_rows(w, &mut base_color, &mut radius, progress, |i| values[index[&tuple(i).map(f32::to_bits)]]);
+        if settings.strategy == StrategyChoice::Exact {
+            Strategy::Exact { evaluations: keys.len() }
+        } else {
+            Strategy::DistinctTuples { tuples: keys.len() }
+        }
+    } else if settings.strategy == StrategyChoice::Exact {
+        // Direct evaluation of every texel, row by row in parallel.
+        let rows: Vec<Result<Vec<([f32; 3], [f32; 3])>, SkinError>> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                let row = (0..w).map(|x| evaluate_one(tuple(y * w + x)).map(|t| select(&t))).collect();
+                if let Some(p) = progress {
+                    p(w, n);
+                }
+                row
+            })
+            .collect();
+        for (y, row) in rows.into_iter().enumerate() {
+            for (x, (c, r)) in row?.into_iter().enumerate() {
+                for k in 0..3 {
+                    base_color[k][y * w + x] = c[k];
+                    radius[k][y * w + x] = r[k];
+                }
+            }
+        }
+        Strategy::Exact { evaluations: n }
+    } else {
+        let build = Instant::now();
+        let table = MaterialTable::build(&prepared, settings.table)?;
+        let build_seconds = build.elapsed().as_secs_f64();
+        let measured_error = measure_error(&table, &prepared, TABLE_CHECK_SAMPLES)?;
+        fill_rows(w, &mut base_color, &mut radius, progress, |i| {
+            let t = tuple(i);
+            select(&table.lookup(t[0], t[1], t[2]))
+        });
+        Strategy::Table { resolution: settings.table, nodes: settings.table.node_count(), build_seconds, measured_error }
+    };
+
+    let specular = match oil {
+        Plane::Constant(v) => SpecularOutput::Constant(specular_from_oiliness(*v as f64)),
+        Plane::Texels(values) => {
+            // The mapping is cheap and exact per texel: level = 0.5 oiliness, constant roughness (surface.rs).
+            let planes: [Vec<f32>; 3] = [
+                values.par_iter().map(|&o| specular_from_oiliness(o as f64).specular_ior_level as f32).collect(),
+                values.par_iter().map(|&o| specular_from_oiliness(o as f64).roughness as f32).collect(),
+                values.clone(),
+            ];
+            SpecularOutput::Map(planes)
+        }
+    };
+
+    let constant_parameters =
+        (0..4).filter(|&p| image.planes[p].is_constant()).map(|p| PARAM_CHANNELS[p]).collect();
+    let report = MapReport {
+        crate_version: env!("CARGO_PKG_VERSION"),
+        width: w,
+        height: h,
+        method,
+        color_space: settings.request.working_space.name(),
+        strategy,
+        clamped: Vec::new(),
+        constant_parameters,
+        request: *prepared.request(),
+        seconds: Timings { compute: start.elapsed().as_secs_f64(), ..Timings::default() },
+    };
+    Ok(MapResult { width: w, height: h, base_color, radius_mm: radius, specular, report })
+}
+
+/// The distinct (C_m, beta_m, C_h) tuples (as f32 bit patterns) if there are at most `limit`, else None.
+fn distinct_tuples(image: &ParamImage, limit: usize) -> Option<HashMap<[u32; 3], ()>> {
+    let [m, b, h, _] = &image.planes;
+    let mut set = HashMap::new();
+    for i in 0..image.texel_count() {
+        set.insert([m.value(i).to_bits(), b.value(i).to_bits(), h.value(i).to_bits()], ());
+        if set.len() > limit {
+            return None;
+        }
+    }
+    Some(set)
+}
+
+/// Fill the output planes row by row in parallel from a per-texel function.
+fn fill_rows(
+    width: usize,
+    base_color: &mut [Vec<f32>; 3],
+    radius: &mut [Vec<f32>; 3],
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    texel: impl Fn(usize) -> ([f32; 3], [f32; 3]) + Sync,
+) {
+    let total = base_color[0].len();
+    let [c0, c1, c2] = base_color;
+    let [r0, r1, r2] = radius;
+    c0.par_chunks_mut(width)
+        .zip(c1.par_chunks_mut(width))
+        .zip(c2.par_chunks_mut(width))
+        .zip(r0.par_chunks_mut(width).zip(r1.par_chunks_mut(width)).zip(r2.par_chunks_mut(width)))
+        .enumerate()
+        .for_each(|(y, (((c0, c1), c2), ((r0, r1), r2)))| {
+            for x in 0..width {
+                let (c, r) = texel(y * width + x);
+                (c0[x], c1[x], c2[x]) = (c[0], c[1], c[2]);
+                (r0[x], r1[x], r2[x]) = (r[0], r[1], r[2]);
+            }
+            if let Some(p) = progress {
+                p(width, total);
+            }
+        });
+}
+
+/// Output file names.
+pub const ALBEDO_FILE: &str = "albedo.exr";
+pub const RADIUS_FILE: &str = "radius.exr";
+pub const SPECULAR_FILE: &str = "specular.exr";
+pub const SIDECAR_FILE: &str = "skin_maps.json";
+
+/// Read the inputs, check them, compute and write `albedo.exr`, `radius.exr`, `specular.exr` (if oiliness varies)
+/// and `skin_maps.json` into `out_dir`. Nothing is written unless everything succeeded: outputs are staged as
+/// temporary files and renamed into place together at the end.
+pub fn run_maps(
+    inputs: &ParamInputs,
+    out_dir: &Path,
+    settings: &MapSettings,
+    exr: ExrOptions,
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+) -> Result<MapReport, SkinError> {
+    let start = Instant::now();
+    let mut image = read_params(inputs)?;
+    let clamped = check_planes(&mut image, settings.clamp)?;
+    let read = start.elapsed().as_secs_f64();
+    let mut result = compute_maps(&image, settings, progress)?;
+    drop(image);
+    std::fs::create_dir_all(out_dir).map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
+
+    let write_start = Instant::now();
+    let (w, h) = (result.width, result.height);
+    let mut staged = vec![
+        stage_rgb_exr(&out_dir.join(ALBEDO_FILE), w, h, planes(&result.base_color), exr)?,
+        stage_rgb_exr(&out_dir.join(RADIUS_FILE), w, h, planes(&result.radius_mm), exr)?,
+    ];
+    if let SpecularOutput::Map(p) = &result.specular {
+        staged.push(stage_rgb_exr(&out_dir.join(SPECULAR_FILE), w, h, planes(p), exr)?);
+    }
+    result.report.clamped = clamped;
+    let mut report = result.report.clone();
+    report.seconds.read = read;
+    report.seconds.write = write_start.elapsed().as_secs_f64();
+    report.seconds.total = start.elapsed().as_secs_f64();
+    let sidecar = sidecar_json(&report, inputs, &result.specular, exr);
+    staged.push(stage_bytes(&out_dir.join(SIDECAR_FILE), sidecar.as_bytes())?);
+    commit_all(staged)?;
+    Ok(report)
+}
+
+/// The sidecar: what each file holds (channels, meaning, units, colour space), the inputs, and the report.
+fn sidecar_json(report: &MapReport, inputs: &ParamInputs, specular: &SpecularOutput, exr: ExrOptions) -> String {
+    let inputs_json = match inputs {
+        ParamInputs::Multi { path, constants } => serde_json::json!({
+            "file": path.display().to_string(),
+            "channels": PARAM_CHANNELS,
+            "constants": PARAM_CHANNELS.iter().zip(constants).filter_map(|(n, c)| c.map(|v| (n.to_string(), v))).collect::<HashMap<_, _>>(),
+        }),
+        ParamInputs::Separate(sources) => serde_json::json!(PARAM_CHANNELS
+            .iter()
+            .zip(sources)
+            .map(|(n, s)| (n.to_string(), match s {
+                super::io::ParamSource::File(p) => serde_json::json!({"file": p.display().to_string()}),
+                super::io::ParamSource::Constant(v) => serde_json::json!({"constant": v}),
+            }))
+            .collect::<HashMap<_, _>>()),
+    };
+    let mut outputs = serde_json::json!({
+        ALBEDO_FILE: {"channels": ["R", "G", "B"], "meaning": "Principled BSDF Base Color", "units": "reflectance",
+                      "color_space": report.color_space},
+        RADIUS_FILE: {"channels": ["R", "G", "B"], "meaning": "Principled BSDF Subsurface Radius x Subsurface Scale",
+                      "units": "mm", "color_space": "Non-Color"},
+    });
+    match specular {
+        SpecularOutput::Map(_) => {
+            outputs[SPECULAR_FILE] = serde_json::json!({"channels": ["R", "G", "B"],
+                "meaning": "R: Principled Specular IOR Level, G: Roughness, B: oiliness", "units": "dimensionless",
+                "color_space": "Non-Color", "ior": crate::surface::SKIN_SURFACE_IOR});
+        }
+        SpecularOutput::Constant(s) => outputs["specular_constants"] = serde_json::json!(s),
+    }
+    let value = serde_json::json!({
+        "inputs": inputs_json,
+        "outputs": outputs,
+        "encoding": exr,
+        "report": report,
+    });
+    serde_json::to_string_pretty(&value).unwrap_or_default()
+}
+
+fn planes(p: &[Vec<f32>; 3]) -> [&[f32]; 3] {
+    [p[0].as_slice(), p[1].as_slice(), p[2].as_slice()]
+}
+
+/// The default output folder's files, for callers that list them.
+pub fn output_paths(out_dir: &Path) -> [PathBuf; 4] {
+    [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE, SIDECAR_FILE].map(|f| out_dir.join(f))
+}

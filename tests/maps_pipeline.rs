@@ -1,0 +1,188 @@
+//! The map pipeline: strategies, table accuracy against direct evaluation, exactness against `evaluate`, bad input,
+//! and that failures leave no output behind.
+
+use std::path::Path;
+
+use spectral_skin::evaluate::Prepared;
+use spectral_skin::fit::SubsurfaceMethod;
+use spectral_skin::maps::example::{face_params, write_face_params};
+use spectral_skin::maps::io::{read_exr_channels, write_channels_exr, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane};
+use spectral_skin::maps::lut::{measure_error, MaterialTable, TableResolution};
+use spectral_skin::maps::pipeline::{check_planes, Strategy, ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE};
+use spectral_skin::maps::{compute_maps, run_maps, MapSettings, StrategyChoice};
+use spectral_skin::{evaluate, Outputs, Request, SkinParams};
+
+fn image(width: usize, height: usize, planes: [Plane; 4]) -> ParamImage {
+    ParamImage { width, height, planes }
+}
+
+/// The default table's worst error over the whole domain (2000 points: cell centres and a low-discrepancy sequence,
+/// each evaluated directly) is below 0.5 % in albedo and 1 % in radius.
+#[test]
+fn table_error_is_within_bounds() {
+    let prepared = Prepared::new(&Request::new(Outputs::material())).unwrap();
+    let table = MaterialTable::build(&prepared, TableResolution::default()).unwrap();
+    let err = measure_error(&table, &prepared, 2000).unwrap();
+    println!("table {:?}: {err:?}", TableResolution::default());
+    assert!(err.max_albedo_relative < 0.005, "{err:?}");
+    assert!(err.max_radius_relative < 0.01, "{err:?}");
+    assert!(err.max_random_walk_base_color_relative < 0.005, "{err:?}");
+}
+
+/// Every texel in exact mode is what `evaluate` gives for its parameters, for both methods.
+#[test]
+fn exact_mode_equals_evaluate() {
+    let values = [0.0f32, 0.013, 0.27, 0.5];
+    let (w, h) = (4, 3);
+    let m: Vec<f32> = (0..w * h).map(|i| values[i % 4]).collect();
+    let b: Vec<f32> = (0..w * h).map(|i| (i as f32 / 11.0).min(1.0)).collect();
+    let hb: Vec<f32> = (0..w * h).map(|i| 0.1 * ((i * 7) % 12) as f32 / 11.0).collect();
+    let img = image(w, h, [Plane::Texels(m.clone()), Plane::Texels(b.clone()), Plane::Texels(hb.clone()), Plane::Constant(0.3)]);
+    for method in [SubsurfaceMethod::Burley, SubsurfaceMethod::RandomWalk] {
+        let settings = MapSettings { method, strategy: StrategyChoice::Exact, ..MapSettings::default() };
+        let result = compute_maps(&img, &settings, None).unwrap();
+        assert!(matches!(result.report.strategy, Strategy::Exact { .. }));
+        for i in 0..w * h {
+            // The pipeline widens f32 texels and rounds them into range (0.1f32 is just above 0.1).
+            let p = SkinParams::new(m[i] as f64, b[i] as f64, (hb[i] as f64).min(0.1), 0.3).unwrap();
+            let ev = evaluate(&p, &Request::new(Outputs::material())).unwrap();
+            let expected = ev.methods.unwrap().get(method).to_owned();
+            for c in 0..3 {
+                assert_eq!(result.base_color[c][i], expected.base_color[c] as f32, "{method:?} texel {i}");
+                assert_eq!(result.radius_mm[c][i], expected.subsurface_radius_mm[c] as f32, "{method:?} texel {i}");
+            }
+        }
+    }
+}
+
+#[test]
+fn strategies_follow_the_input() {
+    let settings = MapSettings::default();
+    // Constant: one evaluation.
+    let constant = image(64, 64, [Plane::Constant(0.1), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.0)]);
+    let r = compute_maps(&constant, &settings, None).unwrap();
+    assert_eq!(r.report.strategy, Strategy::Constant);
+    // A mask with three values: one evaluation per tuple.
+    let mask: Vec<f32> = (0..64 * 64).map(|i| [0.01, 0.2, 0.4][(i / 64) % 3]).collect();
+    let masked = image(64, 64, [Plane::Texels(mask), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.2)]);
+    let r = compute_maps(&masked, &settings, None).unwrap();
+    assert_eq!(r.report.strategy, Strategy::DistinctTuples { tuples: 3 });
+    // Smooth variation everywhere: the table.
+    let face = face_params(64);
+    let r = compute_maps(&face, &settings, None).unwrap();
+    assert!(matches!(r.report.strategy, Strategy::Table { .. }), "{:?}", r.report.strategy);
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .map(|rd| rd.map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect())
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+#[test]
+fn writes_the_documented_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("face.exr");
+    write_face_params(&params, 48).unwrap();
+    let out = dir.path().join("out");
+    let report = run_maps(&ParamInputs::Multi { path: params, constants: [None; 4] }, &out, &MapSettings::default(), ExrOptions::default(), None).unwrap();
+    assert_eq!(files_in(&out), vec![ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE]);
+    for f in [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE] {
+        let (w, h, channels) = read_exr_channels(&out.join(f)).unwrap();
+        assert_eq!((w, h), (48, 48));
+        let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, vec!["B", "G", "R"], "{f}");
+        assert!(channels.iter().all(|(_, v)| v.iter().all(|x| x.is_finite() && *x >= 0.0)));
+    }
+    let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join(SIDECAR_FILE)).unwrap()).unwrap();
+    assert_eq!(sidecar["outputs"][RADIUS_FILE]["units"], "mm");
+    assert_eq!(sidecar["report"]["strategy"]["name"], "table");
+    assert!(report.seconds.total > 0.0);
+
+    // Constant zero oiliness: no specular map, its constants in the sidecar.
+    let out2 = dir.path().join("out2");
+    let inputs = ParamInputs::Multi { path: dir.path().join("face.exr"), constants: [None; 4] };
+    let mut img = face_params(8);
+    img.planes[3] = Plane::Constant(0.0);
+    drop(img);
+    let sep = dir.path().join("melanin.exr");
+    let m: Vec<f32> = (0..64).map(|i| 0.005 * i as f32).collect();
+    write_channels_exr(&sep, 8, 8, &[("Y", &m)], ExrOptions::default()).unwrap();
+    let separate = ParamInputs::Separate([
+        ParamSource::File(sep),
+        ParamSource::Constant(0.7),
+        ParamSource::Constant(0.01),
+        ParamSource::Constant(0.0),
+    ]);
+    run_maps(&separate, &out2, &MapSettings::default(), ExrOptions { half: true, ..ExrOptions::default() }, None).unwrap();
+    assert_eq!(files_in(&out2), vec![ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE]);
+    let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out2.join(SIDECAR_FILE)).unwrap()).unwrap();
+    assert_eq!(sidecar["outputs"]["specular_constants"]["specular_ior_level"], 0.0);
+    let _ = inputs;
+}
+
+#[test]
+fn bad_texels_are_errors_or_clamped() {
+    let mut m = vec![0.1f32; 16];
+    m[5] = f32::NAN;
+    m[6] = f32::INFINITY;
+    m[9] = 0.7;
+    let planes = || [Plane::Texels(m.clone()), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.3)];
+    let err = check_planes(&mut image(4, 4, planes()), false).unwrap_err().to_string();
+    assert!(err.contains("melanin") && err.contains("1 NaN") && err.contains("1 infinite") && err.contains("1 out-of-range"), "{err}");
+    assert!(err.contains("(1, 1)") && err.contains("(2, 1)") && err.contains("(1, 2)"), "coordinates: {err}");
+    let mut img = image(4, 4, planes());
+    let report = check_planes(&mut img, true).unwrap();
+    assert_eq!((report[0].nan, report[0].infinite, report[0].out_of_range), (1, 1, 1));
+    let Plane::Texels(v) = &img.planes[0] else { panic!() };
+    assert_eq!((v[5], v[6], v[9]), (0.0, 0.5, 0.5));
+}
+
+/// A failing run leaves neither new files nor clobbered old ones.
+#[test]
+fn failures_leave_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join(ALBEDO_FILE), b"previous").unwrap();
+    let good = dir.path().join("good.exr");
+    write_face_params(&good, 16).unwrap();
+    // NaN texel.
+    let bad = dir.path().join("bad.exr");
+    let mut m = vec![0.1f32; 16 * 16];
+    m[17] = f32::NAN;
+    let ones = vec![0.5f32; 16 * 16];
+    let small = vec![0.01f32; 16 * 16];
+    write_channels_exr(&bad, 16, 16, &[("melanin", &m), ("melanin_blend", &ones), ("hemoglobin", &small), ("oiliness", &ones)], ExrOptions::default()).unwrap();
+    // Truncated EXR.
+    let truncated = dir.path().join("truncated.exr");
+    let bytes = std::fs::read(&good).unwrap();
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
+    // Mismatched sizes.
+    let other = dir.path().join("other.exr");
+    write_channels_exr(&other, 8, 8, &[("Y", &vec![0.5f32; 64])], ExrOptions::default()).unwrap();
+    let single = dir.path().join("single.exr");
+    write_channels_exr(&single, 16, 16, &[("Y", &small)], ExrOptions::default()).unwrap();
+    let cases = [
+        (ParamInputs::Multi { path: bad, constants: [None; 4] }, "NaN"),
+        (ParamInputs::Multi { path: truncated.clone(), constants: [None; 4] }, "truncated.exr"),
+        (
+            ParamInputs::Separate([
+                ParamSource::File(single),
+                ParamSource::File(other),
+                ParamSource::Constant(0.01),
+                ParamSource::Constant(0.2),
+            ]),
+            "8x8",
+        ),
+        (ParamInputs::Multi { path: dir.path().join("missing.exr"), constants: [None; 4] }, "missing.exr"),
+    ];
+    for (inputs, needle) in cases {
+        let err = run_maps(&inputs, &out, &MapSettings::default(), ExrOptions::default(), None).unwrap_err().to_string();
+        assert!(err.contains(needle), "{needle}: {err}");
+        assert_eq!(files_in(&out), vec![ALBEDO_FILE], "{needle}: outputs appeared");
+        assert_eq!(std::fs::read(out.join(ALBEDO_FILE)).unwrap(), b"previous", "{needle}: clobbered");
+    }
+}
