@@ -7,3 +7,5 @@ bash scripts/setup-python.sh
 cargo test --release
 .venv/bin/python -m pytest tests/python -q
 .venv/bin/python -m mypy.stubtest spectral_skin._core
+# The map performance report in its reduced form, so the report code cannot rot (the full one: see README).
+.venv/bin/python scripts/maps_report.py --quick --out "$(mktemp -d)/maps-performance.md"

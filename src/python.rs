@@ -513,7 +513,12 @@ fn shape_text(shape: &[usize]) -> String {
 
 /// `obj` as a float32/float64 array of `ndim` dimensions, or None if it is not a numpy array. Another dtype or
 /// an unaligned array is a TypeError; another number of dimensions a SpectralSkinError.
-fn float_array<'py>(name: &str, obj: &Bound<'py, PyAny>, ndim: usize, expected: &str) -> PyResult<Option<FloatArray<'py>>> {
+fn float_array<'py>(
+    name: &str,
+    obj: &Bound<'py, PyAny>,
+    ndim: usize,
+    expected: &str,
+) -> PyResult<Option<FloatArray<'py>>> {
     let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
         return Ok(None);
     };
@@ -613,7 +618,8 @@ fn rgb_image(py: Python<'_>, height: usize, width: usize, data: Vec<f32>) -> PyR
 fn python_clamp_hint(e: SkinError) -> SkinError {
     match e {
         SkinError::Invalid { name, reason } => {
-            SkinError::Invalid { name, reason: reason.replace("use --clamp to clamp them", "pass clamp=True to clamp them") }
+            let reason = reason.replace("use --clamp to clamp them", "pass clamp=True to clamp them");
+            SkinError::Invalid { name, reason }
         }
         other => other,
     }
@@ -661,6 +667,7 @@ fn maps_py<'py>(
         clamp,
         table: self::table_resolution(table_resolution)?,
         request: knobs.request(Outputs::material())?,
+        ..MapSettings::default()
     };
 
     // The inputs and their shapes.
@@ -689,17 +696,23 @@ fn maps_py<'py>(
             shapes.push((name, a.shape()));
         }
     }
-    let missing: Vec<&str> = (0..4).filter(|&c| params.is_none() && inputs[c].is_none()).map(|c| PARAM_CHANNELS[c]).collect();
+    let missing: Vec<&str> =
+        (0..4).filter(|&c| params.is_none() && inputs[c].is_none()).map(|c| PARAM_CHANNELS[c]).collect();
     if !missing.is_empty() {
         return Err(invalid(
             "parameters",
-            format!("give params= ({PARAMS_ARRAY}) or each of {}; missing: {}", PARAM_CHANNELS.join(", "), missing.join(", ")),
+            format!(
+                "give params= ({PARAMS_ARRAY}) or each of {}; missing: {}",
+                PARAM_CHANNELS.join(", "),
+                missing.join(", ")
+            ),
         ));
     }
     let Some((_, first)) = shapes.first() else {
         return Err(invalid(
             "parameters",
-            "give at least one array (params or a per-parameter map): with only constants there is no map size (for one material use evaluate())",
+            "give at least one array (params or a per-parameter map): with only constants there is no map size \
+             (for one material use evaluate())",
         ));
     };
     let (height, width) = (first[0], first[1]);
@@ -720,7 +733,8 @@ fn maps_py<'py>(
                 let (lo, hi) = crate::maps::io::PARAM_RANGES[c];
                 if !(*v >= lo && *v <= hi) {
                     let name = PARAM_CHANNELS[c];
-                    return Err(invalid(name, format!("must be in [{lo}, {hi}]; got {v} (pass clamp=True to clamp it)")));
+                    let reason = format!("must be in [{lo}, {hi}]; got {v} (pass clamp=True to clamp it)");
+                    return Err(invalid(name, reason));
                 }
             }
         }
@@ -774,7 +788,9 @@ fn maps_py<'py>(
     dict.set_item("radius_mm", rgb_image(py, height, width, computed.radius_mm)?)?;
     match computed.specular {
         Specular::Map(map) => dict.set_item("specular", rgb_image(py, height, width, map)?)?,
-        Specular::Constant(constants) => dict.set_item("specular", json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?)?,
+        Specular::Constant(constants) => {
+            dict.set_item("specular", json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?)?
+        }
     }
     let mut report = computed.report;
     report.seconds.total = start.elapsed().as_secs_f64();

@@ -62,6 +62,11 @@ fn strategies_follow_the_input() {
     let constant = image(64, 64, [Plane::Constant(0.1), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.0)]);
     let r = compute_maps(&constant, &settings, None).unwrap();
     assert_eq!(r.report.strategy, Strategy::Constant);
+    // A map whose texels all hold one value is constant too.
+    let uniform = image(64, 64, [Plane::Texels(vec![0.1; 4096]), Plane::Constant(0.5), Plane::Texels(vec![0.02; 4096]), Plane::Texels(vec![0.3; 4096])]);
+    let r = compute_maps(&uniform, &settings, None).unwrap();
+    assert_eq!(r.report.strategy, Strategy::Constant);
+    assert!(matches!(r.specular, spectral_skin::maps::pipeline::SpecularOutput::Constant(_)));
     // A mask with three values: one evaluation per tuple.
     let mask: Vec<f32> = (0..64 * 64).map(|i| [0.01, 0.2, 0.4][(i / 64) % 3]).collect();
     let masked = image(64, 64, [Plane::Texels(mask), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.2)]);
@@ -185,4 +190,24 @@ fn failures_leave_no_output() {
         assert_eq!(files_in(&out), vec![ALBEDO_FILE], "{needle}: outputs appeared");
         assert_eq!(std::fs::read(out.join(ALBEDO_FILE)).unwrap(), b"previous", "{needle}: clobbered");
     }
+}
+
+/// A table kept in the cache folder is reused and equals a fresh one; a damaged cache file is rebuilt.
+#[test]
+fn table_cache_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let prepared = Prepared::new(&Request::new(Outputs::material())).unwrap();
+    let small = TableResolution { melanin: 5, melanin_blend: 3, hemoglobin: 4 };
+    let (built, cached) = MaterialTable::load_or_build(&prepared, small, Some(dir.path())).unwrap();
+    assert!(!cached);
+    let (again, cached) = MaterialTable::load_or_build(&prepared, small, Some(dir.path())).unwrap();
+    assert!(cached);
+    for (m, b, h) in [(0.0, 0.0, 0.0), (0.13, 0.4, 0.07), (0.5, 1.0, 0.1)] {
+        assert_eq!(built.lookup(m, b, h), again.lookup(m, b, h));
+    }
+    let file = std::fs::read_dir(dir.path()).unwrap().next().unwrap().unwrap().path();
+    let bytes = std::fs::read(&file).unwrap();
+    std::fs::write(&file, &bytes[..bytes.len() - 7]).unwrap();
+    let (_, cached) = MaterialTable::load_or_build(&prepared, small, Some(dir.path())).unwrap();
+    assert!(!cached, "a damaged cache file must be rebuilt");
 }

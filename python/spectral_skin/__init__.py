@@ -9,6 +9,7 @@ Functions:
     profile: the radial reflectance profile R(r), RGB or per wavelength.
     presets: the named parameter sets.
     layered_reflectance: the layered diffusion solver alone, for checks against other solvers.
+    maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received.
@@ -19,6 +20,7 @@ from ._core import (
     __version__,
     evaluate,
     layered_reflectance,
+    maps,
     presets,
     profile,
 )
@@ -28,6 +30,7 @@ __all__ = [
     "__version__",
     "evaluate",
     "layered_reflectance",
+    "maps",
     "presets",
     "profile",
 ]

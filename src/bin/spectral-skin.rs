@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use spectral_skin::fit::SubsurfaceMethod;
-use spectral_skin::maps::example::write_face_params;
+use spectral_skin::maps::example::{write_example_params, ExampleKind};
 use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
 use spectral_skin::diffusion::{Combination, MultipoleTerms};
@@ -67,6 +67,9 @@ enum Command {
         /// Width and height in texels.
         #[arg(long, default_value_t = 512)]
         size: usize,
+        /// Which map: the face-like test card, a 16-tuple mask, or one value everywhere.
+        #[arg(long, value_enum, default_value_t = KindArg::Face)]
+        kind: KindArg,
     },
 }
 
@@ -114,11 +117,25 @@ struct MapsArgs {
     /// Write 16-bit half floats instead of 32-bit floats.
     #[arg(long)]
     half: bool,
+    /// Points at which a freshly built table is checked against direct evaluation (reported in the sidecar).
+    #[arg(long, default_value_t = spectral_skin::maps::pipeline::DEFAULT_TABLE_CHECK_SAMPLES)]
+    table_check: usize,
+    /// Build the lookup table afresh instead of reusing one kept in the cache folder
+    /// ($SPECTRAL_SKIN_CACHE_DIR, else $XDG_CACHE_HOME/spectral-skin, else ~/.cache/spectral-skin).
+    #[arg(long)]
+    no_cache: bool,
     /// EXR compression.
-    #[arg(long, value_enum, default_value_t = CompressionArg::Zip)]
+    #[arg(long, value_enum, default_value_t = CompressionArg::Piz)]
     compression: CompressionArg,
     #[command(flatten)]
     accuracy: AccuracyArgs,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum KindArg {
+    Face,
+    Mask,
+    Uniform,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -237,8 +254,13 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             print_profile_csv(&ev);
         }
         Command::Maps(args) => run_maps(args)?,
-        Command::Example { out, size } => {
-            write_face_params(&out, size)?;
+        Command::Example { out, size, kind } => {
+            let kind = match kind {
+                KindArg::Face => ExampleKind::Face,
+                KindArg::Mask => ExampleKind::Mask,
+                KindArg::Uniform => ExampleKind::Uniform,
+            };
+            write_example_params(&out, kind, size)?;
             println!("wrote {} ({size}x{size}, channels melanin, melanin_blend, hemoglobin, oiliness)", out.display());
         }
         Command::Presets => {
@@ -279,6 +301,8 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         },
         strategy: if args.exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
         clamp: args.clamp,
+        table_check_samples: args.table_check,
+        table_cache: if args.no_cache { None } else { spectral_skin::maps::lut::default_cache_dir() },
         ..MapSettings::default()
     };
     settings.request = args.accuracy.request(Outputs::material());

@@ -66,9 +66,50 @@ pub fn face_params(size: usize) -> ParamImage {
     ParamImage { width: n, height: n, planes: [Plane::Texels(a), Plane::Texels(b), Plane::Texels(c), Plane::Texels(d)] }
 }
 
-/// Write the example map as one EXR with the four parameter channels.
+/// Which example map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExampleKind {
+    /// The face-like test card: distinct values nearly everywhere (the table strategy).
+    Face,
+    /// Sixteen blocks of distinct parameters, like an 8-bit mask (the distinct-tuple strategy).
+    Mask,
+    /// One value everywhere (the constant strategy).
+    Uniform,
+}
+
+/// An example map of the given kind.
+pub fn example_params(kind: ExampleKind, size: usize) -> ParamImage {
+    let n = size.max(1);
+    let block = |i: usize, j: usize| (4 * j / n) * 4 + 4 * i / n; // 0..16
+    let plane = |f: &dyn Fn(usize, usize) -> f32| Plane::Texels((0..n * n).map(|k| f(k % n, k / n)).collect());
+    match kind {
+        ExampleKind::Face => face_params(n),
+        ExampleKind::Mask => ParamImage {
+            width: n,
+            height: n,
+            planes: [
+                plane(&|i, j| 0.01 + 0.03 * (block(i, j) % 4) as f32),
+                plane(&|i, j| 0.25 * (block(i, j) / 4) as f32),
+                plane(&|_, _| 0.01),
+                plane(&|i, j| 0.1 + 0.05 * (block(i, j) % 4) as f32),
+            ],
+        },
+        ExampleKind::Uniform => ParamImage {
+            width: n,
+            height: n,
+            planes: [plane(&|_, _| 0.05), plane(&|_, _| 0.7), plane(&|_, _| 0.01), plane(&|_, _| 0.3)],
+        },
+    }
+}
+
+/// Write the face example map as one EXR with the four parameter channels.
 pub fn write_face_params(path: &Path, size: usize) -> Result<(), SkinError> {
-    let image = face_params(size);
+    write_example_params(path, ExampleKind::Face, size)
+}
+
+/// Write an example map as one EXR with the four parameter channels.
+pub fn write_example_params(path: &Path, kind: ExampleKind, size: usize) -> Result<(), SkinError> {
+    let image = example_params(kind, size);
     let planes: Vec<&[f32]> = image
         .planes
         .iter()

@@ -123,14 +123,15 @@ pub struct ExrOptions {
     pub compression: Compression,
 }
 
-/// Lossless EXR compression of written files.
+/// Lossless EXR compression of written files. PIZ is the default: on a 4096² float map it wrote in 60 % of ZIP's
+/// time (2.9 s against 4.9 s for the three outputs, 2 cores) at about the same size (148 MB against 142 MB).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Compression {
     /// ZIP, 16 scan lines per block (OpenEXR `ZIP_COMPRESSION`, Blender's "ZIP").
-    #[default]
     Zip,
     /// PIZ wavelet compression (Blender's "PIZ").
+    #[default]
     Piz,
     /// No compression.
     None,

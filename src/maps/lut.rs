@@ -6,9 +6,13 @@
 //! logarithm of each output (all positive, spanning decades) and interpolates trilinearly. Its error against direct
 //! evaluation is measured, not assumed: see `measure_error` and `tests/maps_pipeline.rs`.
 
+use std::path::{Path, PathBuf};
+
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::io::write_atomic;
+use crate::fit::SubsurfaceMethod;
 use crate::error::SkinError;
 use crate::evaluate::{Material, Prepared};
 use crate::skin::params::{HEMOGLOBIN_RANGE, MELANIN_BLEND_RANGE, MELANIN_RANGE};
@@ -122,8 +126,36 @@ impl MaterialTable {
         self.resolution
     }
 
+    /// Base Color and radius (mm) of one method: the half of [`MaterialTable::lookup`] a texture needs.
+    pub fn lookup_method(&self, method: SubsurfaceMethod, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> ([f32; 3], [f32; 3]) {
+        let offset = match method {
+            SubsurfaceMethod::Burley => 0,
+            SubsurfaceMethod::RandomWalk => 6,
+        };
+        let mut out = [0.0f32; 6];
+        self.interpolate(melanin, melanin_blend, hemoglobin, |w, v| {
+            for q in 0..6 {
+                out[q] += w * v[offset + q];
+            }
+        });
+        let e = out.map(f32::exp);
+        ([e[0], e[1], e[2]], [e[3], e[4], e[5]])
+    }
+
     /// Trilinear interpolation in the warped coordinates of the logarithms. Inputs are clamped to the domain.
     pub fn lookup(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> TexelMaterial {
+        let mut out = [0.0f32; 12];
+        self.interpolate(melanin, melanin_blend, hemoglobin, |w, v| {
+            for q in 0..12 {
+                out[q] += w * v[q];
+            }
+        });
+        TexelMaterial::from_array(out.map(f32::exp))
+    }
+
+    /// Calls `add(weight, node_values)` for the eight corners of the cell around the point.
+    #[inline]
+    fn interpolate(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32, mut add: impl FnMut(f32, &[f32; 12])) {
         let r = self.resolution;
         let axis = |u: f64, n: usize| {
             let x = u.clamp(0.0, 1.0) * (n - 1) as f64;
@@ -134,23 +166,91 @@ impl MaterialTable {
         let (j, tj) = axis((melanin_blend as f64 - MELANIN_BLEND_RANGE.0) / MELANIN_BLEND_RANGE.1, r.melanin_blend);
         let (k, tk) = axis(warp(hemoglobin as f64, HEMOGLOBIN_RANGE.1), r.hemoglobin);
         let index = |a: usize, b: usize, c: usize| (a * r.melanin_blend + b) * r.hemoglobin + c;
-        let mut out = [0.0f32; 12];
         for (di, wi) in [(0, 1.0 - ti), (1, ti)] {
             for (dj, wj) in [(0, 1.0 - tj), (1, tj)] {
                 for (dk, wk) in [(0, 1.0 - tk), (1, tk)] {
-                    let w = wi * wj * wk;
-                    if w == 0.0 {
-                        continue;
-                    }
-                    let v = &self.log_values[index(i + di, j + dj, k + dk)];
-                    for q in 0..12 {
-                        out[q] += w * v[q];
-                    }
+                    add(wi * wj * wk, &self.log_values[index(i + di, j + dj, k + dk)]);
                 }
             }
         }
-        TexelMaterial::from_array(out.map(f32::exp))
     }
+
+    /// The table for `prepared` and `resolution`: read from `cache_dir` when a table with the same key is there,
+    /// else built (and then stored there, best effort). Returns whether it came from the cache.
+    pub fn load_or_build(
+        prepared: &Prepared,
+        resolution: TableResolution,
+        cache_dir: Option<&Path>,
+    ) -> Result<(MaterialTable, bool), SkinError> {
+        let path = cache_dir.map(|d| d.join(format!("table-{:016x}.bin", cache_key(prepared, resolution))));
+        if let Some(table) = path.as_deref().and_then(|p| MaterialTable::read(p, resolution)) {
+            return Ok((table, true));
+        }
+        let table = MaterialTable::build(prepared, resolution)?;
+        if let Some(p) = &path {
+            // A cache that cannot be written is no error: the table is still good.
+            if std::fs::create_dir_all(p.parent().unwrap_or(Path::new("."))).is_ok() {
+                let _ = write_atomic(p, &table.to_bytes());
+            }
+        }
+        Ok((table, false))
+    }
+
+    fn to_bytes(&self) -> Vec<u8> {
+        let r = self.resolution;
+        let mut bytes = Vec::with_capacity(CACHE_MAGIC.len() + 12 + self.log_values.len() * 48);
+        bytes.extend_from_slice(CACHE_MAGIC);
+        for n in [r.melanin, r.melanin_blend, r.hemoglobin] {
+            bytes.extend_from_slice(&(n as u32).to_le_bytes());
+        }
+        for v in &self.log_values {
+            for x in v {
+                bytes.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        bytes
+    }
+
+    /// A cached table, or None if the file is missing, of another size, or damaged.
+    fn read(path: &Path, resolution: TableResolution) -> Option<MaterialTable> {
+        let bytes = std::fs::read(path).ok()?;
+        let body = bytes.strip_prefix(CACHE_MAGIC)?;
+        let header: Vec<usize> = body.get(..12)?.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize).collect();
+        let r = resolution;
+        if header != [r.melanin, r.melanin_blend, r.hemoglobin] || body.len() != 12 + r.node_count() * 48 {
+            return None;
+        }
+        let floats: Vec<f32> = body[12..].chunks(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        if floats.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        let log_values = floats.chunks(12).map(|c| std::array::from_fn(|q| c[q])).collect();
+        Some(MaterialTable { resolution, log_values })
+    }
+}
+
+/// First bytes of a cached table file.
+const CACHE_MAGIC: &[u8] = b"spectral-skin table v1\n";
+
+/// FNV-1a hash of everything the table depends on: crate version, request (accuracy, model, working space) and
+/// resolution. Stable across runs and platforms.
+fn cache_key(prepared: &Prepared, resolution: TableResolution) -> u64 {
+    let text = format!(
+        "{}|{}|{:?}",
+        env!("CARGO_PKG_VERSION"),
+        serde_json::to_string(prepared.request()).unwrap_or_default(),
+        resolution
+    );
+    text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+/// The per-user cache folder: `$SPECTRAL_SKIN_CACHE_DIR`, else `$XDG_CACHE_HOME/spectral-skin`, else
+/// `$HOME/.cache/spectral-skin`.
+pub fn default_cache_dir() -> Option<PathBuf> {
+    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
+    var("SPECTRAL_SKIN_CACHE_DIR")
+        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("spectral-skin")))
+        .or_else(|| var("HOME").map(|d| d.join(".cache").join("spectral-skin")))
 }
 
 /// The parameters at node n (oiliness does not enter the table).

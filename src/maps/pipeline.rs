@@ -22,8 +22,8 @@ use crate::surface::{specular_from_oiliness, SpecularParams};
 pub const MAX_DISTINCT_TUPLES: usize = 2048;
 /// How many bad texels an error message lists by coordinate.
 const LISTED_BAD_TEXELS: usize = 5;
-/// Points at which a freshly built table's error is measured (each a direct evaluation).
-const TABLE_CHECK_SAMPLES: usize = 64;
+/// Points at which a freshly built table's error is measured by default (each a direct evaluation).
+pub const DEFAULT_TABLE_CHECK_SAMPLES: usize = 64;
 
 /// How texels are evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
@@ -44,6 +44,10 @@ pub struct MapSettings {
     /// Clamp NaN, infinite and out-of-range texels into range (and count them) instead of failing.
     pub clamp: bool,
     pub table: TableResolution,
+    /// Points at which a freshly built table is checked against direct evaluation.
+    pub table_check_samples: usize,
+    /// Folder where built tables are kept for later runs (None: always build). See `lut::default_cache_dir`.
+    pub table_cache: Option<PathBuf>,
     /// Accuracy, model and working space; its `outputs` are ignored (maps need albedo, radius and specular).
     pub request: Request,
 }
@@ -55,6 +59,8 @@ impl Default for MapSettings {
             strategy: StrategyChoice::Auto,
             clamp: false,
             table: TableResolution::default(),
+            table_check_samples: DEFAULT_TABLE_CHECK_SAMPLES,
+            table_cache: None,
             request: Request::new(Outputs::material()),
         }
     }
@@ -66,7 +72,7 @@ impl Default for MapSettings {
 pub enum Strategy {
     Constant,
     DistinctTuples { tuples: usize },
-    Table { resolution: TableResolution, nodes: usize, build_seconds: f64, measured_error: TableError },
+    Table { resolution: TableResolution, nodes: usize, from_cache: bool, build_seconds: f64, measured_error: Option<TableError> },
     Exact { evaluations: usize },
 }
 
@@ -207,7 +213,7 @@ pub fn compute_maps(
         SubsurfaceMethod::RandomWalk => (t.random_walk_base_color, t.random_walk_radius_mm),
     };
 
-    let all_constant = m.is_constant() && b.is_constant() && hb.is_constant();
+    let all_constant = uniform_value(m).is_some() && uniform_value(b).is_some() && uniform_value(hb).is_some();
     let strategy = if all_constant {
         let (c, r) = select(&evaluate_one(tuple(0))?);
         for k in 0..3 {
@@ -251,19 +257,26 @@ pub fn compute_maps(
         Strategy::Exact { evaluations: n }
     } else {
         let build = Instant::now();
-        let table = MaterialTable::build(&prepared, settings.table)?;
+        let (table, from_cache) = MaterialTable::load_or_build(&prepared, settings.table, settings.table_cache.as_deref())?;
         let build_seconds = build.elapsed().as_secs_f64();
-        let measured_error = measure_error(&table, &prepared, TABLE_CHECK_SAMPLES)?;
+        // A freshly built table is checked against direct evaluation; a cached one was checked when it was built.
+        let measured_error = if from_cache || settings.table_check_samples == 0 {
+            None
+        } else {
+            Some(measure_error(&table, &prepared, settings.table_check_samples)?)
+        };
         fill_rows(w, &mut base_color, &mut radius, progress, |i| {
             let t = tuple(i);
-            select(&table.lookup(t[0], t[1], t[2]))
+            table.lookup_method(method, t[0], t[1], t[2])
         });
-        Strategy::Table { resolution: settings.table, nodes: settings.table.node_count(), build_seconds, measured_error }
+        let (resolution, nodes) = (settings.table, settings.table.node_count());
+        Strategy::Table { resolution, nodes, from_cache, build_seconds, measured_error }
     };
 
-    let specular = match oil {
-        Plane::Constant(v) => SpecularOutput::Constant(specular_from_oiliness(*v as f64)),
-        Plane::Texels(values) => {
+    let specular = match (uniform_value(oil), oil) {
+        (Some(v), _) => SpecularOutput::Constant(specular_from_oiliness(v as f64)),
+        (None, Plane::Constant(_)) => unreachable!("a constant plane is uniform"),
+        (None, Plane::Texels(values)) => {
             // The mapping is cheap and exact per texel: level = 0.5 oiliness, constant roughness (surface.rs).
             let planes: [Vec<f32>; 3] = [
                 values.par_iter().map(|&o| specular_from_oiliness(o as f64).specular_ior_level as f32).collect(),
@@ -275,7 +288,7 @@ pub fn compute_maps(
     };
 
     let constant_parameters =
-        (0..4).filter(|&p| image.planes[p].is_constant()).map(|p| PARAM_CHANNELS[p]).collect();
+        (0..4).filter(|&p| uniform_value(&image.planes[p]).is_some()).map(|p| PARAM_CHANNELS[p]).collect();
     let report = MapReport {
         crate_version: env!("CARGO_PKG_VERSION"),
         width: w,
@@ -289,6 +302,17 @@ pub fn compute_maps(
         seconds: Timings { compute: start.elapsed().as_secs_f64(), ..Timings::default() },
     };
     Ok(MapResult { width: w, height: h, base_color, radius_mm: radius, specular, report })
+}
+
+/// The plane's value if every texel holds the same one (a constant, or a map that is constant in fact).
+fn uniform_value(plane: &Plane) -> Option<f32> {
+    match plane {
+        Plane::Constant(v) => Some(*v),
+        Plane::Texels(values) => {
+            let first = values.first()?.to_bits();
+            values.par_iter().all(|v| v.to_bits() == first).then(|| f32::from_bits(first))
+        }
+    }
 }
 
 /// The distinct (C_m, beta_m, C_h) tuples (as f32 bit patterns) if there are at most `limit`, else None.
