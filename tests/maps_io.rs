@@ -511,7 +511,7 @@ fn options_serialise_in_lowercase() {
     let s = serde_json::to_string(&o).unwrap();
     assert_eq!(s, r#"{"half":true,"compression":"piz"}"#);
     assert_eq!(serde_json::from_str::<ExrOptions>(&s).unwrap(), o);
-    assert_eq!(ExrOptions::default(), ExrOptions { half: false, compression: Compression::Zip });
+    assert_eq!(ExrOptions::default(), ExrOptions { half: false, compression: Compression::Piz });
     assert_eq!(serde_json::to_string(&Compression::None).unwrap(), r#""none""#);
 }
 
