@@ -528,12 +528,13 @@ fn float_array<'py>(
         FloatArray::F64(a.clone())
     } else {
         return Err(PyTypeError::new_err(format!(
-            "{name} must be {expected}; got an array of dtype {} (float32 and float64 are accepted)",
+            "{name} must be {expected}; got an array of dtype {} (float32 and float64 in native byte order are \
+             accepted)",
             untyped.dtype()
         )));
     };
     if !untyped.is_aligned() {
-        return Err(PyTypeError::new_err(format!("{name} must be an aligned array; pass np.ascontiguousarray({name})")));
+        return Err(PyTypeError::new_err(format!("{name} must be an aligned array; pass {name}.copy()")));
     }
     if untyped.ndim() != ndim {
         return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(untyped.shape()))));
