@@ -615,11 +615,11 @@ fn rgb_image(py: Python<'_>, height: usize, width: usize, data: Vec<f32>) -> PyR
     Ok(PyArray::from_owned_array(py, Array3::from_shape_vec((height, width, 3), data).map_err(internal)?))
 }
 
-/// The check's message names the CLI's flag; here the keyword.
+/// The check's message says "enable clamping"; here that is the keyword.
 fn python_clamp_hint(e: SkinError) -> SkinError {
     match e {
         SkinError::Invalid { name, reason } => {
-            let reason = reason.replace("use --clamp to clamp them", "pass clamp=True to clamp them");
+            let reason = reason.replace("enable clamping to clamp", "pass clamp=True to clamp");
             SkinError::Invalid { name, reason }
         }
         other => other,

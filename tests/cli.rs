@@ -73,3 +73,30 @@ fn bad_input_is_a_clear_error() {
         assert!(!err.contains("panicked"));
     }
 }
+
+#[test]
+fn maps_on_the_example() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("face.exr");
+    let out = run(&["example", "--out", params.to_str().unwrap(), "--size", "48"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let maps = dir.path().join("maps");
+    let cache = dir.path().join("cache");
+    let out = Command::new(env!("CARGO_BIN_EXE_spectral-skin"))
+        .args(["maps", "--params", params.to_str().unwrap(), "--out", maps.to_str().unwrap()])
+        .env("SPECTRAL_SKIN_CACHE_DIR", &cache)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("strategy table"));
+    for f in ["albedo.exr", "radius.exr", "specular.exr", "skin_maps.json"] {
+        assert!(maps.join(f).is_file(), "{f}");
+    }
+    // Out-of-range constant: a clear error naming the flag that clamps, and nothing new written.
+    let bad = dir.path().join("bad");
+    let out = run(&["maps", "--melanin-map", params.to_str().unwrap(), "--melanin-blend", "0.5", "--hemoglobin", "0.5", "--oiliness", "0.1", "--out", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("hemoglobin") && err.contains("--clamp"), "{err}");
+    assert!(!bad.exists() || std::fs::read_dir(&bad).unwrap().next().is_none());
+}

@@ -61,8 +61,7 @@ impl TexelMaterial {
     }
 }
 
-/// Exponent of the warp of the concentration axes: u = (C / C_max)^(1/3).
-const CONCENTRATION_WARP: f64 = 1.0 / 3.0;
+/// The concentration axes are warped by a cube root: u = (C / C_max)^(1/3) (`warp`, `unwarp`).
 /// Smallest value stored before taking the logarithm (outputs are positive; this guards underflow).
 const MIN_STORED: f32 = 1e-30;
 
@@ -82,14 +81,29 @@ impl Default for TableResolution {
     }
 }
 
+/// Most nodes a table may have (a 1000-cube; the default has 3927).
+const MAX_TABLE_NODES: usize = 1_000_000_000;
+
 impl TableResolution {
     pub fn node_count(&self) -> usize {
-        self.melanin * self.melanin_blend * self.hemoglobin
+        self.melanin.saturating_mul(self.melanin_blend).saturating_mul(self.hemoglobin)
+    }
+
+    /// At least 2 nodes per axis, at most `MAX_TABLE_NODES` in all.
+    pub fn validate(&self) -> Result<(), SkinError> {
+        let r = self;
+        if r.melanin < 2 || r.melanin_blend < 2 || r.hemoglobin < 2 || r.node_count() > MAX_TABLE_NODES {
+            return Err(SkinError::invalid(
+                "table resolution",
+                format!("need 2 or more nodes per axis and at most {MAX_TABLE_NODES} in all; got {r:?}"),
+            ));
+        }
+        Ok(())
     }
 }
 
 fn warp(value: f64, max: f64) -> f64 {
-    (value / max).clamp(0.0, 1.0).powf(CONCENTRATION_WARP)
+    (value / max).clamp(0.0, 1.0).cbrt()
 }
 
 fn unwarp(u: f64, max: f64) -> f64 {
@@ -107,10 +121,8 @@ pub struct MaterialTable {
 impl MaterialTable {
     /// Evaluate every node (in parallel) with `prepared`.
     pub fn build(prepared: &Prepared, resolution: TableResolution) -> Result<MaterialTable, SkinError> {
+        resolution.validate()?;
         let r = resolution;
-        if r.melanin < 2 || r.melanin_blend < 2 || r.hemoglobin < 2 {
-            return Err(SkinError::invalid("table resolution", format!("need at least 2 nodes per axis; got {r:?}")));
-        }
         let log_values = (0..r.node_count())
             .into_par_iter()
             .map(|n| {

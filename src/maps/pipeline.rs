@@ -174,7 +174,7 @@ pub fn check_planes(image: &mut ParamImage, clamp: bool) -> Result<Vec<BadTexels
                 return Err(SkinError::invalid(
                     format!("{} map", bad.parameter),
                     format!(
-                        "values must be in [{lo}, {hi}]; found {} NaN, {} infinite and {} out-of-range texels, first at (x, y) {:?} (use --clamp to clamp them)",
+                        "values must be in [{lo}, {hi}]; found {} NaN, {} infinite and {} out-of-range texels, first at (x, y) {:?}; enable clamping to clamp them into range instead",
                         bad.nan, bad.infinite, bad.out_of_range, bad.first
                     ),
                 ));
@@ -193,8 +193,12 @@ pub fn compute_maps(
     progress: Option<&(dyn Fn(usize, usize) + Sync)>,
 ) -> Result<MapResult, SkinError> {
     let start = Instant::now();
-    let prepared = Prepared::new(&settings.request)?;
     let (w, h) = (image.width, image.height);
+    if w == 0 || h == 0 {
+        return Err(SkinError::invalid("parameter maps", format!("expected at least one texel; got {w}x{h}")));
+    }
+    settings.table.validate()?;
+    let prepared = Prepared::new(&settings.request)?;
     let n = image.texel_count();
     let [m, b, hb, oil] = &image.planes;
     let evaluate_one = |t: [f32; 3]| -> Result<TexelMaterial, SkinError> {
