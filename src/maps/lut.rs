@@ -42,12 +42,10 @@ impl From<&Material> for TexelMaterial {
 impl TexelMaterial {
     fn to_array(self) -> [f32; 12] {
         let mut a = [0.0; 12];
-        for c in 0..3 {
-            a[c] = self.albedo[c];
-            a[3 + c] = self.burley_radius_mm[c];
-            a[6 + c] = self.random_walk_base_color[c];
-            a[9 + c] = self.random_walk_radius_mm[c];
-        }
+        a[0..3].copy_from_slice(&self.albedo);
+        a[3..6].copy_from_slice(&self.burley_radius_mm);
+        a[6..9].copy_from_slice(&self.random_walk_base_color);
+        a[9..12].copy_from_slice(&self.random_walk_radius_mm);
         a
     }
 

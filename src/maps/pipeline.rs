@@ -240,7 +240,8 @@ pub fn compute_maps(
         }
     } else if settings.strategy == StrategyChoice::Exact {
         // Direct evaluation of every texel, row by row in parallel.
-        let rows: Vec<Result<Vec<([f32; 3], [f32; 3])>, SkinError>> = (0..h)
+        type Row = Result<Vec<([f32; 3], [f32; 3])>, SkinError>;
+        let rows: Vec<Row> = (0..h)
             .into_par_iter()
             .map(|y| {
                 let row = (0..w).map(|x| evaluate_one(tuple(y * w + x)).map(|t| select(&t))).collect();
