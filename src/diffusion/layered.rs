@@ -65,11 +65,10 @@ impl Layer {
     }
 }
 
-/// A validated stack of layers under air, reduced to slabs seen from above (`down`) and from below (`up`).
+/// A validated stack of layers under air, reduced to slabs seen from above (`Slab::flipped` sees them from below).
 #[derive(Debug, Clone)]
 pub struct LayerStack {
     down: Vec<Slab>,
-    up: Vec<Slab>,
 }
 
 impl LayerStack {
@@ -83,7 +82,7 @@ impl LayerStack {
         for (i, layer) in layers.iter().enumerate() {
             layer.validate(i, i == last)?;
         }
-        let (mut down, mut up) = (Vec::with_capacity(layers.len()), Vec::with_capacity(layers.len()));
+        let mut down = Vec::with_capacity(layers.len());
         for (i, layer) in layers.iter().enumerate() {
             let n_above = if i == 0 { AMBIENT_IOR } else { layers[i - 1].ior };
             let n_below = if i == last { layer.ior } else { layers[i + 1].ior };
@@ -95,9 +94,8 @@ impl LayerStack {
                 layer.ior / n_below,
             );
             down.push(slab);
-            up.push(slab.flipped());
         }
-        Ok(LayerStack { down, up })
+        Ok(LayerStack { down })
     }
 
     /// The top layer's slab, seen from above.
@@ -117,7 +115,8 @@ impl LayerStack {
             return 0.0;
         }
         let below = self.reflectance_hat_from(1, s_per_mm, combination, terms);
-        self.bounce_term(0, below, s_per_mm, combination, terms)
+        let hats = self.down[0].hats_both_ways(s_per_mm, terms);
+        bounce_term(hats, below, combination)
     }
 
     /// `R~(s)` of the whole stack; `R~(0)` is the total diffuse reflectance.
@@ -130,24 +129,23 @@ impl LayerStack {
         let last = self.down.len() - 1;
         let mut below = self.down[last].reflectance_hat(s, terms);
         for i in (first..last).rev() {
-            below = self.down[i].reflectance_hat(s, terms) + self.bounce_term(i, below, s, combination, terms);
+            let hats = self.down[i].hats_both_ways(s, terms);
+            below = hats[0] + bounce_term(hats, below, combination);
         }
         below
     }
+}
 
-    /// `T~i+ R~below T~i- / (1 - R~below R~i-)`: every path that crosses layer i, returns from below and crosses it again.
-    fn bounce_term(&self, i: usize, below: f64, s: f64, combination: Combination, terms: MultipoleTerms) -> f64 {
-        let from_above = &self.down[i];
-        let from_below = match combination {
-            Combination::Directional => &self.up[i],
-            Combination::Symmetric => &self.down[i],
-        };
-        let t_down = from_above.transmittance_hat(s, terms);
-        let t_up = from_below.transmittance_hat(s, terms);
-        let r_up = from_below.reflectance_hat(s, terms);
-        let denominator = (1.0 - below * r_up).max(MIN_ADDING_DENOMINATOR);
-        safe_div(t_down * below * t_up, denominator, 0.0)
-    }
+/// `T~i+ R~below T~i- / (1 - R~below R~i-)`: every path that crosses a layer, returns from below and crosses it
+/// again. `hats` = [R~+, T~+, R~-, T~-] of the layer; the symmetric form uses the "+" pair both ways.
+fn bounce_term(hats: [f64; 4], below: f64, combination: Combination) -> f64 {
+    let [r_down, t_down, r_up, t_up] = hats;
+    let (r_up, t_up) = match combination {
+        Combination::Directional => (r_up, t_up),
+        Combination::Symmetric => (r_down, t_down),
+    };
+    let denominator = (1.0 - below * r_up).max(MIN_ADDING_DENOMINATOR);
+    safe_div(t_down * below * t_up, denominator, 0.0)
 }
 
 #[cfg(test)]

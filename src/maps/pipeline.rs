@@ -387,13 +387,23 @@ pub fn run_maps(
 
     let write_start = Instant::now();
     let (w, h) = (result.width, result.height);
-    let mut staged = vec![
-        stage_rgb_exr(&out_dir.join(ALBEDO_FILE), w, h, planes(&result.base_color), exr)?,
-        stage_rgb_exr(&out_dir.join(RADIUS_FILE), w, h, planes(&result.radius_mm), exr)?,
+    // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
+    // in parallel, so overlapping the files keeps both cores busy (measured: 2.4 s -> see docs/maps-performance.md).
+    let mut jobs: Vec<(PathBuf, [&[f32]; 3])> = vec![
+        (out_dir.join(ALBEDO_FILE), planes(&result.base_color)),
+        (out_dir.join(RADIUS_FILE), planes(&result.radius_mm)),
     ];
     if let SpecularOutput::Map(p) = &result.specular {
-        staged.push(stage_rgb_exr(&out_dir.join(SPECULAR_FILE), w, h, planes(p), exr)?);
+        jobs.push((out_dir.join(SPECULAR_FILE), planes(p)));
     }
+    let mut staged = std::thread::scope(|scope| {
+        let handles: Vec<_> =
+            jobs.iter().map(|(path, p)| scope.spawn(move || stage_rgb_exr(path, w, h, *p, exr))).collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|_| Err(SkinError::invalid("output", "an EXR writer panicked"))))
+            .collect::<Result<Vec<_>, SkinError>>()
+    })?;
     result.report.clamped = clamped;
     let mut report = result.report.clone();
     report.seconds.read = read;
