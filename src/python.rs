@@ -774,7 +774,7 @@ fn maps_py<'py>(
         let base_color = interleave(width, std::mem::take(&mut result.base_color));
         let radius_mm = interleave(width, std::mem::take(&mut result.radius_mm));
         let specular = match result.specular {
-            SpecularOutput::Map(planes) => Specular::Map(interleave(width, planes)),
+            SpecularOutput::Map { specular_ior_level, .. } => Specular::Map(specular_ior_level),
             SpecularOutput::Constant(s) => Specular::Constant(s),
         };
         let mut report = result.report;
@@ -788,7 +788,10 @@ fn maps_py<'py>(
     dict.set_item("base_color", rgb_image(py, height, width, computed.base_color)?)?;
     dict.set_item("radius_mm", rgb_image(py, height, width, computed.radius_mm)?)?;
     match computed.specular {
-        Specular::Map(map) => dict.set_item("specular", rgb_image(py, height, width, map)?)?,
+        Specular::Map(map) => dict.set_item(
+            "specular",
+            PyArray::from_owned_array(py, Array2::from_shape_vec((height, width), map).map_err(internal)?),
+        )?,
         Specular::Constant(constants) => {
             dict.set_item("specular", json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?)?
         }

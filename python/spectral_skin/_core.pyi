@@ -232,8 +232,8 @@ def maps(
         "base_color": float32 (H, W, 3), Principled Base Color for ``method``, linear RGB in ``working_space``;
         "radius_mm": float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for ``method``, mm (with
         Radius set to these values, Scale is 0.001 in a scene whose unit is the metre);
-        "specular": when oiliness varies, float32 (H, W, 3) with channels Principled Specular IOR Level, Roughness
-        and oiliness (Principled IOR is 1.4 everywhere); when it is one value everywhere (a float, or an array of
+        "specular": when oiliness varies, float32 (H, W): Principled Specular IOR Level per texel (Roughness and
+        IOR do not depend on oiliness: see ``evaluate(...)["specular"]``; Principled IOR is 1.4 everywhere); when it is one value everywhere (a float, or an array of
         one value), a dict of the constants {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
         "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``);
         "report": what was done: {"crate_version", "width", "height", "method", "color_space", "strategy" ({"name":

@@ -10,7 +10,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::io::{commit_all, read_params, stage_bytes, stage_rgb_exr, ExrOptions, ParamImage, ParamInputs, Plane, PARAM_CHANNELS, PARAM_RANGES};
+use super::io::{commit_all, read_params, stage_bytes, stage_channels_exr, ExrOptions, ParamImage, ParamInputs, Plane, PARAM_CHANNELS, PARAM_RANGES};
 use super::lut::{measure_error, MaterialTable, TableError, TableResolution, TexelMaterial};
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
@@ -91,8 +91,9 @@ pub struct BadTexels {
 #[derive(Debug, Clone)]
 pub enum SpecularOutput {
     Constant(SpecularParams),
-    /// Planes: Principled Specular IOR Level, Roughness, oiliness.
-    Map([Vec<f32>; 3]),
+    /// Principled Specular IOR Level per texel. Roughness and IOR do not depend on oiliness in the surface mapping
+    /// (`surface::specular_from_oiliness`): they are the constants in `roughness_and_ior`.
+    Map { specular_ior_level: Vec<f32>, constants: SpecularParams },
 }
 
 /// Everything a map run computed, before it is written.
@@ -282,13 +283,10 @@ pub fn compute_maps(
         (Some(v), _) => SpecularOutput::Constant(specular_from_oiliness(v as f64)),
         (None, Plane::Constant(_)) => unreachable!("a constant plane is uniform"),
         (None, Plane::Texels(values)) => {
-            // The mapping is cheap and exact per texel: level = 0.5 oiliness, constant roughness (surface.rs).
-            let planes: [Vec<f32>; 3] = [
-                values.par_iter().map(|&o| specular_from_oiliness(o as f64).specular_ior_level as f32).collect(),
-                values.par_iter().map(|&o| specular_from_oiliness(o as f64).roughness as f32).collect(),
-                values.clone(),
-            ];
-            SpecularOutput::Map(planes)
+            // The mapping is cheap and exact per texel; only the level depends on oiliness (surface.rs).
+            let specular_ior_level =
+                values.par_iter().map(|&o| specular_from_oiliness(o as f64).specular_ior_level as f32).collect();
+            SpecularOutput::Map { specular_ior_level, constants: specular_from_oiliness(0.0) }
         }
     };
 
@@ -361,6 +359,11 @@ fn fill_rows(
         });
 }
 
+/// The R, G, B channels of three planes, for the EXR writer.
+fn rgb(p: &[Vec<f32>; 3]) -> Vec<(&'static str, &[f32])> {
+    vec![("R", p[0].as_slice()), ("G", p[1].as_slice()), ("B", p[2].as_slice())]
+}
+
 /// Output file names.
 pub const ALBEDO_FILE: &str = "albedo.exr";
 pub const RADIUS_FILE: &str = "radius.exr";
@@ -389,16 +392,16 @@ pub fn run_maps(
     let (w, h) = (result.width, result.height);
     // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
     // in parallel, so overlapping the files keeps both cores busy (measured: 2.4 s -> see docs/maps-performance.md).
-    let mut jobs: Vec<(PathBuf, [&[f32]; 3])> = vec![
-        (out_dir.join(ALBEDO_FILE), planes(&result.base_color)),
-        (out_dir.join(RADIUS_FILE), planes(&result.radius_mm)),
+    let mut jobs: Vec<(PathBuf, Vec<(&str, &[f32])>)> = vec![
+        (out_dir.join(ALBEDO_FILE), rgb(&result.base_color)),
+        (out_dir.join(RADIUS_FILE), rgb(&result.radius_mm)),
     ];
-    if let SpecularOutput::Map(p) = &result.specular {
-        jobs.push((out_dir.join(SPECULAR_FILE), planes(p)));
+    if let SpecularOutput::Map { specular_ior_level, .. } = &result.specular {
+        jobs.push((out_dir.join(SPECULAR_FILE), vec![("Y", specular_ior_level.as_slice())]));
     }
     let mut staged = std::thread::scope(|scope| {
         let handles: Vec<_> =
-            jobs.iter().map(|(path, p)| scope.spawn(move || stage_rgb_exr(path, w, h, *p, exr))).collect();
+            jobs.iter().map(|(path, c)| scope.spawn(move || stage_channels_exr(path, w, h, c, exr))).collect();
         handles
             .into_iter()
             .map(|h| h.join().unwrap_or_else(|_| Err(SkinError::invalid("output", "an EXR writer panicked"))))
@@ -439,10 +442,10 @@ fn sidecar_json(report: &MapReport, inputs: &ParamInputs, specular: &SpecularOut
                       "units": "mm", "color_space": "Non-Color"},
     });
     match specular {
-        SpecularOutput::Map(_) => {
-            outputs[SPECULAR_FILE] = serde_json::json!({"channels": ["R", "G", "B"],
-                "meaning": "R: Principled Specular IOR Level, G: Roughness, B: oiliness", "units": "dimensionless",
-                "color_space": "Non-Color", "ior": crate::surface::SKIN_SURFACE_IOR});
+        SpecularOutput::Map { constants, .. } => {
+            outputs[SPECULAR_FILE] = serde_json::json!({"channels": ["Y"],
+                "meaning": "Principled Specular IOR Level", "units": "dimensionless", "color_space": "Non-Color",
+                "roughness": constants.roughness, "ior": constants.ior});
         }
         SpecularOutput::Constant(s) => outputs["specular_constants"] = serde_json::json!(s),
     }
@@ -453,10 +456,6 @@ fn sidecar_json(report: &MapReport, inputs: &ParamInputs, specular: &SpecularOut
         "report": report,
     });
     serde_json::to_string_pretty(&value).unwrap_or_default()
-}
-
-fn planes(p: &[Vec<f32>; 3]) -> [&[f32]; 3] {
-    [p[0].as_slice(), p[1].as_slice(), p[2].as_slice()]
 }
 
 /// The default output folder's files, for callers that list them.

@@ -42,12 +42,14 @@ def maps_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_outputs_open_in_openimageio(maps_dir: Path) -> None:
     sidecar = json.loads((maps_dir / "skin_maps.json").read_text())
-    for name in ("albedo.exr", "radius.exr", "specular.exr"):
+    for name, expected in (("albedo.exr", ("R", "G", "B")), ("radius.exr", ("R", "G", "B")), ("specular.exr", ("Y",))):
         channels, pixels = read(maps_dir / name)
-        assert channels == ("R", "G", "B"), name
-        assert pixels.shape == (96, 96, 3)
+        assert channels == expected, name
+        assert pixels.shape == (96, 96, len(expected))
         assert np.isfinite(pixels).all() and (pixels >= 0).all()
-        assert sidecar["outputs"][name]["channels"] == ["R", "G", "B"]
+        assert sidecar["outputs"][name]["channels"] == list(expected)
+    _, level = read(maps_dir / "specular.exr")
+    assert 0.0 < level.min() and level.max() <= 0.5  # Specular IOR Level = oiliness / 2
     assert sidecar["outputs"]["radius.exr"]["units"] == "mm"
     assert sidecar["outputs"]["albedo.exr"]["color_space"] == "Linear Rec.709"
 
