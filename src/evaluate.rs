@@ -89,7 +89,7 @@ impl Default for Accuracy {
             multipole_terms: MultipoleTerms::All,
             profile_grid: ProfileGrid::default(),
             hankel: HankelQuadrature::default(),
-            fit_frequencies_per_decade: 5.0,
+            fit_frequencies_per_decade: 4.0,
         }
     }
 }

@@ -47,7 +47,7 @@ fn squared_norm(s: &[f64], f: impl Fn(usize) -> f64) -> f64 {
 pub fn fit_burley(s: &[f64], normalized: &[f64]) -> BurleyFit {
     let misfit = |d: f64| squared_norm(s, |i| normalized[i] - burley_transform(s[i], d));
     // Coarse scan of ln d over the grid's range, then golden-section refinement around the best point.
-    const SCAN: usize = 80;
+    const SCAN: usize = 48;
     let (lo, hi) = ((0.1 / s[s.len() - 1]).ln(), (10.0 / s[0]).ln());
     let ln_d = |k: f64| lo + (hi - lo) * k / SCAN as f64;
     let best = (0..=SCAN).map(|k| (k, misfit(ln_d(k as f64).exp()))).fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
