@@ -100,23 +100,19 @@ impl Slab {
         if self.is_semi_infinite() {
             return 0.5 * self.alpha_prime * dipole;
         }
-        let images = match terms {
-            MultipoleTerms::All => {
-                // i >= 1 and i <= -1 images summed as geometric series in x = e^(-2Lq):
-                // sum = -e^(-(2L-l)q) E(2l, 2L) - e^(-(2L-l-2z_b0)q) E(2l+4z_b0, 2L), E(a,b) = (1-e^(-aq))/(1-e^(-bq)).
-                let two_l = 2.0 * self.half_period_mm();
-                -(-(two_l - l) * q).exp() * expm1_ratio(2.0 * l, two_l, q)
-                    - (-(two_l - l - 2.0 * zb0) * q).exp() * expm1_ratio(2.0 * l + 4.0 * zb0, two_l, q)
+        match terms {
+            MultipoleTerms::All => self.closed_form(q, zb0, self.zb_bottom_mm).0,
+            MultipoleTerms::Pairs(n) => {
+                let images: f64 = (1..=n as i64)
+                    .flat_map(|i| [i, -i])
+                    .map(|i| {
+                        let (zr, zv) = self.image_depths_mm(i);
+                        signed_exp(zr, q) - signed_exp(zv, q)
+                    })
+                    .sum();
+                0.5 * self.alpha_prime * (dipole + images)
             }
-            MultipoleTerms::Pairs(n) => (1..=n as i64)
-                .flat_map(|i| [i, -i])
-                .map(|i| {
-                    let (zr, zv) = self.image_depths_mm(i);
-                    signed_exp(zr, q) - signed_exp(zv, q)
-                })
-                .sum(),
-        };
-        0.5 * self.alpha_prime * (dipole + images)
+        }
     }
 
     /// `T~(s)`: Hankel transform of the transmittance profile through the far face (model.md 5.3); 0 if semi-infinite.
@@ -125,14 +121,9 @@ impl Slab {
             return 0.0;
         }
         let q = self.q(s_per_mm);
-        let (d, l) = (self.thickness_mm, self.source_depth_mm);
+        let d = self.thickness_mm;
         match terms {
-            MultipoleTerms::All => {
-                // Images i <= 0 lie above the far face, i >= 1 below it; each set is a geometric series:
-                // T~ = alpha'/2 E(2l + 2z_b0, 2L) [e^(-(d-l)q) + e^(-(d-l+2z_bd)q)].
-                let e = expm1_ratio(2.0 * l + 2.0 * self.zb_top_mm, 2.0 * self.half_period_mm(), q);
-                0.5 * self.alpha_prime * e * ((-(d - l) * q).exp() + (-(d - l + 2.0 * self.zb_bottom_mm) * q).exp())
-            }
+            MultipoleTerms::All => self.closed_form(q, self.zb_top_mm, self.zb_bottom_mm).1,
             MultipoleTerms::Pairs(n) => {
                 let n = n as i64;
                 let sum: f64 = (-n..=n)
@@ -159,24 +150,26 @@ impl Slab {
             ];
         }
         let q = self.q(s_per_mm);
-        let (d, l, zt, zb) = (self.thickness_mm, self.source_depth_mm, self.zb_top_mm, self.zb_bottom_mm);
-        let two_l = 2.0 * self.half_period_mm();
-        let half_albedo = 0.5 * self.alpha_prime;
-        let e_l = (-l * q).exp();
-        let e_image = (-(two_l - l) * q).exp();
-        let e_far = (-(d - l) * q).exp();
-        let ratio_2l = expm1_ratio(2.0 * l, two_l, q);
-        // Per entry face: with z the entry boundary's and z' the far boundary's extrapolation distance.
-        let side = |z: f64, z_far: f64| {
-            let r = e_l + e_l * (-2.0 * z * q).exp()
-                - e_image * ratio_2l
-                - (-(two_l - l - 2.0 * z) * q).exp() * expm1_ratio(2.0 * l + 4.0 * z, two_l, q);
-            let t = expm1_ratio(2.0 * l + 2.0 * z, two_l, q) * (e_far + e_far * (-2.0 * z_far * q).exp());
-            (half_albedo * r, half_albedo * t)
-        };
-        let (r_down, t_down) = side(zt, zb);
-        let (r_up, t_up) = side(zb, zt);
+        let (r_down, t_down) = self.closed_form(q, self.zb_top_mm, self.zb_bottom_mm);
+        let (r_up, t_up) = self.closed_form(q, self.zb_bottom_mm, self.zb_top_mm);
         [r_down, t_down, r_up, t_up]
+    }
+
+    /// `(R~, T~)` of a finite slab for the whole image series at decay rate q, entered through the face whose
+    /// extrapolation distance is `z_in` (the far face's is `z_out`). The images i >= 1 and i <= -1 form geometric
+    /// series in x = e^(-2Lq), summed with E(a, b) = (1 - e^(-aq)) / (1 - e^(-bq)) (model-notes.md):
+    ///   R~ = alpha'/2 [e^(-lq) + e^(-(l+2z_in)q) - e^(-(2L-l)q) E(2l, 2L) - e^(-(2L-l-2z_in)q) E(2l+4z_in, 2L)]
+    ///   T~ = alpha'/2 E(2l+2z_in, 2L) [e^(-(d-l)q) + e^(-(d-l+2z_out)q)]
+    fn closed_form(&self, q: f64, z_in: f64, z_out: f64) -> (f64, f64) {
+        let (d, l) = (self.thickness_mm, self.source_depth_mm);
+        let two_l = 2.0 * self.half_period_mm();
+        let e_l = (-l * q).exp();
+        let e_far = (-(d - l) * q).exp();
+        let r = e_l + e_l * (-2.0 * z_in * q).exp()
+            - (-(two_l - l) * q).exp() * expm1_ratio(2.0 * l, two_l, q)
+            - (-(two_l - l - 2.0 * z_in) * q).exp() * expm1_ratio(2.0 * l + 4.0 * z_in, two_l, q);
+        let t = expm1_ratio(2.0 * l + 2.0 * z_in, two_l, q) * (e_far + e_far * (-2.0 * z_out * q).exp());
+        (0.5 * self.alpha_prime * r, 0.5 * self.alpha_prime * t)
     }
 
     /// `R(r)`: reflectance profile at distance r (mm) from the point of entry, mm^-2 (DJ05 eq. 8; Jensen 2001 for d = inf).
