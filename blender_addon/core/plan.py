@@ -1,0 +1,190 @@
+"""What the skin material needs, computed by the core before anything in Blender changes (no bpy here).
+
+:func:`make_plan` returns a plain dict, the "material plan":
+
+- ``method``: Blender's subsurface method, "BURLEY" or "RANDOM_WALK";
+- ``base_color``: Principled Base Color, linear Rec.709 RGB, or None when the albedo texture supplies it;
+- ``radius``: Principled Subsurface Radius (the core's radius in mm), or None when the radius texture supplies it;
+- ``scale``: Principled Subsurface Scale, scene units per mm (``METRES_PER_MM / scale_length``), so that
+  Radius × Scale is the core's radius in scene units;
+- ``ior``, ``subsurface_ior``, ``specular_ior_level`` (None when the specular texture supplies it), ``roughness``;
+- ``textures``: {"albedo" | "radius" | "specular": final absolute path} of the maps this plan writes;
+- ``images``: {same keys: numpy array, row 0 at the top} still to be written by :func:`write_textures`;
+- ``summary``: what the panel shows: ``albedo`` (RGB), ``radius_mm`` (RGB), ``computed`` (a sentence),
+  ``seconds``, ``warnings`` (list of sentences).
+
+Maps are written only by :func:`write_textures`, after the plan is complete: first to temporary files in the output
+folder, then renamed into place together, so a failure leaves existing files as they were.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from typing import Any
+
+from .settings import METHODS, PARAMETER_INFO, PARAMETERS, SkinSettings, check
+
+METRES_PER_MM = 1e-3
+
+TEXTURE_CHANNELS = {"albedo": ("R", "G", "B"), "radius": ("R", "G", "B"), "specular": ("Y",)}
+
+
+def subsurface_scale(scale_length: float) -> float:
+    """Principled Subsurface Scale for radii in mm: scene units per mm (scale_length is metres per scene unit)."""
+    return METRES_PER_MM / scale_length
+
+
+def _rgb(values: Any) -> list[float]:
+    return [float(v) for v in values]
+
+
+def make_plan(settings: SkinSettings) -> dict[str, Any]:
+    """Compute everything the material needs; raises ``spectral_skin.SpectralSkinError`` (a ValueError) on bad input."""
+    check(settings)
+    start = time.perf_counter()
+    if settings.maps:
+        plan = _plan_from_maps(settings)
+    else:
+        plan = _plan_from_constants(settings)
+    plan["method"] = settings.method
+    plan["scale"] = subsurface_scale(settings.scale_length)
+    plan["summary"]["seconds"] = time.perf_counter() - start
+    return plan
+
+
+def _plan_from_constants(settings: SkinSettings) -> dict[str, Any]:
+    import spectral_skin
+
+    c = settings.constants()
+    ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"])
+    method = ev["methods"][METHODS[settings.method]]
+    specular = ev["specular"]
+    base_color = _rgb(method["base_color"])
+    radius_mm = _rgb(method["subsurface_radius_mm"])
+    return {
+        "base_color": base_color,
+        "radius": radius_mm,
+        "ior": float(specular["ior"]),
+        "subsurface_ior": float(specular["ior"]),
+        "specular_ior_level": float(specular["specular_ior_level"]),
+        "roughness": float(specular["roughness"]),
+        "textures": {},
+        "images": {},
+        "summary": {
+            "albedo": base_color,
+            "radius_mm": radius_mm,
+            "computed": f"one evaluation ({ev['work']['wavelengths']} wavelengths)",
+            "warnings": [],
+        },
+    }
+
+
+def _map_input(settings: SkinSettings, name: str) -> Any:
+    import numpy as np
+
+    pmap = settings.maps.get(name)
+    if pmap is None:
+        return float(getattr(settings, name))
+    pixels = np.asarray(pmap.pixels, dtype=np.float32)
+    if pmap.normalized:
+        low, high = PARAMETER_INFO[name][:2]
+        pixels = (low + pixels * (high - low)).astype(np.float32)
+    return np.ascontiguousarray(pixels)
+
+
+def _safe_name(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "skin"
+
+
+def _plan_from_maps(settings: SkinSettings) -> dict[str, Any]:
+    import numpy as np
+    import spectral_skin
+
+    inputs = {name: _map_input(settings, name) for name in PARAMETERS}
+    result = spectral_skin.maps(**inputs, method=METHODS[settings.method])
+    report = result["report"]
+    prefix = _safe_name(settings.file_prefix)
+    folder = os.path.abspath(settings.output_dir)
+    images: dict[str, Any] = {"albedo": result["base_color"], "radius": result["radius_mm"]}
+    specular = result["specular"]
+    if isinstance(specular, dict):
+        specular_ior_level = float(specular["specular_ior_level"])
+        roughness = float(specular["roughness"])
+        ior = float(specular["ior"])
+    else:
+        images["specular"] = specular
+        specular_ior_level = None
+        # Roughness and IOR do not depend on the oiliness (see spectral_skin.maps): ask for them at any valid one.
+        low = {p: PARAMETER_INFO[p][0] for p in PARAMETERS}
+        ev_specular = spectral_skin.evaluate(low["melanin"], low["melanin_blend"], low["hemoglobin"],
+                                             PARAMETER_INFO["oiliness"][1], outputs=("specular",))
+        roughness = float(ev_specular["specular"]["roughness"])
+        ior = float(ev_specular["specular"]["ior"])
+    strategy = report["strategy"]
+    computed = f"{report['width']}×{report['height']} maps, strategy {strategy['name']}"
+    if "tuples" in strategy:
+        computed += f" ({strategy['tuples']} distinct parameter sets)"
+    warnings = [
+        f"{c['parameter']}: {c['nan']} NaN, {c['infinite']} infinite, {c['out_of_range']} out-of-range texels clamped"
+        for c in report.get("clamped", [])
+    ]
+    return {
+        "base_color": None,
+        "radius": None,
+        "ior": ior,
+        "subsurface_ior": ior,
+        "specular_ior_level": specular_ior_level,
+        "roughness": roughness,
+        "textures": {kind: os.path.join(folder, f"{prefix}_{kind}.exr") for kind in images},
+        "images": images,
+        "summary": {
+            "albedo": _rgb(np.asarray(result["base_color"], dtype=np.float64).reshape(-1, 3).mean(axis=0)),
+            "radius_mm": _rgb(np.asarray(result["radius_mm"], dtype=np.float64).reshape(-1, 3).mean(axis=0)),
+            "computed": computed,
+            "warnings": warnings,
+        },
+    }
+
+
+def write_textures(plan: dict[str, Any]) -> None:
+    """Write the plan's maps as float EXRs (scene-linear, PIZ): all to temporary files, then renamed together.
+
+    Raises OSError when a file cannot be written; the final paths are then untouched.
+    """
+    if not plan["textures"]:
+        return
+    import OpenImageIO as oiio  # bundled with Blender (and installed in the project's .venv)
+
+    temps: dict[str, str] = {}
+    try:
+        for kind, path in plan["textures"].items():
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            tmp = os.path.join(os.path.dirname(path), f".{os.path.basename(path)}.{os.getpid()}.tmp.exr")
+            temps[kind] = tmp
+            _write_exr(oiio, tmp, plan["images"][kind], TEXTURE_CHANNELS[kind])
+        for kind, tmp in temps.items():
+            os.replace(tmp, plan["textures"][kind])
+    finally:
+        for tmp in temps.values():
+            if os.path.exists(tmp):
+                os.remove(tmp)
+
+
+def _write_exr(oiio: Any, path: str, pixels: Any, channels: tuple[str, ...]) -> None:
+    import numpy as np
+
+    data = np.ascontiguousarray(np.asarray(pixels, dtype=np.float32).reshape(pixels.shape[0], pixels.shape[1], -1))
+    height, width, nchannels = data.shape
+    spec = oiio.ImageSpec(width, height, nchannels, "float")
+    spec.channelnames = channels
+    spec.attribute("compression", "piz")
+    out = oiio.ImageOutput.create(path)
+    if out is None:
+        raise OSError(f"cannot create an EXR writer for {path}: {oiio.geterror()}")
+    try:
+        if not out.open(path, spec) or not out.write_image(data):
+            raise OSError(f"cannot write {path}: {out.geterror()}")
+    finally:
+        out.close()

@@ -1,0 +1,103 @@
+"""The panel's settings as a plain object, without bpy.
+
+Validation of the parameters defers to the core: a value out of range fails when the plan is computed, with the
+core's own message (``melanin must be in [0, 0.5] ...``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
+
+# Subsurface methods: Blender's enum identifier -> the core's method name.
+METHODS = {"BURLEY": "burley", "RANDOM_WALK": "random_walk"}
+
+# The parameters' ranges, labels and meanings, for the UI (slider limits and tooltips) and for scaling 8/16-bit
+# parameter images onto the range (as `spectral-skin maps` does). The core validates every value itself; these
+# duplicate the spec's parameter table (src/skin/params.rs) because the Python API does not expose the ranges.
+PARAMETER_INFO = {
+    "melanin": (0.0, 0.5, "Melanin (C_m)",
+                "Melanin volume fraction of the epidermis, C_m (0 to 0.5): from fair (0.005) to very dark (0.5) skin"),
+    "melanin_blend": (0.0, 1.0, "Melanin Blend (β_m)",
+                      "Eumelanin share of the melanin, β_m (0 to 1): 0 is all red-yellow pheomelanin, "
+                      "1 all brown-black eumelanin"),
+    "hemoglobin": (0.0, 0.1, "Haemoglobin (C_h)",
+                   "Whole-blood volume fraction of the dermis, C_h (0 to 0.1): more blood gives redder skin"),
+    "oiliness": (0.0, 1.0, "Oiliness (ρ_s)",
+                 "Scale of the skin's specular lobe from its oil layer, ρ_s (0 to 1): sets Specular IOR Level and "
+                 "Roughness"),
+}
+
+
+@dataclass
+class ParameterMap:
+    """One parameter's map: pixel values as an (H, W) float32 array, row 0 at the top.
+
+    ``normalized`` is True for 8/16-bit images, whose 0..1 values map linearly onto the parameter's range; False for
+    float images, whose values are the parameter itself.
+    """
+
+    pixels: object  # numpy.ndarray, (H, W)
+    normalized: bool
+    name: str = ""
+
+
+@dataclass
+class SkinSettings:
+    """Everything the Apply operator needs, read from the material's properties or given by a batch script."""
+
+    melanin: float = 0.005
+    melanin_blend: float = 0.7
+    hemoglobin: float = 0.005
+    oiliness: float = 0.3
+    method: str = "BURLEY"
+    # parameter name -> ParameterMap; a parameter with a map ignores its constant.
+    maps: dict[str, ParameterMap] = field(default_factory=dict)
+    # Absolute folder for the texture maps (needed only when maps are given).
+    output_dir: str = ""
+    # Name used for the texture files: <prefix>_albedo.exr etc.
+    file_prefix: str = "skin"
+    # Blender's scene.unit_settings.scale_length: metres per scene unit.
+    scale_length: float = 1.0
+
+    @classmethod
+    def from_preset(cls, name: str, **overrides: object) -> SkinSettings:
+        """Settings with a preset's parameters (``spectral_skin.presets()``), then ``overrides``."""
+        import spectral_skin
+
+        presets = spectral_skin.presets()
+        key = name.lower()
+        if key not in presets:
+            raise spectral_skin.SpectralSkinError(
+                f"unknown preset {name!r}; expected one of {', '.join(sorted(presets))}")
+        preset: dict[str, object] = dict(presets[key])
+        values = {p: preset[p] for p in PARAMETERS}
+        values.update(overrides)
+        return cls(**values)  # type: ignore[arg-type]
+
+    def replace(self, **changes: object) -> SkinSettings:
+        return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+    def constants(self) -> dict[str, float]:
+        return {p: float(getattr(self, p)) for p in PARAMETERS}
+
+
+def check(settings: SkinSettings) -> None:
+    """Raise ``spectral_skin.SpectralSkinError`` (a ValueError) for settings Blender would reject."""
+    import spectral_skin
+
+    if settings.method not in METHODS:
+        raise spectral_skin.SpectralSkinError(
+            f"subsurface method must be one of {', '.join(METHODS)}; got {settings.method!r}")
+    if not settings.scale_length > 0.0:
+        raise spectral_skin.SpectralSkinError(
+            f"scene unit scale must be > 0 (metres per scene unit); got {settings.scale_length}")
+    unknown = set(settings.maps) - set(PARAMETERS)
+    if unknown:
+        raise spectral_skin.SpectralSkinError(
+            f"parameter maps must be among {', '.join(PARAMETERS)}; got {', '.join(sorted(unknown))}")
+    if settings.maps and not settings.output_dir:
+        raise spectral_skin.SpectralSkinError("an output folder for the texture maps is required with parameter maps")
+    # The parameter values themselves are validated by the core when the plan is computed.

@@ -1,0 +1,130 @@
+"""The material's node tree from a material plan (see core/plan.py): set sockets by name, no numerics here.
+
+Nodes the add-on creates carry the custom property ``spectral_skin`` (their role) and a name starting with
+``SpectralSkin``; re-applying finds and updates them and never touches other nodes.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import bpy
+
+TAG = "spectral_skin"
+NAME_PREFIX = "SpectralSkin"
+
+# Texture role -> (Principled input, image colour space).
+TEXTURE_INPUTS = {
+    "albedo": ("Base Color", "Linear Rec.709"),
+    "radius": ("Subsurface Radius", "Non-Color"),
+    "specular": ("Specular IOR Level", "Non-Color"),
+}
+
+
+def tagged_nodes(tree: bpy.types.NodeTree, role: str | None = None) -> list[bpy.types.Node]:
+    """Nodes the add-on created (of one role, or all)."""
+    return [n for n in tree.nodes if TAG in n and (role is None or n[TAG] == role)]
+
+
+def _tag(node: bpy.types.Node, role: str) -> None:
+    node[TAG] = role
+    node.name = node.label = f"{NAME_PREFIX} {role.title()}"
+
+
+def _socket(sockets: Any, name: str) -> bpy.types.NodeSocket:
+    """A socket by name, available or not (``inputs[name]`` misses sockets the current method hides)."""
+    for socket in sockets:
+        if socket.name == name or socket.identifier == name:
+            return socket
+    raise KeyError(name)
+
+
+def _unlink(tree: bpy.types.NodeTree, socket: bpy.types.NodeSocket) -> None:
+    for link in list(socket.links):
+        tree.links.remove(link)
+
+
+def _output_node(tree: bpy.types.NodeTree) -> bpy.types.Node:
+    output = tree.get_output_node("ALL") or tree.get_output_node("CYCLES")
+    if output is None:
+        output = tree.nodes.new("ShaderNodeOutputMaterial")
+        _tag(output, "output")
+        output.is_active_output = True
+    return output
+
+
+def _principled(tree: bpy.types.NodeTree) -> bpy.types.Node:
+    found = tagged_nodes(tree, "principled")
+    if found:
+        return found[0]
+    node = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    _tag(node, "principled")
+    output = _output_node(tree)
+    node.location = (output.location.x - 320, output.location.y)
+    return node
+
+
+def _texture_node(tree: bpy.types.NodeTree, role: str, path: str, colorspace: str,
+                  principled: bpy.types.Node, index: int) -> bpy.types.Node:
+    found = tagged_nodes(tree, role)
+    node = found[0] if found else tree.nodes.new("ShaderNodeTexImage")
+    if not found:
+        _tag(node, role)
+        node.location = (principled.location.x - 360, principled.location.y - 280 * index)
+    image = node.image
+    if image is None or os.path.abspath(bpy.path.abspath(image.filepath, library=image.library)) != path:
+        image = bpy.data.images.load(path, check_existing=True)
+    image.reload()
+    image.colorspace_settings.name = colorspace
+    if bpy.data.filepath:
+        try:
+            image.filepath = bpy.path.relpath(path)
+        except ValueError:  # another drive (Windows): keep the absolute path
+            pass
+    node.image = image
+    node.interpolation = "Linear"
+    node.extension = "EXTEND"
+    return node
+
+
+def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.Node:
+    """Make (or update) the add-on's Principled BSDF and texture nodes from a computed plan; returns the Principled."""
+    if material.node_tree is None:
+        material.use_nodes = True
+    tree = material.node_tree
+    node = _principled(tree)
+    inputs = node.inputs
+    values = {
+        "Base Color": None if plan["base_color"] is None else [*plan["base_color"], 1.0],
+        "Subsurface Radius": plan["radius"],
+        "Specular IOR Level": plan["specular_ior_level"],
+        "Subsurface Weight": 1.0,
+        "Subsurface Scale": plan["scale"],
+        "Roughness": plan["roughness"],
+        "IOR": plan["ior"],
+        "Subsurface IOR": plan["subsurface_ior"],
+    }
+    for name, value in values.items():
+        socket = _socket(inputs, name)
+        _unlink(tree, socket)
+        if value is not None:
+            socket.default_value = value
+    # Set after the values: the method hides sockets it does not use.
+    node.subsurface_method = plan["method"]
+
+    for index, (role, (input_name, colorspace)) in enumerate(TEXTURE_INPUTS.items()):
+        path = plan["textures"].get(role)
+        if path is None:
+            for stale in tagged_nodes(tree, role):
+                tree.nodes.remove(stale)
+            continue
+        texture = _texture_node(tree, role, os.path.abspath(path), colorspace, node, index)
+        tree.links.new(texture.outputs["Color"], _socket(inputs, input_name))
+
+    output = _output_node(tree)
+    surface = _socket(output.inputs, "Surface")
+    if not any(link.from_node == node for link in surface.links):
+        _unlink(tree, surface)
+        tree.links.new(node.outputs["BSDF"], surface)
+    return node

@@ -1,0 +1,49 @@
+"""The Spectral Skin panel in Material Properties."""
+
+from __future__ import annotations
+
+import bpy
+
+from .core import PARAMETERS
+
+
+class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
+    bl_label = "Spectral Skin"
+    bl_idname = "SPECTRAL_SKIN_PT_material"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context: bpy.types.Context) -> bool:
+        return getattr(context, "material", None) is not None
+
+    def draw(self, context: bpy.types.Context) -> None:
+        layout = self.layout
+        layout.use_property_split = True
+        material = context.material
+        props = material.spectral_skin
+        layout.prop(props, "preset")
+        for name in PARAMETERS:
+            row = layout.row(align=True)
+            row.active = getattr(props, f"{name}_map") is None
+            row.prop(props, name, slider=True)
+        box = layout.box()
+        box.label(text="Parameter Maps (optional)")
+        for name in PARAMETERS:
+            box.template_ID(props, f"{name}_map", open="image.open")
+        layout.prop(props, "method")
+        layout.prop(props, "output_dir")
+        layout.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
+        if props.has_result:
+            result = layout.box()
+            result.prop(props, "result_albedo")
+            row = result.row()
+            row.enabled = False
+            row.prop(props, "result_radius_mm")
+            result.label(text=f"{props.result_computed} in {props.result_seconds:.2f} s")
+            if props.result_warning:
+                result.label(text=props.result_warning, icon="ERROR")
+
+
+classes = (SPECTRAL_SKIN_PT_material,)

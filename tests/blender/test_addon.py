@@ -1,0 +1,234 @@
+"""The Blender add-on (blender_addon/): registration, Apply on a material, re-apply, errors, the installable zip.
+
+Headless, no rendering: each test starts from an empty factory scene. Run: .venv/bin/python -m pytest tests/blender/test_addon.py
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+import numpy as np  # noqa: E402
+import spectral_skin  # noqa: E402
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+import blender_addon  # noqa: E402
+from blender_addon import nodes as addon_nodes  # noqa: E402
+from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
+from blender_addon.ops import apply_skin  # noqa: E402
+
+ZIP = REPO / "dist" / "spectral_skin-0.1.0.zip"
+BLENDER_EXT = pathlib.Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"
+
+
+def _registered() -> bool:
+    return hasattr(bpy.types, "SPECTRAL_SKIN_OT_apply")
+
+
+@pytest.fixture
+def addon():
+    """An empty factory scene with the add-on registered (and unregistered afterwards if this fixture did it)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    registered_here = not _registered()
+    if registered_here:
+        blender_addon.register()
+    yield blender_addon
+    if registered_here and _registered():
+        blender_addon.unregister()
+
+
+def _principled(material):
+    found = addon_nodes.tagged_nodes(material.node_tree, "principled")
+    assert len(found) == 1, [n.name for n in material.node_tree.nodes]
+    return found[0]
+
+
+def _snapshot(material) -> dict:
+    """Every node's name, type and unlinked input values, and the links: what an untouched material keeps."""
+    tree = material.node_tree
+    values = {}
+    for node in tree.nodes:
+        for socket in node.inputs:
+            value = getattr(socket, "default_value", None)
+            if value is not None:
+                values[(node.name, socket.identifier)] = (tuple(value) if hasattr(value, "__len__")
+                                                          and not isinstance(value, str) else value)
+    links = sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
+                   for l in tree.links)
+    return {"nodes": sorted((n.name, n.bl_idname) for n in tree.nodes), "values": values, "links": links}
+
+
+def test_register_unregister_leaves_no_trace(addon):
+    assert _registered()
+    assert "spectral_skin" in bpy.types.Material.bl_rna.properties
+    addon.unregister()
+    try:
+        assert not hasattr(bpy.types, "SPECTRAL_SKIN_OT_apply")
+        assert not hasattr(bpy.types, "SPECTRAL_SKIN_PT_material")
+        assert not hasattr(bpy.types.Material, "spectral_skin")
+        assert "spectral_skin" not in bpy.types.Material.bl_rna.properties
+        assert not hasattr(bpy.ops.spectral_skin, "apply") or "apply" not in dir(bpy.ops.spectral_skin)
+    finally:
+        addon.register()
+    assert _registered()
+
+
+def test_apply_preset_sets_principled_from_core(addon):
+    material = bpy.data.materials.new("Skin")
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    node = _principled(material)
+    expected = spectral_skin.evaluate(preset="caucasian")
+    burley = expected["methods"]["burley"]
+    np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], burley["base_color"], rtol=1e-6)
+    scale_length = bpy.context.scene.unit_settings.scale_length
+    radius_times_scale = np.array(node.inputs["Subsurface Radius"].default_value) * node.inputs["Subsurface Scale"].default_value
+    np.testing.assert_allclose(radius_times_scale, burley["subsurface_radius_mm"] * 0.001 / scale_length, rtol=1e-6)
+    assert node.subsurface_method == "BURLEY"
+    assert node.inputs["Subsurface Weight"].default_value == 1.0
+    assert node.inputs["IOR"].default_value == pytest.approx(1.4)
+    assert node.inputs["Specular IOR Level"].default_value == pytest.approx(expected["specular"]["specular_ior_level"])
+    assert node.inputs["Roughness"].default_value == pytest.approx(expected["specular"]["roughness"], rel=1e-6)
+    output = material.node_tree.get_output_node("ALL")
+    assert any(link.from_node == node for link in output.inputs["Surface"].links)
+    result = material.spectral_skin
+    assert result.has_result and result.result_computed
+    np.testing.assert_allclose(result.result_radius_mm, burley["subsurface_radius_mm"], rtol=1e-6)
+
+
+def test_scale_follows_scene_unit_scale(addon):
+    bpy.context.scene.unit_settings.scale_length = 0.01  # one scene unit is a centimetre
+    material = bpy.data.materials.new("Skin")
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    node = _principled(material)
+    assert node.inputs["Subsurface Scale"].default_value == pytest.approx(0.001 / 0.01, rel=1e-6)
+
+
+def test_reapply_updates_own_nodes_and_leaves_user_nodes(addon):
+    material = bpy.data.materials.new("Skin")
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    user_node = material.node_tree.nodes.new("ShaderNodeRGB")
+    user_node.name = "UserColour"
+    user_node.outputs[0].default_value = (0.1, 0.2, 0.3, 1.0)
+    count = len(material.node_tree.nodes)
+    before = _snapshot(material)
+
+    props = material.spectral_skin
+    props.preset = "AFRICAN"
+    props.method = "RANDOM_WALK"
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+
+    assert len(material.node_tree.nodes) == count
+    node = _principled(material)
+    expected = spectral_skin.evaluate(preset="african")["methods"]["random_walk"]
+    np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], expected["base_color"], rtol=1e-6)
+    assert node.subsurface_method == "RANDOM_WALK"
+    assert tuple(material.node_tree.nodes["UserColour"].outputs[0].default_value) == pytest.approx((0.1, 0.2, 0.3, 1.0))
+    after = _snapshot(material)
+    others = lambda snap: {k: v for k, v in snap["values"].items() if not k[0].startswith(addon_nodes.NAME_PREFIX)}  # noqa: E731
+    assert others(after) == others(before)
+
+
+def test_invalid_parameter_changes_nothing(addon):
+    material = bpy.data.materials.new("Skin")
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    before = _snapshot(material)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="melanin"):
+        apply_skin(material, SkinSettings.from_preset("caucasian", melanin=0.9))
+    assert _snapshot(material) == before
+
+
+def test_operator_reports_error_and_changes_nothing(addon, tmp_path):
+    material = bpy.data.materials.new("Skin")
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    before = _snapshot(material)
+    props = material.spectral_skin
+    props.melanin_map = bpy.data.images.new("m", 4, 4, float_buffer=True)
+    props.hemoglobin_map = bpy.data.images.new("h", 5, 4, float_buffer=True)  # sizes differ: the core rejects it
+    props.output_dir = str(tmp_path)
+    with pytest.raises(RuntimeError, match="Spectral Skin"):  # bpy turns an ERROR report into RuntimeError
+        bpy.ops.spectral_skin.apply(material="Skin")
+    assert _snapshot(material) == before
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_maps_write_textures_and_link_them(addon, tmp_path):
+    material = bpy.data.materials.new("Skin")
+    melanin = np.linspace(0.0, 0.3, 12, dtype=np.float32).reshape(3, 4)
+    settings = SkinSettings.from_preset("asian", maps={"melanin": ParameterMap(melanin, normalized=False)},
+                                        output_dir=str(tmp_path), file_prefix="Skin")
+    plan = apply_skin(material, settings)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["Skin_albedo.exr", "Skin_radius.exr"]
+    node = _principled(material)
+    albedo = addon_nodes.tagged_nodes(material.node_tree, "albedo")[0]
+    radius = addon_nodes.tagged_nodes(material.node_tree, "radius")[0]
+    assert albedo.image.colorspace_settings.name == "Linear Rec.709"
+    assert radius.image.colorspace_settings.name == "Non-Color"
+    assert node.inputs["Base Color"].links[0].from_node == albedo
+    assert node.inputs["Subsurface Radius"].links[0].from_node == radius
+    assert tuple(albedo.image.size) == (4, 3)
+    assert plan["summary"]["computed"]
+    # Back to constants: the texture nodes go, the values come back.
+    apply_skin(material, SkinSettings.from_preset("asian"))
+    assert not addon_nodes.tagged_nodes(material.node_tree, "albedo")
+    assert not node.inputs["Base Color"].links
+
+
+def test_batch_saves_relative_texture_paths(addon, tmp_path):
+    from blender_addon.batch import apply_to_materials
+
+    bpy.data.materials.new("Skin").use_fake_user = True
+    source = tmp_path / "in.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    melanin = np.full((2, 2), 0.1, dtype=np.float32)
+    melanin[0, 0] = 0.2
+    settings = SkinSettings.from_preset("caucasian", maps={"melanin": ParameterMap(melanin, normalized=False)})
+    out = tmp_path / "out" / "out.blend"
+    apply_to_materials(str(source), ["Skin"], settings, str(out))
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    paths = sorted(image.filepath for image in bpy.data.images)
+    assert paths == ["//../skin_maps/Skin_albedo.exr", "//../skin_maps/Skin_radius.exr"]
+    assert len(addon_nodes.tagged_nodes(bpy.data.materials["Skin"].node_tree, "principled")) == 1
+
+
+INSTALL_SCRIPT = textwrap.dedent("""
+    import json, os, sys
+    os.environ["BLENDER_USER_RESOURCES"] = sys.argv[1]
+    import bpy
+    bpy.ops.extensions.package_install_files(filepath=sys.argv[2], repo="user_default", enable_on_install=True)
+    mat = bpy.data.materials.new("Skin")
+    result = bpy.ops.spectral_skin.apply(material="Skin")
+    node = [n for n in mat.node_tree.nodes if n.get("spectral_skin") == "principled"][0]
+    print(json.dumps({"result": sorted(result), "base_color": list(node.inputs["Base Color"].default_value)[:3],
+                      "module": bpy.types.SPECTRAL_SKIN_OT_apply.__module__}))
+""")
+
+
+@pytest.mark.skipif(not ZIP.exists(), reason="no dist/spectral_skin-0.1.0.zip: run bash scripts/build_addon.sh")
+def test_built_zip_validates_and_installs(tmp_path):
+    validate = subprocess.run([sys.executable, str(BLENDER_EXT), "validate", str(ZIP)],
+                              capture_output=True, text=True)
+    assert validate.returncode == 0, validate.stdout + validate.stderr
+    user = tmp_path / "user"
+    user.mkdir()
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    run = subprocess.run([sys.executable, "-c", INSTALL_SCRIPT, str(user), str(ZIP)], capture_output=True,
+                         text=True, cwd=tmp_path, env=env, timeout=120)
+    assert run.returncode == 0, run.stdout + run.stderr
+    report = json.loads(run.stdout.strip().splitlines()[-1])
+    assert report["result"] == ["FINISHED"]
+    assert report["module"].startswith("bl_ext.user_default.spectral_skin")
+    unpacked = list((user / "extensions" / ".local").glob("lib/python3*/site-packages/spectral_skin/__init__.py"))
+    assert unpacked, "the extension's wheel was not unpacked into the user's extensions"
+    expected = spectral_skin.evaluate(preset="caucasian")["methods"]["burley"]["base_color"]
+    np.testing.assert_allclose(report["base_color"], expected, rtol=1e-6)
