@@ -1,0 +1,272 @@
+"""Cycles renders of materials set up from spectral_skin.evaluate / spectral_skin.maps (not through the add-on).
+
+What is checked (design and measurements behind each setup: shared/design/blender.md sections 3, 4 and 6):
+
+1. Albedo, Christensen-Burley: a thick flat slab under a uniform white world renders its Base Color exactly (Cycles'
+   Burley profile is normalised and Specular IOR Level 0 removes the specular closure), so the rendered mean must
+   equal the core's total diffuse reflectance; also per texel, from maps() written to EXR textures.
+2. Profile: a sun with a hard half-plane shadow; the rendered edge response must match the Cycles Burley edge model
+   with d = radius / (4 pi) from the core; the distance between that Burley edge and the core's own multipole
+   profile's edge is printed.
+3. Random walk: the flat-slab mean with the core's random-walk Base Color / Radius (compensated for Cycles' walk)
+   vs the core's diffuse reflectance.
+
+Run with ``python -m pytest tests/blender/test_renders.py -q -s`` to see the measured figures.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+pytest.importorskip("OpenImageIO")
+spectral_skin = pytest.importorskip("spectral_skin")
+
+from conftest import (  # noqa: E402
+    MM,
+    add_plane,
+    add_slab,
+    add_sun,
+    add_top_camera,
+    assign,
+    black_material,
+    burley_edge_response,
+    pixel_centres_x,
+    principled_sss,
+    profile_edge_fraction,
+    render,
+    set_world,
+    write_exr,
+)
+
+PRESETS = ("caucasian", "asian", "african")
+
+
+def _evaluate(preset: str) -> dict:
+    return spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"))
+
+
+def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, size_px: int = 64, region_px: int = 32):
+    """Render the white-world flat slab; return the mean RGB over the central region_px x region_px pixels."""
+    set_world(scene, strength=1.0)
+    slab = add_slab()
+    mat, _ = principled_sss("Skin", method, base_color, radius_mm)
+    assign(slab, mat)
+    add_top_camera(scene, ortho_scale=0.1, width=size_px, height=size_px)
+    img = render(scene, samples=samples)
+    lo = (size_px - region_px) // 2
+    region = img[lo : lo + region_px, lo : lo + region_px]
+    return region.reshape(-1, 3).mean(axis=0)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 1. Albedo, Christensen-Burley
+
+# With unequal RGB radii Cycles' Burley estimate of a flat slab is not noise-free (the disk sampling picks one
+# channel's profile per sample, and the other channels get eval/pdf != 1), and the error is strongly correlated
+# across channels and pixels (red and blue opposite): measured on the caucasian slab, 64 x 64 px, central 32 x 32,
+# seeds 1 and 2: about -0.12 % red / +0.10 % blue at 64, 128 and 256 spp alike, then below 0.03 % at 512 and 1024
+# spp. The per-texel test (4 regions of 10 x 12 px) showed up to 0.6 % at 64 spp and 0.29 % at 256 spp, but at most
+# 0.065 % at 1024 spp (seeds 1-3). Hence 512 spp for the 64 x 64 slab and 1024 spp for the small texel image; both
+# renders take about a second.
+BURLEY_SPP = 512
+BURLEY_TEXEL_SPP = 1024
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_burley_flat_slab_albedo(scene, preset):
+    res = _evaluate(preset)
+    burley = res["methods"]["burley"]
+    expected = np.asarray(res["diffuse_reflectance_rgb"])
+    mean = _flat_slab_mean(scene, "BURLEY", burley["base_color"], burley["subsurface_radius_mm"], samples=BURLEY_SPP)
+    rel = mean / expected - 1.0
+    print(
+        f"\n[albedo/burley] {preset}: rendered {np.array2string(mean, precision=6)} "
+        f"expected {np.array2string(expected, precision=6)} rel.err {np.array2string(rel * 100, precision=4)} %"
+    )
+    np.testing.assert_allclose(mean, expected, rtol=2e-3)
+
+
+def test_burley_per_texel_maps(scene, tmp_path):
+    """A 4 x 1 parameter-map gradient -> maps() -> float EXR textures (Closest) on the slab; each texel's interior
+    renders its own base_color."""
+    n = 4
+    params = np.zeros((1, n, 4), dtype=np.float32)
+    params[0, :, 0] = [0.005, 0.05, 0.15, 0.35]  # melanin
+    params[0, :, 1] = 0.7  # melanin_blend
+    params[0, :, 2] = [0.005, 0.02, 0.05, 0.1]  # hemoglobin
+    params[0, :, 3] = 0.3  # oiliness
+    m = spectral_skin.maps(params, method="burley")
+    base = np.asarray(m["base_color"], dtype=np.float64)[0]  # (n, 3)
+    radius = np.asarray(m["radius_mm"], dtype=np.float64)[0]
+    albedo_path = os.path.join(tmp_path, "base_color.exr")
+    radius_path = os.path.join(tmp_path, "radius_mm.exr")
+    write_exr(albedo_path, m["base_color"])
+    write_exr(radius_path, m["radius_mm"])
+
+    set_world(scene, strength=1.0)
+    slab = add_slab(size=1.0)
+    mat, bsdf = principled_sss("SkinMaps", "BURLEY")
+    nt = mat.node_tree
+    coords = nt.nodes.new("ShaderNodeTexCoord")
+    mapping = nt.nodes.new("ShaderNodeMapping")
+    mapping.vector_type = "POINT"
+    mapping.inputs["Location"].default_value = (0.5, 0.5, 0.0)  # object x, y in [-0.5, 0.5] m -> u, v in [0, 1]
+    mapping.inputs["Scale"].default_value = (1.0, 1.0, 1.0)
+    nt.links.new(coords.outputs["Object"], mapping.inputs["Vector"])
+    for path, colorspace, socket in (
+        (albedo_path, "Linear Rec.709", "Base Color"),
+        (radius_path, "Non-Color", "Subsurface Radius"),
+    ):
+        img = bpy.data.images.load(path)
+        img.colorspace_settings.name = colorspace
+        tex = nt.nodes.new("ShaderNodeTexImage")
+        tex.image = img
+        tex.interpolation = "Closest"
+        tex.extension = "EXTEND"
+        nt.links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+        nt.links.new(tex.outputs["Color"], bsdf.inputs[socket])
+    assign(slab, mat)
+
+    px_per_texel = 16
+    width, height = n * px_per_texel, 16
+    add_top_camera(scene, ortho_scale=1.0, width=width, height=height)  # the image spans the slab's x extent
+    img = render(scene, samples=BURLEY_TEXEL_SPP)
+    worst = 0.0
+    for k in range(n):
+        # interior: 3 px (47 mm, >> 16 d) away from the texel's boundaries
+        region = img[2:-2, k * px_per_texel + 3 : (k + 1) * px_per_texel - 3]
+        mean = region.reshape(-1, 3).mean(axis=0)
+        rel = mean / base[k] - 1.0
+        worst = max(worst, float(np.max(np.abs(rel))))
+        print(
+            f"\n[albedo/texel] texel {k} melanin {params[0, k, 0]:.3f} hemoglobin {params[0, k, 2]:.3f} "
+            f"radius_mm {np.array2string(radius[k], precision=3)}: rendered {np.array2string(mean, precision=6)} "
+            f"base_color {np.array2string(base[k], precision=6)} rel.err {np.array2string(rel * 100, precision=4)} %"
+        )
+        np.testing.assert_allclose(mean, base[k], rtol=2e-3)
+    print(f"[albedo/texel] worst |rel.err| {worst * 100:.4f} %")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 2. Profile: half-plane edge test
+
+EDGE_PRESET = "caucasian"
+EDGE_ORTHO_MM = 16.0  # image width in mm: > 2 x 16 d for the reddest channel (16 d = 5.5 mm), 0.0625 mm per pixel
+EDGE_W, EDGE_H = 256, 32
+EDGE_SPP = 512
+
+
+def _render_edge(scene, base_color, radius_mm) -> tuple[np.ndarray, np.ndarray]:
+    """piL(x)/E across a hard shadow edge at x = 0 (lit for x < 0); returns (x in mm, (W, 3) row-averaged)."""
+    set_world(scene, strength=0.0, color=(0.0, 0.0, 0.0))
+    slab = add_slab()
+    mat, _ = principled_sss("Skin", "BURLEY", base_color, radius_mm)
+    assign(slab, mat)
+    occluder = add_plane("Occluder", 0.0, 1.0, -1.0, 1.0, z=1.5 * MM)  # covers x > 0, 1.5 mm above the slab
+    assign(occluder, black_material())
+    occluder.visible_camera = False  # casts the shadow, but camera rays pass through
+    add_sun(scene, strength=1.0, angle=0.0)  # irradiance 1 W/m^2: piL = A on a lit white-world-free Lambertian
+    ortho = EDGE_ORTHO_MM * MM
+    add_top_camera(scene, ortho_scale=ortho, width=EDGE_W, height=EDGE_H)
+    img = render(scene, samples=EDGE_SPP, filter_width=0.01)  # pixel-centre sampling
+    # The EXR holds radiance L; a sun of strength 1 gives irradiance E = 1 W/m^2, so piL/E = pi * L.
+    pi_l = math.pi * img.mean(axis=0)
+    x_mm = pixel_centres_x(ortho, EDGE_W) / MM
+    return x_mm, pi_l
+
+
+def test_burley_edge_profile(scene):
+    res = spectral_skin.evaluate(preset=EDGE_PRESET, outputs=("albedo", "radius"))
+    burley = res["methods"]["burley"]
+    base = np.asarray(burley["base_color"])
+    radius = np.asarray(burley["subsurface_radius_mm"])
+    d_mm = radius / (4 * math.pi)
+    fit_d = np.array([f["d_mm"] for f in res["radius_fit"]])
+    np.testing.assert_allclose(fit_d, d_mm, rtol=1e-9)
+
+    x_mm, measured = _render_edge(scene, base, radius)
+    rms = np.zeros(3)
+    maxerr = np.zeros(3)
+    for c in range(3):
+        model = burley_edge_response(x_mm, d_mm[c], base[c])
+        err = (measured[:, c] - model) / base[c]
+        rms[c] = math.sqrt(np.mean(err**2))
+        maxerr[c] = np.max(np.abs(err))
+    print(
+        f"\n[edge/burley] {EDGE_PRESET}: d_mm {np.array2string(d_mm, precision=4)}, {EDGE_W}x{EDGE_H} px over "
+        f"{EDGE_ORTHO_MM} mm, {EDGE_SPP} spp: rms err / A {np.array2string(rms * 100, precision=4)} %, "
+        f"max |err| / A {np.array2string(maxerr * 100, precision=4)} %"
+    )
+    # plateaus: far on the lit side the response is A, far on the dark side 0
+    lit = x_mm < -16 * d_mm.max() - 0.2
+    print(f"[edge/burley] lit plateau / A {np.array2string(measured[lit].mean(axis=0) / base, precision=5)}")
+    assert np.all(rms < 5e-3), rms
+
+    # How far is that Burley edge from the edge of the core's own multipole profile? (printed, loosely asserted)
+    prof = spectral_skin.profile(
+        preset=EDGE_PRESET, profile_r_min_mm=1e-4, profile_r_max_mm=80.0, profile_count=600
+    )
+    radii = np.asarray(prof["radii_mm"])
+    rgb = np.asarray(prof["rgb_per_mm2"])
+    albedo = np.asarray(res["diffuse_reflectance_rgb"])
+    rms_mp = np.zeros(3)
+    rms_mp_near = np.zeros(3)  # over |x| <= 16 d of the channel only (where the edge is not a plateau)
+    max_mp = np.zeros(3)
+    rms_render_mp = np.zeros(3)  # the render itself vs the multipole edge
+    totals = np.zeros(3)
+    for c in range(3):
+        g_mp, totals[c] = profile_edge_fraction(x_mm, radii, rgb[:, c])
+        mp_edge = np.where(x_mm < 0, 1.0 - g_mp, g_mp)  # normalised by the albedo
+        bu_edge = burley_edge_response(x_mm, d_mm[c], 1.0)
+        diff = mp_edge - bu_edge
+        near = np.abs(x_mm) <= 16 * d_mm[c]
+        rms_mp[c] = math.sqrt(np.mean(diff**2))
+        rms_mp_near[c] = math.sqrt(np.mean(diff[near] ** 2))
+        max_mp[c] = np.max(np.abs(diff))
+        rms_render_mp[c] = math.sqrt(np.mean((measured[:, c] / base[c] - mp_edge) ** 2))
+    edge_residual = np.array([f["edge_residual"] for f in res["radius_fit"]])
+    print(
+        f"[edge/multipole] profile integral / diffuse_reflectance {np.array2string(totals / albedo, precision=5)}\n"
+        f"[edge/multipole] Burley edge vs multipole edge (both / A): rms over |x| <= {EDGE_ORTHO_MM / 2} mm "
+        f"{np.array2string(rms_mp * 100, precision=4)} %, rms over |x| <= 16 d "
+        f"{np.array2string(rms_mp_near * 100, precision=4)} %, max {np.array2string(max_mp * 100, precision=4)} %\n"
+        f"[edge/multipole] render vs multipole edge: rms over |x| <= {EDGE_ORTHO_MM / 2} mm "
+        f"{np.array2string(rms_render_mp * 100, precision=4)} %; core's radius_fit edge_residual "
+        f"{np.array2string(edge_residual, precision=4)}"
+    )
+    assert np.all(rms_mp < 0.1), rms_mp  # loose: the Burley shape is only an approximation of the multipole
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 3. Random walk
+
+# Tolerance for the random-walk flat-slab mean (central 48 x 48 px, 1024 spp) vs the core's diffuse reflectance.
+# Measured (scratch scan, 64 x 64 px, central 48 x 48, seeds 2-4): at 1024 spp |err| <= 0.14 % for all three
+# presets, with a standard error of the region mean (from 4 x 4 block means) of 0.04-0.07 % (caucasian, asian) and
+# 0.13-0.15 % (african, A ~ 0.02-0.04, where the walk is noisiest): no bias is visible, i.e. the core's compensated
+# random-walk Base Color hits the target albedo. (At 256 spp the standard error is 0.07-0.2 % / 0.27-0.45 % and the
+# seed-1 asian blue channel came out at -0.52 %.) blender.md gives ~0.3 % as how well the walk's flat-slab value is
+# predicted at all. 1 % = that 0.3 % model allowance plus > 4 standard errors in every channel.
+RW_RTOL = 1.0e-2
+RW_SPP = 1024
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_random_walk_flat_slab_albedo(scene, preset):
+    res = _evaluate(preset)
+    rw = res["methods"]["random_walk"]
+    expected = np.asarray(res["diffuse_reflectance_rgb"])
+    mean = _flat_slab_mean(
+        scene, "RANDOM_WALK", rw["base_color"], rw["subsurface_radius_mm"], samples=RW_SPP, region_px=48
+    )
+    rel = mean / expected - 1.0
+    print(
+        f"\n[albedo/random_walk] {preset}: base_color {np.array2string(np.asarray(rw['base_color']), precision=5)} "
+        f"rendered {np.array2string(mean, precision=6)} expected {np.array2string(expected, precision=6)} "
+        f"rel.err {np.array2string(rel * 100, precision=4)} %"
+    )
+    np.testing.assert_allclose(mean, expected, rtol=RW_RTOL)
