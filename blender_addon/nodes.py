@@ -14,12 +14,20 @@ import bpy
 TAG = "spectral_skin"
 NAME_PREFIX = "SpectralSkin"
 
-# Texture role -> (Principled input, image colour space).
+# Texture role -> (Principled input, image colour space); None: the plan's working space (the albedo is linear RGB
+# in the scene's working space, whose OCIO colour space has the same name: Linear Rec.709, Linear Rec.2020, ACEScg).
 TEXTURE_INPUTS = {
-    "albedo": ("Base Color", "Linear Rec.709"),
+    "albedo": ("Base Color", None),
     "radius": ("Subsurface Radius", "Non-Color"),
     "specular": ("Specular IOR Level", "Non-Color"),
 }
+
+
+def scene_working_space() -> str:
+    """The blend file's scene-linear working space: ``bpy.data.colorspace.working_space`` in Blender 5.0
+    ('Linear Rec.709', 'Linear Rec.2020' or 'ACEScg'); 'Linear Rec.709' where it does not exist (Blender 4.x)."""
+    colorspace = getattr(bpy.data, "colorspace", None)
+    return str(getattr(colorspace, "working_space", "") or "Linear Rec.709")
 
 
 def tagged_nodes(tree: bpy.types.NodeTree, role: str | None = None) -> list[bpy.types.Node]:
@@ -89,7 +97,15 @@ def _texture_node(tree: bpy.types.NodeTree, role: str, path: str, colorspace: st
 
 
 def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.Node:
-    """Make (or update) the add-on's Principled BSDF and texture nodes from a computed plan; returns the Principled."""
+    """Make (or update) the add-on's Principled BSDF and texture nodes from a computed plan; returns the Principled.
+
+    A constant Base Color is taken as it is, so the plan must be in the scene's working space (ValueError if not);
+    the albedo texture is tagged with the plan's working space, which Blender converts to the scene's.
+    """
+    working_space = plan.get("working_space", "Linear Rec.709")
+    if plan["base_color"] is not None and working_space != scene_working_space():
+        raise ValueError(f"the plan's Base Color is in {working_space} but the scene's working space is "
+                         f"{scene_working_space()}: compute the plan with working_space={scene_working_space()!r}")
     if material.node_tree is None:
         material.use_nodes = True
     tree = material.node_tree
@@ -113,13 +129,14 @@ def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.
     # Set after the values: the method hides sockets it does not use.
     node.subsurface_method = plan["method"]
 
+    working_space = plan.get("working_space", "Linear Rec.709")
     for index, (role, (input_name, colorspace)) in enumerate(TEXTURE_INPUTS.items()):
         path = plan["textures"].get(role)
         if path is None:
             for stale in tagged_nodes(tree, role):
                 tree.nodes.remove(stale)
             continue
-        texture = _texture_node(tree, role, os.path.abspath(path), colorspace, node, index)
+        texture = _texture_node(tree, role, os.path.abspath(path), colorspace or working_space, node, index)
         tree.links.new(texture.outputs["Color"], _socket(inputs, input_name))
 
     output = _output_node(tree)

@@ -7,15 +7,17 @@ import spectral_skin
 
 from . import nodes, props
 from .core import SkinSettings, make_plan, write_textures
+from .nodes import scene_working_space
 
 
 def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
     """Compute everything, write the maps, and only then edit ``material``; returns the plan.
 
     Raises spectral_skin.SpectralSkinError / ValueError for bad settings and OSError when a map cannot be written;
-    the material and existing files are then unchanged.
+    the material and existing files are then unchanged. The plan is computed in the scene's working space
+    (:func:`scene_working_space`), whatever ``settings.working_space`` says.
     """
-    plan = make_plan(settings)
+    plan = make_plan(settings.replace(working_space=scene_working_space()))
     write_textures(plan)
     nodes.apply_plan(material, plan)
     props.store_result(material, plan)

@@ -7,6 +7,7 @@ import numpy as np
 import spectral_skin
 
 from .core import PARAMETER_INFO, PARAMETERS, ParameterMap, SkinSettings
+from .nodes import scene_working_space
 
 _PRESETS = spectral_skin.presets()
 _DEFAULT_PRESET = "caucasian" if "caucasian" in _PRESETS else next(iter(_PRESETS))
@@ -108,7 +109,8 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
                              "save it first or choose an absolute folder")
     return SkinSettings(
         **{name: getattr(props, name) for name in PARAMETERS}, method=props.method, maps=maps,
-        output_dir=output_dir, file_prefix=material.name, scale_length=scene.unit_settings.scale_length)
+        output_dir=output_dir, file_prefix=material.name, scale_length=scene.unit_settings.scale_length,
+        working_space=scene_working_space())
 
 
 def store_result(material: bpy.types.Material, plan: dict) -> None:

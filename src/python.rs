@@ -18,7 +18,7 @@ use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::color::WorkingSpace;
+use crate::color::{WorkingSpace, ALL_WORKING_SPACES};
 use crate::diffusion::{Combination, Layer, MultipoleTerms};
 use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
@@ -45,7 +45,7 @@ impl From<SkinError> for PyErr {
 const MATERIAL_OUTPUTS: [&str; 3] = ["albedo", "radius", "specular"];
 /// The combinations and working spaces accepted by name (their names are the core's serde names).
 const COMBINATIONS: [Combination; 2] = [Combination::Directional, Combination::Symmetric];
-const WORKING_SPACES: [WorkingSpace; 2] = [WorkingSpace::LinearRec709, WorkingSpace::LinearRec2020];
+const WORKING_SPACES: [WorkingSpace; 3] = ALL_WORKING_SPACES;
 /// Names of the four parameters, in `SkinParams` order.
 const PARAM_NAMES: [&str; 4] = ["melanin", "melanin_blend", "hemoglobin", "oiliness"];
 /// The fields of one layer tuple, in order.

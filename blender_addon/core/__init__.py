@@ -1,12 +1,23 @@
 """The add-on's portable part: settings and the material plan, computed by spectral_skin. No bpy imports."""
 
 from .plan import make_plan, subsurface_scale, write_textures
-from .settings import METHODS, PARAMETER_INFO, PARAMETERS, ParameterMap, SkinSettings, check
+from .settings import (
+    DEFAULT_WORKING_SPACE,
+    METHODS,
+    PARAMETER_INFO,
+    PARAMETERS,
+    WORKING_SPACES,
+    ParameterMap,
+    SkinSettings,
+    check,
+)
 
 __all__ = [
+    "DEFAULT_WORKING_SPACE",
     "METHODS",
     "PARAMETERS",
     "PARAMETER_INFO",
+    "WORKING_SPACES",
     "ParameterMap",
     "SkinSettings",
     "check",

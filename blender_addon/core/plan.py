@@ -3,7 +3,8 @@
 :func:`make_plan` returns a plain dict, the "material plan":
 
 - ``method``: Blender's subsurface method, "BURLEY" or "RANDOM_WALK";
-- ``base_color``: Principled Base Color, linear Rec.709 RGB, or None when the albedo texture supplies it;
+- ``working_space``: the scene-linear working space of ``base_color`` and of the albedo texture (the settings');
+- ``base_color``: Principled Base Color, linear RGB in ``working_space``, or None when the albedo texture supplies it;
 - ``radius``: Principled Subsurface Radius (the core's radius in mm), or None when the radius texture supplies it;
 - ``scale``: Principled Subsurface Scale, scene units per mm (``METRES_PER_MM / scale_length``), so that
   Radius × Scale is the core's radius in scene units;
@@ -49,6 +50,7 @@ def make_plan(settings: SkinSettings) -> dict[str, Any]:
     else:
         plan = _plan_from_constants(settings)
     plan["method"] = settings.method
+    plan["working_space"] = settings.working_space
     plan["scale"] = subsurface_scale(settings.scale_length)
     plan["summary"]["seconds"] = time.perf_counter() - start
     return plan
@@ -58,7 +60,8 @@ def _plan_from_constants(settings: SkinSettings) -> dict[str, Any]:
     import spectral_skin
 
     c = settings.constants()
-    ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"])
+    ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"],
+                                working_space=settings.working_space)
     method = ev["methods"][METHODS[settings.method]]
     specular = ev["specular"]
     base_color = _rgb(method["base_color"])
@@ -103,7 +106,7 @@ def _plan_from_maps(settings: SkinSettings) -> dict[str, Any]:
     import spectral_skin
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
-    result = spectral_skin.maps(**inputs, method=METHODS[settings.method])
+    result = spectral_skin.maps(**inputs, method=METHODS[settings.method], working_space=settings.working_space)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)

@@ -11,6 +11,11 @@ from dataclasses import dataclass, field
 
 PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
 
+# Blender 5.0's scene-linear working spaces (``bpy.data.colorspace.working_space``), which are also the names of
+# their OCIO colour spaces and the core's ``working_space`` names. Blender before 5.0 has only Linear Rec.709.
+WORKING_SPACES = ("Linear Rec.709", "Linear Rec.2020", "ACEScg")
+DEFAULT_WORKING_SPACE = "Linear Rec.709"
+
 # Subsurface methods: Blender's enum identifier -> the core's method name.
 METHODS = {"BURLEY": "burley", "RANDOM_WALK": "random_walk"}
 
@@ -61,6 +66,9 @@ class SkinSettings:
     file_prefix: str = "skin"
     # Blender's scene.unit_settings.scale_length: metres per scene unit.
     scale_length: float = 1.0
+    # The blend file's scene-linear working space (bpy.data.colorspace.working_space in Blender 5.0): the space of
+    # Base Color and of the albedo texture.
+    working_space: str = DEFAULT_WORKING_SPACE
 
     @classmethod
     def from_preset(cls, name: str, **overrides: object) -> SkinSettings:
@@ -94,6 +102,9 @@ def check(settings: SkinSettings) -> None:
     if not settings.scale_length > 0.0:
         raise spectral_skin.SpectralSkinError(
             f"scene unit scale must be > 0 (metres per scene unit); got {settings.scale_length}")
+    if settings.working_space not in WORKING_SPACES:
+        raise spectral_skin.SpectralSkinError(
+            f"working space must be one of {', '.join(WORKING_SPACES)}; got {settings.working_space!r}")
     unknown = set(settings.maps) - set(PARAMETERS)
     if unknown:
         raise spectral_skin.SpectralSkinError(

@@ -19,7 +19,7 @@ _Float32Array = npt.NDArray[np.float32]
 _MapArray = npt.NDArray[np.float32] | npt.NDArray[np.float64]
 
 _Combination = Literal["directional", "symmetric"]
-_WorkingSpace = Literal["Linear Rec.709", "Linear Rec.2020"]
+_WorkingSpace = Literal["Linear Rec.709", "Linear Rec.2020", "ACEScg"]
 _Method = Literal["burley", "random_walk"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
 
@@ -75,7 +75,9 @@ def evaluate(
         profile_count: number of profile radii; None: 64.
         combination: transport through the epidermis from below: "directional" (the layer seen from below) or
             "symmetric" (DJ2005's published form).
-        working_space: linear RGB space of every RGB output: "Linear Rec.709" or "Linear Rec.2020".
+        working_space: linear RGB space of every RGB output, named as Blender 5.0's working spaces:
+            "Linear Rec.709", "Linear Rec.2020" (both D65) or "ACEScg" (AP1 primaries, ACES white; the D65 XYZ is
+            Bradford-adapted to it, as Blender's OCIO config does). A perfect white reflector is (1, 1, 1) in each.
 
     Returns:
         The CLI's JSON as a dict. Always: "params", "color_space", "accuracy", "model" (model["dermis_thickness_mm"]
@@ -222,8 +224,8 @@ def maps(
         clamp: clamp NaN (to the minimum), infinite and out-of-range values into range and count them in
             ``report["clamped"]``, instead of raising. The input arrays are not modified.
         wavelength_step_nm: wavelength sampling step in nm (380-780 nm), 0.5..100.
-        working_space: linear RGB space of Base Color: "Linear Rec.709" (Blender's scene linear) or
-            "Linear Rec.2020".
+        working_space: linear RGB space of Base Color, as for :func:`evaluate`: "Linear Rec.709" (Blender's
+            default scene linear), "Linear Rec.2020" or "ACEScg"; use the scene's working space.
         table_resolution: nodes per axis of the lookup table, (melanin, melanin_blend, hemoglobin), each >= 2;
             None: the core's default (chosen for the error bound above; the report names it). Used only by "table".
 

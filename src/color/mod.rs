@@ -4,7 +4,7 @@ pub mod cmf;
 pub mod rgb;
 pub mod spectrum;
 
-pub use rgb::WorkingSpace;
+pub use rgb::{WorkingSpace, ALL_WORKING_SPACES};
 pub use spectrum::{spectrum_to_xyz, WavelengthGrid};
 
 /// Weights turning a spectrum sampled on `grid` into linear RGB in `space`: rgb[c] = sum_k w[k][c] R(lambda_k).
@@ -29,7 +29,7 @@ mod tests {
     fn white_reflector_is_one() {
         for step in [1.0, 2.0, 5.0, 10.0, 20.0] {
             let g = WavelengthGrid::uniform(step);
-            for ws in [WorkingSpace::LinearRec709, WorkingSpace::LinearRec2020] {
+            for ws in ALL_WORKING_SPACES {
                 let rgb = spectrum_to_rgb(&vec![1.0; g.wavelengths_nm.len()], &spectral_rgb_weights(&g, ws));
                 assert!(rgb.iter().all(|v| (v - 1.0).abs() < 1e-12), "{step} {ws:?} {rgb:?}");
             }
