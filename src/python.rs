@@ -414,6 +414,17 @@ fn presets_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(all)
 }
 
+/// The allowed range of each parameter: {name: (min, max)} (the core's, so no caller repeats them).
+#[pyfunction]
+#[pyo3(name = "parameter_ranges")]
+fn parameter_ranges_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    for (name, range) in crate::maps::io::PARAM_CHANNELS.iter().zip(crate::maps::io::PARAM_RANGES) {
+        d.set_item(name, range)?;
+    }
+    Ok(d)
+}
+
 /// One layer from a 4-sequence of numbers.
 fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<Layer> {
     reject_string(item, &format!("layers[{index}] must be a tuple {LAYER_FIELDS}"))?;
@@ -816,6 +827,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evaluate_py, m)?)?;
     m.add_function(wrap_pyfunction!(profile_py, m)?)?;
     m.add_function(wrap_pyfunction!(presets_py, m)?)?;
+    m.add_function(wrap_pyfunction!(parameter_ranges_py, m)?)?;
     m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
     m.add_function(wrap_pyfunction!(maps_py, m)?)?;
     Ok(())

@@ -9,6 +9,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
+import spectral_skin
+
 PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
 
 # Blender 5.0's scene-linear working spaces (``bpy.data.colorspace.working_space``), which are also the names of
@@ -22,15 +24,16 @@ METHODS = {"BURLEY": "burley", "RANDOM_WALK": "random_walk"}
 # The parameters' ranges, labels and meanings, for the UI (slider limits and tooltips) and for scaling 8/16-bit
 # parameter images onto the range (as `spectral-skin maps` does). The core validates every value itself; these
 # duplicate the spec's parameter table (src/skin/params.rs) because the Python API does not expose the ranges.
+_RANGES = spectral_skin.parameter_ranges()  # the core's ranges: slider limits and 8/16-bit map scaling
 PARAMETER_INFO = {
-    "melanin": (0.0, 0.5, "Melanin (C_m)",
+    "melanin": (*_RANGES["melanin"], "Melanin (C_m)",
                 "Melanin volume fraction of the epidermis, C_m (0 to 0.5): from fair (0.005) to very dark (0.5) skin"),
-    "melanin_blend": (0.0, 1.0, "Melanin Blend (β_m)",
+    "melanin_blend": (*_RANGES["melanin_blend"], "Melanin Blend (β_m)",
                       "Eumelanin share of the melanin, β_m (0 to 1): 0 is all red-yellow pheomelanin, "
                       "1 all brown-black eumelanin"),
-    "hemoglobin": (0.0, 0.1, "Haemoglobin (C_h)",
+    "hemoglobin": (*_RANGES["hemoglobin"], "Haemoglobin (C_h)",
                    "Whole-blood volume fraction of the dermis, C_h (0 to 0.1): more blood gives redder skin"),
-    "oiliness": (0.0, 1.0, "Oiliness (ρ_s)",
+    "oiliness": (*_RANGES["oiliness"], "Oiliness (ρ_s)",
                  "Scale of the skin's specular lobe from its oil layer, ρ_s (0 to 1): sets Specular IOR Level and "
                  "Roughness"),
 }

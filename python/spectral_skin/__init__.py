@@ -7,6 +7,7 @@ nanometres. The work runs in the compiled core (``spectral_skin._core``) with th
 Functions:
     evaluate: what a material needs (albedo, Subsurface Radius, specular) or any subset of the outputs.
     profile: the radial reflectance profile R(r), RGB or per wavelength.
+    parameter_ranges: the allowed range of each parameter.
     presets: the named parameter sets.
     layered_reflectance: the layered diffusion solver alone, for checks against other solvers.
     maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
@@ -21,6 +22,7 @@ from ._core import (
     evaluate,
     layered_reflectance,
     maps,
+    parameter_ranges,
     presets,
     profile,
 )
@@ -31,6 +33,7 @@ __all__ = [
     "evaluate",
     "layered_reflectance",
     "maps",
+    "parameter_ranges",
     "presets",
     "profile",
 ]

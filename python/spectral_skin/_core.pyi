@@ -10,7 +10,7 @@ from typing import Any, Literal, TypedDict
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "presets", "profile"]
+__all__ = ["SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets", "profile"]
 
 __version__: str
 
@@ -129,6 +129,14 @@ def profile(
     Raises:
         SpectralSkinError: as for :func:`evaluate`.
         TypeError: an argument of the wrong type.
+    """
+
+def parameter_ranges() -> dict[str, tuple[float, float]]:
+    """The allowed range of each parameter.
+
+    Returns:
+        {"melanin": (0.0, 0.5), "melanin_blend": (0.0, 1.0), "hemoglobin": (0.0, 0.1), "oiliness": (0.0, 1.0)}:
+        volume fractions (melanin of the epidermis, whole blood of the dermis), the eumelanin share, the oiliness.
     """
 
 def presets() -> dict[str, _Preset]:

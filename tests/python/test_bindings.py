@@ -253,7 +253,8 @@ def test_error_class_is_exported():
     assert issubclass(SpectralSkinError, ValueError)
     assert spectral_skin.SpectralSkinError is spectral_skin._core.SpectralSkinError
     assert set(spectral_skin.__all__) == {
-        "SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "presets", "profile"
+        "SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets",
+        "profile"
     }
 
 
@@ -295,3 +296,13 @@ def test_concurrent_calls_finish_and_agree():
         t.join(timeout=60)
     assert not any(t.is_alive() for t in threads)
     np.testing.assert_array_equal(results[0]["rgb_per_mm2"], results[1]["rgb_per_mm2"])
+
+
+def test_parameter_ranges_bound_what_evaluate_accepts():
+    ranges = spectral_skin.parameter_ranges()
+    assert ranges == {"melanin": (0.0, 0.5), "melanin_blend": (0.0, 1.0), "hemoglobin": (0.0, 0.1), "oiliness": (0.0, 1.0)}
+    for name, (low, high) in ranges.items():
+        values = {"melanin": 0.1, "melanin_blend": 0.5, "hemoglobin": 0.01, "oiliness": 0.2}
+        spectral_skin.evaluate(**{**values, name: high}, outputs=("albedo",))
+        with pytest.raises(spectral_skin.SpectralSkinError, match=name):
+            spectral_skin.evaluate(**{**values, name: high * 1.01 + 0.001}, outputs=("albedo",))
