@@ -644,7 +644,7 @@ fn python_clamp_hint(e: SkinError) -> SkinError {
     signature = (
         params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
         method = "burley", exact = false, clamp = false, wavelength_step_nm = 5.0,
-        working_space = "Linear Rec.709", table_resolution = None
+        working_space = "Linear Rec.709", table_resolution = None, table_cache = true
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -661,6 +661,7 @@ fn maps_py<'py>(
     wavelength_step_nm: f64,
     working_space: &str,
     table_resolution: Option<&Bound<'py, PyAny>>,
+    table_cache: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let start = Instant::now();
     // Settings first: their errors come before any copy.
@@ -678,6 +679,7 @@ fn maps_py<'py>(
         strategy: if exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
         clamp,
         table: self::table_resolution(table_resolution)?,
+        table_cache: if table_cache { crate::maps::lut::default_cache_dir() } else { None },
         request: knobs.request(Outputs::material())?,
         ..MapSettings::default()
     };

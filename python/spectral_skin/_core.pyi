@@ -202,6 +202,7 @@ def maps(
     wavelength_step_nm: float = 5.0,
     working_space: _WorkingSpace | str = "Linear Rec.709",
     table_resolution: tuple[int, int, int] | None = None,
+    table_cache: bool = True,
 ) -> _Maps:
     """Principled BSDF texture maps (Base Color, Subsurface Radius, specular) from per-texel parameter maps.
 
@@ -234,6 +235,9 @@ def maps(
         wavelength_step_nm: wavelength sampling step in nm (380-780 nm), 0.5..100.
         working_space: linear RGB space of Base Color, as for :func:`evaluate`: "Linear Rec.709" (Blender's
             default scene linear), "Linear Rec.2020" or "ACEScg"; use the scene's working space.
+        table_cache: keep a built lookup table in the per-user cache folder ($SPECTRAL_SKIN_CACHE_DIR, else
+            $XDG_CACHE_HOME/spectral-skin, else ~/.cache/spectral-skin) and reuse it (as the CLI does); False
+            always builds it afresh.
         table_resolution: nodes per axis of the lookup table, (melanin, melanin_blend, hemoglobin), each >= 2;
             None: the core's default (chosen for the error bound above; the report names it). Used only by "table".
 

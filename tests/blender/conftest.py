@@ -344,3 +344,12 @@ def scene():
     pytest.importorskip("bpy")
     pytest.importorskip("OpenImageIO")
     return reset_scene()
+
+
+@pytest.fixture(autouse=True, scope="session")
+def isolated_table_cache(tmp_path_factory: pytest.TempPathFactory):
+    """Keep lookup tables that tests build out of the user's cache folder."""
+    mp = pytest.MonkeyPatch()
+    mp.setenv("SPECTRAL_SKIN_CACHE_DIR", str(tmp_path_factory.mktemp("table-cache")))
+    yield
+    mp.undo()

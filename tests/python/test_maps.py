@@ -87,7 +87,7 @@ def test_specular_map_follows_oiliness():
 def test_table_against_exact():
     """64 x 64 distinct values force the table; its error against direct evaluation, here on every 4th texel."""
     params = random_params(64, 64, seed=3)
-    table = spectral_skin.maps(params)
+    table = spectral_skin.maps(params, table_cache=False)  # built here, so its error is measured
     strategy = table["report"]["strategy"]
     assert strategy["name"] == "table", strategy
     resolution = strategy["resolution"]
@@ -331,3 +331,19 @@ def test_gil_is_released_during_maps():
     quarter = (end - start) / 4
     inside = [t for t in ticks if start + quarter < t < end - quarter]
     assert len(inside) >= 3, (end - start, len(ticks), len(inside))
+
+
+def test_table_cache_is_reused(tmp_path, monkeypatch):
+    monkeypatch.setenv("SPECTRAL_SKIN_CACHE_DIR", str(tmp_path))
+    rng = np.random.default_rng(3)
+    params = np.stack([rng.uniform(0, 0.5, (48, 48)), rng.uniform(0, 1, (48, 48)), rng.uniform(0, 0.1, (48, 48)),
+                       np.full((48, 48), 0.2)], axis=-1).astype(np.float32)
+    small = (5, 3, 4)
+    first = spectral_skin.maps(params, table_resolution=small)
+    assert first["report"]["strategy"]["from_cache"] is False
+    assert list(tmp_path.iterdir()), "the table was not kept"
+    second = spectral_skin.maps(params, table_resolution=small)
+    assert second["report"]["strategy"]["from_cache"] is True
+    np.testing.assert_array_equal(first["base_color"], second["base_color"])
+    fresh = spectral_skin.maps(params, table_resolution=small, table_cache=False)
+    assert fresh["report"]["strategy"]["from_cache"] is False
