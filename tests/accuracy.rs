@@ -1,0 +1,62 @@
+//! The default accuracy against the converged reference (`Accuracy::reference`), and the reference against a further
+//! refinement of every knob: albedo within 0.2 % (max relative per channel) and radius within 1 % for every preset.
+
+use spectral_skin::diffusion::HankelQuadrature;
+use spectral_skin::evaluate::Accuracy;
+use spectral_skin::{evaluate, Evaluation, Outputs, Request, SkinParams, PRESETS};
+
+fn run(preset: &SkinParams, accuracy: Accuracy) -> Evaluation {
+    let mut request = Request::new(Outputs { albedo: true, radius: true, profile_rgb: true, ..Outputs::default() });
+    request.accuracy = accuracy;
+    evaluate(preset, &request).unwrap()
+}
+
+fn max_relative(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|c| ((a[c] - b[c]) / b[c]).abs()).fold(0.0, f64::max)
+}
+
+fn figures(e: &Evaluation) -> ([f64; 3], [f64; 3]) {
+    (e.diffuse_reflectance_rgb.unwrap(), e.methods.unwrap().burley.subsurface_radius_mm)
+}
+
+#[test]
+fn default_is_within_bounds_of_the_converged_reference() {
+    for preset in PRESETS {
+        let reference = run(&preset.params, Accuracy::reference());
+        let default = run(&preset.params, Accuracy::default());
+        let (ra, rr) = figures(&reference);
+        let (da, dr) = figures(&default);
+        let (albedo_error, radius_error) = (max_relative(da, ra), max_relative(dr, rr));
+        println!("{}: default vs reference: albedo {:.4} %, radius {:.4} %", preset.name, 100.0 * albedo_error, 100.0 * radius_error);
+        assert!(albedo_error < 0.002, "{}: albedo {albedo_error}", preset.name);
+        assert!(radius_error < 0.01, "{}: radius {radius_error}", preset.name);
+    }
+}
+
+/// Refining every knob of the reference once more (half the wavelength step, twice the fit frequencies, a finer
+/// inverse-Hankel grid) changes albedo, radius and the RGB profile by less than 1e-6 relative: it is converged.
+#[test]
+fn reference_is_converged() {
+    let finer = Accuracy {
+        wavelength_step_nm: 0.5,
+        fit_frequencies_per_decade: 32.0,
+        hankel: HankelQuadrature { gauss_order: 16, refinement: 4.0, cutoff: 1e-16 },
+        ..Accuracy::reference()
+    };
+    for preset in PRESETS {
+        let a = run(&preset.params, Accuracy::reference());
+        let b = run(&preset.params, finer);
+        let (aa, ar) = figures(&a);
+        let (ba, br) = figures(&b);
+        assert!(max_relative(aa, ba) < 1e-6 && max_relative(ar, br) < 1e-6, "{}: {aa:?} {ba:?} {ar:?} {br:?}", preset.name);
+        let (pa, pb) = (a.profile.unwrap(), b.profile.unwrap());
+        let (pa, pb) = (pa.rgb_per_mm2.unwrap(), pb.rgb_per_mm2.unwrap());
+        let peak = pa[0].iter().cloned().fold(0.0, f64::max);
+        for (x, y) in pa.iter().zip(&pb) {
+            for c in 0..3 {
+                // Relative where the profile matters; absolute (to the peak) in the far tail.
+                assert!((x[c] - y[c]).abs() <= 1e-6 * y[c].abs() + 1e-12 * peak, "{}: {x:?} vs {y:?}", preset.name);
+            }
+        }
+    }
+}
