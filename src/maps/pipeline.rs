@@ -458,8 +458,3 @@ fn sidecar_json(report: &MapReport, inputs: &ParamInputs, specular: &SpecularOut
     });
     serde_json::to_string_pretty(&value).unwrap_or_default()
 }
-
-/// The default output folder's files, for callers that list them.
-pub fn output_paths(out_dir: &Path) -> [PathBuf; 4] {
-    [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE, SIDECAR_FILE].map(|f| out_dir.join(f))
-}

@@ -151,8 +151,8 @@ def add_sun(scene, strength: float = 1.0, angle: float = 0.0):
     return obj
 
 
-def new_material(name: str):
-    """A node material with its Principled BSDF and Material Output; returns (material, principled)."""
+def _node_material(name: str, bsdf_type: str):
+    """A node material holding only a Material Output fed by one new BSDF node; returns (material, bsdf)."""
     bpy = _bpy()
     mat = bpy.data.materials.new(name)
     if mat.node_tree is None:  # Blender < 5.0 (use_nodes is deprecated in 5.0, where node trees always exist)
@@ -160,9 +160,14 @@ def new_material(name: str):
     nt = mat.node_tree
     nt.nodes.clear()
     out = nt.nodes.new("ShaderNodeOutputMaterial")
-    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf = nt.nodes.new(bsdf_type)
     nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
     return mat, bsdf
+
+
+def new_material(name: str):
+    """A node material with its Principled BSDF and Material Output; returns (material, principled)."""
+    return _node_material(name, "ShaderNodeBsdfPrincipled")
 
 
 def principled_sss(
@@ -198,16 +203,8 @@ def principled_sss(
 
 def black_material(name: str = "Black"):
     """A perfectly absorbing (black diffuse) material."""
-    bpy = _bpy()
-    mat = bpy.data.materials.new(name)
-    if mat.node_tree is None:  # Blender < 5.0 (use_nodes is deprecated in 5.0, where node trees always exist)
-        mat.use_nodes = True
-    nt = mat.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    diff = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    diff.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    nt.links.new(diff.outputs["BSDF"], out.inputs["Surface"])
+    mat, diffuse = _node_material(name, "ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
     return mat
 
 
@@ -353,3 +350,25 @@ def isolated_table_cache(tmp_path_factory: pytest.TempPathFactory):
     mp.setenv("SPECTRAL_SKIN_CACHE_DIR", str(tmp_path_factory.mktemp("table-cache")))
     yield
     mp.undo()
+
+
+@pytest.fixture
+def addon():
+    """An empty factory scene with the add-on registered (and unregistered afterwards if this fixture did it)."""
+    import sys
+    from pathlib import Path
+
+    repo = str(Path(__file__).resolve().parents[2])
+    if repo not in sys.path:
+        sys.path.insert(0, repo)
+    import blender_addon
+
+    bpy = _bpy()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    registered = lambda: hasattr(bpy.types, "SPECTRAL_SKIN_OT_apply")  # noqa: E731
+    registered_here = not registered()
+    if registered_here:
+        blender_addon.register()
+    yield blender_addon
+    if registered_here and registered():
+        blender_addon.unregister()

@@ -23,7 +23,6 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-import blender_addon  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 from blender_addon.ops import apply_skin  # noqa: E402
@@ -34,18 +33,6 @@ BLENDER_EXT = pathlib.Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core"
 
 def _registered() -> bool:
     return hasattr(bpy.types, "SPECTRAL_SKIN_OT_apply")
-
-
-@pytest.fixture
-def addon():
-    """An empty factory scene with the add-on registered (and unregistered afterwards if this fixture did it)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    registered_here = not _registered()
-    if registered_here:
-        blender_addon.register()
-    yield blender_addon
-    if registered_here and _registered():
-        blender_addon.unregister()
 
 
 def _principled(material):

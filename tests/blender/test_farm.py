@@ -32,7 +32,6 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
-import blender_addon  # noqa: E402
 from blender_addon import batch  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
@@ -73,17 +72,6 @@ FARM_SCRIPT = textwrap.dedent("""
 
 def _registered() -> bool:
     return hasattr(bpy.types, "SPECTRAL_SKIN_OT_apply")
-
-
-@pytest.fixture
-def addon():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    registered_here = not _registered()
-    if registered_here:
-        blender_addon.register()
-    yield blender_addon
-    if registered_here and _registered():
-        blender_addon.unregister()
 
 
 def _build_source(path: pathlib.Path) -> None:

@@ -30,7 +30,6 @@ REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-import blender_addon  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import WORKING_SPACES, ParameterMap, SkinSettings, make_plan  # noqa: E402
 from blender_addon.ops import apply_skin, scene_working_space  # noqa: E402
@@ -51,16 +50,6 @@ def _spaces() -> list[str]:
 
 
 SPACES = _spaces()
-
-
-@pytest.fixture
-def addon():
-    registered_here = not hasattr(bpy.types, "SPECTRAL_SKIN_OT_apply")
-    if registered_here:
-        blender_addon.register()
-    yield blender_addon
-    if registered_here and hasattr(bpy.types, "SPECTRAL_SKIN_OT_apply"):
-        blender_addon.unregister()
 
 
 def _scene_in(space: str):
