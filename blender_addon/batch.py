@@ -268,13 +268,15 @@ def _apply_main(argv: list[str]) -> int:
         parser.add_argument(f"--{flag}", type=float, help=f"{name} (overrides the preset)")
         parser.add_argument(f"--{flag}-map", help=f"image of {name} per texel")
     parser.add_argument("--method", choices=["BURLEY", "RANDOM_WALK"], default="BURLEY")
+    parser.add_argument("--accuracy", choices=list(core.ACCURACY_LEVELS), default="DEFAULT",
+                        help="accuracy level of the spectral computation")
     parser.add_argument("--out-dir", default="", help="texture folder ('//' = next to the input .blend)")
     parser.add_argument("--pack", action="store_true", help="pack the textures into the .blend")
     args = parser.parse_args(argv)
     try:
         overrides = {n: getattr(args, n) for n in core.PARAMETERS if getattr(args, n) is not None}
         settings = core.SkinSettings.from_preset(args.preset, **overrides).replace(
-            method=args.method, output_dir=args.out_dir)
+            method=args.method, accuracy=args.accuracy, output_dir=args.out_dir)
         _open(args.blend)
         maps = {n: _read_map(getattr(args, f"{n}_map"), n)
                 for n in core.PARAMETERS if getattr(args, f"{n}_map")}

@@ -33,6 +33,7 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         for name in PARAMETERS:
             box.template_ID(props, f"{name}_map", open="image.open")
         layout.prop(props, "method")
+        layout.prop(props, "accuracy")
         layout.prop(props, "output_dir")
         layout.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
         if props.has_result:

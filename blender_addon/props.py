@@ -25,6 +25,12 @@ METHOD_ITEMS = [
      "Cycles' volumetric random walk: Base Color and Radius are fitted so the walk reproduces the skin's reflectance"),
 ]
 
+ACCURACY_ITEMS = [
+    ("DRAFT", "Draft", "Fast preview: fewer wavelengths and fit frequencies (see docs/accuracy-vs-time.md)"),
+    ("DEFAULT", "Default", "Albedo within 0.2 % and radius within 1 % of the converged reference"),
+    ("REFERENCE", "Reference", "The converged reference: 1 nm wavelength steps; several times slower"),
+]
+
 
 def _apply_preset(self: SpectralSkinSettings, _context: bpy.types.Context) -> None:
     if self.preset == "CUSTOM":
@@ -64,6 +70,9 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     method: bpy.props.EnumProperty(
         name="Subsurface Method", description="Cycles subsurface method the material is made for",
         items=METHOD_ITEMS, default="BURLEY")
+    accuracy: bpy.props.EnumProperty(
+        name="Accuracy", description="Accuracy of the spectral computation (docs/accuracy-vs-time.md)",
+        items=ACCURACY_ITEMS, default="DEFAULT")
     output_dir: bpy.props.StringProperty(
         name="Texture Folder",
         description="Folder for the texture maps computed from parameter maps ('//' is the .blend's folder)",
@@ -108,7 +117,7 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
             raise ValueError("the texture folder is relative to the .blend, which is not saved yet: "
                              "save it first or choose an absolute folder")
     return SkinSettings(
-        **{name: getattr(props, name) for name in PARAMETERS}, method=props.method, maps=maps,
+        **{name: getattr(props, name) for name in PARAMETERS}, method=props.method, accuracy=props.accuracy, maps=maps,
         output_dir=output_dir, file_prefix=material.name, scale_length=scene.unit_settings.scale_length,
         working_space=scene_working_space())
 

@@ -12,3 +12,5 @@ bash scripts/build_addon.sh
 .venv/bin/python -m pytest tests/blender -q
 # The map performance report in its reduced form, so the report code cannot rot (the full one: see README).
 .venv/bin/python scripts/maps_report.py --quick --out "$(mktemp -d)/maps-performance.md"
+# The accuracy-vs-time report, reduced (the full one: bash scripts/accuracy_report.sh).
+bash scripts/accuracy_report.sh --quick

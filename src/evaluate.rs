@@ -5,12 +5,13 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::color::{spectral_rgb_weights, spectrum_to_rgb, WavelengthGrid, WorkingSpace};
-use crate::diffusion::{reflectance_profiles, Combination, HankelQuadrature, LayerStack, MultipoleTerms};
+pub use crate::accuracy::{Accuracy, AccuracyLevel, ProfileGrid};
+use crate::color::{placement_rgb_weights, spectrum_to_rgb, WavelengthGrid, WorkingSpace};
+use crate::diffusion::{reflectance_profiles, Combination, LayerStack};
 use crate::error::{check_range, SkinError};
-use crate::fit::burley::{fit_burley, fit_frequencies, BurleyFit};
+use crate::fit::burley::{fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM};
 use crate::fit::random_walk::{random_walk_base_color, random_walk_radius_scale};
-use crate::fit::{SubsurfaceMethod, DEFAULT_METHOD};
+use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
 use crate::surface::{specular_from_oiliness, SpecularParams};
 
@@ -39,90 +40,6 @@ impl Outputs {
     /// What a material needs: albedo, radius and specular.
     pub fn material() -> Outputs {
         Outputs { albedo: true, radius: true, specular: true, ..Outputs::default() }
-    }
-}
-
-/// Radii of radial profiles: `count` log-spaced values from `r_min_mm` to `r_max_mm`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ProfileGrid {
-    pub r_min_mm: f64,
-    pub r_max_mm: f64,
-    pub count: usize,
-}
-
-impl Default for ProfileGrid {
-    /// 0.001 to 20 mm spans dark-skin blue (~0.02 mm wide) to light-skin red tails (model.md 6.2, pitfall 10).
-    fn default() -> Self {
-        ProfileGrid { r_min_mm: 0.001, r_max_mm: 20.0, count: 64 }
-    }
-}
-
-impl ProfileGrid {
-    pub fn radii_mm(&self) -> Vec<f64> {
-        if self.count == 1 {
-            return vec![self.r_min_mm];
-        }
-        let ratio = (self.r_max_mm / self.r_min_mm).ln() / (self.count - 1) as f64;
-        (0..self.count).map(|i| self.r_min_mm * (ratio * i as f64).exp()).collect()
-    }
-}
-
-/// Accuracy settings: every knob that trades time for accuracy.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Accuracy {
-    /// Wavelength step, nm (samples from 380 to 780 nm).
-    pub wavelength_step_nm: f64,
-    /// Image-source pairs of the multipole.
-    pub multipole_terms: MultipoleTerms,
-    /// Radii of radial profiles.
-    pub profile_grid: ProfileGrid,
-    /// Inverse Hankel quadrature of radial profiles.
-    pub hankel: HankelQuadrature,
-    /// Frequencies per decade of the radius fit.
-    pub fit_frequencies_per_decade: f64,
-}
-
-impl Default for Accuracy {
-    fn default() -> Self {
-        Accuracy {
-            wavelength_step_nm: 5.0,
-            multipole_terms: MultipoleTerms::All,
-            profile_grid: ProfileGrid::default(),
-            hankel: HankelQuadrature::default(),
-            fit_frequencies_per_decade: 4.0,
-        }
-    }
-}
-
-impl Accuracy {
-    /// The converged reference: 1 nm wavelength steps (the colour tables' own resolution: the spectrum is integrated
-    /// against the 1 nm CMF x D65 product, so finer steps cannot change a colour), the whole multipole series, 16 fit
-    /// frequencies per decade, and an inverse-Hankel grid twice as fine with 12-point panels and a 1e-15 cut-off.
-    /// `tests/accuracy.rs` checks that refining it further changes nothing and how far the default is from it.
-    pub fn reference() -> Accuracy {
-        Accuracy {
-            wavelength_step_nm: 1.0,
-            multipole_terms: MultipoleTerms::All,
-            profile_grid: ProfileGrid::default(),
-            hankel: HankelQuadrature { gauss_order: 12, refinement: 2.0, cutoff: 1e-15 },
-            fit_frequencies_per_decade: 16.0,
-        }
-    }
-
-    fn validate(&self) -> Result<(), SkinError> {
-        check_range("wavelength_step_nm", "wavelength step", self.wavelength_step_nm, 0.5, 100.0)?;
-        if let MultipoleTerms::Pairs(n) = self.multipole_terms {
-            check_range("multipole_pairs", "image pairs per side", n as f64, 0.0, 10_000.0)?;
-        }
-        let g = &self.profile_grid;
-        check_range("profile_r_min_mm", "smallest profile radius", g.r_min_mm, 1e-6, 1e4)?;
-        check_range("profile_r_max_mm", "largest profile radius", g.r_max_mm, g.r_min_mm, 1e4)?;
-        check_range("profile_count", "number of profile radii", g.count as f64, 1.0, 100_000.0)?;
-        check_range("hankel_gauss_order", "nodes per panel", self.hankel.gauss_order as f64, 2.0, 64.0)?;
-        check_range("hankel_refinement", "panel refinement", self.hankel.refinement, 0.1, 100.0)?;
-        check_range("hankel_cutoff", "transform cutoff", self.hankel.cutoff, 1e-20, 1e-3)?;
-        check_range("fit_frequencies_per_decade", "fit frequencies per decade", self.fit_frequencies_per_decade, 2.0, 200.0)?;
-        Ok(())
     }
 }
 
@@ -246,9 +163,13 @@ impl Prepared {
     pub fn new(request: &Request) -> Result<Prepared, SkinError> {
         request.accuracy.validate()?;
         validate_model(&request.model)?;
-        let grid = WavelengthGrid::uniform(request.accuracy.wavelength_step_nm);
-        let weights = spectral_rgb_weights(&grid, request.working_space);
-        let fit_s = fit_frequencies(request.accuracy.fit_frequencies_per_decade);
+        let acc = &request.accuracy;
+        let grid = WavelengthGrid::new(acc.wavelength_placement, acc.wavelength_step_nm);
+        let weights = placement_rgb_weights(&grid, acc.wavelength_placement, request.working_space);
+        let fit_s = match acc.radius_fit {
+            RadiusFit::EdgeL2 => fit_frequencies(acc.fit_frequencies_per_decade),
+            RadiusFit::SecondMoment => vec![SECOND_MOMENT_FREQUENCY_PER_MM],
+        };
         Ok(Prepared { request: *request, grid, weights, fit_s })
     }
 
@@ -286,7 +207,10 @@ impl Prepared {
             .collect();
         [0, 1, 2].map(|c| {
             let normalized: Vec<f64> = rgb.iter().map(|v| crate::numeric::safe_div(v[c], albedo[c], 0.0)).collect();
-            fit_burley(s, &normalized)
+            match self.request.accuracy.radius_fit {
+                RadiusFit::EdgeL2 => fit_burley(s, &normalized),
+                RadiusFit::SecondMoment => fit_burley_second_moment(normalized[0]),
+            }
         })
     }
 

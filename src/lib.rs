@@ -5,6 +5,7 @@
 //! into the inputs of Blender's Principled BSDF ([`fit`], [`surface`]). [`evaluate`] computes only what a
 //! [`Request`] asks for.
 
+pub mod accuracy;
 pub mod color;
 pub mod diffusion;
 pub mod error;
@@ -20,5 +21,6 @@ mod table;
 mod python;
 
 pub use error::SkinError;
-pub use evaluate::{evaluate, Accuracy, Evaluation, Outputs, Request};
+pub use accuracy::{Accuracy, AccuracyLevel};
+pub use evaluate::{evaluate, Evaluation, Outputs, Request};
 pub use skin::{SkinModel, SkinParams, PRESETS};

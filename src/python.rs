@@ -18,7 +18,7 @@ use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::color::{WorkingSpace, ALL_WORKING_SPACES};
+use crate::color::{WavelengthPlacement, WorkingSpace, ALL_WORKING_SPACES};
 use crate::diffusion::{Combination, Layer, MultipoleTerms};
 use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
@@ -26,7 +26,7 @@ use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{ParamImage, Plane, MAX_TEXELS, PARAM_CHANNELS};
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{check_planes, compute_maps, MapSettings, SpecularOutput, StrategyChoice};
-use crate::{Accuracy, Outputs, Request, SkinParams, PRESETS};
+use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
 
 create_exception!(
     spectral_skin,
@@ -46,6 +46,8 @@ const MATERIAL_OUTPUTS: [&str; 3] = ["albedo", "radius", "specular"];
 /// The combinations and working spaces accepted by name (their names are the core's serde names).
 const COMBINATIONS: [Combination; 2] = [Combination::Directional, Combination::Symmetric];
 const WORKING_SPACES: [WorkingSpace; 3] = ALL_WORKING_SPACES;
+const WAVELENGTH_PLACEMENTS: [WavelengthPlacement; 3] =
+    [WavelengthPlacement::Uniform, WavelengthPlacement::CmfAdapted, WavelengthPlacement::RgbShortcut];
 /// Names of the four parameters, in `SkinParams` order.
 const PARAM_NAMES: [&str; 4] = ["melanin", "melanin_blend", "hemoglobin", "oiliness"];
 /// The fields of one layer tuple, in order.
@@ -155,7 +157,10 @@ fn to_u32(name: &'static str, meaning: &'static str, value: i64) -> PyResult<u32
 
 /// The accuracy and model choices common to `evaluate` and `profile`.
 struct Knobs<'a> {
-    wavelength_step_nm: f64,
+    /// A named level (draft, default, reference); the knobs below override it where given.
+    accuracy: &'a str,
+    wavelength_step_nm: Option<f64>,
+    wavelength_placement: Option<&'a str>,
     multipole_pairs: Option<i64>,
     profile_r_min_mm: Option<f64>,
     profile_r_max_mm: Option<f64>,
@@ -166,24 +171,29 @@ struct Knobs<'a> {
 
 impl Knobs<'_> {
     fn request(&self, outputs: Outputs) -> PyResult<Request> {
-        let defaults = ProfileGrid::default();
+        let level = AccuracyLevel::from_name(self.accuracy)?.accuracy();
+        let defaults = level.profile_grid;
         let count = match self.profile_count {
             Some(n) => to_u32("profile_count", "number of profile radii", n)? as usize,
             None => defaults.count,
         };
         let multipole_terms = match self.multipole_pairs {
             Some(n) => MultipoleTerms::Pairs(to_u32("multipole_pairs", "image pairs per side", n)?),
-            None => MultipoleTerms::All,
+            None => level.multipole_terms,
         };
         let accuracy = Accuracy {
-            wavelength_step_nm: self.wavelength_step_nm,
+            wavelength_step_nm: self.wavelength_step_nm.unwrap_or(level.wavelength_step_nm),
+            wavelength_placement: match self.wavelength_placement {
+                Some(name) => by_name("wavelength_placement", name, &WAVELENGTH_PLACEMENTS)?,
+                None => level.wavelength_placement,
+            },
             multipole_terms,
             profile_grid: ProfileGrid {
                 r_min_mm: self.profile_r_min_mm.unwrap_or(defaults.r_min_mm),
                 r_max_mm: self.profile_r_max_mm.unwrap_or(defaults.r_max_mm),
                 count,
             },
-            ..Accuracy::default()
+            ..level
         };
         Ok(Request {
             outputs,
@@ -303,7 +313,7 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
     name = "evaluate",
     signature = (
         melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None, *,
-        preset = None, outputs = None, wavelength_step_nm = 5.0, multipole_pairs = None,
+        preset = None, outputs = None, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None, multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709"
     )
@@ -317,7 +327,9 @@ fn evaluate_py<'py>(
     oiliness: Option<f64>,
     preset: Option<&str>,
     outputs: Option<&Bound<'py, PyAny>>,
-    wavelength_step_nm: f64,
+    accuracy: &str,
+    wavelength_step_nm: Option<f64>,
+    wavelength_placement: Option<&str>,
     multipole_pairs: Option<i64>,
     profile_r_min_mm: Option<f64>,
     profile_r_max_mm: Option<f64>,
@@ -327,7 +339,9 @@ fn evaluate_py<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = resolve_params(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
     let knobs = Knobs {
+        accuracy,
         wavelength_step_nm,
+        wavelength_placement,
         multipole_pairs,
         profile_r_min_mm,
         profile_r_max_mm,
@@ -347,7 +361,7 @@ fn evaluate_py<'py>(
     name = "profile",
     signature = (
         melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None, *,
-        preset = None, spectral = false, wavelength_step_nm = 5.0, multipole_pairs = None,
+        preset = None, spectral = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None, multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709"
     )
@@ -361,7 +375,9 @@ fn profile_py<'py>(
     oiliness: Option<f64>,
     preset: Option<&str>,
     spectral: bool,
-    wavelength_step_nm: f64,
+    accuracy: &str,
+    wavelength_step_nm: Option<f64>,
+    wavelength_placement: Option<&str>,
     multipole_pairs: Option<i64>,
     profile_r_min_mm: Option<f64>,
     profile_r_max_mm: Option<f64>,
@@ -371,7 +387,9 @@ fn profile_py<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = resolve_params(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
     let knobs = Knobs {
+        accuracy,
         wavelength_step_nm,
+        wavelength_placement,
         multipole_pairs,
         profile_r_min_mm,
         profile_r_max_mm,
@@ -643,7 +661,7 @@ fn python_clamp_hint(e: SkinError) -> SkinError {
     name = "maps",
     signature = (
         params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
-        method = "burley", exact = false, clamp = false, wavelength_step_nm = 5.0,
+        method = "burley", exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
         working_space = "Linear Rec.709", table_resolution = None, table_cache = true
     )
 )]
@@ -658,7 +676,9 @@ fn maps_py<'py>(
     method: &str,
     exact: bool,
     clamp: bool,
-    wavelength_step_nm: f64,
+    accuracy: &str,
+    wavelength_step_nm: Option<f64>,
+    wavelength_placement: Option<&str>,
     working_space: &str,
     table_resolution: Option<&Bound<'py, PyAny>>,
     table_cache: bool,
@@ -666,7 +686,9 @@ fn maps_py<'py>(
     let start = Instant::now();
     // Settings first: their errors come before any copy.
     let knobs = Knobs {
+        accuracy,
         wavelength_step_nm,
+        wavelength_placement,
         multipole_pairs: None,
         profile_r_min_mm: None,
         profile_r_max_mm: None,

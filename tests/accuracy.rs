@@ -60,3 +60,31 @@ fn reference_is_converged() {
         }
     }
 }
+
+/// The named levels: each is what `AccuracyLevel::accuracy` says, the draft is cheaper than the default and stays within
+/// 0.5 % albedo and 2 % radius of the reference (measured in docs/accuracy-vs-time.md: 0.08 % and 0.85 %), and an
+/// unknown name is an error that lists the levels.
+#[test]
+fn named_levels() {
+    use spectral_skin::accuracy::ALL_ACCURACY_LEVELS;
+    use spectral_skin::AccuracyLevel;
+    assert_eq!(AccuracyLevel::Default.accuracy(), Accuracy::default());
+    assert_eq!(AccuracyLevel::Reference.accuracy(), Accuracy::reference());
+    for level in ALL_ACCURACY_LEVELS {
+        assert_eq!(AccuracyLevel::from_name(level.name()).unwrap(), level);
+    }
+    let e = AccuracyLevel::from_name("fast").unwrap_err().to_string();
+    assert!(e.contains("accuracy") && e.contains("draft") && e.contains("reference"), "{e}");
+    for preset in PRESETS {
+        let reference = run(&preset.params, Accuracy::reference());
+        let draft = run(&preset.params, Accuracy::draft());
+        let default = run(&preset.params, Accuracy::default());
+        assert!(draft.work.transform_samples < default.work.transform_samples / 3, "{:?} {:?}", draft.work, default.work);
+        let (ra, rr) = figures(&reference);
+        let (da, dr) = figures(&draft);
+        let (albedo_error, radius_error) = (max_relative(da, ra), max_relative(dr, rr));
+        println!("{}: draft vs reference: albedo {:.4} %, radius {:.4} %", preset.name, 100.0 * albedo_error, 100.0 * radius_error);
+        assert!(albedo_error < 0.005, "{}: albedo {albedo_error}", preset.name);
+        assert!(radius_error < 0.02, "{}: radius {radius_error}", preset.name);
+    }
+}

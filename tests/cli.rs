@@ -65,6 +65,7 @@ fn bad_input_is_a_clear_error() {
         (vec!["eval", "--melanin", "0.9", "--melanin-blend", "0.5", "--hemoglobin", "0.01", "--oiliness", "0.2"], "melanin must be in [0, 0.5]"),
         (vec!["eval", "--melanin", "0.1"], "melanin-blend"),
         (vec!["eval", "--preset", "asian", "--wavelength-step-nm", "0"], "wavelength_step_nm"),
+        (vec!["eval", "--preset", "asian", "--accuracy", "fast"], "draft"),
     ] {
         let out = run(&args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
@@ -99,4 +100,22 @@ fn maps_on_the_example() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("hemoglobin") && err.contains("--clamp"), "{err}");
     assert!(!bad.exists() || std::fs::read_dir(&bad).unwrap().next().is_none());
+}
+
+/// `--accuracy` picks a named level; `--wavelength-step-nm` overrides the level's step.
+#[test]
+fn accuracy_levels() {
+    let json = |args: &[&str]| -> serde_json::Value {
+        let out = run(args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let draft = json(&["eval", "--preset", "caucasian", "--accuracy", "draft", "--json"]);
+    assert_eq!(draft["accuracy"]["wavelength_placement"], "cmf_adapted");
+    assert_eq!(draft["work"]["wavelengths"], 21);
+    let reference = json(&["eval", "--preset", "caucasian", "--accuracy", "reference", "--json"]);
+    assert_eq!(reference["work"]["wavelengths"], 401);
+    let overridden = json(&["eval", "--preset", "caucasian", "--accuracy", "reference", "--wavelength-step-nm", "10", "--json"]);
+    assert_eq!(overridden["work"]["wavelengths"], 41);
+    assert_eq!(overridden["accuracy"]["fit_frequencies_per_decade"], 16.0);
 }

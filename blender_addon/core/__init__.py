@@ -2,6 +2,7 @@
 
 from .plan import make_plan, subsurface_scale, write_textures
 from .settings import (
+    ACCURACY_LEVELS,
     DEFAULT_WORKING_SPACE,
     METHODS,
     PARAMETER_INFO,
@@ -13,6 +14,7 @@ from .settings import (
 )
 
 __all__ = [
+    "ACCURACY_LEVELS",
     "DEFAULT_WORKING_SPACE",
     "METHODS",
     "PARAMETERS",

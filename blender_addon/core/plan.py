@@ -25,7 +25,7 @@ import re
 import time
 from typing import Any
 
-from .settings import METHODS, PARAMETER_INFO, PARAMETERS, SkinSettings, check
+from .settings import ACCURACY_LEVELS, METHODS, PARAMETER_INFO, PARAMETERS, SkinSettings, check
 
 METRES_PER_MM = 1e-3
 
@@ -61,7 +61,7 @@ def _plan_from_constants(settings: SkinSettings) -> dict[str, Any]:
 
     c = settings.constants()
     ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"],
-                                working_space=settings.working_space)
+                                accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space)
     method = ev["methods"][METHODS[settings.method]]
     specular = ev["specular"]
     base_color = _rgb(method["base_color"])
@@ -106,7 +106,8 @@ def _plan_from_maps(settings: SkinSettings) -> dict[str, Any]:
     import spectral_skin
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
-    result = spectral_skin.maps(**inputs, method=METHODS[settings.method], working_space=settings.working_space)
+    result = spectral_skin.maps(**inputs, method=METHODS[settings.method], accuracy=ACCURACY_LEVELS[settings.accuracy],
+                                working_space=settings.working_space)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)

@@ -18,6 +18,9 @@ PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
 WORKING_SPACES = ("Linear Rec.709", "Linear Rec.2020", "ACEScg")
 DEFAULT_WORKING_SPACE = "Linear Rec.709"
 
+# The core's named accuracy levels (docs/accuracy-vs-time.md): Blender's enum identifier -> the core's name.
+ACCURACY_LEVELS = {"DRAFT": "draft", "DEFAULT": "default", "REFERENCE": "reference"}
+
 # Subsurface methods: Blender's enum identifier -> the core's method name.
 METHODS = {"BURLEY": "burley", "RANDOM_WALK": "random_walk"}
 
@@ -61,6 +64,8 @@ class SkinSettings:
     hemoglobin: float = 0.005
     oiliness: float = 0.3
     method: str = "BURLEY"
+    # Accuracy level of the spectral computation (a key of ACCURACY_LEVELS).
+    accuracy: str = "DEFAULT"
     # parameter name -> ParameterMap; a parameter with a map ignores its constant.
     maps: dict[str, ParameterMap] = field(default_factory=dict)
     # Absolute folder for the texture maps (needed only when maps are given).
@@ -102,6 +107,9 @@ def check(settings: SkinSettings) -> None:
     if settings.method not in METHODS:
         raise spectral_skin.SpectralSkinError(
             f"subsurface method must be one of {', '.join(METHODS)}; got {settings.method!r}")
+    if settings.accuracy not in ACCURACY_LEVELS:
+        raise spectral_skin.SpectralSkinError(
+            f"accuracy must be one of {', '.join(ACCURACY_LEVELS)}; got {settings.accuracy!r}")
     if not settings.scale_length > 0.0:
         raise spectral_skin.SpectralSkinError(
             f"scene unit scale must be > 0 (metres per scene unit); got {settings.scale_length}")

@@ -21,6 +21,8 @@ _MapArray = npt.NDArray[np.float32] | npt.NDArray[np.float64]
 _Combination = Literal["directional", "symmetric"]
 _WorkingSpace = Literal["Linear Rec.709", "Linear Rec.2020", "ACEScg"]
 _Method = Literal["burley", "random_walk"]
+_AccuracyLevel = Literal["draft", "default", "reference"]
+_WavelengthPlacement = Literal["uniform", "cmf_adapted", "rgb_shortcut"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
 
 class SpectralSkinError(ValueError):
@@ -47,7 +49,9 @@ def evaluate(
     *,
     preset: str | None = None,
     outputs: Iterable[_OutputName | str] | None = None,
-    wavelength_step_nm: float = 5.0,
+    accuracy: _AccuracyLevel | str = "default",
+    wavelength_step_nm: float | None = None,
+    wavelength_placement: _WavelengthPlacement | str | None = None,
     multipole_pairs: int | None = None,
     profile_r_min_mm: float | None = None,
     profile_r_max_mm: float | None = None,
@@ -68,7 +72,13 @@ def evaluate(
         preset: a preset name from :func:`presets` (case-insensitive).
         outputs: names among "albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular".
             None: ("albedo", "radius", "specular"), what a material needs.
-        wavelength_step_nm: wavelength sampling step in nm (380-780 nm), 0.5..100.
+        accuracy: a named accuracy level, "draft", "default" or "reference" (docs/accuracy-vs-time.md); the
+            knobs below override its settings where given.
+        wavelength_step_nm: wavelength sampling step in nm (380-780 nm), 0.5..100; with "cmf_adapted" placement it
+            sets the count (the uniform step's); None: the level's (10 nm at "default").
+        wavelength_placement: "uniform" (every step nm), "cmf_adapted" (denser where the colour-matching functions
+            weigh most; the default level's) or "rgb_shortcut" (reflectance at 435.8, 546.1 and 700 nm taken as B, G,
+            R: the shortcut DJ2006 argues against, for comparison); None: the level's.
         multipole_pairs: image-source pairs per side of the multipole; None: the whole series (closed form).
         profile_r_min_mm: smallest radius of the log-spaced profile grid, mm; None: 0.001 mm.
         profile_r_max_mm: largest radius of the profile grid, mm; None: 20 mm.
@@ -106,7 +116,9 @@ def profile(
     *,
     preset: str | None = None,
     spectral: bool = False,
-    wavelength_step_nm: float = 5.0,
+    accuracy: _AccuracyLevel | str = "default",
+    wavelength_step_nm: float | None = None,
+    wavelength_placement: _WavelengthPlacement | str | None = None,
     multipole_pairs: int | None = None,
     profile_r_min_mm: float | None = None,
     profile_r_max_mm: float | None = None,
@@ -119,8 +131,8 @@ def profile(
     Arguments:
         melanin, melanin_blend, hemoglobin, oiliness, preset: as for :func:`evaluate`.
         spectral: False: RGB profiles; True: one profile per wavelength.
-        wavelength_step_nm, multipole_pairs, profile_r_min_mm, profile_r_max_mm, profile_count, combination,
-            working_space: as for :func:`evaluate`.
+        accuracy, wavelength_step_nm, wavelength_placement, multipole_pairs, profile_r_min_mm, profile_r_max_mm, profile_count,
+            combination, working_space: as for :func:`evaluate`.
 
     Returns:
         {"radii_mm": (N,), "rgb_per_mm2": (N, 3)} in mm^-2, or with spectral=True
@@ -199,7 +211,9 @@ def maps(
     method: _Method | str = "burley",
     exact: bool = False,
     clamp: bool = False,
-    wavelength_step_nm: float = 5.0,
+    accuracy: _AccuracyLevel | str = "default",
+    wavelength_step_nm: float | None = None,
+    wavelength_placement: _WavelengthPlacement | str | None = None,
     working_space: _WorkingSpace | str = "Linear Rec.709",
     table_resolution: tuple[int, int, int] | None = None,
     table_cache: bool = True,
@@ -232,7 +246,8 @@ def maps(
         exact: evaluate every texel (or distinct tuple) directly, never the table.
         clamp: clamp NaN (to the minimum), infinite and out-of-range values into range and count them in
             ``report["clamped"]``, instead of raising. The input arrays are not modified.
-        wavelength_step_nm: wavelength sampling step in nm (380-780 nm), 0.5..100.
+        accuracy: a named accuracy level, "draft", "default" or "reference", as for :func:`evaluate`.
+        wavelength_step_nm, wavelength_placement: as for :func:`evaluate`.
         working_space: linear RGB space of Base Color, as for :func:`evaluate`: "Linear Rec.709" (Blender's
             default scene linear), "Linear Rec.2020" or "ACEScg"; use the scene's working space.
         table_cache: keep a built lookup table in the per-user cache folder ($SPECTRAL_SKIN_CACHE_DIR, else

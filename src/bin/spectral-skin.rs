@@ -10,9 +10,10 @@ use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::maps::example::{write_example_params, ExampleKind};
 use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
+use spectral_skin::color::WavelengthPlacement;
 use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
-use spectral_skin::{evaluate, Evaluation, Outputs, Request, SkinError, SkinParams, PRESETS};
+use spectral_skin::{evaluate, AccuracyLevel, Evaluation, Outputs, Request, SkinError, SkinParams, PRESETS};
 
 #[derive(Parser)]
 #[command(name = "spectral-skin", version, about = "Spectral skin BSSRDF (Donner & Jensen 2006) for Blender's Principled BSDF")]
@@ -172,15 +173,35 @@ struct SkinArgs {
 
 #[derive(Args)]
 struct AccuracyArgs {
-    /// Wavelength step, nm (380-780 nm).
-    #[arg(long, default_value_t = 5.0)]
-    wavelength_step_nm: f64,
+    /// Named accuracy level (docs/accuracy-vs-time.md); the flags below override its settings.
+    #[arg(long, value_enum, default_value_t = LevelArg::Default)]
+    accuracy: LevelArg,
+    /// Wavelength step, nm (380-780 nm); with cmf-adapted placement it sets the count [default: the level's].
+    #[arg(long)]
+    wavelength_step_nm: Option<f64>,
+    /// Where the wavelengths lie [default: the level's, cmf-adapted at the default level].
+    #[arg(long, value_enum)]
+    wavelength_placement: Option<PlacementArg>,
     /// Image-source pairs of the multipole (default: the whole series in closed form).
     #[arg(long)]
     multipole_pairs: Option<u32>,
     /// Layer combination.
     #[arg(long, value_enum, default_value_t = CombinationArg::Directional)]
     combination: CombinationArg,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum PlacementArg {
+    Uniform,
+    CmfAdapted,
+    RgbShortcut,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum LevelArg {
+    Draft,
+    Default,
+    Reference,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -212,7 +233,22 @@ impl SkinArgs {
 impl AccuracyArgs {
     fn request(&self, outputs: Outputs) -> Request {
         let mut r = Request::new(outputs);
-        r.accuracy.wavelength_step_nm = self.wavelength_step_nm;
+        r.accuracy = match self.accuracy {
+            LevelArg::Draft => AccuracyLevel::Draft,
+            LevelArg::Default => AccuracyLevel::Default,
+            LevelArg::Reference => AccuracyLevel::Reference,
+        }
+        .accuracy();
+        if let Some(step) = self.wavelength_step_nm {
+            r.accuracy.wavelength_step_nm = step;
+        }
+        if let Some(placement) = self.wavelength_placement {
+            r.accuracy.wavelength_placement = match placement {
+                PlacementArg::Uniform => WavelengthPlacement::Uniform,
+                PlacementArg::CmfAdapted => WavelengthPlacement::CmfAdapted,
+                PlacementArg::RgbShortcut => WavelengthPlacement::RgbShortcut,
+            };
+        }
         if let Some(n) = self.multipole_pairs {
             r.accuracy.multipole_terms = MultipoleTerms::Pairs(n);
         }
@@ -393,7 +429,9 @@ fn print_profile_csv(ev: &Evaluation) {
         }
     }
     if let (Some(spectral), Some(wavelengths)) = (&profile.spectral_per_mm2, &ev.wavelengths_nm) {
-        let header: Vec<String> = wavelengths.iter().map(|w| format!("nm{w}_per_mm2")).collect();
+        // Whole nanometres as integers (uniform grids), others to 0.01 nm (CMF-adapted grids).
+        let name = |w: f64| if w.fract() == 0.0 { format!("nm{w:.0}_per_mm2") } else { format!("nm{w:.2}_per_mm2") };
+        let header: Vec<String> = wavelengths.iter().map(|&w| name(w)).collect();
         println!("r_mm,{}", header.join(","));
         for (i, r) in profile.radii_mm.iter().enumerate() {
             let row: Vec<String> = spectral.iter().map(|p| format!("{:.6e}", p[i])).collect();

@@ -5,7 +5,7 @@ pub mod rgb;
 pub mod spectrum;
 
 pub use rgb::{WorkingSpace, ALL_WORKING_SPACES};
-pub use spectrum::{spectrum_to_xyz, WavelengthGrid};
+pub use spectrum::{spectrum_to_xyz, WavelengthGrid, WavelengthPlacement};
 
 /// Weights turning a spectrum sampled on `grid` into linear RGB in `space`: rgb[c] = sum_k w[k][c] R(lambda_k).
 pub fn spectral_rgb_weights(grid: &WavelengthGrid, space: WorkingSpace) -> Vec<[f64; 3]> {
@@ -13,6 +13,15 @@ pub fn spectral_rgb_weights(grid: &WavelengthGrid, space: WorkingSpace) -> Vec<[
     let white = spectrum_to_xyz(&vec![1.0; xyz_w.len()], &xyz_w);
     let m = space.xyz_to_rgb_matrix(white);
     xyz_w.iter().map(|w| rgb::mat_vec(m, *w)).collect()
+}
+
+/// Weights for a grid made by `placement`: the colour integration of [`spectral_rgb_weights`], except for the RGB
+/// shortcut, whose three samples (435.8, 546.1, 700 nm) are taken as B, G and R as they are, in any working space.
+pub fn placement_rgb_weights(grid: &WavelengthGrid, placement: WavelengthPlacement, space: WorkingSpace) -> Vec<[f64; 3]> {
+    match placement {
+        WavelengthPlacement::RgbShortcut => vec![[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
+        _ => spectral_rgb_weights(grid, space),
+    }
 }
 
 /// Linear RGB of a spectrum with weights from [`spectral_rgb_weights`].
@@ -34,5 +43,23 @@ mod tests {
                 assert!(rgb.iter().all(|v| (v - 1.0).abs() < 1e-12), "{step} {ws:?} {rgb:?}");
             }
         }
+        for placement in [WavelengthPlacement::CmfAdapted, WavelengthPlacement::RgbShortcut] {
+            let g = WavelengthGrid::new(placement, 10.0);
+            let rgb = spectrum_to_rgb(&vec![1.0; g.wavelengths_nm.len()], &placement_rgb_weights(&g, placement, WorkingSpace::LinearRec709));
+            assert!(rgb.iter().all(|v| (v - 1.0).abs() < 1e-12), "{placement:?} {rgb:?}");
+        }
+    }
+
+    /// The CMF-adapted grid has the uniform grid's count, spans 380-780 nm, increases, and is densest where the
+    /// colour-matching functions are large (the 500-600 nm gap is smaller than the 700-780 nm one).
+    #[test]
+    fn cmf_adapted_grid() {
+        let g = WavelengthGrid::new(WavelengthPlacement::CmfAdapted, 20.0);
+        let w = &g.wavelengths_nm;
+        assert_eq!(w.len(), WavelengthGrid::uniform(20.0).wavelengths_nm.len());
+        assert!((w[0] - 380.0).abs() < 1e-9 && (w[w.len() - 1] - 780.0).abs() < 1e-9, "{w:?}");
+        assert!(w.windows(2).all(|p| p[1] > p[0]), "{w:?}");
+        let gap_at = |x: f64| w.windows(2).find(|p| p[0] <= x && x < p[1]).map(|p| p[1] - p[0]).unwrap();
+        assert!(gap_at(550.0) < 0.7 * gap_at(740.0), "{} vs {}", gap_at(550.0), gap_at(740.0));
     }
 }

@@ -7,6 +7,25 @@ use super::cmf::{cie1931_2deg, illuminant_d65};
 /// The visible range integrated for colour, nm (model.md 11.3 uses 380-780 nm).
 pub const VISIBLE_RANGE_NM: (f64, f64) = (380.0, 780.0);
 
+/// Where the spectral computation places its wavelengths (the number is set by the step, see [`WavelengthGrid::new`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum WavelengthPlacement {
+    /// Every `step` nm from 380 to 780 nm.
+    #[default]
+    Uniform,
+    /// As many wavelengths as the uniform step gives, placed where the colour-matching functions weigh most: equal
+    /// steps of the cumulative sqrt((xbar + ybar + zbar) D65), the density that minimises the weighted error of linear
+    /// interpolation for a spectrum of uniform curvature.
+    CmfAdapted,
+    /// The three-wavelength shortcut DJ06 argues against: R, G and B are the reflectance at the CIE 1931 RGB primaries,
+    /// 700, 546.1 and 435.8 nm, with no colour integration.
+    RgbShortcut,
+}
+
+/// The CIE 1931 RGB primaries, nm (CIE 1931; Wyszecki & Stiles, Color Science, 2nd ed., table 3.3.3): B, G, R.
+pub const CIE_RGB_PRIMARIES_NM: [f64; 3] = [435.8, 546.1, 700.0];
+
 /// Wavelength sampling of the spectral computation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WavelengthGrid {
@@ -14,6 +33,44 @@ pub struct WavelengthGrid {
 }
 
 impl WavelengthGrid {
+    /// The grid of a placement: uniform or CMF-adapted with the uniform step's count, or the three RGB primaries.
+    pub fn new(placement: WavelengthPlacement, step_nm: f64) -> WavelengthGrid {
+        match placement {
+            WavelengthPlacement::Uniform => WavelengthGrid::uniform(step_nm),
+            WavelengthPlacement::CmfAdapted => WavelengthGrid::cmf_adapted(WavelengthGrid::uniform(step_nm).wavelengths_nm.len()),
+            WavelengthPlacement::RgbShortcut => WavelengthGrid { wavelengths_nm: CIE_RGB_PRIMARIES_NM.to_vec() },
+        }
+    }
+
+    /// `count` (>= 2) wavelengths from 380 to 780 nm at equal steps of the cumulative sqrt((xbar + ybar + zbar) D65),
+    /// with a floor of 1 % of its peak so that no gap grows without bound where the tables are near zero.
+    pub fn cmf_adapted(count: usize) -> WavelengthGrid {
+        let count = count.max(2);
+        let (cmf, d65) = (cie1931_2deg(), illuminant_d65());
+        let (lo, hi) = VISIBLE_RANGE_NM;
+        let nm: Vec<f64> = (0..=(hi - lo) as usize).map(|i| lo + i as f64).collect();
+        let raw: Vec<f64> = nm
+            .iter()
+            .map(|&l| (d65.interpolate(0, l) * (0..3).map(|c| cmf.interpolate(c, l)).sum::<f64>()).sqrt())
+            .collect();
+        let floor = 0.01 * raw.iter().cloned().fold(0.0, f64::max);
+        let density: Vec<f64> = raw.iter().map(|v| v.max(floor)).collect();
+        // Cumulative density (trapezoid, 1 nm), then its inverse at equal steps.
+        let mut cumulative = vec![0.0; nm.len()];
+        for i in 1..nm.len() {
+            cumulative[i] = cumulative[i - 1] + 0.5 * (density[i] + density[i - 1]);
+        }
+        let total = cumulative[nm.len() - 1];
+        let wavelengths_nm = (0..count)
+            .map(|k| {
+                let target = total * k as f64 / (count - 1) as f64;
+                let (i, t) = bracket(&cumulative, target);
+                if t == 0.0 { nm[i] } else { nm[i] + t * (nm[i + 1] - nm[i]) }
+            })
+            .collect();
+        WavelengthGrid { wavelengths_nm }
+    }
+
     /// Uniform samples every `step_nm` from 380 nm to (at least) 780 nm.
     pub fn uniform(step_nm: f64) -> WavelengthGrid {
         let (lo, hi) = VISIBLE_RANGE_NM;

@@ -138,7 +138,7 @@ impl LayerStack {
 
 /// `T~i+ R~below T~i- / (1 - R~below R~i-)`: every path that crosses a layer, returns from below and crosses it
 /// again. `hats` = [R~+, T~+, R~-, T~-] of the layer; the symmetric form uses the "+" pair both ways.
-fn bounce_term(hats: [f64; 4], below: f64, combination: Combination) -> f64 {
+pub(crate) fn bounce_term(hats: [f64; 4], below: f64, combination: Combination) -> f64 {
     let [r_down, t_down, r_up, t_up] = hats;
     let (r_up, t_up) = match combination {
         Combination::Directional => (r_up, t_up),

@@ -1,10 +1,12 @@
 //! Diffusion: the multipole slab model, the layer combination and radial profiles (model.md sections 5-6).
 
 pub mod boundary;
+pub mod fft_route;
 pub mod hankel;
 pub mod layered;
 pub mod multipole;
 
+pub use fft_route::{fft_reflectance_profiles, fft_reflectance_profiles_with, FftGrid, FftProfiles, PixelSampling};
 pub use hankel::{reflectance_profiles, HankelQuadrature};
 pub use layered::{Combination, Layer, LayerStack};
 pub use multipole::{MultipoleTerms, Slab};

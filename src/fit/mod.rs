@@ -15,6 +15,18 @@ pub enum SubsurfaceMethod {
     RandomWalk,
 }
 
+/// How the Christensen-Burley length is fitted to the model's profile (`burley`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum RadiusFit {
+    /// Least squares on the edge response, through the transfer function on log-spaced frequencies (`fit_burley`).
+    #[default]
+    EdgeL2,
+    /// Match the profile's second moment, from one low frequency (`fit_burley_second_moment`): one transform per
+    /// wavelength instead of dozens, but a profile with a long tail gets too wide a radius.
+    SecondMoment,
+}
+
 /// The default method: Christensen-Burley, because Cycles renders its Base Color exactly and its profile is a
 /// closed form the fit can match (blender.md TL;DR).
 pub const DEFAULT_METHOD: SubsurfaceMethod = SubsurfaceMethod::Burley;

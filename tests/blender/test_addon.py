@@ -219,3 +219,17 @@ def test_built_zip_validates_and_installs(tmp_path):
     assert unpacked, "the extension's wheel was not unpacked into the user's extensions"
     expected = spectral_skin.evaluate(preset="caucasian")["methods"]["burley"]["base_color"]
     np.testing.assert_allclose(report["base_color"], expected, rtol=1e-6)
+
+
+def test_accuracy_level_reaches_the_core(addon):
+    """The material's Accuracy setting is the core's named level; an unknown one changes nothing."""
+    material = bpy.data.materials.new("Skin")
+    material.spectral_skin.accuracy = "DRAFT"
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    draft = spectral_skin.evaluate(preset="caucasian", accuracy="draft")["methods"]["burley"]
+    node = _principled(material)
+    np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], draft["base_color"], rtol=1e-6)
+    assert "21 wavelengths" in material.spectral_skin.result_computed
+    with pytest.raises(spectral_skin.SpectralSkinError, match="accuracy"):
+        apply_skin(material, SkinSettings.from_preset("caucasian").replace(accuracy="FAST"))
+    np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], draft["base_color"], rtol=1e-6)

@@ -191,6 +191,7 @@ EVALUATE_ERRORS = [
     (dict(), ["preset", "melanin"]),
     (dict(preset="asian", wavelength_step_nm=0.0), ["wavelength_step_nm", "[0.5, 100]"]),
     (dict(preset="asian", multipole_pairs=-1), ["multipole_pairs", "-1"]),
+    (dict(preset="asian", accuracy="fast"), ["accuracy", "fast", "draft", "default", "reference"]),
     (dict(preset="asian", combination="sideways"), ["combination", "sideways", "directional", "symmetric"]),
     (dict(preset="asian", working_space="sRGB"), ["working_space", "sRGB", "Linear Rec.709", "Linear Rec.2020"]),
 ]
@@ -288,3 +289,30 @@ def test_parameter_ranges_bound_what_evaluate_accepts():
         spectral_skin.evaluate(**{**values, name: high}, outputs=("albedo",))
         with pytest.raises(spectral_skin.SpectralSkinError, match=name):
             spectral_skin.evaluate(**{**values, name: high * 1.01 + 0.001}, outputs=("albedo",))
+
+
+def test_accuracy_levels():
+    """A named level sets every knob; explicit knobs override it; the draft stays close to the reference."""
+    draft = spectral_skin.evaluate(preset="asian", accuracy="draft")
+    default = spectral_skin.evaluate(preset="asian")
+    reference = spectral_skin.evaluate(preset="asian", accuracy="reference")
+    assert draft["accuracy"]["wavelength_placement"] == "cmf_adapted"
+    assert (draft["work"]["wavelengths"], default["work"]["wavelengths"], reference["work"]["wavelengths"]) == (21, 41, 401)
+    assert default["accuracy"] == spectral_skin.evaluate(preset="asian", accuracy="default")["accuracy"]
+    ref_albedo = np.asarray(reference["diffuse_reflectance_rgb"])
+    assert np.max(np.abs(np.asarray(draft["diffuse_reflectance_rgb"]) / ref_albedo - 1)) < 0.005
+    assert np.max(np.abs(np.asarray(default["diffuse_reflectance_rgb"]) / ref_albedo - 1)) < 0.002
+    overridden = spectral_skin.evaluate(preset="asian", accuracy="reference", wavelength_step_nm=10.0)
+    assert overridden["work"]["wavelengths"] == 41
+    uniform = spectral_skin.evaluate(preset="asian", outputs=("spectrum",), wavelength_placement="uniform")
+    np.testing.assert_array_equal(uniform["wavelengths_nm"], np.arange(380.0, 781.0, 10.0))
+    adapted = spectral_skin.evaluate(preset="asian", outputs=("spectrum",))
+    assert adapted["wavelengths_nm"].shape == (41,) and np.all(np.diff(adapted["wavelengths_nm"]) > 0)
+    with pytest.raises(SpectralSkinError, match="wavelength_placement"):
+        spectral_skin.evaluate(preset="asian", wavelength_placement="random")
+    assert overridden["accuracy"]["fit_frequencies_per_decade"] == reference["accuracy"]["fit_frequencies_per_decade"]
+    profile = spectral_skin.profile(preset="asian", accuracy="draft", spectral=True, profile_count=4)
+    assert profile["wavelengths_nm"].shape == (21,)
+    maps = spectral_skin.maps(melanin=np.full((2, 2), 0.1, np.float32), melanin_blend=0.5, hemoglobin=0.01,
+                              oiliness=0.2, accuracy="draft")
+    assert maps["report"]["request"]["accuracy"]["wavelength_placement"] == "cmf_adapted"

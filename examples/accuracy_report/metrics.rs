@@ -1,0 +1,123 @@
+//! The report's error metrics and its timer.
+
+use std::time::Instant;
+
+use palette::color_difference::Ciede2000;
+use palette::white_point::D65;
+use palette::Lab;
+
+/// Largest relative difference over the three channels.
+pub fn max_relative(test: [f64; 3], reference: [f64; 3]) -> f64 {
+    (0..3).map(|c| ((test[c] - reference[c]) / reference[c]).abs()).fold(0.0, f64::max)
+}
+
+/// Linear Rec.709 to CIE XYZ (IEC 61966-2-1, D65; Y of white = 1).
+fn rec709_to_xyz(rgb: [f64; 3]) -> [f64; 3] {
+    const M: [[f64; 3]; 3] = [[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]];
+    [0, 1, 2].map(|i| M[i][0] * rgb[0] + M[i][1] * rgb[1] + M[i][2] * rgb[2])
+}
+
+/// CIELAB of linear Rec.709 under D65 (CIE 15:2004): white (1, 1, 1) is L* = 100.
+fn rec709_to_lab(rgb: [f64; 3]) -> Lab<D65, f64> {
+    let xyz = rec709_to_xyz(rgb);
+    let white = rec709_to_xyz([1.0; 3]);
+    let f = |t: f64| {
+        const E: f64 = 216.0 / 24389.0; // (6/29)^3
+        if t > E { t.cbrt() } else { (24389.0 / 27.0 * t + 16.0) / 116.0 }
+    };
+    let [fx, fy, fz] = [0, 1, 2].map(|c| f(xyz[c] / white[c]));
+    Lab::new(116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz))
+}
+
+/// CIEDE2000 colour difference of two linear Rec.709 colours (the albedo as rendered); 1 is about a just-noticeable
+/// difference side by side.
+pub fn delta_e_2000(test: [f64; 3], reference: [f64; 3]) -> f64 {
+    rec709_to_lab(test).difference(rec709_to_lab(reference))
+}
+
+/// Profile error "in log space": max over the log-spaced radii and the channels of |ln(R / R_ref)|, where both are
+/// raised to a floor: 0.1 % of the channel's peak energy per unit ln r, max of r^2 R_ref(r) (below it a radius carries
+/// no visible light, and there the green and blue channels are near-cancellations of out-of-gamut red light, which can
+/// dip below zero). Weighting by r^2 keeps the far tail, which holds a few per cent of the light of fair skin.
+pub fn profile_log_error(radii_mm: &[f64], test: &[[f64; 3]], reference: &[[f64; 3]]) -> f64 {
+    let mut worst = 0.0f64;
+    for c in 0..3 {
+        let peak = radii_mm.iter().zip(reference).map(|(r, v)| r * r * v[c]).fold(0.0, f64::max);
+        let floor = 1e-3 * peak;
+        for ((radius, t), r) in radii_mm.iter().zip(test).zip(reference) {
+            let energy = |v: f64| (radius * radius * v).max(floor);
+            worst = worst.max((energy(t[c]) / energy(r[c])).ln().abs());
+        }
+    }
+    worst
+}
+
+/// exp(log error) - 1: the log error as a relative factor, for tables.
+pub fn log_to_relative(log_error: f64) -> f64 {
+    log_error.exp_m1()
+}
+
+/// Median wall time of `f`, seconds: at least `min_runs` runs, more until `budget_s` is spent (at most 101).
+pub fn median_seconds(min_runs: usize, budget_s: f64, mut f: impl FnMut()) -> f64 {
+    let start = Instant::now();
+    let mut times = Vec::new();
+    while times.len() < min_runs || (start.elapsed().as_secs_f64() < budget_s && times.len() < 101) {
+        let t = Instant::now();
+        f();
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// Peak resident memory of this process so far, MiB (Linux `VmHWM`; None elsewhere).
+pub fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+/// Indices of the points on the Pareto front of (time, error): no other point is both faster and more accurate.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
+    order.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
+    let mut front = Vec::new();
+    let mut best = f64::INFINITY;
+    for i in order {
+        if points[i].1 < best {
+            best = points[i].1;
+            front.push(i);
+        }
+    }
+    front
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sharma, Wu & Dalal (2005), "The CIEDE2000 color-difference formula: implementation notes, supplementary test
+    /// data, and mathematical observations", table 1: pairs 1, 7, 17 and 25 (checks that palette is used right).
+    #[test]
+    fn ciede2000_matches_sharma_pairs() {
+        let pairs = [
+            ([50.0, 2.6772, -79.7751], [50.0, 0.0, -82.7485], 2.0425),
+            ([50.0, 0.0, 0.0], [50.0, -1.0, 2.0], 2.3669),
+            ([50.0, 2.5, 0.0], [73.0, 25.0, -18.0], 27.1492),
+            ([60.2574, -34.0099, 36.2677], [60.4626, -34.1751, 39.4387], 1.2644),
+        ];
+        for (a, b, expected) in pairs {
+            let d = Lab::<D65, f64>::new(a[0], a[1], a[2]).difference(Lab::new(b[0], b[1], b[2]));
+            assert!((d - expected).abs() < 1e-4, "{a:?} {b:?}: {d} vs {expected}");
+        }
+    }
+
+    #[test]
+    fn white_is_l100_and_front_is_monotone() {
+        let lab = rec709_to_lab([1.0; 3]);
+        assert!((lab.l - 100.0).abs() < 1e-9 && lab.a.abs() < 1e-9 && lab.b.abs() < 1e-9);
+        let front = pareto_front(&[(1.0, 5.0), (2.0, 6.0), (3.0, 1.0), (0.5, 9.0)]);
+        assert_eq!(front, vec![3, 0, 2]);
+    }
+}

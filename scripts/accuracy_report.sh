@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Regenerate docs/accuracy-vs-time.md: Cycles samples through bpy (docs/data/cycles_samples.json), then every accuracy
+# knob of the core measured and timed (examples/accuracy_report). About 15 minutes on 2 cores.
+#   bash scripts/accuracy_report.sh            # the full report, written to docs/
+#   bash scripts/accuracy_report.sh --quick    # the reduced run CI does, written to a temporary folder
+set -euo pipefail
+cd "$(dirname "$0")/.."
+[ -x .venv/bin/python ] || bash scripts/setup-python.sh
+if [ "${1:-}" = "--quick" ]; then
+    out="$(mktemp -d)"
+    .venv/bin/python scripts/cycles_samples.py --quick --out "$out/data/cycles_samples.json"
+    cargo run --release --example accuracy_report -- --quick --out-dir "$out" --cycles-json "$out/data/cycles_samples.json"
+    echo "reduced report: $out/accuracy-vs-time.md"
+else
+    .venv/bin/python scripts/cycles_samples.py --out docs/data/cycles_samples.json
+    cargo run --release --example accuracy_report
+fi

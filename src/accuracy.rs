@@ -1,0 +1,161 @@
+//! Accuracy settings: every knob that trades time for accuracy, and the named levels (`draft`, `default`,
+//! `reference`) that docs/accuracy-vs-time.md measured and chose.
+
+use serde::{Deserialize, Serialize};
+
+use crate::color::WavelengthPlacement;
+use crate::diffusion::{HankelQuadrature, MultipoleTerms};
+use crate::error::{check_range, SkinError};
+use crate::fit::RadiusFit;
+
+/// Radii of radial profiles: `count` log-spaced values from `r_min_mm` to `r_max_mm`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ProfileGrid {
+    pub r_min_mm: f64,
+    pub r_max_mm: f64,
+    pub count: usize,
+}
+
+impl Default for ProfileGrid {
+    /// 0.001 to 20 mm spans dark-skin blue (~0.02 mm wide) to light-skin red tails (model.md 6.2, pitfall 10).
+    fn default() -> Self {
+        ProfileGrid { r_min_mm: 0.001, r_max_mm: 20.0, count: 64 }
+    }
+}
+
+impl ProfileGrid {
+    pub fn radii_mm(&self) -> Vec<f64> {
+        if self.count == 1 {
+            return vec![self.r_min_mm];
+        }
+        let ratio = (self.r_max_mm / self.r_min_mm).ln() / (self.count - 1) as f64;
+        (0..self.count).map(|i| self.r_min_mm * (ratio * i as f64).exp()).collect()
+    }
+}
+
+/// Accuracy settings: every knob that trades time for accuracy.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Accuracy {
+    /// Wavelength step, nm (samples from 380 to 780 nm); with a non-uniform placement it sets the count.
+    pub wavelength_step_nm: f64,
+    /// Where the wavelengths lie (uniform, adapted to the colour-matching functions, or the RGB shortcut).
+    #[serde(default)]
+    pub wavelength_placement: WavelengthPlacement,
+    /// Image-source pairs of the multipole.
+    pub multipole_terms: MultipoleTerms,
+    /// Radii of radial profiles.
+    pub profile_grid: ProfileGrid,
+    /// Inverse Hankel quadrature of radial profiles.
+    pub hankel: HankelQuadrature,
+    /// Frequencies per decade of the radius fit.
+    pub fit_frequencies_per_decade: f64,
+    /// How the Burley radius is fitted.
+    #[serde(default)]
+    pub radius_fit: RadiusFit,
+}
+
+impl Default for Accuracy {
+    fn default() -> Self {
+        Accuracy {
+            // docs/accuracy-vs-time.md: 41 CMF-adapted wavelengths are as accurate as 81 uniform ones (albedo within
+            // 0.03 % of the reference) at half the cost; the closed-form multipole and 4 fit frequencies per decade sit
+            // on their fronts; the Hankel default is the cheapest quadrature whose error is negligible (see hankel.rs).
+            wavelength_step_nm: 10.0,
+            wavelength_placement: WavelengthPlacement::CmfAdapted,
+            multipole_terms: MultipoleTerms::All,
+            profile_grid: ProfileGrid::default(),
+            hankel: HankelQuadrature::default(),
+            fit_frequencies_per_decade: 4.0,
+            radius_fit: RadiusFit::EdgeL2,
+        }
+    }
+}
+
+impl Accuracy {
+    /// The converged reference: 1 nm wavelength steps (the colour tables' own resolution: the spectrum is integrated
+    /// against the 1 nm CMF x D65 product, so finer steps cannot change a colour), the whole multipole series, 16 fit
+    /// frequencies per decade, and an inverse-Hankel grid twice as fine with 12-point panels and a 1e-15 cut-off.
+    /// `tests/accuracy.rs` checks that refining it further changes nothing and how far the default is from it.
+    pub fn reference() -> Accuracy {
+        Accuracy {
+            wavelength_step_nm: 1.0,
+            wavelength_placement: WavelengthPlacement::Uniform,
+            multipole_terms: MultipoleTerms::All,
+            profile_grid: ProfileGrid::default(),
+            hankel: HankelQuadrature { gauss_order: 12, refinement: 2.0, cutoff: 1e-15 },
+            fit_frequencies_per_decade: 16.0,
+            radius_fit: RadiusFit::EdgeL2,
+        }
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), SkinError> {
+        check_range("wavelength_step_nm", "wavelength step", self.wavelength_step_nm, 0.5, 100.0)?;
+        if let MultipoleTerms::Pairs(n) = self.multipole_terms {
+            check_range("multipole_pairs", "image pairs per side", n as f64, 0.0, 10_000.0)?;
+        }
+        let g = &self.profile_grid;
+        check_range("profile_r_min_mm", "smallest profile radius", g.r_min_mm, 1e-6, 1e4)?;
+        check_range("profile_r_max_mm", "largest profile radius", g.r_max_mm, g.r_min_mm, 1e4)?;
+        check_range("profile_count", "number of profile radii", g.count as f64, 1.0, 100_000.0)?;
+        check_range("hankel_gauss_order", "nodes per panel", self.hankel.gauss_order as f64, 2.0, 64.0)?;
+        check_range("hankel_refinement", "panel refinement", self.hankel.refinement, 0.1, 100.0)?;
+        check_range("hankel_cutoff", "transform cutoff", self.hankel.cutoff, 1e-20, 1e-3)?;
+        check_range("fit_frequencies_per_decade", "fit frequencies per decade", self.fit_frequencies_per_decade, 2.0, 200.0)?;
+        Ok(())
+    }
+}
+
+
+/// Named accuracy levels, each a point on the error-time fronts of docs/accuracy-vs-time.md.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum AccuracyLevel {
+    /// For interactive previews: several times faster than `default`, colours within about 1 % (see the report).
+    Draft,
+    /// The best trade-off: albedo within 0.2 % and radius within 1 % of the reference for every preset.
+    #[default]
+    Default,
+    /// The converged reference, for checking the others.
+    Reference,
+}
+
+/// Every level, cheapest first.
+pub const ALL_ACCURACY_LEVELS: [AccuracyLevel; 3] = [AccuracyLevel::Draft, AccuracyLevel::Default, AccuracyLevel::Reference];
+
+impl AccuracyLevel {
+    pub fn name(self) -> &'static str {
+        match self {
+            AccuracyLevel::Draft => "draft",
+            AccuracyLevel::Default => "default",
+            AccuracyLevel::Reference => "reference",
+        }
+    }
+
+    /// The level called `name` (draft, default, reference).
+    pub fn from_name(name: &str) -> Result<AccuracyLevel, SkinError> {
+        ALL_ACCURACY_LEVELS.into_iter().find(|l| l.name() == name).ok_or_else(|| {
+            SkinError::invalid("accuracy", format!("unknown accuracy level {name:?}; expected one of draft, default, reference"))
+        })
+    }
+
+    /// The settings of the level.
+    pub fn accuracy(self) -> Accuracy {
+        match self {
+            AccuracyLevel::Draft => Accuracy::draft(),
+            AccuracyLevel::Default => Accuracy::default(),
+            AccuracyLevel::Reference => Accuracy::reference(),
+        }
+    }
+}
+
+impl Accuracy {
+    /// The draft level: DRAFT_DOC
+    pub fn draft() -> Accuracy {
+        Accuracy {
+            wavelength_step_nm: 20.0,
+            wavelength_placement: WavelengthPlacement::CmfAdapted,
+            fit_frequencies_per_decade: 2.0,
+            ..Accuracy::default()
+        }
+    }
+}
