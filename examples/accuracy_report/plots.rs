@@ -88,7 +88,10 @@ pub fn render_png(plot: &Plot) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
                 .label("default")
                 .legend(|(x, y)| Circle::new((x + 9, y), 6, RED.stroke_width(2)));
         }
-        chart.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 13)).draw()?;
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerLeft)
+            .background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 13)).draw()?;
         root.present()?;
     }
     let image = image::RgbImage::from_raw(SIZE.0, SIZE.1, rgb).ok_or("plot buffer size")?;

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 use spectral_skin::color::{spectral_rgb_weights, spectrum_to_rgb, WavelengthGrid, WorkingSpace};
 use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
-use spectral_skin::evaluate::ProfileGrid;
+use spectral_skin::evaluate::{Prepared, ProfileGrid};
 use spectral_skin::fit::burley::{edge_misfit, fit_frequencies};
 use spectral_skin::skin::skin_layers;
 use spectral_skin::{evaluate, Accuracy, Evaluation, Outputs, Request, SkinModel, SkinParams, PRESETS};
@@ -27,6 +27,10 @@ pub struct PresetReference {
     /// The profile with the reference quadrature on the default wavelength grid: the reference of the quadrature knobs
     /// (Hankel, FFT), which leaves out the spectral sampling's own share of the profile error.
     pub profile_default_wavelengths: Vec<[f64; 3]>,
+    /// Albedo and radius with the reference settings on the default wavelength grid: the reference of the knobs other
+    /// than the wavelengths (`albedo_knob`, `radius_knob`), without the wavelength sampling's share.
+    pub albedo_default_wavelengths: [f64; 3],
+    pub radius_default_wavelengths_mm: [f64; 3],
     /// Log-spaced frequencies and the normalised RGB transfer function N_c(s) = R~_c(s) / R~_c(0) on them.
     pub s_per_mm: Vec<f64>,
     pub normalized: [Vec<f64>; 3],
@@ -73,6 +77,7 @@ impl PresetReference {
         let d = Accuracy::default();
         let same_grid = Accuracy { wavelength_step_nm: d.wavelength_step_nm, wavelength_placement: d.wavelength_placement, ..reference };
         let quadrature = evaluate(&params, &request(same_grid, Task::Profile)).expect("reference quadrature profile");
+        let same_grid_material = evaluate(&params, &request(same_grid, Task::Material)).expect("reference on the default grid");
         let (s_per_mm, normalized) = transfer_function(&params, reference.wavelength_step_nm, material.diffuse_reflectance_rgb.unwrap());
         PresetReference {
             name,
@@ -81,6 +86,8 @@ impl PresetReference {
             radius_mm: material.methods.unwrap().burley.subsurface_radius_mm,
             profile: profile.profile.unwrap().rgb_per_mm2.unwrap(),
             profile_default_wavelengths: quadrature.profile.unwrap().rgb_per_mm2.unwrap(),
+            albedo_default_wavelengths: same_grid_material.diffuse_reflectance_rgb.unwrap(),
+            radius_default_wavelengths_mm: same_grid_material.methods.unwrap().burley.subsurface_radius_mm,
             s_per_mm,
             normalized,
         }
@@ -115,22 +122,28 @@ pub fn references() -> Vec<PresetReference> {
 /// Errors of one evaluation against its preset's reference.
 pub fn errors_of(ev: &Evaluation, reference: &PresetReference) -> BTreeMap<&'static str, f64> {
     let mut m = BTreeMap::new();
+    let d = Accuracy::default();
+    let default_grid = ev.accuracy.wavelength_step_nm == d.wavelength_step_nm && ev.accuracy.wavelength_placement == d.wavelength_placement;
     if let Some(albedo) = ev.diffuse_reflectance_rgb {
         m.insert("albedo_rel", max_relative(albedo, reference.albedo));
         m.insert("delta_e00", delta_e_2000(albedo, reference.albedo));
+        if default_grid {
+            m.insert("albedo_knob", max_relative(albedo, reference.albedo_default_wavelengths));
+        }
     }
     if let Some(methods) = ev.methods {
         let radius = methods.burley.subsurface_radius_mm;
         m.insert("radius_rel", max_relative(radius, reference.radius_mm));
+        if default_grid {
+            m.insert("radius_knob", max_relative(radius, reference.radius_default_wavelengths_mm));
+        }
         let d = ev.radius_fit.unwrap().map(|f| f.d_mm);
         let edge = (0..3).map(|c| edge_misfit(&reference.s_per_mm, &reference.normalized[c], d[c])).fold(0.0, f64::max);
         m.insert("edge_misfit", edge);
     }
     if let Some(profile) = ev.profile.as_ref().and_then(|p| p.rgb_per_mm2.as_ref()) {
         m.insert("profile_log", profile_log_error(&PROFILE_GRID.radii_mm(), profile, &reference.profile));
-        if ev.accuracy.wavelength_step_nm == Accuracy::default().wavelength_step_nm
-            && ev.accuracy.wavelength_placement == Accuracy::default().wavelength_placement
-        {
+        if default_grid {
             m.insert("quadrature_log", profile_log_error(&PROFILE_GRID.radii_mm(), profile, &reference.profile_default_wavelengths));
         }
     }
@@ -156,13 +169,24 @@ pub struct Budget {
     pub seconds: f64,
 }
 
-/// Measure `accuracy` for `task` over every preset: worst errors, and the median time of the caucasian evaluation.
+/// Measure `accuracy` for `task` over every preset: worst errors, and the median time of the caucasian evaluation on
+/// one thread (steadier than two, and what one table node or one texel costs): `Prepared::material` for a material,
+/// `evaluate` for a profile.
 pub fn measure(refs: &[PresetReference], accuracy: Accuracy, task: Task, budget: Budget) -> (f64, BTreeMap<&'static str, f64>) {
     let req = request(accuracy, task);
     let metrics = worst(refs.iter().map(|r| errors_of(&evaluate(&r.params, &req).expect("evaluation"), r)));
     let timed = &refs[0].params;
-    let time = median_seconds(budget.min_runs, budget.seconds, || {
-        std::hint::black_box(evaluate(timed, &req).expect("evaluation"));
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("one-thread pool");
+    let time = pool.install(|| match task {
+        Task::Material => {
+            let prepared = Prepared::new(&req).expect("prepared");
+            median_seconds(budget.min_runs, budget.seconds, || {
+                std::hint::black_box(prepared.material(timed).expect("material"));
+            })
+        }
+        Task::Profile => median_seconds(budget.min_runs, budget.seconds, || {
+            std::hint::black_box(evaluate(timed, &req).expect("evaluation"));
+        }),
     });
     (time, metrics)
 }

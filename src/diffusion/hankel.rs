@@ -29,10 +29,10 @@ pub struct HankelQuadrature {
 
 impl Default for HankelQuadrature {
     /// The cheapest setting on the error-time front whose error is negligible (docs/accuracy-vs-time.md): 12 nodes on
-    /// panels 4x the base width (up to two J0 periods at the largest radius) stay within 1e-7 of the converged
-    /// quadrature over 0.01-10 mm, about 3x faster than 8 nodes on the base grid.
+    /// panels 4x the base width (up to two J0 periods at the largest radius), cut at 1e-9, stay within 1e-8 of the
+    /// converged quadrature over 0.01-10 mm, 2-3x faster than 8 nodes on the base grid cut at 1e-13.
     fn default() -> Self {
-        HankelQuadrature { gauss_order: 12, refinement: 0.25, cutoff: 1e-13 }
+        HankelQuadrature { gauss_order: 12, refinement: 0.25, cutoff: 1e-9 }
     }
 }
 
