@@ -28,7 +28,7 @@ METHOD_ITEMS = [
 ACCURACY_ITEMS = [
     ("DRAFT", "Draft", "Fast preview: fewer wavelengths and fit frequencies (see docs/accuracy-vs-time.md)"),
     ("DEFAULT", "Default", "Albedo within 0.2 % and radius within 1 % of the converged reference"),
-    ("REFERENCE", "Reference", "The converged reference: 1 nm wavelength steps; several times slower"),
+    ("REFERENCE", "Reference", "The converged reference: 1 nm wavelength steps; about 30 times slower"),
 ]
 
 

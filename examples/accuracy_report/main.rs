@@ -1,7 +1,7 @@
 //! What accuracy costs in time: every accuracy knob measured against the converged reference and timed, written to
 //! docs/accuracy-vs-time.md with plots in docs/images/accuracy/ and the numbers in docs/data/accuracy.json.
 //!
-//!     cargo run --release --example accuracy_report             # the full report (about 10 minutes on 2 cores)
+//!     cargo run --release --example accuracy_report             # the full report (about 5 minutes on 2 cores)
 //!     cargo run --release --example accuracy_report -- --quick --out-dir /tmp/report   # the reduced run of CI
 //!
 //! `scripts/accuracy_report.sh` runs the Cycles samples measurement (bpy) first and then this.

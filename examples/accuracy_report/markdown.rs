@@ -148,23 +148,23 @@ fn metric_label(metric: &str) -> &'static str {
 }
 
 /// The plot of a sweep's rows: one series per row series, the Pareto front over all, the default circled.
-fn plot_rows(title: &str, rows: &[Row], metric: &str, x_label: &str) -> Plot<'static> {
+fn plot_rows(title: &str, rows: &[Row], metric: &str, x_label: &str) -> Plot {
     let mut series: Vec<Series> = Vec::new();
     for r in rows {
         let Some(&y) = r.metrics.get(metric) else { continue };
-        let y = y.max(1e-9);
+        let y = y.max(1e-12);
         match series.iter_mut().find(|s| s.name == r.series) {
             Some(s) => s.points.push((r.time_s, y, r.label.clone())),
             None => series.push(Series { name: r.series.clone(), points: vec![(r.time_s, y, r.label.clone())] }),
         }
     }
-    let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.time_s, r.metrics.get(metric).copied().unwrap_or(f64::NAN).max(1e-9))).collect();
+    let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.time_s, r.metrics.get(metric).copied().unwrap_or(f64::NAN).max(1e-12))).collect();
     let front = pareto_front(&points).into_iter().map(|i| points[i]).collect();
     let default = rows.iter().position(|r| r.is_default).map(|i| points[i]);
     Plot {
-        title: Box::leak(title.to_string().into_boxed_str()),
-        x_label: Box::leak(x_label.to_string().into_boxed_str()),
-        y_label: metric_label(metric),
+        title: title.to_string(),
+        x_label: x_label.to_string(),
+        y_label: metric_label(metric).to_string(),
         series,
         front,
         default,
@@ -225,7 +225,7 @@ pub fn write(out_dir: &Path, report: &Report) -> Result<(), Box<dyn std::error::
     }
     let _ = writeln!(
         md,
-        "Times are medians of repeated runs of one evaluation (caucasian preset) on one thread of this machine (maps: {} \
+        "Errors of zero (the reference itself) and below 1e-12 are drawn at 1e-12 on the log axes. Times are medians of repeated runs of one evaluation (caucasian preset) on one thread of this machine (maps: {} \
          threads); errors are the worst over the three presets (caucasian, asian, african), against \
          the converged reference; *this knob* columns compare with the reference on the same wavelength grid, which \
          isolates the knob from the wavelength sampling. Colours are linear Rec.709. Every knob is varied with the \

@@ -12,10 +12,10 @@ pub struct Series {
 }
 
 /// A plot of error against time.
-pub struct Plot<'a> {
-    pub title: &'a str,
-    pub x_label: &'a str,
-    pub y_label: &'a str,
+pub struct Plot {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
     pub series: Vec<Series>,
     /// Pareto front over all series, as (time, error) in time order.
     pub front: Vec<(f64, f64)>,
@@ -51,15 +51,17 @@ pub fn render_png(plot: &Plot) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
         let x_range = log_range(all().map(|p| p.0));
         let y_range = log_range(all().map(|p| p.1));
         let mut chart = ChartBuilder::on(&root)
-            .caption(plot.title, ("sans-serif", 22))
+            .caption(&plot.title, ("sans-serif", 22))
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(70)
             .build_cartesian_2d(x_range.log_scale(), y_range.log_scale())?;
         chart
             .configure_mesh()
-            .x_desc(plot.x_label)
-            .y_desc(plot.y_label)
+            .x_desc(&plot.x_label)
+            .y_desc(&plot.y_label)
+            .x_labels(8)
+            .y_labels(10)
             .x_label_formatter(&|v| format!("{v:.0e}"))
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .label_style(("sans-serif", 14))
