@@ -313,7 +313,8 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
     name = "evaluate",
     signature = (
         melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None, *,
-        preset = None, outputs = None, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None, multipole_pairs = None,
+        preset = None, outputs = None, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
+        multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709"
     )
@@ -361,7 +362,8 @@ fn evaluate_py<'py>(
     name = "profile",
     signature = (
         melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None, *,
-        preset = None, spectral = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None, multipole_pairs = None,
+        preset = None, spectral = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
+        multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709"
     )
@@ -661,7 +663,8 @@ fn python_clamp_hint(e: SkinError) -> SkinError {
     name = "maps",
     signature = (
         params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
-        method = "burley", exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
+        method = "burley", exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
+        wavelength_placement = None,
         working_space = "Linear Rec.709", table_resolution = None, table_cache = true
     )
 )]

@@ -131,8 +131,8 @@ def profile(
     Arguments:
         melanin, melanin_blend, hemoglobin, oiliness, preset: as for :func:`evaluate`.
         spectral: False: RGB profiles; True: one profile per wavelength.
-        accuracy, wavelength_step_nm, wavelength_placement, multipole_pairs, profile_r_min_mm, profile_r_max_mm, profile_count,
-            combination, working_space: as for :func:`evaluate`.
+        accuracy, wavelength_step_nm, wavelength_placement, multipole_pairs, profile_r_min_mm, profile_r_max_mm,
+            profile_count, combination, working_space: as for :func:`evaluate`.
 
     Returns:
         {"radii_mm": (N,), "rgb_per_mm2": (N, 3)} in mm^-2, or with spectral=True
