@@ -242,7 +242,7 @@ pub fn levels(refs: &[PresetReference], s: &Settings, map_size: usize) -> Sweep 
         if let Strategy::Table { build_seconds, .. } = result.report.strategy {
             r.metrics.insert("table_build_s", build_seconds);
         }
-        r.metrics.insert("wavelengths", spectral_skin::color::WavelengthGrid::new(acc.wavelength_placement, acc.wavelength_step_nm).wavelengths_nm.len() as f64);
+        r.metrics.insert("wavelengths", WavelengthGrid::new(acc.wavelength_placement, acc.wavelength_step_nm).wavelengths_nm.len() as f64);
         rows.push(r);
     }
     Sweep { key: "levels", title: "Named accuracy levels", timed: "albedo + radius", plot_metric: "albedo_rel", rows }
