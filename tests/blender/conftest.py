@@ -213,6 +213,21 @@ def assign(obj, mat):
     obj.data.materials.append(mat)
 
 
+def material_snapshot(material) -> dict:
+    """Every node's name, type and unlinked input values, and the links: what an untouched material keeps."""
+    tree = material.node_tree
+    values = {}
+    for node in tree.nodes:
+        for socket in node.inputs:
+            value = getattr(socket, "default_value", None)
+            if value is not None:
+                values[(node.name, socket.identifier)] = (tuple(value) if hasattr(value, "__len__")
+                                                          and not isinstance(value, str) else value)
+    links = sorted((lk.from_node.name, lk.from_socket.identifier, lk.to_node.name, lk.to_socket.identifier)
+                   for lk in tree.links)
+    return {"nodes": sorted((n.name, n.bl_idname) for n in tree.nodes), "values": values, "links": links}
+
+
 def write_exr(path: str, pixels: np.ndarray) -> None:
     """Write an (H, W, C) float array as a 32-bit float EXR (row 0 = top row)."""
     import OpenImageIO as oiio

@@ -26,6 +26,7 @@ if str(REPO) not in sys.path:
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 from blender_addon.ops import apply_skin  # noqa: E402
+from conftest import material_snapshot  # noqa: E402
 
 ZIP = REPO / "dist" / "spectral_skin-0.1.0.zip"
 BLENDER_EXT = pathlib.Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"
@@ -39,21 +40,6 @@ def _principled(material):
     found = addon_nodes.tagged_nodes(material.node_tree, "principled")
     assert len(found) == 1, [n.name for n in material.node_tree.nodes]
     return found[0]
-
-
-def _snapshot(material) -> dict:
-    """Every node's name, type and unlinked input values, and the links: what an untouched material keeps."""
-    tree = material.node_tree
-    values = {}
-    for node in tree.nodes:
-        for socket in node.inputs:
-            value = getattr(socket, "default_value", None)
-            if value is not None:
-                values[(node.name, socket.identifier)] = (tuple(value) if hasattr(value, "__len__")
-                                                          and not isinstance(value, str) else value)
-    links = sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
-                   for l in tree.links)
-    return {"nodes": sorted((n.name, n.bl_idname) for n in tree.nodes), "values": values, "links": links}
 
 
 def test_register_unregister_leaves_no_trace(addon):
@@ -108,7 +94,7 @@ def test_reapply_updates_own_nodes_and_leaves_user_nodes(addon):
     user_node.name = "UserColour"
     user_node.outputs[0].default_value = (0.1, 0.2, 0.3, 1.0)
     count = len(material.node_tree.nodes)
-    before = _snapshot(material)
+    before = material_snapshot(material)
 
     props = material.spectral_skin
     props.preset = "AFRICAN"
@@ -121,7 +107,7 @@ def test_reapply_updates_own_nodes_and_leaves_user_nodes(addon):
     np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], expected["base_color"], rtol=1e-6)
     assert node.subsurface_method == "RANDOM_WALK"
     assert tuple(material.node_tree.nodes["UserColour"].outputs[0].default_value) == pytest.approx((0.1, 0.2, 0.3, 1.0))
-    after = _snapshot(material)
+    after = material_snapshot(material)
     others = lambda snap: {k: v for k, v in snap["values"].items() if not k[0].startswith(addon_nodes.NAME_PREFIX)}  # noqa: E731
     assert others(after) == others(before)
 
@@ -129,23 +115,23 @@ def test_reapply_updates_own_nodes_and_leaves_user_nodes(addon):
 def test_invalid_parameter_changes_nothing(addon):
     material = bpy.data.materials.new("Skin")
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
-    before = _snapshot(material)
+    before = material_snapshot(material)
     with pytest.raises(spectral_skin.SpectralSkinError, match="melanin"):
         apply_skin(material, SkinSettings.from_preset("caucasian", melanin=0.9))
-    assert _snapshot(material) == before
+    assert material_snapshot(material) == before
 
 
 def test_operator_reports_error_and_changes_nothing(addon, tmp_path):
     material = bpy.data.materials.new("Skin")
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
-    before = _snapshot(material)
+    before = material_snapshot(material)
     props = material.spectral_skin
     props.melanin_map = bpy.data.images.new("m", 4, 4, float_buffer=True)
     props.hemoglobin_map = bpy.data.images.new("h", 5, 4, float_buffer=True)  # sizes differ: the core rejects it
     props.output_dir = str(tmp_path)
     with pytest.raises(RuntimeError, match="Spectral Skin"):  # bpy turns an ERROR report into RuntimeError
         bpy.ops.spectral_skin.apply(material="Skin")
-    assert _snapshot(material) == before
+    assert material_snapshot(material) == before
     assert list(tmp_path.iterdir()) == []
 
 

@@ -35,8 +35,8 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from blender_addon import batch  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
-from conftest import (add_slab, add_sun, add_top_camera, assign, new_material, read_exr,  # noqa: E402
-                      reset_scene, set_world)
+from conftest import (add_slab, add_sun, add_top_camera, assign, material_snapshot, new_material,  # noqa: E402
+                      read_exr, reset_scene, set_world)
 
 BATCH = REPO / "blender_addon" / "batch.py"
 SIZE = 64
@@ -203,26 +203,12 @@ def test_batch_render_cli(addon, tmp_path):
         assert proc.stderr.startswith("spectral-skin batch:") and message in proc.stderr, proc.stderr
 
 
-def _material_snapshot(material) -> dict:
-    tree = material.node_tree
-    values = {}
-    for node in tree.nodes:
-        for socket in node.inputs:
-            value = getattr(socket, "default_value", None)
-            if value is not None:
-                values[(node.name, socket.identifier)] = (tuple(value) if hasattr(value, "__len__")
-                                                          and not isinstance(value, str) else value)
-    links = sorted((lk.from_node.name, lk.from_socket.identifier, lk.to_node.name, lk.to_socket.identifier)
-                   for lk in tree.links)
-    return {"nodes": sorted((n.name, n.bl_idname) for n in tree.nodes), "values": values, "links": links}
-
-
 def test_unreadable_map_changes_nothing(addon, tmp_path):
     """A parameter map whose file is missing or corrupt: the operator reports an error, the batch command exits 2;
     the material is unchanged and no file is written in the texture folder."""
     material = bpy.data.materials.new("Skin")
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
-    before = _material_snapshot(material)
+    before = material_snapshot(material)
     maps_dir = tmp_path / "skin_maps"
     # An image whose file is gone (e.g. a .blend moved without its maps).
     source = tmp_path / "melanin.exr"
@@ -237,7 +223,7 @@ def test_unreadable_map_changes_nothing(addon, tmp_path):
     props.output_dir = str(maps_dir)
     with pytest.raises(RuntimeError, match="melanin map .* no pixels"):
         bpy.ops.spectral_skin.apply(material="Skin")
-    assert _material_snapshot(material) == before
+    assert material_snapshot(material) == before
     assert not maps_dir.exists() or list(maps_dir.iterdir()) == []
     # A corrupt file.
     corrupt = tmp_path / "corrupt.exr"
@@ -250,7 +236,7 @@ def test_unreadable_map_changes_nothing(addon, tmp_path):
         props.melanin_map = image
         with pytest.raises(RuntimeError, match="Spectral Skin"):
             bpy.ops.spectral_skin.apply(material="Skin")
-        assert _material_snapshot(material) == before
+        assert material_snapshot(material) == before
         assert not maps_dir.exists() or list(maps_dir.iterdir()) == []
 
     # The batch command: missing and corrupt map files.
