@@ -88,6 +88,19 @@ impl Accuracy {
         }
     }
 
+    /// Every knob refined once more: half the wavelength step, twice the fit frequencies, four more nodes per panel,
+    /// panels half as wide and a cut-off ten times lower. `reference().refined()` is the check that the reference has
+    /// converged (tests/accuracy.rs, docs/accuracy-vs-time.md).
+    pub fn refined(&self) -> Accuracy {
+        let h = self.hankel;
+        Accuracy {
+            wavelength_step_nm: 0.5 * self.wavelength_step_nm,
+            fit_frequencies_per_decade: 2.0 * self.fit_frequencies_per_decade,
+            hankel: HankelQuadrature { gauss_order: h.gauss_order + 4, refinement: 2.0 * h.refinement, cutoff: 0.1 * h.cutoff },
+            ..*self
+        }
+    }
+
     pub(crate) fn validate(&self) -> Result<(), SkinError> {
         check_range("wavelength_step_nm", "wavelength step", self.wavelength_step_nm, 0.5, 100.0)?;
         if let MultipoleTerms::Pairs(n) = self.multipole_terms {

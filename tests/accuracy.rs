@@ -1,7 +1,6 @@
 //! The default accuracy against the converged reference (`Accuracy::reference`), and the reference against a further
 //! refinement of every knob: albedo within 0.2 % (max relative per channel) and radius within 1 % for every preset.
 
-use spectral_skin::diffusion::HankelQuadrature;
 use spectral_skin::evaluate::Accuracy;
 use spectral_skin::{evaluate, Evaluation, Outputs, Request, SkinParams, PRESETS};
 
@@ -37,12 +36,10 @@ fn default_is_within_bounds_of_the_converged_reference() {
 /// inverse-Hankel grid) changes albedo, radius and the RGB profile by less than 1e-6 relative: it is converged.
 #[test]
 fn reference_is_converged() {
-    let finer = Accuracy {
-        wavelength_step_nm: 0.5,
-        fit_frequencies_per_decade: 32.0,
-        hankel: HankelQuadrature { gauss_order: 16, refinement: 4.0, cutoff: 1e-16 },
-        ..Accuracy::reference()
-    };
+    let finer = Accuracy::reference().refined();
+    assert_eq!((finer.wavelength_step_nm, finer.fit_frequencies_per_decade), (0.5, 32.0));
+    assert_eq!((finer.hankel.gauss_order, finer.hankel.refinement), (16, 4.0));
+    assert!((finer.hankel.cutoff / 1e-16 - 1.0).abs() < 1e-12, "{:?}", finer.hankel);
     for preset in PRESETS {
         let a = run(&preset.params, Accuracy::reference());
         let b = run(&preset.params, finer);

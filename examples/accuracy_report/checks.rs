@@ -2,7 +2,7 @@
 //! the project's Monte Carlo photon walk.
 
 use serde::Serialize;
-use spectral_skin::diffusion::{Combination, HankelQuadrature, LayerStack, MultipoleTerms};
+use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
 use spectral_skin::skin::skin_layers;
 use spectral_skin::{evaluate, Accuracy, SkinModel};
 
@@ -30,12 +30,7 @@ impl Convergence {
 
 pub fn convergence(refs: &[PresetReference]) -> Convergence {
     let reference = Accuracy::reference();
-    let finer = Accuracy {
-        wavelength_step_nm: 0.5,
-        fit_frequencies_per_decade: 32.0,
-        hankel: HankelQuadrature { gauss_order: 16, refinement: 4.0, cutoff: 1e-16 },
-        ..reference
-    };
+    let finer = reference.refined();
     let mut c = Convergence { finer, albedo_rel: 0.0, radius_rel: 0.0, profile_log: 0.0 };
     for r in refs {
         let m = evaluate(&r.params, &request(finer, Task::Material)).expect("finer evaluation");
