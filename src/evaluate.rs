@@ -181,7 +181,13 @@ impl Prepared {
         &self.grid.wavelengths_nm
     }
 
-    fn stacks(&self, params: &SkinParams) -> Result<Vec<LayerStack>, SkinError> {
+    /// The weights that turn a spectrum on this request's wavelengths into linear RGB in its working space.
+    pub fn rgb_weights(&self) -> &[[f64; 3]] {
+        &self.weights
+    }
+
+    /// The layer stack of `params` at each of this request's wavelengths.
+    pub fn stacks(&self, params: &SkinParams) -> Result<Vec<LayerStack>, SkinError> {
         self.grid
             .wavelengths_nm
             .iter()

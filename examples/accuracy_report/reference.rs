@@ -3,12 +3,11 @@
 use std::collections::BTreeMap;
 
 use serde::Serialize;
-use spectral_skin::color::{spectral_rgb_weights, spectrum_to_rgb, WavelengthGrid, WorkingSpace};
-use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
+use spectral_skin::color::spectrum_to_rgb;
+use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::{Prepared, ProfileGrid};
 use spectral_skin::fit::burley::{edge_misfit, fit_frequencies};
-use spectral_skin::skin::skin_layers;
-use spectral_skin::{evaluate, Accuracy, Evaluation, Outputs, Request, SkinModel, SkinParams, PRESETS};
+use spectral_skin::{evaluate, Accuracy, Evaluation, Outputs, Request, SkinParams, PRESETS};
 
 use crate::metrics::{delta_e_2000, max_relative, median_seconds, profile_log_error};
 
@@ -78,7 +77,7 @@ impl PresetReference {
         let same_grid = Accuracy { wavelength_step_nm: d.wavelength_step_nm, wavelength_placement: d.wavelength_placement, ..reference };
         let quadrature = evaluate(&params, &request(same_grid, Task::Profile)).expect("reference quadrature profile");
         let same_grid_material = evaluate(&params, &request(same_grid, Task::Material)).expect("reference on the default grid");
-        let (s_per_mm, normalized) = transfer_function(&params, reference.wavelength_step_nm, material.diffuse_reflectance_rgb.unwrap());
+        let (s_per_mm, normalized) = transfer_function(&params, reference, material.diffuse_reflectance_rgb.unwrap());
         PresetReference {
             name,
             params,
@@ -95,20 +94,15 @@ impl PresetReference {
 }
 
 /// The RGB transfer function, normalised by the albedo, on the dense reference frequency grid.
-fn transfer_function(params: &SkinParams, step_nm: f64, albedo: [f64; 3]) -> (Vec<f64>, [Vec<f64>; 3]) {
-    let grid = WavelengthGrid::uniform(step_nm);
-    let weights = spectral_rgb_weights(&grid, WorkingSpace::LinearRec709);
-    let stacks: Vec<LayerStack> = grid
-        .wavelengths_nm
-        .iter()
-        .map(|&w| LayerStack::new(&skin_layers(params, &SkinModel::default(), w)).expect("skin layers"))
-        .collect();
+fn transfer_function(params: &SkinParams, accuracy: Accuracy, albedo: [f64; 3]) -> (Vec<f64>, [Vec<f64>; 3]) {
+    let prepared = Prepared::new(&request(accuracy, Task::Material)).expect("prepared");
+    let stacks = prepared.stacks(params).expect("skin layers");
     let s = fit_frequencies(REFERENCE_FIT_PER_DECADE);
     let rgb: Vec<[f64; 3]> = s
         .iter()
         .map(|&x| {
             let spectrum: Vec<f64> = stacks.iter().map(|st| st.reflectance_hat(x, Combination::Directional, MultipoleTerms::All)).collect();
-            spectrum_to_rgb(&spectrum, &weights)
+            spectrum_to_rgb(&spectrum, prepared.rgb_weights())
         })
         .collect();
     let normalized = [0, 1, 2].map(|c| rgb.iter().map(|v| v[c] / albedo[c]).collect());

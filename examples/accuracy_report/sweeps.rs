@@ -5,17 +5,16 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use serde::Serialize;
-use spectral_skin::color::{placement_rgb_weights, spectrum_to_rgb, WavelengthGrid, WavelengthPlacement, WorkingSpace};
+use spectral_skin::color::{spectrum_to_rgb, WavelengthGrid, WavelengthPlacement};
 use spectral_skin::diffusion::fft_route::{fft_reflectance_profiles_with, FftGrid, PixelSampling};
-use spectral_skin::diffusion::{Combination, HankelQuadrature, LayerStack, MultipoleTerms};
+use spectral_skin::diffusion::{Combination, HankelQuadrature, MultipoleTerms};
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::fit::RadiusFit;
 use spectral_skin::maps::example::face_params;
 use spectral_skin::maps::lut::{measure_error, MaterialTable, TableResolution};
 use spectral_skin::maps::pipeline::Strategy;
 use spectral_skin::maps::{compute_maps, MapSettings};
-use spectral_skin::skin::skin_layers;
-use spectral_skin::{Accuracy, AccuracyLevel, Outputs, Request, SkinModel};
+use spectral_skin::{Accuracy, AccuracyLevel, Outputs, Request};
 
 use crate::metrics::{delta_e_2000, max_relative, median_seconds, profile_log_error};
 use crate::reference::{request, row, worst, Budget, PresetReference, Row, Task, PROFILE_GRID};
@@ -102,22 +101,18 @@ pub fn fft(refs: &[PresetReference], s: &Settings, hankel: &Sweep) -> Sweep {
     let sizes: &[usize] = if s.quick { &[64, 128] } else { &[128, 256, 512, 1024] };
     // The extent covers the caucasian red tail (a 20 mm tile wraps its periodic copy onto r = 10 mm).
     let extent_mm = 40.0;
-    let d = Accuracy::default();
-    let grid = WavelengthGrid::new(d.wavelength_placement, d.wavelength_step_nm);
-    let weights = placement_rgb_weights(&grid, d.wavelength_placement, WorkingSpace::LinearRec709);
+    // The default's wavelengths, colour weights and layers: the comparison is of the two routes alone.
+    let prepared = Prepared::new(&request(Accuracy::default(), Task::Profile)).expect("prepared");
+    let weights = prepared.rgb_weights();
     let radii = PROFILE_GRID.radii_mm();
     let run = |r: &PresetReference, fft_grid: FftGrid, sampling: PixelSampling| {
-        let stacks: Vec<LayerStack> = grid
-            .wavelengths_nm
-            .iter()
-            .map(|&w| LayerStack::new(&skin_layers(&r.params, &SkinModel::default(), w)).expect("layers"))
-            .collect();
+        let stacks = prepared.stacks(&r.params).expect("layers");
         let out = fft_reflectance_profiles_with(&stacks, &radii, Combination::Directional, MultipoleTerms::All, fft_grid, sampling)
             .expect("fft route");
         let profile: Vec<[f64; 3]> = (0..radii.len())
-            .map(|i| spectrum_to_rgb(&out.profiles.iter().map(|p| p[i]).collect::<Vec<_>>(), &weights))
+            .map(|i| spectrum_to_rgb(&out.profiles.iter().map(|p| p[i]).collect::<Vec<_>>(), weights))
             .collect();
-        (spectrum_to_rgb(&out.totals, &weights), profile)
+        (spectrum_to_rgb(&out.totals, weights), profile)
     };
     let mut rows = Vec::new();
     for (series, sampling) in [("FFT, pixel centres (DJ05)", PixelSampling::Centre), ("FFT, pixel areas", PixelSampling::Area)] {
