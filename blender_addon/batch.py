@@ -10,7 +10,8 @@ From Python with bpy (``import bpy`` as a module, or Blender's own Python)::
 
 or as a script::
 
-    python blender_addon/batch.py apply in.blend out.blend --material Skin --preset asian [--melanin-map m.exr] [--pack]
+    python blender_addon/batch.py apply in.blend out.blend --material Skin --preset asian [--melanin-map m.exr]
+        [--params-map face.exr] [--clamp] [--pack]
     python blender_addon/batch.py render in.blend --out DIR [--frames 1-3,7] [--samples N] [--resolution 640x480]
 
 (``batch.py in.blend out.blend --material ...`` without a subcommand still means ``apply``.)
@@ -76,8 +77,8 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     returns the plans.
 
     ``settings.output_dir`` (used only with maps) may start with ``//``: relative to ``blend_path``'s folder; empty
-    means ``//skin_maps``. ``settings.file_prefix`` is replaced by each material's name and ``settings.scale_length``
-    by the scene's unit scale. Raises spectral_skin.SpectralSkinError / ValueError / OSError; nothing is saved then.
+    means ``//skin_maps``. ``settings.file_prefix`` is replaced by ``<blend_path's name>_<material name>`` and
+    ``settings.scale_length`` by the scene's unit scale. Raises spectral_skin.SpectralSkinError / ValueError / OSError; nothing is saved then.
     """
     nodes = _addon_module("nodes")
     props = _addon_module("props")
@@ -92,7 +93,7 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     plans = {}
     for name in material_names:
         material_settings = settings.replace(
-            file_prefix=name, output_dir=output_dir, scale_length=scene.unit_settings.scale_length,
+            file_prefix=core.texture_prefix(blend_path, name), output_dir=output_dir, scale_length=scene.unit_settings.scale_length,
             working_space=nodes.scene_working_space())
         plans[name] = core.make_plan(material_settings)
     for plan in plans.values():
@@ -111,20 +112,12 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     return plans
 
 
-def _read_map(path: str, name: str) -> Any:
+def _read_map(path: str, name: str | None) -> Any:
+    """A parameter file read by the core (the CLI's rules): ``name``'s map, or the four-channel file (None)."""
     path = os.path.abspath(path)
     if not os.path.isfile(path):
-        raise FileNotFoundError(f"{name} map: no such file: {path}")
-    try:
-        image = bpy.data.images.load(path)
-    except RuntimeError as error:  # Blender's "Error: Cannot read file ..."
-        raise OSError(f"{name} map: cannot read {path}: {error}") from None
-    try:
-        if image.size[0] == 0 or image.size[1] == 0:  # Blender loads a corrupt file as an image without pixels
-            raise OSError(f"{name} map: cannot read {path} (no pixels: corrupt or unsupported file)")
-        return _addon_module("props")._image_parameter_map(image, name)
-    finally:
-        bpy.data.images.remove(image)
+        raise FileNotFoundError(f"{name or 'parameter'} map: no such file: {path}")
+    return _addon_module("core").read_map_file(path, name)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -267,6 +260,9 @@ def _apply_main(argv: list[str]) -> int:
         flag = name.replace("_", "-")
         parser.add_argument(f"--{flag}", type=float, help=f"{name} (overrides the preset)")
         parser.add_argument(f"--{flag}-map", help=f"image of {name} per texel")
+    parser.add_argument("--params-map", help="four-channel parameter EXR (channels melanin, melanin_blend, hemoglobin, "
+                        "oiliness); a parameter's own map replaces its channel")
+    parser.add_argument("--clamp", action="store_true", help="clamp out-of-range texels of the maps into range")
     parser.add_argument("--method", choices=["BURLEY", "RANDOM_WALK"], default="BURLEY")
     parser.add_argument("--accuracy", choices=list(core.ACCURACY_LEVELS), default="DEFAULT",
                         help="accuracy level of the spectral computation")
@@ -276,14 +272,15 @@ def _apply_main(argv: list[str]) -> int:
     try:
         overrides = {n: getattr(args, n) for n in core.PARAMETERS if getattr(args, n) is not None}
         settings = core.SkinSettings.from_preset(args.preset, **overrides).replace(
-            method=args.method, accuracy=args.accuracy, output_dir=args.out_dir)
-        _open(args.blend)
-        maps = {n: _read_map(getattr(args, f"{n}_map"), n)
-                for n in core.PARAMETERS if getattr(args, f"{n}_map")}
+            method=args.method, accuracy=args.accuracy, output_dir=args.out_dir, clamp=args.clamp)
+        maps = _read_map(args.params_map, None) if args.params_map else {}
+        for n in core.PARAMETERS:
+            if getattr(args, f"{n}_map"):
+                maps.update(_read_map(getattr(args, f"{n}_map"), n))
         settings = settings.replace(maps=maps)
         apply_to_materials(args.blend, args.material, settings, args.out_blend, pack=args.pack)
     except (spectral_skin.SpectralSkinError, ValueError, OSError) as error:
-        print(f"spectral-skin batch: {error}", file=sys.stderr)
+        print(f"spectral-skin batch: {core.describe_error(error)}", file=sys.stderr)
         return 2
     return 0
 

@@ -1,7 +1,8 @@
 """The material's node tree from a material plan (see core/plan.py): set sockets by name, no numerics here.
 
 Nodes the add-on creates carry the custom property ``spectral_skin`` (their role) and a name starting with
-``SpectralSkin``; re-applying finds and updates them and never touches other nodes.
+``SpectralSkin``; re-applying finds and updates them and never touches other nodes; :func:`remove_skin` deletes them
+and puts back the Surface link the material had before.
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ import bpy
 
 TAG = "spectral_skin"
 NAME_PREFIX = "SpectralSkin"
+# Custom property of the material output: [node name, socket identifier] of the Surface link before Apply.
+PREVIOUS_SURFACE = "spectral_skin_previous_surface"
 
 # Texture role -> (Principled input, image colour space); None: the plan's working space (the albedo is linear RGB
 # in the scene's working space, whose OCIO colour space has the same name: Linear Rec.709, Linear Rec.2020, ACEScg).
@@ -142,6 +145,38 @@ def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.
     output = _output_node(tree)
     surface = _socket(output.inputs, "Surface")
     if not any(link.from_node == node for link in surface.links):
+        # Remembered on the output node, so that remove_skin can put the material's own shader back.
+        previous = [[link.from_node.name, link.from_socket.identifier] for link in surface.links]
+        output[PREVIOUS_SURFACE] = previous[0] if previous else []
         _unlink(tree, surface)
         tree.links.new(node.outputs["BSDF"], surface)
     return node
+
+
+def remove_skin(material: bpy.types.Material) -> int:
+    """Delete the add-on's nodes from ``material`` and link the material output's Surface back to what it was before
+    the first Apply (when that node is still there); returns how many nodes were removed. Images the add-on loaded
+    and nothing else uses are removed too."""
+    tree = material.node_tree
+    if tree is None:
+        return 0
+    images = [n.image for n in tagged_nodes(tree) if n.type == "TEX_IMAGE" and n.image is not None]
+    outputs = [n for n in tree.nodes if n.type == "OUTPUT_MATERIAL" and PREVIOUS_SURFACE in n]
+    removed = 0
+    for node in tagged_nodes(tree):
+        tree.nodes.remove(node)
+        removed += 1
+    for output in outputs:
+        if output.name not in tree.nodes:
+            continue
+        previous = list(output[PREVIOUS_SURFACE])
+        del output[PREVIOUS_SURFACE]
+        if len(previous) == 2 and previous[0] in tree.nodes:
+            source = tree.nodes[previous[0]]
+            sockets = [s for s in source.outputs if s.identifier == previous[1]]
+            if sockets:
+                tree.links.new(sockets[0], _socket(output.inputs, "Surface"))
+    for image in images:
+        if image.users == 0:
+            bpy.data.images.remove(image)
+    return removed

@@ -1,13 +1,23 @@
-"""The Apply operator: compute the material plan with the core, write its maps, then edit the material."""
+"""The operators: Apply (compute the material plan with the core, write its maps, then edit the material) and Remove.
+
+Apply with parameter maps, started from the UI, computes in a worker thread (the core releases the GIL) while a
+modal timer shows the progress and Esc cancels with nothing changed; the material is edited on Blender's main thread
+once everything is computed and written. From a script (or without maps) it runs synchronously, the same code.
+"""
 
 from __future__ import annotations
+
+import threading
+from typing import Any
 
 import bpy
 import spectral_skin
 
 from . import nodes, props
-from .core import SkinSettings, make_plan, write_textures
+from .core import SkinSettings, describe_error, make_plan, write_textures
 from .nodes import scene_working_space
+
+ERRORS = (spectral_skin.SpectralSkinError, ValueError, OSError)
 
 
 def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
@@ -17,11 +27,49 @@ def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
     the material and existing files are then unchanged. The plan is computed in the scene's working space
     (:func:`scene_working_space`), whatever ``settings.working_space`` says.
     """
-    plan = make_plan(settings.replace(working_space=scene_working_space()))
+    plan = compute_plan(settings)
+    finish_apply(material, plan)
+    return plan
+
+
+def compute_plan(settings: SkinSettings, progress: Any = None) -> dict:
+    """The part of Apply that needs no bpy data: the plan and its written maps (safe in a worker thread)."""
+    plan = make_plan(settings.replace(working_space=scene_working_space()), progress)
     write_textures(plan)
+    return plan
+
+
+def finish_apply(material: bpy.types.Material, plan: dict) -> None:
+    """The part of Apply on Blender's data (main thread only)."""
     nodes.apply_plan(material, plan)
     props.store_result(material, plan)
-    return plan
+
+
+class _Work:
+    """Apply's computation in a worker thread: its progress, a cancel flag, and its outcome."""
+
+    def __init__(self, settings: SkinSettings) -> None:
+        self.fraction = 0.0
+        self.cancel = threading.Event()
+        self.writing = False
+        self.plan: dict | None = None
+        self.error: BaseException | None = None
+        self.thread = threading.Thread(target=self._run, args=(settings,), daemon=True)
+
+    def _progress(self, done: int, total: int) -> bool:
+        self.fraction = done / total if total else 1.0
+        return not self.cancel.is_set()
+
+    def _run(self, settings: SkinSettings) -> None:
+        try:
+            plan = make_plan(settings, self._progress)
+            if self.cancel.is_set():
+                return
+            self.writing = True
+            write_textures(plan)
+            self.plan = plan
+        except BaseException as error:  # reported on the main thread
+            self.error = error
 
 
 class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
@@ -34,6 +82,10 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
     material: bpy.props.StringProperty(
         name="Material", description="Name of the material to set up; empty: the active material")
 
+    _work: _Work | None = None
+    _timer: Any = None
+    _material_name = ""
+
     def _material(self, context: bpy.types.Context) -> bpy.types.Material | None:
         if self.material:
             return bpy.data.materials.get(self.material)
@@ -42,22 +94,112 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
             material = context.object.active_material
         return material
 
-    def execute(self, context: bpy.types.Context) -> set[str]:
+    def _settings(self, context: bpy.types.Context) -> tuple[bpy.types.Material | None, SkinSettings | None]:
         material = self._material(context)
         if material is None:
             self.report({"ERROR"}, f"no material {self.material!r}" if self.material else "no active material")
-            return {"CANCELLED"}
+            return None, None
         try:
-            settings = props.settings_from_material(material, context.scene)
-            plan = apply_skin(material, settings)
-        except (spectral_skin.SpectralSkinError, ValueError, OSError) as error:
-            self.report({"ERROR"}, f"Spectral Skin: {error}")
-            return {"CANCELLED"}
+            return material, props.settings_from_material(material, context.scene)
+        except ERRORS as error:
+            self.report({"ERROR"}, f"Spectral Skin: {describe_error(error)}")
+            return material, None
+
+    def _done(self, plan: dict) -> set[str]:
         summary = plan["summary"]
         self.report({"INFO"}, f"Spectral Skin: {summary['computed']} in {summary['seconds']:.2f} s")
         for warning in summary["warnings"]:
             self.report({"WARNING"}, warning)
         return {"FINISHED"}
 
+    def execute(self, context: bpy.types.Context) -> set[str]:
+        material, settings = self._settings(context)
+        if material is None or settings is None:
+            return {"CANCELLED"}
+        try:
+            plan = apply_skin(material, settings)
+        except ERRORS as error:
+            self.report({"ERROR"}, f"Spectral Skin: {describe_error(error)}")
+            return {"CANCELLED"}
+        return self._done(plan)
 
-classes = (SPECTRAL_SKIN_OT_apply,)
+    def invoke(self, context: bpy.types.Context, _event: bpy.types.Event) -> set[str]:
+        material, settings = self._settings(context)
+        if material is None or settings is None:
+            return {"CANCELLED"}
+        if not settings.maps or context.window is None:
+            return self.execute(context)  # one evaluation: no time to show
+        self._material_name = material.name
+        self._work = _Work(settings.replace(working_space=scene_working_space()))
+        self._work.thread.start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.progress_begin(0, 100)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _end(self, context: bpy.types.Context) -> None:
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+    def modal(self, context: bpy.types.Context, event: bpy.types.Event) -> set[str]:
+        work = self._work
+        if work is None:
+            return {"CANCELLED"}
+        if event.type == "ESC" and not work.writing:
+            work.cancel.set()
+        if event.type != "TIMER":
+            return {"RUNNING_MODAL"}
+        if work.thread.is_alive():
+            context.window_manager.progress_update(int(100 * work.fraction))
+            if context.workspace is not None:
+                state = "writing the maps" if work.writing else (
+                    "cancelling" if work.cancel.is_set() else f"{100 * work.fraction:.0f} % (Esc to cancel)")
+                context.workspace.status_text_set(f"Spectral Skin: {state}")
+            return {"RUNNING_MODAL"}
+        self._end(context)
+        if work.cancel.is_set() and work.plan is None:
+            self.report({"WARNING"}, "Spectral Skin: cancelled, nothing changed")
+            return {"CANCELLED"}
+        if work.error is not None or work.plan is None:
+            self.report({"ERROR"}, f"Spectral Skin: {describe_error(work.error) if work.error else 'no result'}")
+            return {"CANCELLED"}
+        material = bpy.data.materials.get(self._material_name)
+        if material is None:
+            self.report({"ERROR"}, f"Spectral Skin: the material {self._material_name!r} is gone")
+            return {"CANCELLED"}
+        try:
+            finish_apply(material, work.plan)
+        except ERRORS as error:
+            self.report({"ERROR"}, f"Spectral Skin: {describe_error(error)}")
+            return {"CANCELLED"}
+        return self._done(work.plan)
+
+
+class SPECTRAL_SKIN_OT_remove(bpy.types.Operator):
+    """Delete the nodes Spectral Skin added and link the material's previous shader back to its output"""
+
+    bl_idname = "spectral_skin.remove"
+    bl_label = "Remove Spectral Skin"
+    bl_options = {"REGISTER", "UNDO"}
+
+    material: bpy.props.StringProperty(
+        name="Material", description="Name of the material; empty: the active material")
+
+    def execute(self, context: bpy.types.Context) -> set[str]:
+        material = SPECTRAL_SKIN_OT_apply._material(self, context)  # type: ignore[arg-type]
+        if material is None:
+            self.report({"ERROR"}, f"no material {self.material!r}" if self.material else "no active material")
+            return {"CANCELLED"}
+        removed = nodes.remove_skin(material)
+        material.spectral_skin.has_result = False
+        self.report({"INFO"}, f"Spectral Skin: removed {removed} node{'s' if removed != 1 else ''}")
+        return {"FINISHED"}
+
+
+classes = (SPECTRAL_SKIN_OT_apply, SPECTRAL_SKIN_OT_remove)

@@ -26,16 +26,20 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         layout.prop(props, "preset")
         for name in PARAMETERS:
             row = layout.row(align=True)
-            row.active = getattr(props, f"{name}_map") is None
+            row.active = getattr(props, f"{name}_map") is None and props.params_map is None
             row.prop(props, name, slider=True)
         box = layout.box()
         box.label(text="Parameter Maps (optional)")
+        box.template_ID(props, "params_map", open="image.open")
         for name in PARAMETERS:
             box.template_ID(props, f"{name}_map", open="image.open")
+        box.prop(props, "clamp")
         layout.prop(props, "method")
         layout.prop(props, "accuracy")
         layout.prop(props, "output_dir")
-        layout.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
+        row = layout.row(align=True)
+        row.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
+        row.operator("spectral_skin.remove", icon="X", text="Remove").material = material.name
         if props.has_result:
             result = layout.box()
             result.prop(props, "result_albedo")

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import os
+import tempfile
+
 import bpy
 import numpy as np
 import spectral_skin
 
-from .core import PARAMETER_INFO, PARAMETERS, ParameterMap, SkinSettings
+from .core import PARAMETER_INFO, PARAMETERS, ParameterMap, SkinSettings, read_map_file, texture_prefix
 from .nodes import scene_working_space
 
 _PRESETS = spectral_skin.presets()
@@ -32,27 +35,43 @@ ACCURACY_ITEMS = [
 ]
 
 
+# True while a preset writes the four parameters, so that their update does not switch the menu to Custom.
+_setting_preset = False
+
+
 def _apply_preset(self: SpectralSkinSettings, _context: bpy.types.Context) -> None:
+    global _setting_preset
     if self.preset == "CUSTOM":
         return
     values = _PRESETS[self.preset.lower()]
-    for name in PARAMETERS:
-        setattr(self, name, values[name])
+    _setting_preset = True
+    try:
+        for name in PARAMETERS:
+            setattr(self, name, values[name])
+    finally:
+        _setting_preset = False
+
+
+def _parameter_edited(self: SpectralSkinSettings, _context: bpy.types.Context) -> None:
+    """A slider moved by hand: the parameters are no longer the preset's, so the menu shows Custom."""
+    if not _setting_preset and self.preset != "CUSTOM":
+        self.preset = "CUSTOM"
 
 
 def _parameter(name: str) -> bpy.props.FloatProperty:
     low, high, label, description = PARAMETER_INFO[name]
     return bpy.props.FloatProperty(
         name=label, description=description, default=_PRESETS[_DEFAULT_PRESET][name], min=low, max=high,
-        precision=3, step=0.1 if high <= 0.1 else 1, subtype="FACTOR")
+        precision=3, step=0.1 if high <= 0.1 else 1, subtype="FACTOR", update=_parameter_edited)
 
 
 def _parameter_map(name: str) -> bpy.props.PointerProperty:
     label = PARAMETER_INFO[name][2]
     return bpy.props.PointerProperty(
         type=bpy.types.Image, name=f"{label} Map",
-        description=f"Optional greyscale image of {label} per texel (replaces the constant): float images hold the "
-        "value itself, 8/16-bit images map 0..1 onto the parameter's range")
+        description=f"Optional image of {label} per texel (replaces the constant), read as `spectral-skin maps` reads "
+        "it: a one-channel EXR (any channel name) holds the value itself; an 8/16-bit greyscale PNG or TIFF maps 0..1 "
+        "onto the parameter's range")
 
 
 class SpectralSkinSettings(bpy.types.PropertyGroup):
@@ -67,6 +86,15 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     melanin_blend_map: _parameter_map("melanin_blend")
     hemoglobin_map: _parameter_map("hemoglobin")
     oiliness_map: _parameter_map("oiliness")
+    params_map: bpy.props.PointerProperty(
+        type=bpy.types.Image, name="Parameter Map",
+        description="Optional four-channel parameter EXR (channels melanin, melanin_blend, hemoglobin, oiliness, as "
+        "`spectral-skin example` writes): gives all four parameters per texel; a parameter's own map replaces its "
+        "channel")
+    clamp: bpy.props.BoolProperty(
+        name="Clamp Out-of-Range Texels",
+        description="Clamp NaN, infinite and out-of-range values of the parameter maps into range (and say how many) "
+        "instead of refusing the maps", default=False)
     method: bpy.props.EnumProperty(
         name="Subsurface Method", description="Cycles subsurface method the material is made for",
         items=METHOD_ITEMS, default="BURLEY")
@@ -75,7 +103,8 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
         items=ACCURACY_ITEMS, default="DEFAULT")
     output_dir: bpy.props.StringProperty(
         name="Texture Folder",
-        description="Folder for the texture maps computed from parameter maps ('//' is the .blend's folder)",
+        description="Folder for the texture maps computed from parameter maps ('//' is the .blend's folder); the "
+        "files are named <blend>_<material>_albedo.exr etc., so .blend files sharing a folder keep their own maps",
         default="//skin_maps", subtype="DIR_PATH")
 
     # What the last Apply computed, for the panel.
@@ -91,35 +120,80 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     result_warning: bpy.props.StringProperty(name="Warning", description="Warnings of the last Apply")
 
 
-def _image_parameter_map(image: bpy.types.Image, name: str) -> ParameterMap:
-    """The first channel of a Blender image as an (H, W) float32 array, row 0 at the top."""
-    width, height = image.size
-    if width == 0 or height == 0:
-        raise ValueError(f"{name} map {image.name!r} has no pixels (missing or unreadable file?)")
-    flat = np.empty(width * height * image.channels, dtype=np.float32)
-    image.pixels.foreach_get(flat)
-    pixels = flat.reshape(height, width, image.channels)[::-1, :, 0]
-    return ParameterMap(pixels=np.ascontiguousarray(pixels), normalized=not image.is_float, name=image.name)
+def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str, ParameterMap]:
+    """Parameter maps of a Blender image: ``name``'s map, or the four of a parameter EXR (``name`` None).
+
+    An image from a file is read from that file by the core (``spectral_skin.read_parameter_map``: the CLI's formats
+    and rules; Blender reads an EXR channel named ``melanin`` as zeros); a packed one from its packed bytes, the same
+    way. Only an image Blender made itself (generated, or painted and not saved) is read from Blender's pixels: the
+    first channel of a one-parameter map. Anything else raises ValueError.
+    """
+    what = f"{PARAMETER_INFO[name][2]} map" if name else "Parameter Map"
+    if image.source == "FILE" and image.packed_file is None and not image.is_dirty:
+        path = bpy.path.abspath(image.filepath, library=image.library)
+        if not path or path.startswith("//"):
+            raise ValueError(f"{what} {image.name!r}: its file path {image.filepath!r} is relative to a .blend that is "
+                             "not saved yet: save the .blend or use an absolute path")
+        return read_map_file(os.path.abspath(path), name)
+    if image.source == "FILE" and image.packed_file is not None and not image.is_dirty:
+        suffix = os.path.splitext(image.filepath)[1] or ".exr"
+        with tempfile.TemporaryDirectory(prefix="spectral_skin_") as folder:
+            path = os.path.join(folder, bpy.path.clean_name(image.name) + suffix)
+            with open(path, "wb") as file:
+                file.write(image.packed_file.data)
+            maps = read_map_file(path, name)
+        return {p: ParameterMap(m.pixels, m.normalized, f"{image.name} (packed)") for p, m in maps.items()}
+    if image.source == "GENERATED" or image.is_dirty:
+        if name is None:
+            raise ValueError(f"{what} {image.name!r} is not a file: a four-channel parameter map must be an EXR file")
+        width, height = image.size
+        if width == 0 or height == 0:
+            raise ValueError(f"{what} {image.name!r} has no pixels")
+        flat = np.empty(width * height * image.channels, dtype=np.float32)
+        image.pixels.foreach_get(flat)
+        pixels = flat.reshape(height, width, image.channels)[::-1, :, 0]
+        return {name: ParameterMap(pixels=np.ascontiguousarray(pixels), normalized=not image.is_float,
+                                   name=image.name)}
+    raise ValueError(f"{what} {image.name!r}: a {image.source.lower()} image is not supported; use a single image file "
+                     "(EXR, PNG or TIFF)")
 
 
-def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene) -> SkinSettings:
-    """The portable settings of a material's properties (raises ValueError for unusable images or folders)."""
+def material_maps(material: bpy.types.Material) -> dict[str, ParameterMap]:
+    """The parameter maps set on a material: the four-channel Parameter Map's, then each parameter's own map."""
     props = material.spectral_skin
     maps = {}
+    if props.params_map is not None:
+        maps.update(_image_parameter_maps(props.params_map, None))
     for name in PARAMETERS:
         image = getattr(props, f"{name}_map")
         if image is not None:
-            maps[name] = _image_parameter_map(image, name)
-    output_dir = ""
-    if maps:
-        output_dir = bpy.path.abspath(props.output_dir)
-        if output_dir.startswith("//") or not output_dir:
-            raise ValueError("the texture folder is relative to the .blend, which is not saved yet: "
-                             "save it first or choose an absolute folder")
+            maps.update(_image_parameter_maps(image, name))
+    return maps
+
+
+def texture_folder(props: SpectralSkinSettings) -> str:
+    """The absolute texture folder; ValueError when it would depend on Blender's working folder (an unsaved .blend
+    with a '//' folder, or a relative one)."""
+    folder = props.output_dir.strip()
+    if folder.startswith("//") and not bpy.data.filepath:
+        raise ValueError("the .blend is not saved yet, so its texture folder "
+                         f"'{folder}' has no place: save the .blend first, or choose an absolute Texture Folder")
+    folder = bpy.path.abspath(folder) if folder else ""
+    if not folder or not os.path.isabs(folder):
+        raise ValueError(f"the Texture Folder must be absolute or start with '//' (the .blend's folder); got {folder!r}")
+    return os.path.normpath(folder)
+
+
+def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene) -> SkinSettings:
+    """The portable settings of a material's properties (raises ValueError for unusable images or folders,
+    spectral_skin.SpectralSkinError for files the core cannot read)."""
+    props = material.spectral_skin
+    maps = material_maps(material)
+    output_dir = texture_folder(props) if maps else ""
     return SkinSettings(
         **{name: getattr(props, name) for name in PARAMETERS}, method=props.method, accuracy=props.accuracy, maps=maps,
-        output_dir=output_dir, file_prefix=material.name, scale_length=scene.unit_settings.scale_length,
-        working_space=scene_working_space())
+        clamp=props.clamp, output_dir=output_dir, file_prefix=texture_prefix(bpy.data.filepath, material.name),
+        scale_length=scene.unit_settings.scale_length, working_space=scene_working_space())
 
 
 def store_result(material: bpy.types.Material, plan: dict) -> None:

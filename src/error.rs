@@ -21,6 +21,22 @@ pub enum SkinError {
     /// A file could not be read or written.
     #[error("{path}: {reason}")]
     Io { path: String, reason: String },
+    /// A parameter map holds NaN, infinite or out-of-range texels and clamping is off. The fields let each front
+    /// word its own way to enable clamping (the CLI's `--clamp`, Python's `clamp=True`, the add-on's checkbox).
+    #[error(
+        "{}",
+        bad_texels_message(.parameter, *.min, *.max, [*.nan, *.infinite, *.out_of_range], .first, "enable clamping")
+    )]
+    BadTexels {
+        parameter: String,
+        min: f32,
+        max: f32,
+        nan: usize,
+        infinite: usize,
+        out_of_range: usize,
+        /// The first few bad texels as (x, y), y = 0 at the top row.
+        first: Vec<(usize, usize)>,
+    },
 }
 
 impl SkinError {
@@ -30,6 +46,34 @@ impl SkinError {
 
     pub(crate) fn invalid(name: impl Into<String>, reason: impl Into<String>) -> Self {
         SkinError::Invalid { name: name.into(), reason: reason.into() }
+    }
+}
+
+/// The message of [`SkinError::BadTexels`], with `enable` saying how to enable clamping (e.g. "pass clamp=True").
+fn bad_texels_message(
+    parameter: &str,
+    min: f32,
+    max: f32,
+    [nan, infinite, out_of_range]: [usize; 3],
+    first: &[(usize, usize)],
+    enable: &str,
+) -> String {
+    format!(
+        "invalid {parameter} map: values must be in [{min}, {max}]; found {nan} NaN, {infinite} infinite and \
+         {out_of_range} out-of-range texels, first at (x, y) {first:?}; {enable} to clamp them into range instead"
+    )
+}
+
+impl SkinError {
+    /// The message, with the advice on clamping (for [`SkinError::BadTexels`]) worded for a front: `enable` is how
+    /// to enable clamping there ("pass clamp=True", "use --clamp"). Other errors: their usual message.
+    pub fn with_clamp_advice(&self, enable: &str) -> String {
+        match self {
+            SkinError::BadTexels { parameter, min, max, nan, infinite, out_of_range, first } => {
+                bad_texels_message(parameter, *min, *max, [*nan, *infinite, *out_of_range], first, enable)
+            }
+            other => other.to_string(),
+        }
     }
 }
 

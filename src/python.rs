@@ -3,6 +3,8 @@
 //! lives here; names of outputs, combinations and working spaces come from the core's serde names.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use numpy::ndarray::{Array2, Array3, ArrayView2, Axis, Ix2, Ix3};
@@ -12,7 +14,7 @@ use numpy::{
 };
 use rayon::prelude::*;
 use pyo3::create_exception;
-use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyInterruptedError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
 use serde::Serialize;
@@ -23,7 +25,7 @@ use crate::diffusion::{Combination, Layer, MultipoleTerms};
 use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
 use crate::fit::SubsurfaceMethod;
-use crate::maps::io::{ParamImage, Plane, MAX_TEXELS, PARAM_CHANNELS};
+use crate::maps::io::{read_params, ParamImage, ParamInputs, ParamSource, Plane, MAX_TEXELS, PARAM_CHANNELS};
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{check_planes, compute_maps, MapSettings, SpecularOutput, StrategyChoice};
 use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
@@ -36,8 +38,28 @@ create_exception!(
 );
 
 impl From<SkinError> for PyErr {
+    /// A SpectralSkinError. Bad texels in a parameter map also carry ``bad_texels``: {"parameter", "min", "max",
+    /// "nan", "infinite", "out_of_range", "first"}, so a front can word its own advice (the add-on's checkbox).
     fn from(e: SkinError) -> PyErr {
-        SpectralSkinError::new_err(e.to_string())
+        let err = SpectralSkinError::new_err(e.with_clamp_advice("pass clamp=True"));
+        if let SkinError::BadTexels { parameter, min, max, nan, infinite, out_of_range, first } = e {
+            Python::attach(|py| {
+                let fields = PyDict::new(py);
+                let set = || -> PyResult<()> {
+                    fields.set_item("parameter", parameter)?;
+                    fields.set_item("min", min)?;
+                    fields.set_item("max", max)?;
+                    fields.set_item("nan", nan)?;
+                    fields.set_item("infinite", infinite)?;
+                    fields.set_item("out_of_range", out_of_range)?;
+                    fields.set_item("first", first)?;
+                    err.value(py).setattr("bad_texels", &fields)
+                };
+                // Only the attribute is lost if this fails; the message says it all.
+                let _ = set();
+            });
+        }
+        err
     }
 }
 
@@ -646,15 +668,100 @@ fn rgb_image(py: Python<'_>, height: usize, width: usize, data: Vec<f32>) -> PyR
     Ok(PyArray::from_owned_array(py, Array3::from_shape_vec((height, width, 3), data).map_err(internal)?))
 }
 
-/// The check's message says "enable clamping"; here that is the keyword.
-fn python_clamp_hint(e: SkinError) -> SkinError {
-    match e {
-        SkinError::Invalid { name, reason } => {
-            let reason = reason.replace("enable clamping to clamp", "pass clamp=True to clamp");
-            SkinError::Invalid { name, reason }
+/// `maps(progress=...)`: a Python callable told (texels done, total texels) from the worker threads, about once per
+/// percent (it takes the GIL for each call); returning False cancels. An exception it raises cancels too and is
+/// re-raised by `maps`.
+struct Progress {
+    callback: Py<PyAny>,
+    done: AtomicUsize,
+    reported_percent: AtomicUsize,
+    stopped: AtomicBool,
+    error: Mutex<Option<PyErr>>,
+}
+
+impl Progress {
+    fn new(callback: Py<PyAny>) -> Self {
+        Progress {
+            callback,
+            done: AtomicUsize::new(0),
+            reported_percent: AtomicUsize::new(0),
+            stopped: AtomicBool::new(false),
+            error: Mutex::new(None),
         }
-        other => other,
     }
+
+    fn stopped(&self) -> bool {
+        self.stopped.load(Ordering::Relaxed)
+    }
+
+    /// `increment` more texels are done out of `total` (0 for the first call).
+    fn report(&self, increment: usize, total: usize) {
+        let done = self.done.fetch_add(increment, Ordering::Relaxed) + increment;
+        let percent = done.saturating_mul(100) / total.max(1);
+        if self.stopped() || (increment > 0 && self.reported_percent.fetch_max(percent, Ordering::Relaxed) >= percent) {
+            return;
+        }
+        Python::attach(|py| match self.callback.call1(py, (done, total)) {
+            Ok(answer) => {
+                if answer.bind(py).is_instance_of::<PyBool>() && !answer.bind(py).is_truthy().unwrap_or(true) {
+                    self.stopped.store(true, Ordering::Relaxed);
+                }
+            }
+            Err(e) => {
+                if let Ok(mut slot) = self.error.lock() {
+                    slot.get_or_insert(e);
+                }
+                self.stopped.store(true, Ordering::Relaxed);
+            }
+        });
+    }
+
+    /// Why the work stopped: the callback's exception, or an InterruptedError for a False answer.
+    fn into_error(self) -> PyErr {
+        match self.error.into_inner().ok().flatten() {
+            Some(e) => e,
+            None => PyInterruptedError::new_err("maps: cancelled by the progress callback (it returned False)"),
+        }
+    }
+}
+
+/// Parameter maps read from a file by the core's reader, the CLI's rules (see the stub in `_core.pyi`).
+#[pyfunction]
+#[pyo3(name = "read_parameter_map", signature = (path, name = None))]
+fn read_parameter_map_py<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    name: Option<&str>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let inputs = match name {
+        None => ParamInputs::Multi { path, constants: [None; 4] },
+        Some(name) => {
+            let Some(p) = PARAM_CHANNELS.iter().position(|c| *c == name) else {
+                let expected = PARAM_CHANNELS.join(", ");
+                return Err(invalid(
+                    "name",
+                    format!("expected one of {expected} (or None for the four-channel file); got {name:?}"),
+                ));
+            };
+            ParamInputs::Separate(std::array::from_fn(|k| {
+                if k == p {
+                    ParamSource::File(path.clone())
+                } else {
+                    ParamSource::Constant(0.0)
+                }
+            }))
+        }
+    };
+    let image = detached(py, move || read_params(&inputs))?;
+    let dict = PyDict::new(py);
+    let (height, width) = (image.height, image.width);
+    for (parameter, plane) in PARAM_CHANNELS.iter().zip(image.planes) {
+        if let Plane::Texels(values) = plane {
+            let array = Array2::from_shape_vec((height, width), values).map_err(internal)?;
+            dict.set_item(parameter, PyArray::from_owned_array(py, array))?;
+        }
+    }
+    Ok(dict)
 }
 
 /// Base Color, Subsurface Radius and specular maps from parameter maps (see the stub in `_core.pyi`).
@@ -665,7 +772,7 @@ fn python_clamp_hint(e: SkinError) -> SkinError {
         params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
         method = "burley", exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
         wavelength_placement = None,
-        working_space = "Linear Rec.709", table_resolution = None, table_cache = true
+        working_space = "Linear Rec.709", table_resolution = None, table_cache = true, progress = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -685,8 +792,16 @@ fn maps_py<'py>(
     working_space: &str,
     table_resolution: Option<&Bound<'py, PyAny>>,
     table_cache: bool,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let start = Instant::now();
+    if let Some(callback) = progress.as_ref().filter(|c| !c.is_callable()) {
+        let type_name = callback.get_type().name().map(|n| n.to_string()).unwrap_or_default();
+        return Err(PyTypeError::new_err(format!(
+            "progress must be a callable (done, total) -> bool | None, or None; got {type_name}"
+        )));
+    }
+    let progress = progress.map(|callback| Progress::new(callback.unbind()));
     // Settings first: their errors come before any copy.
     let knobs = Knobs {
         accuracy,
@@ -803,11 +918,24 @@ fn maps_py<'py>(
         specular: Specular,
         report: crate::maps::MapReport,
     }
+    let hook = progress.as_ref();
     let computed = detached(py, move || {
-        let clamped = check_planes(&mut image, clamp).map_err(python_clamp_hint)?;
+        let clamped = check_planes(&mut image, clamp)?;
         let read = start.elapsed().as_secs_f64();
-        let mut result = compute_maps(&image, &settings, None)?;
+        let report = |done: usize, total: usize| {
+            if let Some(h) = hook {
+                h.report(done, total)
+            }
+        };
+        report(0, image.texel_count());
+        if hook.is_some_and(Progress::stopped) {
+            return Ok(None);
+        }
+        let mut result = compute_maps(&image, &settings, hook.map(|_| &report as &(dyn Fn(usize, usize) + Sync)))?;
         drop(image);
+        if hook.is_some_and(Progress::stopped) {
+            return Ok(None);
+        }
         let write = Instant::now();
         let base_color = interleave(width, std::mem::take(&mut result.base_color));
         let radius_mm = interleave(width, std::mem::take(&mut result.radius_mm));
@@ -819,8 +947,11 @@ fn maps_py<'py>(
         report.clamped = clamped;
         report.seconds.read = read;
         report.seconds.write = write.elapsed().as_secs_f64();
-        Ok(Computed { base_color, radius_mm, specular, report })
+        Ok(Some(Computed { base_color, radius_mm, specular, report }))
     })?;
+    let Some(computed) = computed else {
+        return Err(progress.map(Progress::into_error).unwrap_or_else(|| internal("stopped without a progress hook")));
+    };
 
     let dict = PyDict::new(py);
     dict.set_item("base_color", rgb_image(py, height, width, computed.base_color)?)?;
@@ -857,5 +988,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parameter_ranges_py, m)?)?;
     m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
     m.add_function(wrap_pyfunction!(maps_py, m)?)?;
+    m.add_function(wrap_pyfunction!(read_parameter_map_py, m)?)?;
     Ok(())
 }

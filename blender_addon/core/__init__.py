@@ -1,6 +1,6 @@
 """The add-on's portable part: settings and the material plan, computed by spectral_skin. No bpy imports."""
 
-from .plan import make_plan, subsurface_scale, write_textures
+from .plan import describe_error, make_plan, subsurface_scale, texture_prefix, write_textures
 from .settings import (
     ACCURACY_LEVELS,
     DEFAULT_WORKING_SPACE,
@@ -11,6 +11,7 @@ from .settings import (
     ParameterMap,
     SkinSettings,
     check,
+    read_map_file,
 )
 
 __all__ = [
@@ -23,7 +24,10 @@ __all__ = [
     "ParameterMap",
     "SkinSettings",
     "check",
+    "describe_error",
     "make_plan",
+    "read_map_file",
     "subsurface_scale",
+    "texture_prefix",
     "write_textures",
 ]

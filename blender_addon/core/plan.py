@@ -41,12 +41,38 @@ def _rgb(values: Any) -> list[float]:
     return [float(v) for v in values]
 
 
-def make_plan(settings: SkinSettings) -> dict[str, Any]:
-    """Compute everything the material needs; raises ``spectral_skin.SpectralSkinError`` (a ValueError) on bad input."""
+def texture_prefix(blend_path: str, material_name: str) -> str:
+    """The texture files' prefix: ``<blend name>_<material name>``, so that .blend files sharing a texture folder,
+    each with a material of the same name, keep their own maps (just the material's name for an unsaved .blend)."""
+    stem = os.path.splitext(os.path.basename(blend_path))[0]
+    return f"{stem}_{material_name}" if stem else material_name
+
+
+def describe_error(error: Exception) -> str:
+    """An error's message for an artist: bad texels in a parameter map (the core's ``bad_texels``) are described
+    with the panel's words; any other error keeps the core's message (it names the input and its range)."""
+    bad = getattr(error, "bad_texels", None)
+    if not isinstance(bad, dict) or bad.get("parameter") not in PARAMETER_INFO:
+        return str(error)
+    kinds = [f"{bad[key]} {label}" for key, label in (("nan", "NaN"), ("infinite", "infinite"),
+                                                      ("out_of_range", "out of range")) if bad.get(key)]
+    count = sum(int(bad.get(key, 0)) for key in ("nan", "infinite", "out_of_range"))
+    first = ", ".join(f"({x}, {y})" for x, y in bad.get("first", [])[:3])
+    return (f"{PARAMETER_INFO[bad['parameter']][2]} map: {count} texel{'s' if count != 1 else ''} outside "
+            f"{bad['min']:g} to {bad['max']:g} ({', '.join(kinds)}), first at x, y = {first} counted from the top "
+            "left. Tick 'Clamp Out-of-Range Texels' to clamp them into range, or correct the map.")
+
+
+def make_plan(settings: SkinSettings, progress: Any = None) -> dict[str, Any]:
+    """Compute everything the material needs; raises ``spectral_skin.SpectralSkinError`` (a ValueError) on bad input.
+
+    ``progress``: None, or ``progress(done, total)`` told the texels done by the core (see ``spectral_skin.maps``);
+    returning False cancels (InterruptedError).
+    """
     check(settings)
     start = time.perf_counter()
     if settings.maps:
-        plan = _plan_from_maps(settings)
+        plan = _plan_from_maps(settings, progress)
     else:
         plan = _plan_from_constants(settings)
     plan["method"] = settings.method
@@ -101,13 +127,13 @@ def _safe_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "skin"
 
 
-def _plan_from_maps(settings: SkinSettings) -> dict[str, Any]:
+def _plan_from_maps(settings: SkinSettings, progress: Any) -> dict[str, Any]:
     import numpy as np
     import spectral_skin
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
     result = spectral_skin.maps(**inputs, method=METHODS[settings.method], accuracy=ACCURACY_LEVELS[settings.accuracy],
-                                working_space=settings.working_space)
+                                working_space=settings.working_space, clamp=settings.clamp, progress=progress)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)

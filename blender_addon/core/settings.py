@@ -55,6 +55,16 @@ class ParameterMap:
     name: str = ""
 
 
+def read_map_file(path: str, name: str | None = None) -> dict[str, ParameterMap]:
+    """Parameter maps from a file, read by the core with the CLI's rules (``spectral_skin.read_parameter_map``):
+    ``name`` None for the four-channel parameter EXR (channels melanin, melanin_blend, hemoglobin, oiliness), else
+    that parameter's own map (a one-channel EXR of any channel name, or an 8/16-bit greyscale PNG/TIFF mapped onto
+    the parameter's range). Values come back in the parameter's own unit. Raises ``spectral_skin.SpectralSkinError``
+    naming the file and the channels it has."""
+    planes = spectral_skin.read_parameter_map(path, name)
+    return {p: ParameterMap(pixels=pixels, normalized=False, name=path) for p, pixels in planes.items()}
+
+
 @dataclass
 class SkinSettings:
     """Everything the Apply operator needs, read from the material's properties or given by a batch script."""
@@ -68,9 +78,11 @@ class SkinSettings:
     accuracy: str = "DEFAULT"
     # parameter name -> ParameterMap; a parameter with a map ignores its constant.
     maps: dict[str, ParameterMap] = field(default_factory=dict)
+    # Clamp NaN, infinite and out-of-range texels of the maps into range instead of refusing them.
+    clamp: bool = False
     # Absolute folder for the texture maps (needed only when maps are given).
     output_dir: str = ""
-    # Name used for the texture files: <prefix>_albedo.exr etc.
+    # Name used for the texture files: <prefix>_albedo.exr etc. (see plan.texture_prefix).
     file_prefix: str = "skin"
     # Blender's scene.unit_settings.scale_length: metres per scene unit.
     scale_length: float = 1.0

@@ -11,6 +11,7 @@ Functions:
     presets: the named parameter sets.
     layered_reflectance: the layered diffusion solver alone, for checks against other solvers.
     maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
+    read_parameter_map: parameter maps read from an EXR, PNG or TIFF file by the CLI's rules.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received.
@@ -25,6 +26,7 @@ from ._core import (
     parameter_ranges,
     presets,
     profile,
+    read_parameter_map,
 )
 
 __all__ = [
@@ -36,4 +38,5 @@ __all__ = [
     "parameter_ranges",
     "presets",
     "profile",
+    "read_parameter_map",
 ]

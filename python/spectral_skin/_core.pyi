@@ -4,13 +4,17 @@ Units: lengths in mm, coefficients in mm^-1, radial profiles in mm^-2, wavelengt
 except the images of :func:`maps` (float32). Every function releases the GIL while the core computes.
 """
 
-from collections.abc import Iterable, Sequence
+import os
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Literal, TypedDict
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets", "profile"]
+__all__ = [
+    "SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets", "profile",
+    "read_parameter_map",
+]
 
 __version__: str
 
@@ -23,6 +27,7 @@ _WorkingSpace = Literal["Linear Rec.709", "Linear Rec.2020", "ACEScg"]
 _Method = Literal["burley", "random_walk"]
 _AccuracyLevel = Literal["draft", "default", "reference"]
 _WavelengthPlacement = Literal["uniform", "cmf_adapted", "rgb_shortcut"]
+_Parameter = Literal["melanin", "melanin_blend", "hemoglobin", "oiliness"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
 
 class SpectralSkinError(ValueError):
@@ -217,6 +222,7 @@ def maps(
     working_space: _WorkingSpace | str = "Linear Rec.709",
     table_resolution: tuple[int, int, int] | None = None,
     table_cache: bool = True,
+    progress: Callable[[int, int], bool | None] | None = None,
 ) -> _Maps:
     """Principled BSDF texture maps (Base Color, Subsurface Radius, specular) from per-texel parameter maps.
 
@@ -255,6 +261,11 @@ def maps(
             always builds it afresh.
         table_resolution: nodes per axis of the lookup table, (melanin, melanin_blend, hemoglobin), each >= 2;
             None: the core's default (chosen for the error bound above; the report names it). Used only by "table".
+        progress: None, or a callable ``progress(done, total)`` told how many texels of ``total`` are done: once
+            with 0 before the computation, then about once per percent as rows are filled (from the core's worker
+            threads, taking the GIL for each call; a "constant" map has no rows to report). Returning False
+            cancels: the rows being filled are finished, nothing more is computed or returned, and InterruptedError
+            is raised. An exception raised by the callback cancels the same way and is re-raised.
 
     Returns:
         A dict:
@@ -279,5 +290,31 @@ def maps(
             texels; only constants and no array; a parameter given neither by params nor by its keyword; an unknown
             method or working space; a wavelength step out of range; a table resolution below 2 nodes per axis.
         TypeError: an input that is not a numpy array of float32 or float64 (or, for the keywords, a number): e.g. a
-            list, an integer array, a string, a bool.
+            list, an integer array, a string, a bool; a progress that is not callable.
+        InterruptedError: the progress callback returned False.
+
+    A SpectralSkinError for NaN, infinite or out-of-range texels (clamp=False) also has an attribute
+    ``bad_texels``: {"parameter", "min", "max", "nan", "infinite", "out_of_range", "first": [(x, y), ...]}.
+    """
+
+def read_parameter_map(path: str | os.PathLike[str], name: _Parameter | str | None = None) -> dict[str, _Float32Array]:
+    """Parameter maps read from a file with the core's reader: the formats and rules of ``spectral-skin maps``.
+
+    Arguments:
+        path: the file.
+        name: None for the four-channel parameter EXR (as ``spectral-skin maps --params``; ``spectral-skin
+            example`` writes one): channels named melanin, melanin_blend, hemoglobin and oiliness, all required.
+            A parameter name ("melanin", "melanin_blend", "hemoglobin" or "oiliness") for that parameter's own map
+            (as ``--melanin`` etc.): an EXR with exactly one channel (any name) or with a channel named like the
+            parameter, whose values are the parameter itself; or an 8/16-bit greyscale PNG or TIFF, whose 0..1
+            values map linearly onto the parameter's range (:func:`parameter_ranges`).
+
+    Returns:
+        {parameter name: float32 (H, W) array, row 0 at the top}: the four parameters, or the one named. Values are
+        not range-checked (:func:`maps` does that).
+
+    Raises:
+        SpectralSkinError: a missing or unreadable file, an unsupported format, a missing channel or a multi-channel
+            file without the parameter's channel (the message names the file and the channels found), an unknown
+            name.
     """

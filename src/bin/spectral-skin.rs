@@ -368,7 +368,7 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         bar.inc(done as u64);
     };
     let report = spectral_skin::maps::run_maps(&inputs, &args.out, &settings, exr, Some(&progress))
-        .map_err(|e| e.to_string().replace("enable clamping to clamp", "use --clamp to clamp"))?;
+        .map_err(|e| e.with_clamp_advice("use --clamp"))?;
     bar.finish_and_clear();
     println!(
         "{}x{} texels, strategy {}, {:.2} s (read {:.2}, compute {:.2}, write {:.2}); wrote {}",

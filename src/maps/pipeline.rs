@@ -172,13 +172,15 @@ pub fn check_planes(image: &mut ParamImage, clamp: bool) -> Result<Vec<BadTexels
         }
         if bad.nan + bad.infinite + bad.out_of_range > 0 {
             if !clamp {
-                return Err(SkinError::invalid(
-                    format!("{} map", bad.parameter),
-                    format!(
-                        "values must be in [{lo}, {hi}]; found {} NaN, {} infinite and {} out-of-range texels, first at (x, y) {:?}; enable clamping to clamp them into range instead",
-                        bad.nan, bad.infinite, bad.out_of_range, bad.first
-                    ),
-                ));
+                return Err(SkinError::BadTexels {
+                    parameter: bad.parameter,
+                    min: lo,
+                    max: hi,
+                    nan: bad.nan,
+                    infinite: bad.infinite,
+                    out_of_range: bad.out_of_range,
+                    first: bad.first,
+                });
             }
             report.push(bad);
         }

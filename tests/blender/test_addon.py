@@ -170,7 +170,8 @@ def test_batch_saves_relative_texture_paths(addon, tmp_path):
     apply_to_materials(str(source), ["Skin"], settings, str(out))
     bpy.ops.wm.open_mainfile(filepath=str(out))
     paths = sorted(image.filepath for image in bpy.data.images)
-    assert paths == ["//../skin_maps/Skin_albedo.exr", "//../skin_maps/Skin_radius.exr"]
+    # Named after the input .blend and the material, next to the input .blend.
+    assert paths == ["//../skin_maps/in_Skin_albedo.exr", "//../skin_maps/in_Skin_radius.exr"]
     assert len(addon_nodes.tagged_nodes(bpy.data.materials["Skin"].node_tree, "principled")) == 1
 
 

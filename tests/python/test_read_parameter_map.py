@@ -1,0 +1,109 @@
+"""spectral_skin.read_parameter_map: parameter files read by the core's reader (the CLI's rules), checked against
+files written by OpenImageIO (an independent EXR/PNG writer); and maps(progress=...)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import spectral_skin
+from spectral_skin import SpectralSkinError
+
+oiio = pytest.importorskip("OpenImageIO")
+
+PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
+
+
+def write(path: Path, pixels: np.ndarray, channels: tuple[str, ...], fmt: str = "float") -> None:
+    data = np.ascontiguousarray(pixels.reshape(pixels.shape[0], pixels.shape[1], -1))
+    spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], fmt)
+    spec.channelnames = channels
+    out = oiio.ImageOutput.create(str(path))
+    assert out is not None, oiio.geterror()
+    assert out.open(str(path), spec), out.geterror()
+    assert out.write_image(data), out.geterror()
+    out.close()
+
+
+def params(height: int = 5, width: int = 7, seed: int = 1) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    highs = np.array([spectral_skin.parameter_ranges()[p][1] for p in PARAMETERS], dtype=np.float32)
+    return (rng.random((height, width, 4), dtype=np.float32) * highs).astype(np.float32)
+
+
+def test_four_channel_exr(tmp_path: Path) -> None:
+    values = params()
+    path = tmp_path / "face.exr"
+    write(path, values, PARAMETERS)
+    planes = spectral_skin.read_parameter_map(path)
+    assert sorted(planes) == sorted(PARAMETERS)
+    for c, name in enumerate(PARAMETERS):
+        assert planes[name].dtype == np.float32 and planes[name].shape == (5, 7)
+        np.testing.assert_array_equal(planes[name], values[:, :, c])  # row 0 at the top, as written
+
+
+def test_one_channel_exr_with_any_name(tmp_path: Path) -> None:
+    values = params()[:, :, 2]
+    for channel in ("hemoglobin", "Y", "blood"):
+        path = tmp_path / f"{channel}.exr"
+        write(path, values, (channel,))
+        planes = spectral_skin.read_parameter_map(str(path), "hemoglobin")
+        assert list(planes) == ["hemoglobin"]
+        np.testing.assert_array_equal(planes["hemoglobin"], values)
+
+
+def test_named_channel_of_the_four_channel_file(tmp_path: Path) -> None:
+    values = params()
+    path = tmp_path / "face.exr"
+    write(path, values, PARAMETERS)
+    planes = spectral_skin.read_parameter_map(path, "melanin_blend")
+    np.testing.assert_array_equal(planes["melanin_blend"], values[:, :, 1])
+
+
+def test_png_maps_onto_the_range(tmp_path: Path) -> None:
+    grey = np.array([[0, 51], [204, 255]], dtype=np.uint8)
+    path = tmp_path / "melanin.png"
+    write(path, grey, ("Y",), "uint8")
+    low, high = spectral_skin.parameter_ranges()["melanin"]
+    planes = spectral_skin.read_parameter_map(path, "melanin")
+    np.testing.assert_allclose(planes["melanin"], low + (high - low) * grey / 255.0, rtol=1e-6)
+
+
+def test_errors_name_the_file_and_channels(tmp_path: Path) -> None:
+    rgb = tmp_path / "rgb.exr"
+    write(rgb, params()[:, :, :3], ("R", "G", "B"))
+    with pytest.raises(SpectralSkinError, match=r"rgb\.exr.*missing channels melanin.*found channels: [RGB], [RGB], [RGB]"):
+        spectral_skin.read_parameter_map(rgb)
+    with pytest.raises(SpectralSkinError, match=r"melanin map.*rgb\.exr.*channel named melanin.*found channels"):
+        spectral_skin.read_parameter_map(rgb, "melanin")
+    with pytest.raises(SpectralSkinError, match=r"missing\.exr"):
+        spectral_skin.read_parameter_map(tmp_path / "missing.exr", "melanin")
+    with pytest.raises(SpectralSkinError, match=r'name.*melanin, melanin_blend.*"blood"'):
+        spectral_skin.read_parameter_map(rgb, "blood")
+
+
+def test_bad_texels_error_is_structured() -> None:
+    values = params(4, 4)
+    values[1, 2, 0] = 0.9
+    with pytest.raises(SpectralSkinError, match="clamp=True") as info:
+        spectral_skin.maps(values)
+    bad = info.value.bad_texels  # type: ignore[attr-defined]
+    assert bad["parameter"] == "melanin" and bad["out_of_range"] == 1 and bad["nan"] == 0
+    assert bad["first"] == [(2, 1)] and (bad["min"], bad["max"]) == (0.0, 0.5)
+
+
+def test_progress_reports_and_cancels() -> None:
+    values = params(64, 48, seed=3)  # distinct texels: a table lookup, filled row by row
+    calls: list[tuple[int, int]] = []
+    spectral_skin.maps(values, progress=lambda done, total: calls.append((done, total)))
+    total = 64 * 48
+    assert calls[0] == (0, total) and (total, total) in calls  # the threads may call slightly out of order
+    assert all(t == total and 0 <= d <= total for d, t in calls) and 3 <= len(calls) <= 102  # about once a percent
+    with pytest.raises(InterruptedError, match="cancelled"):
+        spectral_skin.maps(values, progress=lambda done, total: done == 0)  # go on at 0, cancel at the first row
+    with pytest.raises(ZeroDivisionError):
+        spectral_skin.maps(values, progress=lambda done, total: 1 / 0)
+    with pytest.raises(TypeError, match="progress must be a callable"):
+        spectral_skin.maps(values, progress=3)  # type: ignore[arg-type]
