@@ -254,7 +254,7 @@ def test_error_class_is_exported():
     assert spectral_skin.SpectralSkinError is spectral_skin._core.SpectralSkinError
     assert set(spectral_skin.__all__) == {
         "SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets",
-        "profile", "read_parameter_map"
+        "profile", "read_parameter_map", "blender_targets"
     }
 
 
