@@ -94,7 +94,7 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     for name in material_names:
         material_settings = settings.replace(
             file_prefix=core.texture_prefix(blend_path, name), output_dir=output_dir, scale_length=scene.unit_settings.scale_length,
-            working_space=nodes.scene_working_space())
+            working_space=nodes.scene_working_space(), **nodes.scene_target(scene))
         plans[name] = core.make_plan(material_settings)
     for plan in plans.values():
         core.write_textures(plan)
@@ -263,7 +263,8 @@ def _apply_main(argv: list[str]) -> int:
     parser.add_argument("--params-map", help="four-channel parameter EXR (channels melanin, melanin_blend, hemoglobin, "
                         "oiliness); a parameter's own map replaces its channel")
     parser.add_argument("--clamp", action="store_true", help="clamp out-of-range texels of the maps into range")
-    parser.add_argument("--method", choices=["BURLEY", "RANDOM_WALK"], default="BURLEY")
+    parser.add_argument("--method", choices=[m["blender_id"] for m in core.methods(bpy.app.version)], default="BURLEY",
+                        help="subsurface method (those of this Blender); the mapping follows the scene's engine")
     parser.add_argument("--accuracy", choices=list(core.ACCURACY_LEVELS), default="DEFAULT",
                         help="accuracy level of the spectral computation")
     parser.add_argument("--out-dir", default="", help="texture folder ('//' = next to the input .blend)")

@@ -33,6 +33,18 @@ def scene_working_space() -> str:
     return str(getattr(colorspace, "working_space", "") or "Linear Rec.709")
 
 
+def scene_target(scene: bpy.types.Scene) -> dict[str, str]:
+    """The target of the running Blender and the scene's render engine: {"blender": "5.0", "engine": "cycles" |
+    "eevee"}, from the core's table. ValueError for an engine the table does not know (Workbench)."""
+    from .core import engine_name, version_text
+
+    engine = engine_name(bpy.app.version, scene.render.engine)
+    if engine is None:
+        raise ValueError(f"the scene renders with {scene.render.engine}, which shows no subsurface scattering: "
+                         "choose Cycles or EEVEE as the render engine, then apply")
+    return {"blender": version_text(bpy.app.version), "engine": engine}
+
+
 def tagged_nodes(tree: bpy.types.NodeTree, role: str | None = None) -> list[bpy.types.Node]:
     """Nodes the add-on created (of one role, or all)."""
     return [n for n in tree.nodes if TAG in n and (role is None or n[TAG] == role)]

@@ -15,7 +15,7 @@ import spectral_skin
 
 from . import nodes, props
 from .core import SkinSettings, describe_error, make_plan, write_textures
-from .nodes import scene_working_space
+from .nodes import scene_target, scene_working_space
 
 ERRORS = (spectral_skin.SpectralSkinError, ValueError, OSError)
 
@@ -25,9 +25,10 @@ def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
 
     Raises spectral_skin.SpectralSkinError / ValueError for bad settings and OSError when a map cannot be written;
     the material and existing files are then unchanged. The plan is computed in the scene's working space
-    (:func:`scene_working_space`), whatever ``settings.working_space`` says.
+    (:func:`scene_working_space`) and for the running Blender and the scene's engine (:func:`scene_target`), whatever
+    ``settings`` says.
     """
-    plan = compute_plan(settings)
+    plan = compute_plan(settings.replace(**scene_target(bpy.context.scene)))
     finish_apply(material, plan)
     return plan
 

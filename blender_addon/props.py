@@ -10,7 +10,8 @@ import numpy as np
 import spectral_skin
 
 from .core import PARAMETER_INFO, PARAMETERS, ParameterMap, SkinSettings, read_map_file, texture_prefix
-from .nodes import scene_working_space
+from .core import methods as core_methods
+from .nodes import scene_target, scene_working_space
 
 _PRESETS = spectral_skin.presets()
 _DEFAULT_PRESET = "caucasian" if "caucasian" in _PRESETS else next(iter(_PRESETS))
@@ -21,11 +22,25 @@ PRESET_ITEMS = [("CUSTOM", "Custom", "Parameters as set below")] + [
     for name, p in _PRESETS.items()
 ]
 
+# What each method does, for the menu's tooltips (the methods themselves, and which this Blender offers, come from the
+# core's target table: core/targets.py).
+_METHOD_TIPS = {
+    "burley": "Christensen-Burley profile: Base Color is exactly the skin's total diffuse reflectance; the fastest to "
+    "render (EEVEE renders every method this way)",
+    "random_walk": "Volumetric random walk: Base Color and Radius fitted so the walk reproduces the skin's "
+    "reflectance; far more samples for the same noise",
+    "random_walk_legacy": "The random walk of Blender before 5.2, fitted as such",
+    "random_walk_skin": "Blender's random walk variant for skin: fitted so a flat slab has the skin's reflectance",
+}
+
+# Labels as Blender's own menu spells them.
+_BLENDER_LABELS = {i.identifier: i.name
+                   for i in bpy.types.ShaderNodeBsdfPrincipled.bl_rna.properties["subsurface_method"].enum_items}
+
 METHOD_ITEMS = [
-    ("BURLEY", "Christensen-Burley",
-     "Cycles' Christensen-Burley profile: Base Color is exactly the skin's total diffuse reflectance"),
-    ("RANDOM_WALK", "Random Walk",
-     "Cycles' volumetric random walk: Base Color and Radius are fitted so the walk reproduces the skin's reflectance"),
+    (m["blender_id"], _BLENDER_LABELS.get(m["blender_id"], m["name"]),
+     _METHOD_TIPS.get(m["name"], m["name"]) + ("" if m["tested"] else " (not tested in this Blender)"))
+    for m in core_methods(bpy.app.version)
 ]
 
 ACCURACY_ITEMS = [
@@ -96,7 +111,9 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
         description="Clamp NaN, infinite and out-of-range values of the parameter maps into range (and say how many) "
         "instead of refusing the maps", default=False)
     method: bpy.props.EnumProperty(
-        name="Subsurface Method", description="Cycles subsurface method the material is made for",
+        name="Subsurface Method",
+        description="Subsurface method the material is made for (the methods this Blender has); the mapping also "
+        "follows the scene's render engine",
         items=METHOD_ITEMS, default="BURLEY")
     accuracy: bpy.props.EnumProperty(
         name="Accuracy", description="Accuracy of the spectral computation (docs/accuracy-vs-time.md)",
@@ -118,6 +135,8 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     result_computed: bpy.props.StringProperty(name="Computed", description="What was computed")
     result_seconds: bpy.props.FloatProperty(name="Seconds", description="Time the computation took, seconds")
     result_warning: bpy.props.StringProperty(name="Warning", description="Warnings of the last Apply")
+    result_target: bpy.props.StringProperty(
+        name="Target", description="The Blender version and render engine the last Apply computed for")
 
 
 def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str, ParameterMap]:
@@ -193,7 +212,7 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
     return SkinSettings(
         **{name: getattr(props, name) for name in PARAMETERS}, method=props.method, accuracy=props.accuracy, maps=maps,
         clamp=props.clamp, output_dir=output_dir, file_prefix=texture_prefix(bpy.data.filepath, material.name),
-        scale_length=scene.unit_settings.scale_length, working_space=scene_working_space())
+        scale_length=scene.unit_settings.scale_length, working_space=scene_working_space(), **scene_target(scene))
 
 
 def store_result(material: bpy.types.Material, plan: dict) -> None:
@@ -205,6 +224,8 @@ def store_result(material: bpy.types.Material, plan: dict) -> None:
     props.result_computed = summary["computed"]
     props.result_seconds = summary["seconds"]
     props.result_warning = "; ".join(summary["warnings"])
+    target = plan["target"]
+    props.result_target = f"Blender {target['blender']}, {target['engine'].upper()}"
 
 
 classes = (SpectralSkinSettings,)

@@ -1,10 +1,10 @@
 """The add-on's portable part: settings and the material plan, computed by spectral_skin. No bpy imports."""
 
 from .plan import describe_error, make_plan, subsurface_scale, texture_prefix, write_textures
+from .targets import engine_name, method_name, methods, version_text
 from .settings import (
     ACCURACY_LEVELS,
     DEFAULT_WORKING_SPACE,
-    METHODS,
     PARAMETER_INFO,
     PARAMETERS,
     WORKING_SPACES,
@@ -17,7 +17,6 @@ from .settings import (
 __all__ = [
     "ACCURACY_LEVELS",
     "DEFAULT_WORKING_SPACE",
-    "METHODS",
     "PARAMETERS",
     "PARAMETER_INFO",
     "WORKING_SPACES",
@@ -25,9 +24,13 @@ __all__ = [
     "SkinSettings",
     "check",
     "describe_error",
+    "engine_name",
     "make_plan",
+    "method_name",
+    "methods",
     "read_map_file",
     "subsurface_scale",
     "texture_prefix",
+    "version_text",
     "write_textures",
 ]

@@ -2,7 +2,8 @@
 
 :func:`make_plan` returns a plain dict, the "material plan":
 
-- ``method``: Blender's subsurface method, "BURLEY" or "RANDOM_WALK";
+- ``method``: Blender's subsurface method id ("BURLEY", "RANDOM_WALK", ...: those the target's Blender offers);
+- ``target``: what the core computed for, {"blender": "5.0", "engine": "cycles" | "eevee", "tested": bool};
 - ``working_space``: the scene-linear working space of ``base_color`` and of the albedo texture (the settings');
 - ``base_color``: Principled Base Color, linear RGB in ``working_space``, or None when the albedo texture supplies it;
 - ``radius``: Principled Subsurface Radius (the core's radius in mm), or None when the radius texture supplies it;
@@ -25,7 +26,8 @@ import re
 import time
 from typing import Any
 
-from .settings import ACCURACY_LEVELS, METHODS, PARAMETER_INFO, PARAMETERS, SkinSettings, check
+from .settings import ACCURACY_LEVELS, PARAMETER_INFO, PARAMETERS, SkinSettings, check
+from .targets import method_name
 
 METRES_PER_MM = 1e-3
 
@@ -78,6 +80,12 @@ def make_plan(settings: SkinSettings, progress: Any = None) -> dict[str, Any]:
     plan["method"] = settings.method
     plan["working_space"] = settings.working_space
     plan["scale"] = subsurface_scale(settings.scale_length)
+    target = plan["target"]
+    plan["summary"]["computed"] += f" for Blender {target['blender']} {target['engine'].upper()}"
+    if not target["tested"]:
+        plan["summary"]["warnings"].append(
+            f"Blender {target['blender']} is newer than the versions Spectral Skin was tested with: it uses the "
+            "newest known behaviour")
     plan["summary"]["seconds"] = time.perf_counter() - start
     return plan
 
@@ -87,8 +95,14 @@ def _plan_from_constants(settings: SkinSettings) -> dict[str, Any]:
 
     c = settings.constants()
     ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"],
-                                accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space)
-    method = ev["methods"][METHODS[settings.method]]
+                                accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
+                                blender=settings.blender, engine=settings.engine)
+    name = method_name(settings.method)
+    if name not in ev["methods"]:
+        raise spectral_skin.SpectralSkinError(
+            f"Blender {ev['target']['blender']} has no subsurface method {settings.method}; it offers "
+            f"{', '.join(ev['methods'])}")
+    method = ev["methods"][name]
     specular = ev["specular"]
     base_color = _rgb(method["base_color"])
     radius_mm = _rgb(method["subsurface_radius_mm"])
@@ -99,6 +113,7 @@ def _plan_from_constants(settings: SkinSettings) -> dict[str, Any]:
         "subsurface_ior": float(specular["ior"]),
         "specular_ior_level": float(specular["specular_ior_level"]),
         "roughness": float(specular["roughness"]),
+        "target": dict(ev["target"]),
         "textures": {},
         "images": {},
         "summary": {
@@ -132,8 +147,10 @@ def _plan_from_maps(settings: SkinSettings, progress: Any) -> dict[str, Any]:
     import spectral_skin
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
-    result = spectral_skin.maps(**inputs, method=METHODS[settings.method], accuracy=ACCURACY_LEVELS[settings.accuracy],
-                                working_space=settings.working_space, clamp=settings.clamp, progress=progress)
+    result = spectral_skin.maps(**inputs, method=method_name(settings.method),
+                                accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
+                                clamp=settings.clamp, progress=progress, blender=settings.blender,
+                                engine=settings.engine)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)
@@ -167,6 +184,7 @@ def _plan_from_maps(settings: SkinSettings, progress: Any) -> dict[str, Any]:
         "subsurface_ior": ior,
         "specular_ior_level": specular_ior_level,
         "roughness": roughness,
+        "target": dict(report["target"]),
         "textures": {kind: os.path.join(folder, f"{prefix}_{kind}.exr") for kind in images},
         "images": images,
         "summary": {

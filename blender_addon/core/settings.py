@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 
 import spectral_skin
 
+from .targets import method_name
+
 PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
 
 # Blender 5.0's scene-linear working spaces (``bpy.data.colorspace.working_space``), which are also the names of
@@ -21,8 +23,6 @@ DEFAULT_WORKING_SPACE = "Linear Rec.709"
 # The core's named accuracy levels (docs/accuracy-vs-time.md): Blender's enum identifier -> the core's name.
 ACCURACY_LEVELS = {"DRAFT": "draft", "DEFAULT": "default", "REFERENCE": "reference"}
 
-# Subsurface methods: Blender's enum identifier -> the core's method name.
-METHODS = {"BURLEY": "burley", "RANDOM_WALK": "random_walk"}
 
 # The parameters' ranges, labels and meanings, for the UI (slider limits and tooltips) and for scaling 8/16-bit
 # parameter images onto the range (as `spectral-skin maps` does). The core validates every value itself; these
@@ -73,7 +73,12 @@ class SkinSettings:
     melanin_blend: float = 0.7
     hemoglobin: float = 0.005
     oiliness: float = 0.3
+    # Principled subsurface_method id (the methods the Blender version offers: core/targets.py).
     method: str = "BURLEY"
+    # The target: Blender version "MAJOR.MINOR" (None: the core's current release) and engine ("cycles", "eevee").
+    # In Blender both come from the running Blender and the scene (bpy glue).
+    blender: str | None = None
+    engine: str = "cycles"
     # Accuracy level of the spectral computation (a key of ACCURACY_LEVELS).
     accuracy: str = "DEFAULT"
     # parameter name -> ParameterMap; a parameter with a map ignores its constant.
@@ -116,9 +121,7 @@ def check(settings: SkinSettings) -> None:
     """Raise ``spectral_skin.SpectralSkinError`` (a ValueError) for settings Blender would reject."""
     import spectral_skin
 
-    if settings.method not in METHODS:
-        raise spectral_skin.SpectralSkinError(
-            f"subsurface method must be one of {', '.join(METHODS)}; got {settings.method!r}")
+    method_name(settings.method)  # raises for an unknown method; the core checks the version offers it
     if settings.accuracy not in ACCURACY_LEVELS:
         raise spectral_skin.SpectralSkinError(
             f"accuracy must be one of {', '.join(ACCURACY_LEVELS)}; got {settings.accuracy!r}")

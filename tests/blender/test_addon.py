@@ -58,10 +58,11 @@ def test_register_unregister_leaves_no_trace(addon):
 
 
 def test_apply_preset_sets_principled_from_core(addon):
+    bpy.context.scene.render.engine = "CYCLES"
     material = bpy.data.materials.new("Skin")
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
     node = _principled(material)
-    expected = spectral_skin.evaluate(preset="caucasian")
+    expected = spectral_skin.evaluate(preset="caucasian", blender=bpy.app.version)
     burley = expected["methods"]["burley"]
     np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], burley["base_color"], rtol=1e-6)
     scale_length = bpy.context.scene.unit_settings.scale_length
@@ -88,6 +89,7 @@ def test_scale_follows_scene_unit_scale(addon):
 
 
 def test_reapply_updates_own_nodes_and_leaves_user_nodes(addon):
+    bpy.context.scene.render.engine = "CYCLES"
     material = bpy.data.materials.new("Skin")
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
     user_node = material.node_tree.nodes.new("ShaderNodeRGB")
@@ -103,7 +105,7 @@ def test_reapply_updates_own_nodes_and_leaves_user_nodes(addon):
 
     assert len(material.node_tree.nodes) == count
     node = _principled(material)
-    expected = spectral_skin.evaluate(preset="african")["methods"]["random_walk"]
+    expected = spectral_skin.evaluate(preset="african", blender=bpy.app.version)["methods"]["random_walk"]
     np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], expected["base_color"], rtol=1e-6)
     assert node.subsurface_method == "RANDOM_WALK"
     assert tuple(material.node_tree.nodes["UserColour"].outputs[0].default_value) == pytest.approx((0.1, 0.2, 0.3, 1.0))
@@ -213,7 +215,8 @@ def test_accuracy_level_reaches_the_core(addon):
     material = bpy.data.materials.new("Skin")
     material.spectral_skin.accuracy = "DRAFT"
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
-    draft = spectral_skin.evaluate(preset="caucasian", accuracy="draft")["methods"]["burley"]
+    draft = spectral_skin.evaluate(preset="caucasian", accuracy="draft", blender=bpy.app.version,
+                                   engine="eevee")["methods"]["burley"]  # the factory scene renders with EEVEE
     node = _principled(material)
     np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], draft["base_color"], rtol=1e-6)
     assert "21 wavelengths" in material.spectral_skin.result_computed

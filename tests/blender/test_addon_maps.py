@@ -35,6 +35,11 @@ CLI = REPO / "target" / "release" / "spectral-skin"
 PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
 
 
+def reference_maps(*args, **kwargs):
+    """``spectral_skin.maps`` for this Blender and Cycles (the scenes of these tests)."""
+    return spectral_skin.maps(*args, blender=bpy.app.version, engine="cycles", **kwargs)
+
+
 def write_channels(path: pathlib.Path, pixels: np.ndarray, channels: tuple[str, ...]) -> None:
     data = np.ascontiguousarray(pixels.reshape(pixels.shape[0], pixels.shape[1], -1), dtype=np.float32)
     spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], "float")
@@ -62,6 +67,8 @@ def face(height: int = 6, width: int = 8) -> np.ndarray:
 
 
 def saved_material(tmp_path: pathlib.Path, blend: str = "scene.blend", name: str = "Skin"):
+    """A material in a scene rendered with Cycles (the references below are Cycles'), saved as ``blend``."""
+    bpy.context.scene.render.engine = "CYCLES"
     material = bpy.data.materials.new(name)
     material.use_fake_user = True
     bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / blend))
@@ -83,7 +90,7 @@ def test_four_channel_parameter_exr_gives_the_cli_material(addon, tmp_path):
     albedo, radius = written(tmp_path, "scene_Skin")
     # Reference: OpenImageIO's reading of the same file, through the core's maps().
     channels = read_channels(path)
-    reference = spectral_skin.maps(np.stack([channels[p] for p in PARAMETERS], axis=2))
+    reference = reference_maps(np.stack([channels[p] for p in PARAMETERS], axis=2))
     np.testing.assert_array_equal(albedo, reference["base_color"])
     np.testing.assert_array_equal(radius, reference["radius_mm"])
     assert albedo.std(axis=(0, 1)).min() > 1e-3  # the map shows through: not one colour
@@ -104,7 +111,7 @@ def test_one_channel_exr_named_melanin(addon, tmp_path):
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
     albedo, _ = written(tmp_path, "scene_Skin")
     asian = spectral_skin.presets()["asian"]
-    reference = spectral_skin.maps(melanin=read_channels(path)["melanin"], melanin_blend=asian["melanin_blend"],
+    reference = reference_maps(melanin=read_channels(path)["melanin"], melanin_blend=asian["melanin_blend"],
                                    hemoglobin=asian["hemoglobin"], oiliness=asian["oiliness"])
     np.testing.assert_array_equal(albedo, reference["base_color"])
     # Not the whitish material of melanin 0 everywhere.
@@ -123,7 +130,7 @@ def test_packed_parameter_map_is_read_from_its_bytes(addon, tmp_path):
     material.spectral_skin.params_map = image
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
     albedo, _ = written(tmp_path, "scene_Skin")
-    np.testing.assert_array_equal(albedo, spectral_skin.maps(params)["base_color"])
+    np.testing.assert_array_equal(albedo, reference_maps(params)["base_color"])
 
 
 def test_unusable_parameter_file_is_a_clear_error(addon, tmp_path):
@@ -218,7 +225,7 @@ def test_out_of_range_texels_offer_the_clamp_checkbox(addon, tmp_path):
     clamped[1, 2] = 0.5
     albedo, _ = written(tmp_path, "scene_Skin")
     presets = spectral_skin.presets()["caucasian"]
-    reference = spectral_skin.maps(melanin=clamped, melanin_blend=presets["melanin_blend"],
+    reference = reference_maps(melanin=clamped, melanin_blend=presets["melanin_blend"],
                                    hemoglobin=presets["hemoglobin"], oiliness=presets["oiliness"])
     np.testing.assert_array_equal(albedo, reference["base_color"])
 

@@ -1,0 +1,114 @@
+"""The add-on computes for the Blender it runs in and the scene's render engine (the core's target table): EEVEE
+scenes get the radius compensated for EEVEE's Burley, the method menu is this Blender's, other engines are refused.
+
+Headless, no rendering. The EEVEE reference is Christensen & Burley 2015's s(A) written out here, applied to the
+Cycles radius. Run: .venv/bin/python -m pytest tests/blender/test_addon_targets.py
+"""
+
+from __future__ import annotations
+
+import pathlib
+import sys
+
+import pytest
+
+bpy = pytest.importorskip("bpy")
+pytest.importorskip("OpenImageIO")
+
+import numpy as np  # noqa: E402
+import spectral_skin  # noqa: E402
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+
+from blender_addon import nodes as addon_nodes  # noqa: E402
+from conftest import read_exr  # noqa: E402
+
+
+def _eevee_id() -> str:
+    """This Blender's EEVEE engine id, as Blender lists it (BLENDER_EEVEE_NEXT in 4.2-4.5, BLENDER_EEVEE from 5.0)."""
+    ids = [i.identifier for i in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items]
+    return [i for i in ids if "EEVEE" in i][-1]
+
+
+def _s(albedo: np.ndarray) -> np.ndarray:
+    """EEVEE divides Radius x Scale by s(A_n), A_n = A / max(A) per channel (Christensen & Burley 2015, eq. 6)."""
+    a = albedo / albedo.max(axis=-1, keepdims=True)
+    return 1.9 - a + 3.5 * (a - 0.8) ** 2
+
+
+def _radius_mm(node) -> np.ndarray:
+    scale_mm = node.inputs["Subsurface Scale"].default_value * bpy.context.scene.unit_settings.scale_length / 1e-3
+    return np.array(node.inputs["Subsurface Radius"].default_value) * scale_mm
+
+
+@pytest.mark.parametrize("preset", ["caucasian", "african"])
+def test_eevee_scene_gets_the_compensated_radius(addon, preset):
+    material = bpy.data.materials.new("Skin")
+    material.spectral_skin.preset = preset.upper()
+    bpy.context.scene.render.engine = "CYCLES"
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    node = addon_nodes.tagged_nodes(material.node_tree, "principled")[0]
+    cycles_albedo = np.array(node.inputs["Base Color"].default_value[:3])
+    cycles_radius = _radius_mm(node)
+    assert "CYCLES" in material.spectral_skin.result_target
+
+    bpy.context.scene.render.engine = _eevee_id()
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    assert "EEVEE" in material.spectral_skin.result_target
+    np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], cycles_albedo, rtol=1e-6)
+    np.testing.assert_allclose(_radius_mm(node), cycles_radius * _s(cycles_albedo), rtol=1e-5)
+    assert np.max(np.abs(_s(cycles_albedo) - 1.0)) > 0.05  # the compensation is not a no-op for this skin
+
+
+def test_eevee_radius_map_is_compensated_per_texel(addon, tmp_path):
+    melanin = np.array([[0.01, 0.1], [0.25, 0.45]], dtype=np.float32)
+    path = tmp_path / "melanin.exr"
+    import OpenImageIO as oiio
+
+    spec = oiio.ImageSpec(2, 2, 1, "float")
+    spec.channelnames = ("melanin",)
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), spec) and out.write_image(melanin)
+    out.close()
+    material = bpy.data.materials.new("Skin")
+    material.spectral_skin.melanin_map = bpy.data.images.load(str(path))
+    material.spectral_skin.output_dir = str(tmp_path / "maps")
+    radius = {}
+    for engine in ("CYCLES", _eevee_id()):
+        bpy.context.scene.render.engine = engine
+        assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+        radius[engine] = read_exr(str(tmp_path / "maps" / "Skin_radius.exr"))[:, :, :3]
+        albedo = read_exr(str(tmp_path / "maps" / "Skin_albedo.exr"))[:, :, :3]
+    np.testing.assert_allclose(radius[_eevee_id()], radius["CYCLES"] * _s(albedo.astype(np.float64)), rtol=1e-5)
+
+
+def test_method_menu_is_this_blenders(addon):
+    """The menu offers exactly the subsurface methods this Blender's Principled BSDF has."""
+    props = bpy.data.materials.new("Skin").spectral_skin
+    ours = {i.identifier for i in props.bl_rna.properties["method"].enum_items}
+    blenders = {i.identifier for i in bpy.types.ShaderNodeBsdfPrincipled.bl_rna.properties["subsurface_method"].enum_items}
+    assert ours == blenders
+
+
+def test_random_walk_is_this_blenders(addon):
+    bpy.context.scene.render.engine = "CYCLES"
+    material = bpy.data.materials.new("Skin")
+    material.spectral_skin.method = "RANDOM_WALK"
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    node = addon_nodes.tagged_nodes(material.node_tree, "principled")[0]
+    assert node.subsurface_method == "RANDOM_WALK"
+    version = f"{bpy.app.version[0]}.{bpy.app.version[1]}"
+    expected = spectral_skin.evaluate(preset="caucasian", blender=version)
+    assert f"Blender {expected['target']['blender']}" in material.spectral_skin.result_target
+    np.testing.assert_allclose(_radius_mm(node), expected["methods"]["random_walk"]["subsurface_radius_mm"], rtol=1e-5)
+
+
+def test_engine_without_subsurface_is_refused(addon):
+    material = bpy.data.materials.new("Skin")
+    bpy.context.scene.render.engine = "BLENDER_WORKBENCH"
+    with pytest.raises(RuntimeError, match="BLENDER_WORKBENCH.*Cycles or EEVEE"):
+        bpy.ops.spectral_skin.apply(material="Skin")
+    assert not addon_nodes.tagged_nodes(material.node_tree)
