@@ -46,6 +46,16 @@ def finish_apply(material: bpy.types.Material, plan: dict) -> None:
     props.store_result(material, plan)
 
 
+def _find_material(name: str, context: bpy.types.Context) -> bpy.types.Material | None:
+    """The material named ``name``, or the context's (the panel's, else the active object's) when empty."""
+    if name:
+        return bpy.data.materials.get(name)
+    material = getattr(context, "material", None)
+    if material is None and context.object is not None:
+        material = context.object.active_material
+    return material
+
+
 class _Work:
     """Apply's computation in a worker thread: its progress, a cancel flag, and its outcome."""
 
@@ -88,12 +98,7 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
     _material_name = ""
 
     def _material(self, context: bpy.types.Context) -> bpy.types.Material | None:
-        if self.material:
-            return bpy.data.materials.get(self.material)
-        material = getattr(context, "material", None)
-        if material is None and context.object is not None:
-            material = context.object.active_material
-        return material
+        return _find_material(self.material, context)
 
     def _settings(self, context: bpy.types.Context) -> tuple[bpy.types.Material | None, SkinSettings | None]:
         material = self._material(context)
@@ -154,8 +159,9 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
             return {"CANCELLED"}
         if event.type == "ESC" and not work.writing:
             work.cancel.set()
-        if event.type != "TIMER":
             return {"RUNNING_MODAL"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}  # the rest of Blender stays usable meanwhile
         if work.thread.is_alive():
             context.window_manager.progress_update(int(100 * work.fraction))
             if context.workspace is not None:
@@ -193,7 +199,7 @@ class SPECTRAL_SKIN_OT_remove(bpy.types.Operator):
         name="Material", description="Name of the material; empty: the active material")
 
     def execute(self, context: bpy.types.Context) -> set[str]:
-        material = SPECTRAL_SKIN_OT_apply._material(self, context)  # type: ignore[arg-type]
+        material = _find_material(self.material, context)
         if material is None:
             self.report({"ERROR"}, f"no material {self.material!r}" if self.material else "no active material")
             return {"CANCELLED"}

@@ -163,6 +163,8 @@ def test_unsaved_blend_is_refused_and_nothing_written(addon, tmp_path, monkeypat
         bpy.ops.spectral_skin.apply(material="Skin")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["melanin.exr"]
     assert material_snapshot(material) == before
+    with pytest.raises(RuntimeError, match="not saved yet"):  # as from the panel (no window here: no worker thread)
+        bpy.ops.spectral_skin.apply("INVOKE_DEFAULT", material="Skin")
     material.spectral_skin.output_dir = "relative_maps"
     with pytest.raises(RuntimeError, match="must be absolute"):
         bpy.ops.spectral_skin.apply(material="Skin")
