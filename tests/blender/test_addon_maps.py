@@ -271,3 +271,22 @@ def test_worker_reports_progress_and_cancels_with_nothing_written(addon, tmp_pat
     assert cancelled.plan is None and isinstance(cancelled.error, InterruptedError)
     assert not (tmp_path / "cancelled").exists()
     assert os.path.isdir(tmp_path / "maps")
+
+
+def test_8_bit_png_maps_onto_the_range_once(addon, tmp_path):
+    grey = np.array([[0, 64, 128], [191, 230, 255]], dtype=np.uint8)
+    path = tmp_path / "hemoglobin.png"
+    spec = oiio.ImageSpec(3, 2, 1, "uint8")
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), spec) and out.write_image(np.ascontiguousarray(grey[:, :, None])), oiio.geterror()
+    out.close()
+    material = saved_material(tmp_path)
+    material.spectral_skin.hemoglobin_map = bpy.data.images.load(str(path))
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    albedo, _ = written(tmp_path, "scene_Skin")
+    low, high = spectral_skin.parameter_ranges()["hemoglobin"]
+    caucasian = spectral_skin.presets()["caucasian"]
+    reference = reference_maps(melanin=caucasian["melanin"], melanin_blend=caucasian["melanin_blend"],
+                               hemoglobin=(low + (high - low) * grey / 255.0).astype(np.float32),
+                               oiliness=caucasian["oiliness"])
+    np.testing.assert_allclose(albedo, reference["base_color"], rtol=1e-6)

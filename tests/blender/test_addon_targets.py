@@ -71,7 +71,7 @@ def test_eevee_radius_map_is_compensated_per_texel(addon, tmp_path):
     spec = oiio.ImageSpec(2, 2, 1, "float")
     spec.channelnames = ("melanin",)
     out = oiio.ImageOutput.create(str(path))
-    assert out.open(str(path), spec) and out.write_image(melanin)
+    assert out.open(str(path), spec) and out.write_image(np.ascontiguousarray(melanin[:, :, None]))
     out.close()
     material = bpy.data.materials.new("Skin")
     material.spectral_skin.melanin_map = bpy.data.images.load(str(path))
