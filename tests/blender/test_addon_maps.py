@@ -290,3 +290,21 @@ def test_8_bit_png_maps_onto_the_range_once(addon, tmp_path):
                                hemoglobin=(low + (high - low) * grey / 255.0).astype(np.float32),
                                oiliness=caucasian["oiliness"])
     np.testing.assert_allclose(albedo, reference["base_color"], rtol=1e-6)
+
+
+@pytest.mark.skipif(not CLI.exists(), reason="build the CLI first: cargo build --release")
+def test_the_example_files_parameter_map_gives_the_cli_material(addon, tmp_path):
+    """The four-channel file `spectral-skin example` writes, through the Parameter Map slot and through the CLI."""
+    path = tmp_path / "face.exr"
+    subprocess.run([str(CLI), "example", "--out", str(path), "--size", "24"], check=True, capture_output=True)
+    material = saved_material(tmp_path)
+    material.spectral_skin.params_map = bpy.data.images.load(str(path))
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    albedo, radius = written(tmp_path, "scene_Skin")
+    out = tmp_path / "cli"
+    version = f"{bpy.app.version[0]}.{bpy.app.version[1]}"
+    subprocess.run([str(CLI), "maps", "--params", str(path), "--out", str(out), "--blender", version,
+                    "--engine", "cycles"], check=True, capture_output=True)
+    np.testing.assert_allclose(albedo, read_exr(str(out / "albedo.exr"))[:, :, :3], rtol=1e-6)
+    np.testing.assert_allclose(radius, read_exr(str(out / "radius.exr"))[:, :, :3], rtol=1e-6)
+    assert albedo.std(axis=(0, 1)).min() > 1e-3
