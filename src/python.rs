@@ -28,7 +28,7 @@ use crate::fit::blender_target::{describe_targets, BlenderVersion, Engine, Targe
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{read_params, ParamImage, ParamInputs, ParamSource, Plane, MAX_TEXELS, PARAM_CHANNELS};
 use crate::maps::lut::TableResolution;
-use crate::maps::pipeline::{check_planes, compute_maps, MapSettings, SpecularOutput, StrategyChoice};
+use crate::maps::pipeline::{check_planes, compute_maps_cancellable, MapSettings, SpecularOutput, StrategyChoice};
 use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
 
 create_exception!(
@@ -693,8 +693,8 @@ fn rgb_image(py: Python<'_>, height: usize, width: usize, data: Vec<f32>) -> PyR
 }
 
 /// `maps(progress=...)`: a Python callable told (texels done, total texels) from the worker threads, about once per
-/// percent (it takes the GIL for each call); returning False cancels. An exception it raises cancels too and is
-/// re-raised by `maps`.
+/// percent (it takes the GIL for each call); returning False cancels (the core skips the rows not yet started). An
+/// exception it raises cancels too and is re-raised by `maps`.
 struct Progress {
     callback: Py<PyAny>,
     done: AtomicUsize,
@@ -961,7 +961,10 @@ fn maps_py<'py>(
         if hook.is_some_and(Progress::stopped) {
             return Ok(None);
         }
-        let mut result = compute_maps(&image, &settings, hook.map(|_| &report as &(dyn Fn(usize, usize) + Sync)))?;
+        let never = AtomicBool::new(false);
+        let cancel = hook.map_or(&never, |h| &h.stopped);
+        let progress = hook.map(|_| &report as &(dyn Fn(usize, usize) + Sync));
+        let mut result = compute_maps_cancellable(&image, &settings, progress, cancel)?;
         drop(image);
         if hook.is_some_and(Progress::stopped) {
             return Ok(None);

@@ -291,8 +291,8 @@ def maps(
         progress: None, or a callable ``progress(done, total)`` told how many texels of ``total`` are done: once
             with 0 before the computation, then about once per percent as rows are filled (from the core's worker
             threads, taking the GIL for each call; a "constant" map has no rows to report). Returning False
-            cancels: the pass over the rows in progress runs to its end without further calls (the core has no
-            finer stop), then nothing more is computed or returned and InterruptedError is raised. An exception raised by the callback cancels the same way and is re-raised.
+            cancels: the rows being filled are finished, the others skipped, nothing is returned and
+            InterruptedError is raised (a lookup table being built is finished first). An exception raised by the callback cancels the same way and is re-raised.
 
     Returns:
         A dict:

@@ -5,6 +5,7 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -198,6 +199,18 @@ pub fn compute_maps(
     settings: &MapSettings,
     progress: Option<&(dyn Fn(usize, usize) + Sync)>,
 ) -> Result<MapResult, SkinError> {
+    compute_maps_cancellable(image, settings, progress, &AtomicBool::new(false))
+}
+
+/// [`compute_maps`] that skips the rows not yet started once `cancel` is set (it is read before each row, so a
+/// front's progress callback can set it). The result is then incomplete: whoever set the flag must discard it. A
+/// lookup table being built is finished first.
+pub fn compute_maps_cancellable(
+    image: &ParamImage,
+    settings: &MapSettings,
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    cancel: &AtomicBool,
+) -> Result<MapResult, SkinError> {
     let start = Instant::now();
     let (w, h) = (image.width, image.height);
     if w == 0 || h == 0 {
@@ -237,7 +250,7 @@ pub fn compute_maps(
             .map(|k| evaluate_one(k.map(f32::from_bits)).map(|t| select(&t)))
             .collect::<Result<Vec<_>, SkinError>>()?;
         let index: HashMap<[u32; 3], usize> = keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
-        fill_rows(w, &mut base_color, &mut radius, progress, |i| values[index[&tuple(i).map(f32::to_bits)]]);
+        fill_rows(w, &mut base_color, &mut radius, progress, cancel, |i| values[index[&tuple(i).map(f32::to_bits)]]);
         if settings.strategy == StrategyChoice::Exact {
             Strategy::Exact { evaluations: keys.len() }
         } else {
@@ -249,6 +262,9 @@ pub fn compute_maps(
         let rows: Vec<Row> = (0..h)
             .into_par_iter()
             .map(|y| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Ok(Vec::new());
+                }
                 let row = (0..w).map(|x| evaluate_one(tuple(y * w + x)).map(|t| select(&t))).collect();
                 if let Some(p) = progress {
                     p(w, n);
@@ -275,7 +291,7 @@ pub fn compute_maps(
         } else {
             Some(measure_error(&table, &prepared, settings.table_check_samples)?)
         };
-        fill_rows(w, &mut base_color, &mut radius, progress, |i| {
+        fill_rows(w, &mut base_color, &mut radius, progress, cancel, |i| {
             let t = tuple(i);
             table.lookup_method(t[0], t[1], t[2])
         });
@@ -336,12 +352,14 @@ fn distinct_tuples(image: &ParamImage, limit: usize) -> Option<HashMap<[u32; 3],
     Some(set)
 }
 
-/// Fill the output planes row by row in parallel from a per-texel function.
+/// Fill the output planes row by row in parallel from a per-texel function; rows not started when `cancel` is set
+/// are skipped.
 fn fill_rows(
     width: usize,
     base_color: &mut [Vec<f32>; 3],
     radius: &mut [Vec<f32>; 3],
     progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    cancel: &AtomicBool,
     texel: impl Fn(usize) -> ([f32; 3], [f32; 3]) + Sync,
 ) {
     let total = base_color[0].len();
@@ -353,6 +371,9 @@ fn fill_rows(
         .zip(r0.par_chunks_mut(width).zip(r1.par_chunks_mut(width)).zip(r2.par_chunks_mut(width)))
         .enumerate()
         .for_each(|(y, (((c0, c1), c2), ((r0, r1), r2)))| {
+            if cancel.load(Ordering::Relaxed) {
+                return;
+            }
             for x in 0..width {
                 let (c, r) = texel(y * width + x);
                 (c0[x], c1[x], c2[x]) = (c[0], c[1], c[2]);
