@@ -56,12 +56,22 @@ def make_plan(settings: SkinSettings) -> dict[str, Any]:
     return plan
 
 
+def _running_blender() -> tuple[int, ...] | None:
+    """The running Blender's version (the mapping depends on it), or None outside Blender (the core's default)."""
+    try:
+        import bpy
+    except ImportError:
+        return None
+    return tuple(bpy.app.version)
+
+
 def _plan_from_constants(settings: SkinSettings) -> dict[str, Any]:
     import spectral_skin
 
     c = settings.constants()
     ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"],
-                                accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space)
+                                accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
+                                blender=_running_blender())
     method = ev["methods"][METHODS[settings.method]]
     specular = ev["specular"]
     base_color = _rgb(method["base_color"])
@@ -107,7 +117,7 @@ def _plan_from_maps(settings: SkinSettings) -> dict[str, Any]:
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
     result = spectral_skin.maps(**inputs, method=METHODS[settings.method], accuracy=ACCURACY_LEVELS[settings.accuracy],
-                                working_space=settings.working_space)
+                                working_space=settings.working_space, blender=_running_blender())
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)
