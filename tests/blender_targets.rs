@@ -108,9 +108,9 @@ fn random_walk_5_2_radius_convention() {
             let albedo = ev.diffuse_reflectance_rgb.unwrap();
             let methods = ev.methods.unwrap();
             let new = methods.random_walk;
-            for c in 0..3 {
+            for (c, &target) in albedo.iter().enumerate() {
                 let rendered = flat_albedo(RandomWalkModel::VanDeHulst, new.base_color[c]);
-                assert!((rendered - albedo[c]).abs() < 1e-10, "{preset} {version} ch {c}: {rendered} vs {}", albedo[c]);
+                assert!((rendered - target).abs() < 1e-10, "{preset} {version} ch {c}: {rendered} vs {target}");
                 let alpha_new = van_de_hulst_single_scatter_albedo(new.base_color[c], 0.0);
                 let alpha_old = RandomWalkModel::WrenningeFit.single_scatter_albedo(old.base_color[c]);
                 assert!((alpha_new - alpha_old).abs() < 1e-8, "{preset} ch {c}: alpha {alpha_new} vs {alpha_old}");

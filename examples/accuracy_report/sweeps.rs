@@ -190,7 +190,7 @@ pub fn table(s: &Settings, map_size: usize) -> Sweep {
     for &(m, b, h) in resolutions {
         let resolution = TableResolution { melanin: m, melanin_blend: b, hemoglobin: h };
         let start = Instant::now();
-        let table = MaterialTable::build(&prepared, resolution).expect("table");
+        let table = MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, resolution).expect("table");
         let build_s = start.elapsed().as_secs_f64();
         let error = measure_error(&table, &prepared, samples).expect("table error");
         let settings = MapSettings { table: resolution, table_check_samples: 0, table_cache: Some(cache.path().to_path_buf()), ..MapSettings::default() };

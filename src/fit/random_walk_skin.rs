@@ -44,7 +44,7 @@ fn dipole_rd(alpha_prime: f64, a_f: f64) -> f64 {
 /// `alpha'` as Cycles computes it for Base Color `rd` (per channel) and Subsurface IOR `eta`: the midpoint after 12
 /// bisection steps, 0 below Rd 1e-4, 0.999999 at or above 0.995. Dimensionless.
 pub fn skin_dipole_alpha_prime(rd: f64, eta: f64) -> f64 {
-    if !(rd >= DIPOLE_RD_LOW) {
+    if rd.is_nan() || rd < DIPOLE_RD_LOW {
         return 0.0;
     }
     if rd >= DIPOLE_RD_HIGH {
