@@ -139,6 +139,7 @@ def measure(
     presets: list[str], samples_list: tuple[int, ...], size_px: int, log: Callable[[str], None] = print
 ) -> tuple[list[dict[str, Any]], int]:
     """Render every (preset, method, samples) case; returns (cases, threads used by Cycles)."""
+    import bpy
     import spectral_skin
 
     helpers = load_helpers()
@@ -146,7 +147,8 @@ def measure(
     threads = 0
     with tempfile.TemporaryDirectory(prefix="cycles_samples_") as workdir:
         for preset in presets:
-            res = spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"))
+            # The mapping for the Blender that renders (Random Walk changed in 5.2).
+            res = spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"), blender=tuple(bpy.app.version))
             for method, cycles_method in METHODS.items():
                 m = res["methods"][method]
                 base = np.asarray(m["base_color"], dtype=np.float64)
