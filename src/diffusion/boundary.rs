@@ -30,4 +30,53 @@ mod tests {
         // pitfall 13: eta = 1/1.4 would give 0.078
         assert!((fdr(1.0 / 1.4) - 0.078).abs() < 2e-3);
     }
+
+    /// Unpolarised Fresnel reflectance for light inside a medium of relative index eta meeting the boundary at
+    /// cos(theta) = mu (Born & Wolf 1.5.2); 1 past the critical angle.
+    fn fresnel_inside(eta: f64, mu: f64) -> f64 {
+        let sin_t2 = eta * eta * (1.0 - mu * mu);
+        if sin_t2 >= 1.0 {
+            return 1.0;
+        }
+        let ct = (1.0 - sin_t2).sqrt();
+        let rs = ((eta * mu - ct) / (eta * mu + ct)).powi(2);
+        let rp = ((eta * ct - mu) / (eta * ct + mu)).powi(2);
+        0.5 * (rs + rp)
+    }
+
+    /// The exact diffuse reflectance F_dr = int_0^1 2 mu F(mu) dmu (midpoint rule, 2e5 points).
+    fn fdr_exact(eta: f64) -> f64 {
+        let n = 200_000;
+        (0..n)
+            .map(|k| (k as f64 + 0.5) / n as f64)
+            .map(|mu| 2.0 * mu * fresnel_inside(eta, mu))
+            .sum::<f64>()
+            / n as f64
+    }
+
+    /// The relative indices a stack can produce (layer indices in `IOR_RANGE`, air above: [1/2, 2]) are where the
+    /// polynomial fits hold: A within 0.5 % of the exact integral's. Just outside they fail (the reason for the range).
+    #[test]
+    fn fits_hold_on_the_accepted_range_only() {
+        let (lo, hi) = crate::diffusion::IOR_RANGE;
+        let a_exact = |eta: f64| {
+            let f = fdr_exact(eta);
+            (1.0 + f) / (1.0 - f)
+        };
+        let mut worst: f64 = 0.0;
+        for k in 0..=60 {
+            let eta = (lo / hi) * (hi * hi / lo).powf(k as f64 / 60.0); // log-spaced over [1/2, 2]
+            worst = worst.max((internal_reflection_a(eta) / a_exact(eta) - 1.0).abs());
+        }
+        assert!(
+            worst < 0.005,
+            "worst relative error of A on [1/2, 2]: {worst}"
+        );
+        for eta in [0.4, 2.5] {
+            assert!(
+                (internal_reflection_a(eta) / a_exact(eta) - 1.0).abs() > 0.04,
+                "eta {eta}"
+            );
+        }
+    }
 }
