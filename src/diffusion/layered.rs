@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::multipole::{MultipoleTerms, Slab};
+use super::multipole::{ballistic_fraction, MultipoleTerms, Slab};
 use crate::error::SkinError;
 use crate::numeric::safe_div;
 
@@ -57,7 +57,7 @@ impl Layer {
         let finite_ok = t.is_finite() && (t_min..=t_max).contains(&t);
         if !(finite_ok || (t == f64::INFINITY && is_last)) {
             return bad(format!(
-                "thickness_mm must be in [{t_min:e}, {t_max:e}] mm (infinity only for the last layer); got {t}"
+                "thickness_mm must be in [{t_min:e}, {t_max:e}] mm (infinity only for the last layer); got {t:e}"
             ));
         }
         let (c_min, c_max) = COEFFICIENT_RANGE_PER_MM;
@@ -67,7 +67,7 @@ impl Layer {
         ] {
             if !(value == 0.0 || (c_min..=c_max).contains(&value)) {
                 return bad(format!(
-                    "{field} must be 0 or in [{c_min:e}, {c_max:e}] per mm; got {value}"
+                    "{field} must be 0 or in [{c_min:e}, {c_max:e}] per mm; got {value:e}"
                 ));
             }
         }
@@ -94,6 +94,11 @@ pub struct LayerStack {
 impl LayerStack {
     /// Validate the layers (top to bottom) and set up their boundaries. A finite last layer rests on a medium of its
     /// own index; the medium above the first layer is air.
+    ///
+    /// A layer thinner than one reduced mean free path lets a share b of the light through without interacting (see
+    /// `Slab::new`); its neighbours then see, for the index across their shared boundary, the blend b n' + (1 - b) n
+    /// of its own index n and of what lies beyond it n'. As a layer vanishes (b -> 1) its neighbours thus meet each
+    /// other's indices, as in the stack without it; at b = 0 (any layer of one mean free path or more) nothing changes.
     pub fn new(layers: &[Layer]) -> Result<LayerStack, SkinError> {
         if layers.is_empty() {
             return Err(SkinError::invalid("layers", "need at least one layer"));
@@ -102,27 +107,45 @@ impl LayerStack {
         for (i, layer) in layers.iter().enumerate() {
             layer.validate(i, i == last)?;
         }
-        let mut down = Vec::with_capacity(layers.len());
-        for (i, layer) in layers.iter().enumerate() {
-            let n_above = if i == 0 {
-                AMBIENT_IOR
-            } else {
-                layers[i - 1].ior
-            };
-            let n_below = if i == last {
-                layer.ior
-            } else {
-                layers[i + 1].ior
-            };
-            let slab = Slab::new(
-                layer.sigma_a_per_mm,
-                layer.sigma_s_reduced_per_mm,
-                layer.thickness_mm,
-                layer.ior / n_above,
-                layer.ior / n_below,
-            );
-            down.push(slab);
+        let ballistic: Vec<f64> = layers
+            .iter()
+            .map(|l| {
+                if l.thickness_mm.is_finite() {
+                    ballistic_fraction(l.sigma_a_per_mm, l.sigma_s_reduced_per_mm, l.thickness_mm)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        // Index seen above each layer, top down, and below each layer, bottom up.
+        let mut above = vec![AMBIENT_IOR; layers.len()];
+        for i in 1..layers.len() {
+            let b = ballistic[i - 1];
+            above[i] = b * above[i - 1] + (1.0 - b) * layers[i - 1].ior;
         }
+        let mut below = vec![layers[last].ior; layers.len()];
+        for i in (0..last).rev() {
+            let beyond = if i + 1 == last {
+                layers[i].ior
+            } else {
+                below[i + 1]
+            };
+            let b = ballistic[i + 1];
+            below[i] = b * beyond + (1.0 - b) * layers[i + 1].ior;
+        }
+        let down = layers
+            .iter()
+            .enumerate()
+            .map(|(i, layer)| {
+                Slab::new(
+                    layer.sigma_a_per_mm,
+                    layer.sigma_s_reduced_per_mm,
+                    layer.thickness_mm,
+                    layer.ior / above[i],
+                    layer.ior / below[i],
+                )
+            })
+            .collect();
         Ok(LayerStack { down })
     }
 
