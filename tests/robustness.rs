@@ -145,9 +145,7 @@ fn vanishing_layer_vanishes() {
             );
         }
     }
-    // A vanishing finite last layer leaves the layer above resting on its own index: the relative index below it
-    // tends to 1 from below, where the two published F_dr fits meet with a step of 1e-4 (0.0017 against 0.0016), so
-    // the limit holds to that step's effect (1.3e-5 here).
+    // A vanishing finite last layer leaves the layer above resting on its own index.
     let finite = [layer(0.5, 0.1, 4.0, 1.4)];
     let with_last = [layer(0.5, 0.1, 4.0, 1.4), layer(1e-10, 0.1, 4.0, 1.8)];
     assert!(

@@ -2,13 +2,19 @@
 
 /// `F_dr(eta)`: average diffuse Fresnel reflectance for relative index eta = n_inside / n_outside
 /// (Egan & Hilgeman polynomial fits as used by Jensen et al. 2001 and DJ05; model.md section 5.1, pitfall 13).
+/// As published the two fits meet at eta = 1 with a step of 1e-4 (0.0016 above, 0.0017 below); the one below is
+/// shifted by that step so that F_dr, and every output, is continuous in the indices (a vanishing layer must vanish).
 pub fn fdr(eta: f64) -> f64 {
     if eta >= 1.0 {
         -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta
     } else {
-        -0.4399 + 0.7099 / eta - 0.3319 / (eta * eta) + 0.0636 / (eta * eta * eta)
+        -0.4399 + 0.7099 / eta - 0.3319 / (eta * eta) + 0.0636 / (eta * eta * eta) + FIT_STEP_AT_ONE
     }
 }
+
+/// Value of the eta >= 1 fit minus that of the eta < 1 fit at eta = 1: 0.0016 - 0.0017.
+const FIT_STEP_AT_ONE: f64 =
+    (-1.440 + 0.710 + 0.668 + 0.0636) - (-0.4399 + 0.7099 - 0.3319 + 0.0636);
 
 /// `A(eta) = (1 + F_dr) / (1 - F_dr)`: internal-reflection parameter of the boundary (Jensen et al. 2001 eq. 6).
 pub fn internal_reflection_a(eta: f64) -> f64 {
@@ -29,6 +35,16 @@ mod tests {
         assert!((internal_reflection_a(1.0) - 1.0032).abs() < 2e-4);
         // pitfall 13: eta = 1/1.4 would give 0.078
         assert!((fdr(1.0 / 1.4) - 0.078).abs() < 2e-3);
+    }
+
+    #[test]
+    fn continuous_at_one() {
+        assert!(
+            (fdr(1.0 - 1e-12) - fdr(1.0)).abs() < 1e-10,
+            "{} {}",
+            fdr(1.0 - 1e-12),
+            fdr(1.0)
+        );
     }
 
     /// Unpolarised Fresnel reflectance for light inside a medium of relative index eta meeting the boundary at

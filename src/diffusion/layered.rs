@@ -123,15 +123,14 @@ impl LayerStack {
             let b = ballistic[i - 1];
             above[i] = b * above[i - 1] + (1.0 - b) * layers[i - 1].ior;
         }
-        let mut below = vec![layers[last].ior; layers.len()];
+        // Below the last layer: a medium of its own index, or, as far as the last layer lets light through
+        // unscattered, of the index it sees above (so a vanishing last layer leaves the one above on its own index).
+        let b_last = ballistic[last];
+        let mut below =
+            vec![b_last * above[last] + (1.0 - b_last) * layers[last].ior; layers.len()];
         for i in (0..last).rev() {
-            let beyond = if i + 1 == last {
-                layers[i].ior
-            } else {
-                below[i + 1]
-            };
             let b = ballistic[i + 1];
-            below[i] = b * beyond + (1.0 - b) * layers[i + 1].ior;
+            below[i] = b * below[i + 1] + (1.0 - b) * layers[i + 1].ior;
         }
         let down = layers
             .iter()
