@@ -235,3 +235,83 @@ fn extreme_magnitudes_are_clear_errors() {
         );
     }
 }
+
+/// A cached material table with a flipped byte is detected (checksum) and rebuilt, not used: the rebuilt table equals
+/// a fresh build, and the cache file is rewritten whole.
+#[test]
+fn corrupted_table_cache_is_rebuilt() {
+    use spectral_skin::maps::lut::{MaterialTable, TableResolution};
+    use spectral_skin::Accuracy;
+    let mut request = Request::new(Outputs {
+        albedo: true,
+        radius: true,
+        ..Outputs::default()
+    });
+    request.accuracy = Accuracy::draft();
+    let prepared = Prepared::new(&request).unwrap();
+    let resolution = TableResolution {
+        melanin: 2,
+        melanin_blend: 2,
+        hemoglobin: 2,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (fresh, cached) =
+        MaterialTable::load_or_build(&prepared, resolution, Some(dir.path())).unwrap();
+    assert!(!cached);
+    assert!(
+        MaterialTable::load_or_build(&prepared, resolution, Some(dir.path()))
+            .unwrap()
+            .1,
+        "second load from the cache"
+    );
+    let file = std::fs::read_dir(dir.path())
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let good = std::fs::read(&file).unwrap();
+    let probe = |t: &MaterialTable| t.lookup(0.2, 0.5, 0.03);
+    for at in [good.len() - 1, good.len() / 2, good.len() - 8 * 48] {
+        let mut bad = good.clone();
+        bad[at] ^= 0x10;
+        std::fs::write(&file, &bad).unwrap();
+        let (rebuilt, cached) =
+            MaterialTable::load_or_build(&prepared, resolution, Some(dir.path())).unwrap();
+        assert!(!cached, "byte {at} flipped: the corrupted cache was used");
+        assert_eq!(probe(&rebuilt), probe(&fresh));
+        assert_eq!(
+            std::fs::read(&file).unwrap(),
+            good,
+            "the cache file is rewritten"
+        );
+    }
+}
+
+/// Sizes that would allocate gigabytes or run for hours are refused before any allocation, naming the input.
+#[test]
+fn sizes_are_bounded_before_allocation() {
+    use spectral_skin::maps::example::{write_example_params, ExampleKind};
+    use spectral_skin::maps::lut::TableResolution;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    for size in [0, 99_999_999, 4_294_967_296] {
+        let e = write_example_params(&out, ExampleKind::Face, size)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("size") && e.contains("8192"), "{size}: {e}");
+        assert!(!out.exists());
+    }
+    let e = TableResolution {
+        melanin: 400,
+        melanin_blend: 400,
+        hemoglobin: 400,
+    }
+    .validate()
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("table resolution") && e.contains("1000000"),
+        "{e}"
+    );
+}
