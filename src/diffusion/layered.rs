@@ -57,7 +57,8 @@ impl Layer {
         let finite_ok = t.is_finite() && (t_min..=t_max).contains(&t);
         if !(finite_ok || (t == f64::INFINITY && is_last)) {
             return bad(format!(
-                "thickness_mm must be in [{t_min:e}, {t_max:e}] mm (infinity only for the last layer); got {t:e}"
+                "thickness_mm must be in [{t_min:e}, {t_max:e}] mm (infinity only for the last layer); got {}",
+                readable(t)
             ));
         }
         let (c_min, c_max) = COEFFICIENT_RANGE_PER_MM;
@@ -82,6 +83,15 @@ impl Layer {
             ));
         }
         Ok(())
+    }
+}
+
+/// A number as written by hand where that is short (0.25, -0.1, 1e101, 1e-310).
+fn readable(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
     }
 }
 

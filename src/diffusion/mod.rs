@@ -48,7 +48,7 @@ pub fn validate_radii(radii_mm: &[f64]) -> Result<(), SkinError> {
     {
         return Err(SkinError::invalid(
             "radii_mm",
-            format!("radii must be in [0, {MAX_RADIUS_MM:e}] mm; radii_mm[{i}] = {r}"),
+            format!("radii must be >= 0 and <= {MAX_RADIUS_MM:e} mm; radii_mm[{i}] = {r}"),
         ));
     }
     Ok(())
