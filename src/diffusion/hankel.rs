@@ -60,8 +60,9 @@ const PROBES_PER_DECADE: f64 = 10.0;
 const GAUSS_MAX_HALF_PHASE: f64 = PI / 2.0;
 
 /// Reflectance profiles R(r) in mm^-2 of several stacks (typically one per wavelength) at the same radii (mm).
-/// Values below zero are clamped to zero; they are quadrature round-off, bounded by `ROUND_OFF_BOUND` times the
-/// profile's scale (tests/robustness.rs checks `raw_reflectance_profiles` against that bound over the domain).
+/// Values below zero are clamped to zero: round-off far in the tail, and the negative lobe that the flux-only
+/// multipole of a thin top layer has where its top extrapolation distance exceeds its thickness plus the bottom one
+/// (docs/robustness.md); `raw_reflectance_profiles` gives them unclamped.
 pub fn reflectance_profiles(
     stacks: &[LayerStack],
     radii_mm: &[f64],
