@@ -204,8 +204,9 @@ def layered_reflectance(
         (total diffuse reflectance, R(r) at radii_mm in mm^-2 as a float64 array of the same length).
 
     Raises:
-        SpectralSkinError: no layers, a layer that is not 4 values, a thickness <= 0 or infinite before the last
-            layer, a negative or non-finite coefficient, an ior outside 1..4, or a negative or non-finite radius.
+        SpectralSkinError: no layers, a layer that is not 4 values, a thickness outside 1e-11..1e6 mm (inf only for
+            the last layer), a coefficient other than 0 or 1e-12..1e6 per mm, an ior outside 1..2 (where the diffuse
+            Fresnel fits hold), or a radius outside 0..1e6 mm.
         TypeError: layers or radii_mm not sequences of numbers.
     """
 

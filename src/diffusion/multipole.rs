@@ -35,8 +35,11 @@ pub struct Slab {
     pub alpha_prime: f64,
     /// `sigma_tr = sqrt(3 sigma_a sigma_t')`: effective transport coefficient, mm^-1.
     pub sigma_tr_per_mm: f64,
-    /// `l`: depth of the real source, mm: one reduced mean free path 1/sigma_t', capped at `d` (thin-slab guard).
+    /// `l`: depth of the real source, mm: one reduced mean free path 1/sigma_t' (see `Slab::new` for thin slabs).
     pub source_depth_mm: f64,
+    /// `b`: fraction of the light entering the slab that crosses it without interacting (0 unless the slab is
+    /// thinner than one reduced mean free path; see `Slab::new`). The multipole carries the other 1 - b.
+    pub ballistic_fraction: f64,
     /// `z_b,0 = 2 A(eta_top) D`: extrapolation distance above the entry face, mm.
     pub zb_top_mm: f64,
     /// `z_b,d = 2 A(eta_bottom) D`: extrapolation distance below the far face, mm.
@@ -47,26 +50,59 @@ impl Slab {
     /// A slab with absorption and reduced scattering in mm^-1, thickness in mm and the relative indices
     /// (n_inside / n_outside) of its entry face and of its far face. Callers validate the inputs (see `layered`).
     ///
-    /// Thin-slab guard (model.md pitfall 7): when one reduced mean free path reaches the slab's thickness, the real
-    /// source would lie at or beyond the far face, where the image construction changes sign discontinuously. The
-    /// source depth is capped at `d`: light whose first interaction would lie deeper is treated as scattering at
-    /// the far face. The cap is continuous in every parameter and changes nothing while `1/sigma_t' < d`.
-    pub fn new(sigma_a_per_mm: f64, sigma_s_reduced_per_mm: f64, thickness_mm: f64, eta_top: f64, eta_bottom: f64) -> Slab {
+    /// Thin slabs (optical thickness tau = sigma_t' d < 1). DJ05 places all light entering a slab at one source, a
+    /// reduced mean free path deep; in a slab thinner than that the source would lie at or past the far face, and a
+    /// vanishing slab would still reflect a fixed share (its extrapolated boundaries do not vanish with it). Below
+    /// tau = 1 a share b = (1 - tau)^2 of the light crosses the slab without interacting, and the multipole carries the
+    /// rest with its source at l = d (1 + tau) / 2, mid-slab as tau -> 0. Both meet DJ05 at tau = 1 with matching
+    /// slope in b (b = 0, l = 1/sigma_t' = d), so nothing changes for tau >= 1; as d -> 0, R -> 0 and T -> 1 (a
+    /// vanishing layer vanishes). 1 - b = tau (2 - tau) is the diffuse-light interaction probability 1 - 2 E3(tau) to
+    /// first order (light crossing a slab diffusely travels 2 d on average).
+    pub fn new(
+        sigma_a_per_mm: f64,
+        sigma_s_reduced_per_mm: f64,
+        thickness_mm: f64,
+        eta_top: f64,
+        eta_bottom: f64,
+    ) -> Slab {
         let sigma_t_reduced = sigma_a_per_mm + sigma_s_reduced_per_mm;
         let diffusion_mm = 1.0 / (3.0 * sigma_t_reduced); // D = 1/(3 sigma_t'), Jensen et al. 2001
+        let ballistic_fraction =
+            ballistic_fraction(sigma_a_per_mm, sigma_s_reduced_per_mm, thickness_mm);
+        let tau = sigma_t_reduced * thickness_mm;
+        let source_depth_mm = if tau < 1.0 {
+            0.5 * thickness_mm * (1.0 + tau)
+        } else {
+            1.0 / sigma_t_reduced
+        };
         Slab {
             thickness_mm,
             alpha_prime: sigma_s_reduced_per_mm / sigma_t_reduced,
             sigma_tr_per_mm: (3.0 * sigma_a_per_mm * sigma_t_reduced).sqrt(),
-            source_depth_mm: (1.0 / sigma_t_reduced).min(thickness_mm),
+            source_depth_mm,
+            ballistic_fraction,
             zb_top_mm: 2.0 * internal_reflection_a(eta_top) * diffusion_mm,
             zb_bottom_mm: 2.0 * internal_reflection_a(eta_bottom) * diffusion_mm,
         }
     }
 
+    /// The share of the entering light the multipole carries, 1 - b (computed without cancellation).
+    fn scattered_fraction(&self) -> f64 {
+        let b = self.ballistic_fraction;
+        if b == 0.0 {
+            return 1.0;
+        }
+        let one_minus_sqrt_b = 1.0 - b.sqrt(); // tau
+        one_minus_sqrt_b * (2.0 - one_minus_sqrt_b)
+    }
+
     /// The same slab entered from its far face (boundaries swapped), for R-, T- of the layer combination.
     pub fn flipped(&self) -> Slab {
-        Slab { zb_top_mm: self.zb_bottom_mm, zb_bottom_mm: self.zb_top_mm, ..*self }
+        Slab {
+            zb_top_mm: self.zb_bottom_mm,
+            zb_bottom_mm: self.zb_top_mm,
+            ..*self
+        }
     }
 
     fn is_semi_infinite(&self) -> bool {
@@ -86,13 +122,22 @@ impl Slab {
 
     /// Depths of the real and virtual source of image pair i (DJ05; model.md 5.2), measured from the entry face.
     fn image_depths_mm(&self, i: i64) -> (f64, f64) {
-        let shift = if i == 0 { 0.0 } else { 2.0 * i as f64 * self.half_period_mm() };
+        let shift = if i == 0 {
+            0.0
+        } else {
+            2.0 * i as f64 * self.half_period_mm()
+        };
         let l = self.source_depth_mm;
         (shift + l, shift - l - 2.0 * self.zb_top_mm)
     }
 
     /// `R~(s)`: Hankel transform of the reflectance profile (model.md 5.3). `R~(0)` is the total diffuse reflectance.
     pub fn reflectance_hat(&self, s_per_mm: f64, terms: MultipoleTerms) -> f64 {
+        self.scattered_fraction() * self.multipole_reflectance_hat(s_per_mm, terms)
+    }
+
+    /// `R~(s)` of the multipole alone, per unit light it carries.
+    fn multipole_reflectance_hat(&self, s_per_mm: f64, terms: MultipoleTerms) -> f64 {
         let q = self.q(s_per_mm);
         let (l, zb0) = (self.source_depth_mm, self.zb_top_mm);
         // The dipole i = 0: real source at l, negative virtual source at -(l + 2 z_b,0).
@@ -116,10 +161,17 @@ impl Slab {
     }
 
     /// `T~(s)`: Hankel transform of the transmittance profile through the far face (model.md 5.3); 0 if semi-infinite.
+    /// The light crossing without interacting adds b at every s (a point at r = 0).
     pub fn transmittance_hat(&self, s_per_mm: f64, terms: MultipoleTerms) -> f64 {
         if self.is_semi_infinite() {
             return 0.0;
         }
+        self.ballistic_fraction
+            + self.scattered_fraction() * self.multipole_transmittance_hat(s_per_mm, terms)
+    }
+
+    /// `T~(s)` of the multipole alone, per unit light it carries.
+    fn multipole_transmittance_hat(&self, s_per_mm: f64, terms: MultipoleTerms) -> f64 {
         let q = self.q(s_per_mm);
         let d = self.thickness_mm;
         match terms {
@@ -152,7 +204,8 @@ impl Slab {
         let q = self.q(s_per_mm);
         let (r_down, t_down) = self.closed_form(q, self.zb_top_mm, self.zb_bottom_mm);
         let (r_up, t_up) = self.closed_form(q, self.zb_bottom_mm, self.zb_top_mm);
-        [r_down, t_down, r_up, t_up]
+        let (w, b) = (self.scattered_fraction(), self.ballistic_fraction);
+        [w * r_down, b + w * t_down, w * r_up, b + w * t_up]
     }
 
     /// `(R~, T~)` of a finite slab for the whole image series at decay rate q, entered through the face whose
@@ -168,25 +221,32 @@ impl Slab {
         let r = e_l + e_l * (-2.0 * z_in * q).exp()
             - (-(two_l - l) * q).exp() * expm1_ratio(2.0 * l, two_l, q)
             - (-(two_l - l - 2.0 * z_in) * q).exp() * expm1_ratio(2.0 * l + 4.0 * z_in, two_l, q);
-        let t = expm1_ratio(2.0 * l + 2.0 * z_in, two_l, q) * (e_far + e_far * (-2.0 * z_out * q).exp());
+        let t = expm1_ratio(2.0 * l + 2.0 * z_in, two_l, q)
+            * (e_far + e_far * (-2.0 * z_out * q).exp());
         (0.5 * self.alpha_prime * r, 0.5 * self.alpha_prime * t)
     }
 
     /// `R(r)`: reflectance profile at distance r (mm) from the point of entry, mm^-2 (DJ05 eq. 8; Jensen 2001 for d = inf).
     pub fn reflectance(&self, r_mm: f64, terms: MultipoleTerms) -> f64 {
-        self.real_space_sum(terms, |zr, zv| pole(zr, r_mm, self.sigma_tr_per_mm) - pole(zv, r_mm, self.sigma_tr_per_mm))
+        self.scattered_fraction()
+            * self.real_space_sum(terms, |zr, zv| {
+                pole(zr, r_mm, self.sigma_tr_per_mm) - pole(zv, r_mm, self.sigma_tr_per_mm)
+            })
     }
 
     /// `T(r)`: transmittance profile through the far face at distance r (mm), mm^-2; 0 if semi-infinite.
-    /// At the thin-slab cap (l = d) the real source lies on the far face and contributes a point mass at r = 0 that
-    /// no point value can carry; it is present in `transmittance_hat`.
+    /// The light crossing a thin slab without interacting is a point mass at r = 0 that no point value can carry; it
+    /// is present in `transmittance_hat`.
     pub fn transmittance(&self, r_mm: f64, terms: MultipoleTerms) -> f64 {
         if self.is_semi_infinite() {
             return 0.0;
         }
         let d = self.thickness_mm;
         let s = self.sigma_tr_per_mm;
-        self.real_space_sum(terms, |zr, zv| pole(d - zr, r_mm, s) - pole(d - zv, r_mm, s))
+        self.scattered_fraction()
+            * self.real_space_sum(terms, |zr, zv| {
+                pole(d - zr, r_mm, s) - pole(d - zv, r_mm, s)
+            })
     }
 
     /// alpha'/(4 pi) times the sum over image pairs of `pair(z_r,i, z_v,i)`: pairs i = -n..=n, or, for the whole
@@ -213,6 +273,21 @@ impl Slab {
             }
         }
         self.alpha_prime / (4.0 * PI) * sum
+    }
+}
+
+/// `b`, the share of light entering a slab that crosses it without interacting: (1 - tau)^2 below an optical
+/// thickness tau = sigma_t' d of 1, else 0 (see `Slab::new`).
+pub fn ballistic_fraction(
+    sigma_a_per_mm: f64,
+    sigma_s_reduced_per_mm: f64,
+    thickness_mm: f64,
+) -> f64 {
+    let tau = (sigma_a_per_mm + sigma_s_reduced_per_mm) * thickness_mm;
+    if tau < 1.0 {
+        (1.0 - tau) * (1.0 - tau)
+    } else {
+        0.0
     }
 }
 
@@ -270,12 +345,19 @@ mod tests {
     /// The closed-form series equals the explicit sum of many pairs.
     #[test]
     fn closed_form_series_equals_explicit_sum() {
-        for slab in [epidermis_550(), Slab::new(0.01, 1.0, 0.5, 1.4, 1.3), Slab::new(2.0, 0.5, 0.05, 1.0, 1.4)] {
+        for slab in [
+            epidermis_550(),
+            Slab::new(0.01, 1.0, 0.5, 1.4, 1.3),
+            Slab::new(2.0, 0.5, 0.05, 1.0, 1.4),
+        ] {
             for s in [0.0, 0.3, 2.0, 17.0] {
                 for f in [Slab::reflectance_hat, Slab::transmittance_hat] {
                     let all = f(&slab, s, MultipoleTerms::All);
                     let sum = f(&slab, s, MultipoleTerms::Pairs(400));
-                    assert!((all - sum).abs() < 1e-12 * all.abs().max(1e-3), "s={s}: {all} vs {sum}");
+                    assert!(
+                        (all - sum).abs() < 1e-12 * all.abs().max(1e-3),
+                        "s={s}: {all} vs {sum}"
+                    );
                 }
             }
         }
@@ -284,15 +366,26 @@ mod tests {
     /// The shared-exponential evaluation equals the four separate transforms.
     #[test]
     fn hats_both_ways_equal_separate_calls() {
-        for slab in [epidermis_550(), Slab::new(0.01, 1.0, 0.5, 1.4, 1.3), Slab::new(0.0, 3.0, 0.4, 1.4, 1.0)] {
+        for slab in [
+            epidermis_550(),
+            Slab::new(0.01, 1.0, 0.5, 1.4, 1.3),
+            Slab::new(0.0, 3.0, 0.4, 1.4, 1.0),
+        ] {
             for s in [0.0, 0.3, 2.0, 17.0, 3000.0] {
                 let t = MultipoleTerms::All;
                 let up = slab.flipped();
-                let separate =
-                    [slab.reflectance_hat(s, t), slab.transmittance_hat(s, t), up.reflectance_hat(s, t), up.transmittance_hat(s, t)];
+                let separate = [
+                    slab.reflectance_hat(s, t),
+                    slab.transmittance_hat(s, t),
+                    up.reflectance_hat(s, t),
+                    up.transmittance_hat(s, t),
+                ];
                 let shared = slab.hats_both_ways(s, t);
                 for k in 0..4 {
-                    assert!((shared[k] - separate[k]).abs() <= 1e-14 * separate[k].abs().max(1e-300), "{k} s={s}: {shared:?} {separate:?}");
+                    assert!(
+                        (shared[k] - separate[k]).abs() <= 1e-14 * separate[k].abs().max(1e-300),
+                        "{k} s={s}: {shared:?} {separate:?}"
+                    );
                 }
             }
         }
@@ -305,7 +398,12 @@ mod tests {
         let r = slab.reflectance_hat(0.0, MultipoleTerms::All);
         let t = slab.transmittance_hat(0.0, MultipoleTerms::All);
         assert!((r + t - 1.0).abs() < 1e-14, "{r} + {t}");
-        let (l, zb0, zbd, d) = (slab.source_depth_mm, slab.zb_top_mm, slab.zb_bottom_mm, slab.thickness_mm);
+        let (l, zb0, zbd, d) = (
+            slab.source_depth_mm,
+            slab.zb_top_mm,
+            slab.zb_bottom_mm,
+            slab.thickness_mm,
+        );
         assert!((r - (d + zbd - l) / (d + zb0 + zbd)).abs() < 1e-14);
     }
 
@@ -328,7 +426,10 @@ mod tests {
         let d = 0.25;
         let at = |ss: f64| {
             let slab = Slab::new(0.1, ss, d, 1.4, 1.0);
-            (slab.reflectance_hat(0.0, MultipoleTerms::All), slab.transmittance_hat(0.0, MultipoleTerms::All))
+            (
+                slab.reflectance_hat(0.0, MultipoleTerms::All),
+                slab.transmittance_hat(0.0, MultipoleTerms::All),
+            )
         };
         let sigma_t_at_cap = 1.0 / d;
         let (r_lo, t_lo) = at(sigma_t_at_cap - 0.1 - 1e-9);
@@ -336,7 +437,10 @@ mod tests {
         assert!((r_lo - r_hi).abs() < 1e-7 && (t_lo - t_hi).abs() < 1e-7);
         for ss in [1e-6, 0.01, 0.5, 3.0, 3.9, 4.0, 100.0] {
             let (r, t) = at(ss);
-            assert!(r.is_finite() && t.is_finite() && r >= 0.0 && t >= 0.0 && r + t <= 1.0, "ss={ss}: {r} {t}");
+            assert!(
+                r.is_finite() && t.is_finite() && r >= 0.0 && t >= 0.0 && r + t <= 1.0,
+                "ss={ss}: {r} {t}"
+            );
         }
     }
 }

@@ -107,9 +107,21 @@ pub fn write_face_params(path: &Path, size: usize) -> Result<(), SkinError> {
     write_example_params(path, ExampleKind::Face, size)
 }
 
+/// Largest example side, texels: 8192 x 8192 x 4 channels of f32 is 1 GiB in memory before it is written.
+pub const MAX_EXAMPLE_SIZE: usize = 8192;
+
+/// `size` if it is in [1, `MAX_EXAMPLE_SIZE`], else an error naming it (checked before anything is allocated).
+pub fn check_example_size(size: usize) -> Result<usize, SkinError> {
+    if (1..=MAX_EXAMPLE_SIZE).contains(&size) {
+        Ok(size)
+    } else {
+        Err(SkinError::invalid("size", format!("the example side must be in [1, {MAX_EXAMPLE_SIZE}] texels; got {size}")))
+    }
+}
+
 /// Write an example map as one EXR with the four parameter channels.
 pub fn write_example_params(path: &Path, kind: ExampleKind, size: usize) -> Result<(), SkinError> {
-    let image = example_params(kind, size);
+    let image = example_params(kind, check_example_size(size)?);
     let planes: Vec<&[f32]> = image
         .planes
         .iter()

@@ -74,8 +74,11 @@ impl Default for TableResolution {
     }
 }
 
-/// Most nodes a table may have (a 1000-cube; the default has 3927).
-const MAX_TABLE_NODES: usize = 1_000_000_000;
+/// Most nodes a table may have: 10^6 (48 MB, minutes to build on a few cores; the default has 3927). Past it a build
+/// would run for hours: refused before any allocation.
+pub const MAX_TABLE_NODES: usize = 1_000_000;
+/// Most points `measure_error` evaluates (each is one direct evaluation, about a millisecond).
+pub const MAX_TABLE_CHECK_SAMPLES: usize = 1_000_000;
 
 impl TableResolution {
     pub fn node_count(&self) -> usize {
@@ -207,25 +210,36 @@ impl MaterialTable {
         Ok((table, false))
     }
 
+    /// The cache file: magic, the FNV-1a checksum of the body (8 bytes, little endian), then the body: the three
+    /// axis sizes (u32) and the node values (f32), little endian.
     fn to_bytes(&self) -> Vec<u8> {
         let r = self.resolution;
-        let mut bytes = Vec::with_capacity(CACHE_MAGIC.len() + 12 + self.log_values.len() * STORED * 4);
-        bytes.extend_from_slice(CACHE_MAGIC);
+        let mut body = Vec::with_capacity(12 + self.log_values.len() * STORED * 4);
         for n in [r.melanin, r.melanin_blend, r.hemoglobin] {
-            bytes.extend_from_slice(&(n as u32).to_le_bytes());
+            body.extend_from_slice(&(n as u32).to_le_bytes());
         }
         for v in &self.log_values {
             for x in v {
-                bytes.extend_from_slice(&x.to_le_bytes());
+                body.extend_from_slice(&x.to_le_bytes());
             }
         }
+        let mut bytes = Vec::with_capacity(CACHE_MAGIC.len() + 8 + body.len());
+        bytes.extend_from_slice(CACHE_MAGIC);
+        bytes.extend_from_slice(&fnv1a(&body).to_le_bytes());
+        bytes.extend_from_slice(&body);
         bytes
     }
 
-    /// A cached table, or None if the file is missing, of another size, or damaged.
+    /// A cached table, or None if the file is missing, of another size, or damaged (checksum mismatch: any flipped
+    /// byte), so that the caller rebuilds it.
     fn read(path: &Path, method: SubsurfaceMethod, resolution: TableResolution) -> Option<MaterialTable> {
         let bytes = std::fs::read(path).ok()?;
-        let body = bytes.strip_prefix(CACHE_MAGIC)?;
+        let rest = bytes.strip_prefix(CACHE_MAGIC)?;
+        let checksum = u64::from_le_bytes(rest.get(..8)?.try_into().ok()?);
+        let body = &rest[8..];
+        if fnv1a(body) != checksum {
+            return None;
+        }
         let header: Vec<usize> = body.get(..12)?.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize).collect();
         let r = resolution;
         if header != [r.melanin, r.melanin_blend, r.hemoglobin] || body.len() != 12 + r.node_count() * STORED * 4 {
@@ -240,8 +254,16 @@ impl MaterialTable {
     }
 }
 
-/// First bytes of a cached table file.
-const CACHE_MAGIC: &[u8] = b"spectral-skin table v2\n";
+/// First bytes of a cached table file (v3: one method per table, with a checksum; older files are not read and get
+/// rebuilt).
+const CACHE_MAGIC: &[u8] = b"spectral-skin table v3
+";
+
+/// 64-bit FNV-1a (Fowler, Noll & Vo; offset basis 0xcbf29ce484222325, prime 0x100000001b3): detects any single
+/// flipped byte and, with probability 1 - 2^-64, any other corruption.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+}
 
 /// FNV-1a hash of everything the table depends on: crate version, request (accuracy, model, working space, target),
 /// method and resolution. Stable across runs and platforms.
@@ -253,7 +275,7 @@ fn cache_key(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableRes
         method.name(),
         resolution
     );
-    text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+    fnv1a(text.as_bytes())
 }
 
 /// The per-user cache folder: `$SPECTRAL_SKIN_CACHE_DIR`, else `$XDG_CACHE_HOME/spectral-skin`, else
@@ -292,6 +314,12 @@ pub struct TableError {
 /// Measure the table's error at `samples` points: cell centres (where trilinear error peaks) and pseudo-random points
 /// (a fixed low-discrepancy sequence, so the figure is reproducible), against `prepared.material` evaluated directly.
 pub fn measure_error(table: &MaterialTable, prepared: &Prepared, samples: usize) -> Result<TableError, SkinError> {
+    if samples > MAX_TABLE_CHECK_SAMPLES {
+        return Err(SkinError::invalid(
+            "table check samples",
+            format!("at most {MAX_TABLE_CHECK_SAMPLES} points (each is a direct evaluation); got {samples}"),
+        ));
+    }
     let r = table.resolution;
     let cells = [r.melanin - 1, r.melanin_blend - 1, r.hemoglobin - 1];
     let points: Vec<[f64; 3]> = (0..samples)
