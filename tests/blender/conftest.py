@@ -274,6 +274,60 @@ def pixel_centres_x(ortho_scale: float, width: int, center_x: float = 0.0) -> np
     return center_x + ((np.arange(width) + 0.5) / width - 0.5) * ortho_scale
 
 
+def half_shadow_scene(scene, material, ortho_mm: float, width: int, height: int, occluder_mm: float = 1.5):
+    """The half-shadow edge scene (blender.md section 4): a thick slab with `material` under a sun of irradiance 1 W/m^2
+    from straight above, a black world, and a black half-plane `occluder_mm` above the slab over x > 0 that casts a
+    hard shadow but is invisible to the camera; an orthographic top camera `ortho_mm` wide. Returns the x (mm) of the
+    image columns' centres."""
+    set_world(scene, strength=0.0, color=(0.0, 0.0, 0.0))
+    slab = add_slab()
+    assign(slab, material)
+    occluder = add_plane("Occluder", 0.0, 1.0, -1.0, 1.0, z=occluder_mm * MM)
+    assign(occluder, black_material())
+    occluder.visible_camera = False  # casts the shadow, but camera rays pass through
+    add_sun(scene, strength=1.0, angle=0.0)  # irradiance 1 W/m^2: piL = A on a lit Lambertian of albedo A
+    ortho = ortho_mm * MM
+    add_top_camera(scene, ortho_scale=ortho, width=width, height=height)
+    return pixel_centres_x(ortho, width) / MM
+
+
+def render_edge(scene, material, ortho_mm: float, width: int, height: int, samples: int, seed: int = 1):
+    """Cycles render of half_shadow_scene: returns (x in mm, piL(x)/E as (width, 3), rows averaged). Pixel-centre
+    sampling (filter width 0.01 px); the EXR holds radiance L and the sun gives E = 1 W/m^2, so piL/E = pi * L."""
+    x_mm = half_shadow_scene(scene, material, ortho_mm, width, height)
+    img = render(scene, samples=samples, filter_width=0.01, seed=seed)
+    return x_mm, math.pi * img.mean(axis=0)
+
+
+def fit_burley_edge(x_mm: np.ndarray, measured: np.ndarray, d_lo_mm: float, d_hi_mm: float) -> tuple[float, float, float]:
+    """Least-squares fit of scale * BurleyEdge(x; d) to one channel's rendered edge (both the scale, i.e. the rendered
+    flat albedo, and the Burley length d free): golden-section search on log d in [d_lo_mm, d_hi_mm], the scale
+    solved linearly for each d. Returns (d_mm, scale, rms residual / scale)."""
+    measured = np.asarray(measured, dtype=np.float64)
+
+    def solve(log_d: float) -> tuple[float, float]:
+        shape = burley_edge_response(x_mm, math.exp(log_d), 1.0)
+        scale = float(shape @ measured / (shape @ shape))
+        return float(np.mean((measured - scale * shape) ** 2)), scale
+
+    a, b = math.log(d_lo_mm), math.log(d_hi_mm)
+    ratio = (math.sqrt(5) - 1) / 2
+    c, d = b - ratio * (b - a), a + ratio * (b - a)
+    fc, fd = solve(c)[0], solve(d)[0]
+    while b - a > 1e-4:
+        if fc < fd:
+            b, d, fd = d, c, fc
+            c = b - ratio * (b - a)
+            fc = solve(c)[0]
+        else:
+            a, c, fc = c, d, fd
+            d = a + ratio * (b - a)
+            fd = solve(d)[0]
+    log_d = 0.5 * (a + b)
+    mse, scale = solve(log_d)
+    return math.exp(log_d), scale, math.sqrt(mse) / scale
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # Reference models of the Cycles Christensen-Burley BSSRDF (blender.md sections 1 and 4)
 
@@ -348,6 +402,72 @@ def profile_edge_fraction(x: np.ndarray, radii: np.ndarray, profile: np.ndarray)
         f = pr * 2 * r * np.arccos(np.clip(xi / r, -1, 1)) * 2 * t
         out[i] = _trapezoid(f, t) / total
     return out, total
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# EEVEE (engine id BLENDER_EEVEE_NEXT in 4.2-4.5, BLENDER_EEVEE from 5.0)
+
+_EEVEE_USED = False  # set once an EEVEE render ran in this process (see pytest_unconfigure)
+
+
+def engine_ids() -> list[str]:
+    """The render engine ids this bpy offers (scene.render.engine's enum)."""
+    bpy = _bpy()
+    return [e.identifier for e in bpy.context.scene.render.bl_rna.properties["engine"].enum_items]
+
+
+def eevee_engine_id() -> str:
+    """EEVEE's engine id in the running bpy."""
+    ids = engine_ids()
+    found = [e for e in ("BLENDER_EEVEE_NEXT", "BLENDER_EEVEE") if e in ids]
+    assert found, ids
+    return found[0]
+
+
+def use_eevee(scene, samples: int):
+    """Switch the scene to EEVEE with `samples` render samples, the smallest pixel filter and soft shadows off (hard
+    shadow edges); marks the process as having used EEVEE."""
+    global _EEVEE_USED
+    _EEVEE_USED = True
+    scene.render.engine = eevee_engine_id()
+    ee = scene.eevee
+    ee.taa_render_samples = samples
+    if hasattr(ee, "use_shadows"):
+        ee.use_shadows = True
+    if hasattr(ee, "use_soft_shadows"):
+        ee.use_soft_shadows = False
+    scene.render.filter_size = 0.0
+    return scene
+
+
+def render_eevee(scene) -> np.ndarray:
+    """Render the scene with its current (EEVEE) engine to a temporary EXR; RGB float64 (H, W, 3), row 0 = top row."""
+    bpy = _bpy()
+    with tempfile.TemporaryDirectory(prefix="spectral_skin_eevee_") as tmp:
+        path = os.path.join(tmp, "render.exr")
+        scene.render.filepath = path
+        bpy.ops.render.render(write_still=True)
+        img = read_exr(path)
+    return img[:, :, :3].astype(np.float64)
+
+
+_EXIT_STATUS = 0
+
+
+def pytest_sessionfinish(session, exitstatus):
+    global _EXIT_STATUS
+    _EXIT_STATUS = int(exitstatus)
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config):
+    """bpy 4.5 can hang at interpreter exit after EEVEE rendered: once the report is out, end the process at once."""
+    if _EEVEE_USED:
+        import sys
+
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(_EXIT_STATUS)
 
 
 @pytest.fixture

@@ -50,13 +50,15 @@ def _evaluate(preset: str) -> dict:
     return spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"))
 
 
-def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, size_px: int = 64, region_px: int = 32):
-    """Render the white-world flat slab; return the mean RGB over the central region_px x region_px pixels."""
+def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, size_px: int = 64, region_px: int = 32,
+                    ortho_m: float = 0.1):
+    """Render the white-world flat slab (an image ortho_m wide); return the mean RGB over the central region_px x
+    region_px pixels."""
     set_world(scene, strength=1.0)
     slab = add_slab()
     mat, _ = principled_sss("Skin", method, base_color, radius_mm)
     assign(slab, mat)
-    add_top_camera(scene, ortho_scale=0.1, width=size_px, height=size_px)
+    add_top_camera(scene, ortho_scale=ortho_m, width=size_px, height=size_px)
     img = render(scene, samples=samples)
     lo = (size_px - region_px) // 2
     region = img[lo : lo + region_px, lo : lo + region_px]
@@ -253,6 +255,10 @@ def test_burley_edge_profile(scene):
 # predicted at all. 1 % = that 0.3 % model allowance plus > 4 standard errors in every channel.
 RW_RTOL = 1.0e-2
 RW_SPP = 1024
+# The random-walk slab is seen close up, 10 mm over 64 px (0.16 mm per pixel): Blender 4.2 renders a random-walk
+# channel whose radius is below about a quarter of a pixel as plain diffuse with its Base Color (measured: the
+# african blue channel, Radius*Scale 0.34 mm, came out 21.6 % bright at 1.56 mm per pixel); 4.5 and later do not.
+RW_ORTHO_M = 0.01
 
 
 @pytest.mark.parametrize("preset", PRESETS)
@@ -261,7 +267,8 @@ def test_random_walk_flat_slab_albedo(scene, preset):
     rw = res["methods"]["random_walk"]
     expected = np.asarray(res["diffuse_reflectance_rgb"])
     mean = _flat_slab_mean(
-        scene, "RANDOM_WALK", rw["base_color"], rw["subsurface_radius_mm"], samples=RW_SPP, region_px=48
+        scene, "RANDOM_WALK", rw["base_color"], rw["subsurface_radius_mm"], samples=RW_SPP, region_px=48,
+        ortho_m=RW_ORTHO_M,
     )
     rel = mean / expected - 1.0
     print(
