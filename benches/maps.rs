@@ -15,9 +15,9 @@ fn bench_maps(c: &mut Criterion) {
     let mut group = c.benchmark_group("maps");
     group.sample_size(10);
     group.bench_function("table_build_default", |b| {
-        b.iter(|| MaterialTable::build(&prepared, TableResolution::default()).unwrap())
+        b.iter(|| MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, TableResolution::default()).unwrap())
     });
-    let table = MaterialTable::build(&prepared, TableResolution::default()).unwrap();
+    let table = MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, TableResolution::default()).unwrap();
     group.bench_function("table_lookup_1e5_texels", |b| {
         b.iter(|| {
             let mut sum = 0.0f32;

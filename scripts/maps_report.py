@@ -136,7 +136,7 @@ def main() -> None:
         f"Measured error against direct evaluation at {err.get('samples', 0)} points (half at cell centres, half a "
         f"low-discrepancy sequence over the whole domain): max relative **{100 * err.get('max_albedo_relative', float('nan')):.3f} %** "
         f"in albedo, **{100 * err.get('max_radius_relative', float('nan')):.3f} %** in radius, "
-        f"{100 * err.get('max_random_walk_base_color_relative', float('nan')):.3f} % in the Random Walk Base Color "
+        f"{100 * err.get('max_base_color_relative', float('nan')):.3f} % in the method's Base Color "
         "(bounds: 0.5 % and 1 %).",
         "",
         f"Exact mode evaluates every texel directly, as the table's cold build evaluates every node: it is run at "

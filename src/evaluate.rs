@@ -10,7 +10,8 @@ use crate::color::{placement_rgb_weights, spectrum_to_rgb, WavelengthGrid, Worki
 use crate::diffusion::{reflectance_profiles, Combination, LayerStack};
 use crate::error::{check_range, SkinError};
 use crate::fit::burley::{fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM};
-use crate::fit::random_walk::{random_walk_base_color, random_walk_radius_scale};
+use crate::fit::blender_target::{Target, TargetInfo};
+pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
 use crate::surface::{specular_from_oiliness, SpecularParams};
@@ -51,6 +52,8 @@ pub struct Request {
     pub model: SkinModel,
     pub combination: Combination,
     pub working_space: WorkingSpace,
+    /// The Blender version and engine the Principled inputs are for.
+    pub target: Target,
 }
 
 impl Request {
@@ -59,31 +62,31 @@ impl Request {
     }
 }
 
-/// Base Color and Subsurface Radius for one Cycles subsurface method.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct MethodParams {
-    /// Principled Base Color, linear RGB in the request's working space.
-    pub base_color: [f64; 3],
-    /// Principled Subsurface Radius x Subsurface Scale, mm per channel.
-    pub subsurface_radius_mm: [f64; 3],
-    /// The flat-slab albedo Cycles is expected to render with these inputs (equals the model's for Burley; for Random
-    /// Walk, lower where the target is out of the method's reach).
-    pub expected_albedo: [f64; 3],
-}
-
-/// Base Color and radius for every supported method.
+/// Base Color and radius for every method the target offers (serialised keyed by method name; a method the
+/// target's Blender does not offer is absent).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Methods {
     pub burley: MethodParams,
     pub random_walk: MethodParams,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub random_walk_legacy: Option<MethodParams>,
+    pub random_walk_skin: MethodParams,
 }
 
 impl Methods {
-    pub fn get(&self, method: SubsurfaceMethod) -> &MethodParams {
+    /// `method`'s inputs, if the target offers it.
+    pub fn get(&self, method: SubsurfaceMethod) -> Option<&MethodParams> {
         match method {
-            SubsurfaceMethod::Burley => &self.burley,
-            SubsurfaceMethod::RandomWalk => &self.random_walk,
+            SubsurfaceMethod::Burley => Some(&self.burley),
+            SubsurfaceMethod::RandomWalk => Some(&self.random_walk),
+            SubsurfaceMethod::RandomWalkLegacy => self.random_walk_legacy.as_ref(),
+            SubsurfaceMethod::RandomWalkSkin => Some(&self.random_walk_skin),
         }
+    }
+
+    /// The offered methods with their inputs, in Blender's menu order.
+    pub fn iter(&self) -> impl Iterator<Item = (SubsurfaceMethod, &MethodParams)> {
+        SubsurfaceMethod::ALL.into_iter().filter_map(|m| self.get(m).map(|p| (m, p)))
     }
 }
 
@@ -119,6 +122,8 @@ pub struct Evaluation {
     pub accuracy: Accuracy,
     pub model: SkinModel,
     pub combination: Combination,
+    /// The Blender version and engine `methods` are for, and whether that version was tested.
+    pub target: TargetInfo,
     /// The model's total diffuse reflectance (subsurface only): what a rendered flat slab must show.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub diffuse_reflectance_rgb: Option<[f64; 3]>,
@@ -151,7 +156,7 @@ pub struct Prepared {
     fit_s: Vec<f64>,
 }
 
-/// The per-texel outputs of a material: the RGB albedo and both methods' inputs.
+/// The per-texel outputs of a material: the RGB albedo, the Burley fit and every method's inputs for the target.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Material {
     pub albedo: [f64; 3],
@@ -226,7 +231,7 @@ impl Prepared {
         let stacks = self.stacks(params)?;
         let albedo = spectrum_to_rgb(&self.totals(&stacks), &self.weights);
         let fits = self.fits(&stacks, albedo, false);
-        Ok(Material { albedo, fits, methods: methods_from(albedo, &fits) })
+        Ok(Material { albedo, fits, methods: methods_from(&self.request.target, albedo, &fits)? })
     }
 }
 
@@ -250,7 +255,7 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
     let (methods, radius_fit) = if out.radius {
         let fits = prepared.fits(&stacks, albedo, true);
         work.transform_samples += stacks.len() * prepared.fit_s.len();
-        (Some(methods_from(albedo, &fits)), Some(fits))
+        (Some(methods_from(&request.target, albedo, &fits)?), Some(fits))
     } else {
         (None, None)
     };
@@ -276,6 +281,7 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
         accuracy: *acc,
         model: request.model,
         combination: request.combination,
+        target: request.target.info(),
         diffuse_reflectance_rgb: needs_albedo.then_some(albedo),
         default_method: DEFAULT_METHOD.name(),
         methods,
@@ -289,21 +295,17 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
     })
 }
 
-/// Burley takes the albedo and the fitted radius as they are; Random Walk gets a compensated Base Color and a radius
-/// scaled for its wider profile (see `fit::random_walk`).
-fn methods_from(albedo: [f64; 3], fits: &[BurleyFit; 3]) -> Methods {
-    let burley = MethodParams {
-        base_color: albedo,
-        subsurface_radius_mm: fits.map(|f| f.radius_mm),
-        expected_albedo: albedo,
-    };
-    let rw = [0, 1, 2].map(|c| random_walk_base_color(albedo[c]));
-    let random_walk = MethodParams {
-        base_color: rw.map(|r| r.base_color),
-        subsurface_radius_mm: [0, 1, 2].map(|c| fits[c].radius_mm * random_walk_radius_scale(rw[c].base_color)),
-        expected_albedo: rw.map(|r| r.achieved_albedo),
-    };
-    Methods { burley, random_walk }
+/// Every method's inputs on `target` from the albedo and the Burley fit (`fit::blender_target`).
+fn methods_from(target: &Target, albedo: [f64; 3], fits: &[BurleyFit; 3]) -> Result<Methods, SkinError> {
+    let radius = fits.map(|f| f.radius_mm);
+    let map = |m: SubsurfaceMethod| target.map(m, albedo, radius);
+    let offers_legacy = target.methods().any(|m| m == SubsurfaceMethod::RandomWalkLegacy);
+    Ok(Methods {
+        burley: map(SubsurfaceMethod::Burley)?,
+        random_walk: map(SubsurfaceMethod::RandomWalk)?,
+        random_walk_legacy: if offers_legacy { Some(map(SubsurfaceMethod::RandomWalkLegacy)?) } else { None },
+        random_walk_skin: map(SubsurfaceMethod::RandomWalkSkin)?,
+    })
 }
 
 fn validate_model(m: &SkinModel) -> Result<(), SkinError> {

@@ -22,6 +22,7 @@ use crate::color::{WavelengthPlacement, WorkingSpace, ALL_WORKING_SPACES};
 use crate::diffusion::{Combination, Layer, MultipoleTerms};
 use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
+use crate::fit::blender_target::{describe_targets, BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{ParamImage, Plane, MAX_TEXELS, PARAM_CHANNELS};
 use crate::maps::lut::TableResolution;
@@ -147,6 +148,24 @@ fn resolve_params(preset: Option<&str>, explicit: [Option<f64>; 4]) -> PyResult<
     Ok(SkinParams::new(m, b, h, o)?)
 }
 
+/// `blender=` and `engine=` to a [`Target`]: the version as "MAJOR.MINOR" (or "MAJOR.MINOR.PATCH") or a tuple of
+/// ints such as `bpy.app.version`; None is the current release. The core validates both and names the range.
+fn target_from(blender: Option<&Bound<'_, PyAny>>, engine: &str) -> PyResult<Target> {
+    const EXPECTED: &str = "blender must be a version string such as \"5.3\" or a tuple such as (5, 3, 0)";
+    let version = match blender {
+        None => CURRENT_RELEASE,
+        Some(obj) if obj.is_instance_of::<PyString>() => obj.extract::<String>()?.parse::<BlenderVersion>()?,
+        Some(obj) => {
+            if obj.is_instance_of::<PyBytes>() || obj.is_instance_of::<PyBool>() {
+                return Err(PyTypeError::new_err(EXPECTED));
+            }
+            let parts: Vec<i64> = obj.extract().map_err(|_| PyTypeError::new_err(EXPECTED))?;
+            BlenderVersion::from_parts(&parts)?
+        }
+    };
+    Ok(Target { blender: version, engine: Engine::from_name(engine)? })
+}
+
 /// An integer keyword to the `u32` the core takes; outside `u32` is an out-of-range error (the core checks its own,
 /// narrower ranges).
 fn to_u32(name: &'static str, meaning: &'static str, value: i64) -> PyResult<u32> {
@@ -167,6 +186,7 @@ struct Knobs<'a> {
     profile_count: Option<i64>,
     combination: &'a str,
     working_space: &'a str,
+    target: Target,
 }
 
 impl Knobs<'_> {
@@ -200,6 +220,7 @@ impl Knobs<'_> {
             accuracy,
             combination: by_name("combination", self.combination, &COMBINATIONS)?,
             working_space: by_name("working_space", self.working_space, &WORKING_SPACES)?,
+            target: self.target,
             ..Request::default()
         })
     }
@@ -281,9 +302,10 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
         let Value::Object(json) = serde_json::to_value(methods).map_err(internal)? else {
             return Err(internal("methods do not serialise to an object"));
         };
-        let field = |name: &str| json.get(name).cloned().unwrap_or(Value::Null);
-        m.set_item("burley", method_dict(py, &field("burley"), &methods.burley)?)?;
-        m.set_item("random_walk", method_dict(py, &field("random_walk"), &methods.random_walk)?)?;
+        for (method, params) in methods.iter() {
+            let field = json.get(method.name()).cloned().unwrap_or(Value::Null);
+            m.set_item(method.name(), method_dict(py, &field, params)?)?;
+        }
         dict.set_item("methods", m)?;
     }
     if let Some(w) = &e.wavelengths_nm {
@@ -316,7 +338,7 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
         preset = None, outputs = None, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
-        combination = "directional", working_space = "Linear Rec.709"
+        combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -337,6 +359,8 @@ fn evaluate_py<'py>(
     profile_count: Option<i64>,
     combination: &str,
     working_space: &str,
+    blender: Option<&Bound<'py, PyAny>>,
+    engine: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = resolve_params(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
     let knobs = Knobs {
@@ -349,6 +373,7 @@ fn evaluate_py<'py>(
         profile_count,
         combination,
         working_space,
+        target: target_from(blender, engine)?,
     };
     let request = knobs.request(parse_outputs(outputs)?)?;
     let evaluation = detached(py, move || crate::evaluate(&params, &request))?;
@@ -398,6 +423,7 @@ fn profile_py<'py>(
         profile_count,
         combination,
         working_space,
+        target: Target::default(),
     };
     let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
     let request = knobs.request(outputs)?;
@@ -486,8 +512,6 @@ fn layered_reflectance_py<'py>(
 
 // --- maps ---------------------------------------------------------------------------------------------------------
 
-/// The subsurface methods accepted by name (their serde names).
-const SUBSURFACE_METHODS: [SubsurfaceMethod; 2] = [SubsurfaceMethod::Burley, SubsurfaceMethod::RandomWalk];
 /// What `params` of `maps` must be, for messages.
 const PARAMS_ARRAY: &str = "a float32 (H, W, 4) numpy array (channels melanin, melanin_blend, hemoglobin, oiliness)";
 /// What a per-parameter keyword of `maps` must be, for messages.
@@ -665,7 +689,8 @@ fn python_clamp_hint(e: SkinError) -> SkinError {
         params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
         method = "burley", exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
         wavelength_placement = None,
-        working_space = "Linear Rec.709", table_resolution = None, table_cache = true
+        working_space = "Linear Rec.709", table_resolution = None, table_cache = true, blender = None,
+        engine = "cycles"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -685,6 +710,8 @@ fn maps_py<'py>(
     working_space: &str,
     table_resolution: Option<&Bound<'py, PyAny>>,
     table_cache: bool,
+    blender: Option<&Bound<'py, PyAny>>,
+    engine: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let start = Instant::now();
     // Settings first: their errors come before any copy.
@@ -698,9 +725,12 @@ fn maps_py<'py>(
         profile_count: None,
         combination: "directional",
         working_space,
+        target: target_from(blender, engine)?,
     };
+    let method = SubsurfaceMethod::from_name(method)?;
+    knobs.target.method_entry(method)?;
     let settings = MapSettings {
-        method: by_name("method", method, &SUBSURFACE_METHODS)?,
+        method,
         strategy: if exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
         clamp,
         table: self::table_resolution(table_resolution)?,
@@ -846,6 +876,14 @@ fn maps_py<'py>(
     Ok(dict)
 }
 
+/// The Blender target table: supported and tested versions, engines with their ids per version, methods per version
+/// with their Blender identifiers and models (see `_core.pyi`).
+#[pyfunction]
+#[pyo3(name = "blender_targets")]
+fn blender_targets_py(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    json_to_py(py, &serde_json::to_value(describe_targets()).map_err(internal)?)
+}
+
 /// spectral-skin's compiled core: Donner & Jensen 2006's spectral skin BSSRDF.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -857,5 +895,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parameter_ranges_py, m)?)?;
     m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
     m.add_function(wrap_pyfunction!(maps_py, m)?)?;
+    m.add_function(wrap_pyfunction!(blender_targets_py, m)?)?;
     Ok(())
 }

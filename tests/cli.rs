@@ -119,3 +119,48 @@ fn accuracy_levels() {
     assert_eq!(overridden["work"]["wavelengths"], 41);
     assert_eq!(overridden["accuracy"]["fit_frequencies_per_decade"], 16.0);
 }
+
+/// `--blender` and `--engine` choose the target; the JSON names it and lists the methods that Blender offers;
+/// unsupported versions and methods a version lacks are clear errors.
+#[test]
+fn eval_and_maps_take_a_target() {
+    let out = run(&["eval", "--preset", "caucasian", "--blender", "5.2", "--engine", "eevee", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["target"], serde_json::json!({"blender": "5.2", "engine": "eevee", "tested": true}));
+    let methods: Vec<&String> = j["methods"].as_object().unwrap().keys().collect();
+    assert_eq!(methods, ["burley", "random_walk", "random_walk_legacy", "random_walk_skin"]);
+    let default = eval_json("caucasian");
+    assert_eq!(default["target"], serde_json::json!({"blender": "5.3", "engine": "cycles", "tested": true}));
+    let out = run(&["eval", "--preset", "asian", "--blender", "5.9", "--method", "random-walk-legacy"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("untested") && text.contains("random_walk_legacy") && !text.contains("burley"), "{text}");
+    for (args, needle) in [
+        (vec!["eval", "--preset", "asian", "--blender", "4.1"], "4.2 and newer"),
+        (vec!["eval", "--preset", "asian", "--blender", "five"], "MAJOR.MINOR"),
+        (vec!["eval", "--preset", "asian", "--engine", "workbench"], "eevee"),
+        (vec!["eval", "--preset", "asian", "--blender", "5.0", "--method", "random-walk-legacy"], "not offered by Blender 5.0"),
+    ] {
+        let out = run(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("maps");
+    let legacy_in_5_0 = run(&[
+        "maps", "--melanin", "0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3",
+        "--out", out_dir.to_str().unwrap(), "--method", "random-walk-legacy", "--blender", "5.0",
+    ]);
+    assert_eq!(legacy_in_5_0.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&legacy_in_5_0.stderr).contains("random_walk_legacy is not offered by Blender 5.0"));
+    assert!(!out_dir.exists(), "nothing written on a refused target");
+    // The sidecar names the target.
+    let params = dir.path().join("uniform.exr");
+    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "4", "--kind", "uniform"]).status.success());
+    let out = run(&["maps", "--params", params.to_str().unwrap(), "--out", out_dir.to_str().unwrap(), "--blender", "4.5", "--engine", "eevee"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["report"]["target"], serde_json::json!({"blender": "4.5", "engine": "eevee", "tested": true}));
+}

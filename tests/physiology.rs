@@ -94,7 +94,7 @@ proptest! {
         let a = ev.diffuse_reflectance_rgb.unwrap();
         prop_assert!(a.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 1.0), "{a:?}");
         let methods = ev.methods.unwrap();
-        for mp in [methods.burley, methods.random_walk] {
+        for (_, mp) in methods.iter() {
             prop_assert!(mp.subsurface_radius_mm.iter().all(|v| v.is_finite() && *v > 0.0), "{mp:?}");
             prop_assert!(mp.base_color.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)), "{mp:?}");
             prop_assert!((0..3).all(|c| mp.expected_albedo[c] <= a[c] + 1e-9));

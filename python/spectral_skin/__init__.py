@@ -11,6 +11,7 @@ Functions:
     presets: the named parameter sets.
     layered_reflectance: the layered diffusion solver alone, for checks against other solvers.
     maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
+    blender_targets: the Blender versions, engines and subsurface methods the mappings target.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received.
@@ -19,6 +20,7 @@ range and the value received.
 from ._core import (
     SpectralSkinError,
     __version__,
+    blender_targets,
     evaluate,
     layered_reflectance,
     maps,
@@ -30,6 +32,7 @@ from ._core import (
 __all__ = [
     "SpectralSkinError",
     "__version__",
+    "blender_targets",
     "evaluate",
     "layered_reflectance",
     "maps",

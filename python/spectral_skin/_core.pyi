@@ -10,7 +10,17 @@ from typing import Any, Literal, TypedDict
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets", "profile"]
+__all__ = [
+    "SpectralSkinError",
+    "__version__",
+    "blender_targets",
+    "evaluate",
+    "layered_reflectance",
+    "maps",
+    "parameter_ranges",
+    "presets",
+    "profile",
+]
 
 __version__: str
 
@@ -20,7 +30,9 @@ _MapArray = npt.NDArray[np.float32] | npt.NDArray[np.float64]
 
 _Combination = Literal["directional", "symmetric"]
 _WorkingSpace = Literal["Linear Rec.709", "Linear Rec.2020", "ACEScg"]
-_Method = Literal["burley", "random_walk"]
+_Method = Literal["burley", "random_walk", "random_walk_legacy", "random_walk_skin"]
+_Engine = Literal["cycles", "eevee"]
+_BlenderVersion = str | tuple[int, int] | tuple[int, int, int]
 _AccuracyLevel = Literal["draft", "default", "reference"]
 _WavelengthPlacement = Literal["uniform", "cmf_adapted", "rgb_shortcut"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
@@ -58,6 +70,8 @@ def evaluate(
     profile_count: int | None = None,
     combination: _Combination | str = "directional",
     working_space: _WorkingSpace | str = "Linear Rec.709",
+    blender: _BlenderVersion | None = None,
+    engine: _Engine | str = "cycles",
 ) -> dict[str, Any]:
     """Evaluate the skin model; compute only the requested outputs.
 
@@ -88,14 +102,23 @@ def evaluate(
         working_space: linear RGB space of every RGB output, named as Blender 5.0's working spaces:
             "Linear Rec.709", "Linear Rec.2020" (both D65) or "ACEScg" (AP1 primaries, ACES white; the D65 XYZ is
             Bradford-adapted to it, as Blender's OCIO config does). A perfect white reflector is (1, 1, 1) in each.
+        blender: the Blender version the Principled inputs are for: "MAJOR.MINOR" (e.g. "5.2"; a patch level is
+            ignored) or a tuple such as ``bpy.app.version``; 4.2 or newer. A version newer than the tested ones uses
+            the newest known behaviour (``result["target"]["tested"]`` is False). None: the current release (5.3,
+            ``blender_targets()["current_release"]``).
+        engine: the render engine, "cycles" or "eevee" (EEVEE renders every subsurface method as Burley, with a
+            radius compensated for its albedo-dependent profile).
 
     Returns:
         The CLI's JSON as a dict. Always: "params", "color_space", "accuracy", "model" (model["dermis_thickness_mm"]
-        is float("inf") for a semi-infinite dermis), "combination", "default_method", "work" ({"wavelengths",
+        is float("inf") for a semi-infinite dermis), "combination", "target" ({"blender": "5.3", "engine":
+        "cycles", "tested": True}), "default_method", "work" ({"wavelengths",
         "transform_samples", "radial_profiles"}), "seconds". Per requested output, numpy arrays where array-valued:
         albedo or radius: "diffuse_reflectance_rgb" (3,);
-        radius: "methods" {"burley", "random_walk"} -> {"base_color" (3,), "subsurface_radius_mm" (3,), mm,
-        "expected_albedo" (3,)} and "radius_fit" (a list of 3 dicts {"d_mm", "radius_mm", "edge_residual"});
+        radius: "methods", one entry per subsurface method the target's Blender offers ("burley", "random_walk",
+        "random_walk_skin", and "random_walk_legacy" from 5.2) -> {"base_color" (3,), "subsurface_radius_mm" (3,),
+        mm, "expected_albedo" (3,)} and "radius_fit" (a list of 3 dicts {"d_mm", "radius_mm", "edge_residual"}:
+        the Cycles Burley fit);
         specular: "specular" {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
         "directional_albedo_normal", "hemispherical_albedo"};
         spectrum: "wavelengths_nm" (K,), "spectral_reflectance" (K,);
@@ -104,7 +127,8 @@ def evaluate(
 
     Raises:
         SpectralSkinError: a parameter or knob out of range or not finite, an unknown preset, output, combination or
-            working space, or neither a preset nor all four parameters.
+            working space, or neither a preset nor all four parameters; a Blender version older than 4.2 or not
+            MAJOR.MINOR; an unknown engine.
         TypeError: an argument of the wrong type (e.g. outputs given as a single string).
     """
 
@@ -217,6 +241,8 @@ def maps(
     working_space: _WorkingSpace | str = "Linear Rec.709",
     table_resolution: tuple[int, int, int] | None = None,
     table_cache: bool = True,
+    blender: _BlenderVersion | None = None,
+    engine: _Engine | str = "cycles",
 ) -> _Maps:
     """Principled BSDF texture maps (Base Color, Subsurface Radius, specular) from per-texel parameter maps.
 
@@ -242,7 +268,10 @@ def maps(
         melanin_blend: beta_m, eumelanin share of the melanin, 0..1; as melanin (channel 1).
         hemoglobin: C_h, whole-blood volume fraction of the dermis, 0..0.1; as melanin (channel 2).
         oiliness: rho_s, scale of the surface's specular lobe, 0..1; as melanin (channel 3).
-        method: the Cycles subsurface method the maps are for: "burley" (Christensen-Burley) or "random_walk".
+        method: the subsurface method the maps are for: "burley" (Christensen-Burley), "random_walk",
+            "random_walk_legacy" (Blender 5.2 and later only) or "random_walk_skin" (best effort, untested).
+        blender, engine: the target, as for :func:`evaluate`; the radius (and for the random walks Base Color) is
+            computed for it per texel (for EEVEE from each texel's own albedo).
         exact: evaluate every texel (or distinct tuple) directly, never the table.
         clamp: clamp NaN (to the minimum), infinite and out-of-range values into range and count them in
             ``report["clamped"]``, instead of raising. The input arrays are not modified.
@@ -265,7 +294,8 @@ def maps(
         IOR do not depend on oiliness: see ``evaluate(...)["specular"]``; Principled IOR is 1.4 everywhere); when it is one value everywhere (a float, or an array of
         one value), a dict of the constants {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
         "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``);
-        "report": what was done: {"crate_version", "width", "height", "method", "color_space", "strategy" ({"name":
+        "report": what was done: {"crate_version", "width", "height", "method", "target" ({"blender", "engine",
+        "tested"}), "color_space", "strategy" ({"name":
         "constant" | "distinct_tuples" | "table" | "exact", with its figures: "tuples"; "evaluations"; or
         "resolution", "nodes", "from_cache", "build_seconds", "measured_error"}), "clamped" (one dict per parameter
         with bad values: {"parameter", "nan", "infinite", "out_of_range", "first": [[x, y], ...]}),
@@ -277,7 +307,20 @@ def maps(
             its range, the counts and the first (x, y) coordinates); inputs whose (H, W) differ (the message lists
             each input's shape); params not (H, W, 4) or a keyword array not (H, W); an empty map or one over 2^28
             texels; only constants and no array; a parameter given neither by params nor by its keyword; an unknown
-            method or working space; a wavelength step out of range; a table resolution below 2 nodes per axis.
+            method, a method the target's Blender lacks, an unknown working space or engine, a Blender version older
+            than 4.2; a wavelength step out of range; a table resolution below 2 nodes per axis.
         TypeError: an input that is not a numpy array of float32 or float64 (or, for the keywords, a number): e.g. a
             list, an integer array, a string, a bool.
+    """
+
+def blender_targets() -> dict[str, Any]:
+    """The Blender target table of the core, for fronts that derive their choices from it (the add-on).
+
+    Returns:
+        {"oldest_supported": "4.2", "current_release": "5.3", "default": {"blender", "engine", "tested"},
+        "tested_versions": ["4.2", ...], "engines": [{"name": "cycles"}, {"name": "eevee"}],
+        "methods": [{"name": "burley", "blender_id": "BURLEY"}, ...] (every method of any version),
+        "versions": one entry per table row, oldest first: {"version": "4.2", "tested": bool,
+        "engine_ids": {"cycles": "CYCLES", "eevee": "BLENDER_EEVEE_NEXT"}, "methods": [{"name", "blender_id",
+        "tested", "model"}, ...] in Blender's menu order}. A version resolves to the newest row at or below it.
     """

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use spectral_skin::fit::SubsurfaceMethod;
+use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
+use spectral_skin::fit::{SubsurfaceMethod, DEFAULT_METHOD};
 use spectral_skin::maps::example::{write_example_params, ExampleKind};
 use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
@@ -24,12 +25,19 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Albedo, Subsurface Radius per Cycles method and specular inputs for one set of parameters.
+    /// Albedo, Base Color and Subsurface Radius per subsurface method, and specular inputs, for one set of
+    /// parameters and one Blender target.
     Eval {
         #[command(flatten)]
         skin: SkinArgs,
         #[command(flatten)]
         accuracy: AccuracyArgs,
+        #[command(flatten)]
+        target: TargetArgs,
+        /// Show only this subsurface method in the summary (an error if the target's Blender lacks it); the JSON
+        /// always lists every method the target offers.
+        #[arg(long, value_enum)]
+        method: Option<SubsurfaceMethod>,
         /// Print the stable JSON interface instead of a summary.
         #[arg(long)]
         json: bool,
@@ -106,9 +114,11 @@ struct MapsArgs {
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Subsurface method the maps are for (default: the same as `eval`).
-    #[arg(long, value_enum, default_value_t = MethodArg::Burley)]
-    method: MethodArg,
+    /// Subsurface method the maps are for (it must be one the target's Blender offers).
+    #[arg(long, value_enum, default_value_t = DEFAULT_METHOD)]
+    method: SubsurfaceMethod,
+    #[command(flatten)]
+    target: TargetArgs,
     /// Evaluate every texel directly instead of through the lookup table.
     #[arg(long)]
     exact: bool,
@@ -137,12 +147,6 @@ enum KindArg {
     Face,
     Mask,
     Uniform,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum MethodArg {
-    Burley,
-    RandomWalk,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -230,6 +234,24 @@ impl SkinArgs {
     }
 }
 
+/// The Blender target of the mapping.
+#[derive(Args)]
+struct TargetArgs {
+    /// Blender version the inputs are for, MAJOR.MINOR (4.2 or newer; a version newer than the tested ones uses the
+    /// newest known behaviour and is reported as untested).
+    #[arg(long, default_value_t = CURRENT_RELEASE)]
+    blender: BlenderVersion,
+    /// Render engine the inputs are for (EEVEE renders every subsurface method as Burley with its own radius).
+    #[arg(long, value_enum, default_value_t = Engine::Cycles)]
+    engine: Engine,
+}
+
+impl TargetArgs {
+    fn target(&self) -> Target {
+        Target { blender: self.blender, engine: self.engine }
+    }
+}
+
 impl AccuracyArgs {
     fn request(&self, outputs: Outputs) -> Request {
         let mut r = Request::new(outputs);
@@ -272,13 +294,18 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
-        Command::Eval { skin, accuracy, json } => {
+        Command::Eval { skin, accuracy, target, method, json } => {
             let params = skin.params()?;
-            let ev = evaluate(&params, &accuracy.request(Outputs::material()))?;
+            let target = target.target();
+            if let Some(m) = method {
+                target.method_entry(m)?;
+            }
+            let request = Request { target, ..accuracy.request(Outputs::material()) };
+            let ev = evaluate(&params, &request)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&ev)?);
             } else {
-                print_summary(&ev);
+                print_summary(&ev, method);
             }
         }
         Command::Profile { skin, accuracy, spectral, csv: _, r_min_mm, r_max_mm, count } => {
@@ -330,18 +357,17 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
             ParamInputs::Separate(sources.try_into().map_err(|_| "four sources")?)
         }
     };
+    let target = args.target.target();
+    target.method_entry(args.method)?;
     let mut settings = MapSettings {
-        method: match args.method {
-            MethodArg::Burley => SubsurfaceMethod::Burley,
-            MethodArg::RandomWalk => SubsurfaceMethod::RandomWalk,
-        },
+        method: args.method,
         strategy: if args.exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
         clamp: args.clamp,
         table_check_samples: args.table_check,
         table_cache: if args.no_cache { None } else { spectral_skin::maps::lut::default_cache_dir() },
         ..MapSettings::default()
     };
-    settings.request = args.accuracy.request(Outputs::material());
+    settings.request = Request { target, ..args.accuracy.request(Outputs::material()) };
     let exr = ExrOptions {
         half: args.half,
         compression: match args.compression {
@@ -390,18 +416,22 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
 /// CLI flag stems of the four parameters, in PARAM_CHANNELS order.
 const FLAGS: [&str; 4] = ["melanin", "melanin-blend", "hemoglobin", "oiliness"];
 
-fn print_summary(ev: &Evaluation) {
+fn print_summary(ev: &Evaluation, only: Option<SubsurfaceMethod>) {
     let p = ev.params;
     println!(
         "parameters: melanin {} melanin_blend {} hemoglobin {} oiliness {}",
         p.melanin, p.melanin_blend, p.hemoglobin, p.oiliness
     );
     println!("colour space: {}", ev.color_space);
+    let t = ev.target;
+    let tested = if t.tested { "tested" } else { "untested: newest known behaviour" };
+    println!("target: Blender {} {} ({tested})", t.blender, t.engine.name());
     if let Some(a) = ev.diffuse_reflectance_rgb {
         println!("diffuse reflectance (RGB): {:.4} {:.4} {:.4}", a[0], a[1], a[2]);
     }
     if let Some(m) = ev.methods {
-        for (name, mp) in [("burley", m.burley), ("random_walk", m.random_walk)] {
+        for (method, mp) in m.iter().filter(|(method, _)| !matches!(only, Some(o) if o != *method)) {
+            let name = method.name();
             let tag = if name == ev.default_method { " (default)" } else { "" };
             println!(
                 "{name}{tag}: base color {:.4} {:.4} {:.4}, subsurface radius {:.4} {:.4} {:.4} mm",

@@ -11,7 +11,8 @@
 //! `blender/blender` commit 00dcfdf916c6 (Cycles 3.x). The g = 0 values agree with blender.md section 1, which read
 //! `release/v5.0` (2eba41024174). Cycles after 5.0 (`blender/cycles` 695bae346ba1) also has d'Eon's Van de Hulst
 //! mapping ("A Hitchhiker's Guide to Multiple Scattering", eq. 53.7) for a new walk model and keeps this fit as the
-//! legacy path; this module models 5.0, where the fit is the only mapping.
+//! legacy path. [`RandomWalkModel`] names the two alpha mappings; Blender 5.2 and later use the Van de Hulst one for
+//! `RANDOM_WALK` and keep the fit for `RANDOM_WALK_LEGACY` (see `fit::blender_target`).
 //!
 //! For a thick flat slab seen straight down under a uniform white world (Specular IOR Level 0, so no surface
 //! reflection and an index-matched boundary), the rendered value is the directional albedo of an isotropic,
@@ -75,6 +76,14 @@ const FIT_F: [f64; 8] = [
 /// Exponent of `blend = A^0.25` in `subsurface_random_walk_remap`.
 const FIT_BLEND_EXPONENT: f64 = 0.25;
 
+/// Van de Hulst's albedo inversion as d'Eon writes it ("A Hitchhiker's Guide to Multiple Scattering", v0.3.2,
+/// eq. 53.7): `s = 4.09712 + 4.20863 A - sqrt(9.59217 + 41.6808 A + 17.7126 A^2)`. Transcribed from the Spectrum
+/// overload of `subsurface_random_walk_remap` in `src/kernel/integrator/subsurface_random_walk.h`, `blender/cycles`
+/// commit 695bae346ba1 (the 5.2 change, PR #156355).
+const VAN_DE_HULST_OFFSET: f64 = 4.09712;
+const VAN_DE_HULST_LINEAR: f64 = 4.20863;
+const VAN_DE_HULST_ROOT: [f64; 3] = [9.59217, 41.6808, 17.7126];
+
 /// Christensen-Burley 2015 eq. 6 fit `s(A) = 1.9 - A + 3.5 (A - 0.8)^2`: constant, linear and quadratic terms.
 const BURLEY_S_CONST: f64 = 1.9;
 const BURLEY_S_QUADRATIC: f64 = 3.5;
@@ -123,6 +132,52 @@ pub fn cycles_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f64 {
     let blend = albedo.powf(FIT_BLEND_EXPONENT);
     let alpha = (1.0 - blend) * a * (b * albedo).atan().powf(c) + blend * d * (e * albedo).atan().powf(f);
     clamp_or_low(alpha, 0.0, CYCLES_MAX_SINGLE_SCATTER_ALBEDO)
+}
+
+/// `alpha(A, g)` of Cycles' Van de Hulst mapping (Blender 5.2 and later, `RANDOM_WALK`): with `s` of d'Eon's
+/// eq. 53.7 (see `VAN_DE_HULST_OFFSET`), `alpha = (1 - s^2) / (1 - g s^2)`, clamped to [0, 0.999999], before the
+/// min-alpha rule, dimensionless. A is clamped to [0, 1]; g to [-0.99, 0.99] as `bssrdf_setup` clamps it for
+/// `RANDOM_WALK` in that commit; NaN counts as 0. alpha(0) = 0 and alpha rises to the clamp near A = 1.
+pub fn van_de_hulst_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f64 {
+    let a = clamp_or_low(base_color, 0.0, 1.0);
+    let g = if anisotropy.is_nan() { 0.0 } else { anisotropy.clamp(-VAN_DE_HULST_MAX_ANISOTROPY, VAN_DE_HULST_MAX_ANISOTROPY) };
+    let [r0, r1, r2] = VAN_DE_HULST_ROOT;
+    let s = VAN_DE_HULST_OFFSET + VAN_DE_HULST_LINEAR * a - (r0 + r1 * a + r2 * a * a).sqrt();
+    let s2 = s * s;
+    // Cycles' safe_divide: 1 - g s^2 > 0 here, since |g| < 1 and s^2 <= 1 on [0, 1].
+    clamp_or_low((1.0 - s2) / (1.0 - g * s2), 0.0, CYCLES_MAX_SINGLE_SCATTER_ALBEDO)
+}
+
+/// Largest |Subsurface Anisotropy| Cycles' `RANDOM_WALK` accepts from 5.2 on (`bssrdf_setup`, `bssrdf.h`,
+/// `blender/cycles` 695bae346ba1).
+pub const VAN_DE_HULST_MAX_ANISOTROPY: f64 = 0.99;
+
+/// How a Cycles random walk turns Base Color into the single-scattering albedo it walks with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RandomWalkModel {
+    /// Wrenninge et al.'s fit ([`cycles_single_scatter_albedo`]): `RANDOM_WALK` up to 5.1, `RANDOM_WALK_LEGACY` and
+    /// `RANDOM_WALK_SKIN` after.
+    WrenningeFit,
+    /// Van de Hulst / d'Eon eq. 53.7 ([`van_de_hulst_single_scatter_albedo`]): `RANDOM_WALK` from 5.2 on.
+    VanDeHulst,
+}
+
+impl RandomWalkModel {
+    /// Every model, in a fixed order (index of its cached inversion tables).
+    pub const ALL: [RandomWalkModel; 2] = [RandomWalkModel::WrenningeFit, RandomWalkModel::VanDeHulst];
+
+    /// The single-scattering albedo this model walks with for Base Color A at g = 0 (before the min-alpha rule).
+    pub fn single_scatter_albedo(self, base_color: f64) -> f64 {
+        match self {
+            RandomWalkModel::WrenningeFit => cycles_single_scatter_albedo(base_color, 0.0),
+            RandomWalkModel::VanDeHulst => van_de_hulst_single_scatter_albedo(base_color, 0.0),
+        }
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
 }
 
 /// Composite Gauss-Legendre rule: `order` nodes on each panel between consecutive `breaks`.
@@ -260,7 +315,20 @@ pub fn half_space_hemispherical_albedo(albedo: f64) -> f64 {
 /// inside after 256 scatterings: 0.3% at A = 0.8 and 10% at A = 0.95 (rendered 0.9438 x A, here 1.0496 x A).
 /// A is clamped to [0, 1], NaN counts as 0.
 pub fn random_walk_flat_albedo(base_color: f64) -> f64 {
-    let alpha = cycles_single_scatter_albedo(base_color, 0.0);
+    flat_albedo(RandomWalkModel::WrenningeFit, base_color)
+}
+
+/// [`random_walk_flat_albedo`] for either alpha mapping: the flat-slab value a Cycles random walk renders for Base
+/// Color A, from the single-scattering albedo `model` walks with. The H-function model, the min-alpha rule
+/// (`subsurface_random_walk_coefficients`, unchanged in `blender/cycles` 695bae346ba1, where it applies after either
+/// mapping) and what is not modelled (the 256-bounce cap) are the same for both.
+pub fn flat_albedo(model: RandomWalkModel, base_color: f64) -> f64 {
+    flat_albedo_of_single_scatter(model.single_scatter_albedo(base_color))
+}
+
+/// The flat-slab value of a walk with single-scattering albedo `alpha` (before the min-alpha rule), dimensionless.
+pub fn flat_albedo_of_single_scatter(alpha: f64) -> f64 {
+    let alpha = clamp_or_low(alpha, 0.0, 1.0);
     let walked = alpha.max(CYCLES_MIN_SINGLE_SCATTER_ALBEDO);
     let throughput = alpha / walked;
     throughput * (1.0 - h_normal_incidence(walked) * (1.0 - walked).sqrt())
@@ -269,71 +337,107 @@ pub fn random_walk_flat_albedo(base_color: f64) -> f64 {
 /// Base Color for Cycles RW that renders a wanted flat-slab albedo, and what it achieves.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RandomWalkColor {
-    /// Base Color to set, in [0, A_sat] (A_sat = 0.9175 at g = 0, where the fit saturates).
+    /// Base Color to set, in [0, A_sat] (A_sat: where the model's alpha reaches its clamp; 0.9175 for the fit).
     pub base_color: f64,
-    /// [`random_walk_flat_albedo`] of `base_color`: the target, unless saturated.
+    /// The flat-slab value `base_color` renders: the target, unless saturated.
     pub achieved_albedo: f64,
     /// True when the target was above what RW reaches (or NaN); `base_color` is then the best achievable.
     pub saturated: bool,
 }
 
-/// `A_sat`: the smallest Base Color at which the fit reaches alpha = 0.999999 (g = 0), by bisection, computed once.
-fn saturation_base_color() -> f64 {
-    static A_SAT: OnceLock<f64> = OnceLock::new();
-    *A_SAT.get_or_init(|| {
-        let (mut lo, mut hi) = (0.5, 1.0);
-        for _ in 0..BISECTION_STEPS {
-            let mid = 0.5 * (lo + hi);
-            if cycles_single_scatter_albedo(mid, 0.0) >= CYCLES_MAX_SINGLE_SCATTER_ALBEDO {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        hi
-    })
+/// Nodes of a monotonic flat-slab response on [0, A_sat], from which [`invert_response`] brackets its root.
+pub(crate) struct ResponseTable {
+    /// The smallest Base Color at which the response stops rising (the model's alpha reaches its clamp).
+    pub a_sat: f64,
+    /// (A, response(A)) on [0, A_sat], rising.
+    pub nodes: Vec<(f64, f64)>,
 }
 
-/// Nodes of the RW response on [0, A_sat], (A, random_walk_flat_albedo(A)), computed once.
-fn response_table() -> &'static [(f64, f64)] {
-    const NODES: usize = 257;
-    static TABLE: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
-    TABLE.get_or_init(|| {
-        let a_sat = saturation_base_color();
-        (0..NODES)
+/// Number of nodes of a [`ResponseTable`].
+const RESPONSE_NODES: usize = 257;
+
+impl ResponseTable {
+    /// Tabulate `response` on [0, a_sat].
+    pub fn new(a_sat: f64, response: impl Fn(f64) -> f64) -> ResponseTable {
+        let nodes = (0..RESPONSE_NODES)
             .map(|i| {
-                let a = a_sat * i as f64 / (NODES - 1) as f64;
-                (a, random_walk_flat_albedo(a))
+                let a = a_sat * i as f64 / (RESPONSE_NODES - 1) as f64;
+                (a, response(a))
             })
-            .collect()
-    })
+            .collect();
+        ResponseTable { a_sat, nodes }
+    }
+}
+
+/// `A_sat` of `model`: the smallest Base Color at which its alpha reaches 0.999999, by bisection.
+fn saturation_of(model: RandomWalkModel) -> f64 {
+    let (mut lo, mut hi) = (0.5, 1.0);
+    for _ in 0..BISECTION_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if model.single_scatter_albedo(mid) >= CYCLES_MAX_SINGLE_SCATTER_ALBEDO {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
+}
+
+/// The response table of `model`, computed once per model.
+fn response_table(model: RandomWalkModel) -> &'static ResponseTable {
+    static TABLES: [OnceLock<ResponseTable>; RandomWalkModel::ALL.len()] = [OnceLock::new(), OnceLock::new()];
+    TABLES[model.index()].get_or_init(|| ResponseTable::new(saturation_of(model), |a| flat_albedo(model, a)))
+}
+
+/// `A_sat` of the Wrenninge fit (g = 0).
+#[cfg(test)]
+fn saturation_base_color() -> f64 {
+    response_table(RandomWalkModel::WrenningeFit).a_sat
 }
 
 /// Base Color A such that [`random_walk_flat_albedo`]`(A)` equals `target_albedo` (dimensionless), the inverse of
-/// Cycles RW's flat-slab response at g = 0.
+/// Cycles RW's flat-slab response at g = 0 with the Wrenninge fit (Blender 4.2-5.1 `RANDOM_WALK`, and
+/// `RANDOM_WALK_LEGACY`).
 ///
 /// Solved on [0, A_sat], where the response rises monotonically from 0 to its maximum 0.99710 (alpha = 0.999999).
 /// A target above that maximum gives A_sat with `saturated = true`. The target is clamped to [0, 1]; NaN gives
 /// base color 0, achieved 0 and `saturated = true`. The 256-bounce cap is not modelled (see
 /// [`random_walk_flat_albedo`]): above A ~ 0.8 Cycles renders less than `achieved_albedo`.
 pub fn random_walk_base_color(target_albedo: f64) -> RandomWalkColor {
+    base_color_for(RandomWalkModel::WrenningeFit, target_albedo)
+}
+
+/// [`random_walk_base_color`] for either alpha mapping: the Base Color whose [`flat_albedo`] under `model` is
+/// `target_albedo`. Both mappings reach the same maximum (alpha clamped to 0.999999), so the same targets saturate.
+pub fn base_color_for(model: RandomWalkModel, target_albedo: f64) -> RandomWalkColor {
+    invert_response(target_albedo, response_table(model), |a| flat_albedo(model, a))
+}
+
+/// The root finder shared by every random-walk response: the Base Color in [0, A_sat] at which the monotonic
+/// `response` (tabulated in `table`) equals `target_albedo`. NaN gives 0 with `saturated = true`; a target at or
+/// above `response(A_sat)` gives A_sat (saturated if above); a target <= 0 gives 0.
+pub(crate) fn invert_response(
+    target_albedo: f64,
+    table: &ResponseTable,
+    response: impl Fn(f64) -> f64,
+) -> RandomWalkColor {
     if target_albedo.is_nan() {
         return RandomWalkColor { base_color: 0.0, achieved_albedo: 0.0, saturated: true };
     }
     let target = target_albedo.clamp(0.0, 1.0);
-    let a_sat = saturation_base_color();
-    let r_max = random_walk_flat_albedo(a_sat);
+    let a_sat = table.a_sat;
+    let r_max = table.nodes[table.nodes.len() - 1].1;
     if target >= r_max {
         return RandomWalkColor { base_color: a_sat, achieved_albedo: r_max, saturated: target > r_max };
     }
     if target <= 0.0 {
         return RandomWalkColor { base_color: 0.0, achieved_albedo: 0.0, saturated: false };
     }
-    // Bracket the root between two nodes of a cached response table, then refine by the Illinois variant of regula
+    // Bracket the root between two nodes of the cached response table, then refine by the Illinois variant of regula
     // falsi (superlinear on this smooth, monotonic response; a handful of evaluations instead of ~50 bisections).
-    let table = response_table();
-    let k = table.partition_point(|&(_, r)| r < target).clamp(1, table.len() - 1);
-    let ((mut lo, mut f_lo), (mut hi, mut f_hi)) = (table[k - 1], table[k]);
+    let nodes = &table.nodes;
+    let k = nodes.partition_point(|&(_, r)| r < target).clamp(1, nodes.len() - 1);
+    let ((mut lo, mut f_lo), (mut hi, mut f_hi)) = (nodes[k - 1], nodes[k]);
     f_lo -= target;
     f_hi -= target;
     let mut base_color = lo;
@@ -343,7 +447,7 @@ pub fn random_walk_base_color(target_albedo: f64) -> RandomWalkColor {
             break;
         }
         base_color = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
-        let f = random_walk_flat_albedo(base_color) - target;
+        let f = response(base_color) - target;
         if f == 0.0 {
             break;
         }
@@ -363,19 +467,69 @@ pub fn random_walk_base_color(target_albedo: f64) -> RandomWalkColor {
             side = 1;
         }
     }
-    RandomWalkColor { base_color, achieved_albedo: random_walk_flat_albedo(base_color), saturated: false }
+    RandomWalkColor { base_color, achieved_albedo: response(base_color), saturated: false }
 }
 
-/// `s(A) = 1.9 - A + 3.5 (A - 0.8)^2`: factor on a Christensen-Burley Radius (4 pi d for profile length d) that
-/// gives Cycles RW about the same profile width at Base Color A, dimensionless (Christensen & Burley 2015, eq. 6).
+/// `s(A) = 1.9 - A + 3.5 (A - 0.8)^2`, dimensionless: Christensen & Burley 2015, eq. 6 (`bssrdf_burley_fitting` in
+/// `src/kernel/closure/bssrdf.h`, `blender/cycles` 695bae346ba1: dead code in Cycles, used by EEVEE's
+/// `burley_setup`). A is clamped to [0, 1], NaN counts as 0.
+pub fn christensen_burley_s(albedo: f64) -> f64 {
+    let a = clamp_or_low(albedo, 0.0, 1.0);
+    BURLEY_S_CONST - a + BURLEY_S_QUADRATIC * (a - BURLEY_S_CENTRE) * (a - BURLEY_S_CENTRE)
+}
+
+/// `s(A)`: factor on a Christensen-Burley Radius (4 pi d for profile length d) that gives Cycles RW about the same
+/// profile width at Base Color A, dimensionless (Christensen & Burley 2015, eq. 6).
 ///
 /// Use `radius_rw = radius_burley * s(A)`. Approximate, to be validated by renders: blender.md section 4 measured
 /// that RW at Radius R renders like a Burley profile with d / (R / 4 pi) = 0.32 / 0.58 / 1.05 at A = 0.2 / 0.5 / 0.8,
 /// against 1/s(A) = 0.34 / 0.58 / 0.91 (so at A = 0.8 this factor makes RW ~15% wider than the Burley target).
 /// A is clamped to [0, 1], NaN counts as 0.
 pub fn random_walk_radius_scale(base_color: f64) -> f64 {
-    let a = clamp_or_low(base_color, 0.0, 1.0);
-    BURLEY_S_CONST - a + BURLEY_S_QUADRATIC * (a - BURLEY_S_CENTRE) * (a - BURLEY_S_CENTRE)
+    christensen_burley_s(base_color)
+}
+
+/// Edge-render calibrations of the walk's width, per alpha mapping: (Base Color, k) with k = the Burley d that fits
+/// the rendered edge divided by the walk's transport mean free path. Empty: not calibrated yet, and
+/// [`width_factor`] falls back to Christensen-Burley's s(A). A measured table drops in here (rising Base Color,
+/// k > 0), interpolated linearly and held constant beyond its ends.
+const WRENNINGE_FIT_WIDTH_CALIBRATION: &[(f64, f64)] = &[];
+const VAN_DE_HULST_WIDTH_CALIBRATION: &[(f64, f64)] = &[];
+
+/// `k` at `a` from a calibration table (linear, held at the ends); None if the table is empty.
+fn calibrated_k(table: &[(f64, f64)], a: f64) -> Option<f64> {
+    let (first, last) = (table.first()?, table.last()?);
+    if a <= first.0 {
+        return Some(first.1);
+    }
+    if a >= last.0 {
+        return Some(last.1);
+    }
+    let k = table.partition_point(|&(x, _)| x < a).clamp(1, table.len() - 1);
+    let ((x0, y0), (x1, y1)) = (table[k - 1], table[k]);
+    Some(y0 + (y1 - y0) * (a - x0) / (x1 - x0))
+}
+
+/// Width factor `w` of a walk under `model` at Base Color A, dimensionless: the walk's transport mean free path that
+/// renders an edge like a Burley profile of length d is `w d`. From the model's calibration table when there is one
+/// (w = 1/k), else uncalibrated: s(A') with A' the Wrenninge-fit Base Color that walks with the same
+/// single-scattering albedo (for the fit A' = A, so today's `radius_burley * s(A)`; for Van de Hulst the same medium,
+/// hence the same width, as the fit's mapping of the same target albedo).
+pub fn width_factor(model: RandomWalkModel, base_color: f64) -> f64 {
+    let table = match model {
+        RandomWalkModel::WrenningeFit => WRENNINGE_FIT_WIDTH_CALIBRATION,
+        RandomWalkModel::VanDeHulst => VAN_DE_HULST_WIDTH_CALIBRATION,
+    };
+    if let Some(k) = calibrated_k(table, clamp_or_low(base_color, 0.0, 1.0)) {
+        return 1.0 / k;
+    }
+    match model {
+        RandomWalkModel::WrenningeFit => random_walk_radius_scale(base_color),
+        RandomWalkModel::VanDeHulst => {
+            let same_medium = base_color_for(RandomWalkModel::WrenningeFit, flat_albedo(model, base_color));
+            random_walk_radius_scale(same_medium.base_color)
+        }
+    }
 }
 
 #[cfg(test)]

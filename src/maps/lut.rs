@@ -18,44 +18,39 @@ use crate::evaluate::{Material, Prepared};
 use crate::skin::params::{HEMOGLOBIN_RANGE, MELANIN_BLEND_RANGE, MELANIN_RANGE};
 use crate::skin::SkinParams;
 
-/// Outputs per texel that depend on (C_m, beta_m, C_h): albedo, Burley radius, Random Walk base colour and radius.
+/// Outputs per texel that depend on (C_m, beta_m, C_h), for one subsurface method on the request's target: the
+/// model's albedo, and the method's Base Color and Subsurface Radius there (for EEVEE the radius is compensated per
+/// texel, from that texel's albedo, before it is tabulated).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct TexelMaterial {
     pub albedo: [f32; 3],
-    pub burley_radius_mm: [f32; 3],
-    pub random_walk_base_color: [f32; 3],
-    pub random_walk_radius_mm: [f32; 3],
+    pub base_color: [f32; 3],
+    pub radius_mm: [f32; 3],
 }
 
-impl From<&Material> for TexelMaterial {
-    fn from(m: &Material) -> Self {
-        let f = |v: [f64; 3]| v.map(|x| x as f32);
-        TexelMaterial {
-            albedo: f(m.albedo),
-            burley_radius_mm: f(m.methods.burley.subsurface_radius_mm),
-            random_walk_base_color: f(m.methods.random_walk.base_color),
-            random_walk_radius_mm: f(m.methods.random_walk.subsurface_radius_mm),
-        }
-    }
-}
+/// Values stored per table node.
+const STORED: usize = 9;
 
 impl TexelMaterial {
-    fn to_array(self) -> [f32; 12] {
-        let mut a = [0.0; 12];
+    /// `method`'s part of a material; an error if the material's target does not offer it.
+    pub fn of(m: &Material, method: SubsurfaceMethod) -> Result<Self, SkinError> {
+        let f = |v: [f64; 3]| v.map(|x| x as f32);
+        let p = m.methods.get(method).ok_or_else(|| {
+            SkinError::invalid("subsurface method", format!("{} is not offered by this target", method.name()))
+        })?;
+        Ok(TexelMaterial { albedo: f(m.albedo), base_color: f(p.base_color), radius_mm: f(p.subsurface_radius_mm) })
+    }
+
+    fn to_array(self) -> [f32; STORED] {
+        let mut a = [0.0; STORED];
         a[0..3].copy_from_slice(&self.albedo);
-        a[3..6].copy_from_slice(&self.burley_radius_mm);
-        a[6..9].copy_from_slice(&self.random_walk_base_color);
-        a[9..12].copy_from_slice(&self.random_walk_radius_mm);
+        a[3..6].copy_from_slice(&self.base_color);
+        a[6..9].copy_from_slice(&self.radius_mm);
         a
     }
 
-    fn from_array(a: [f32; 12]) -> Self {
-        TexelMaterial {
-            albedo: [a[0], a[1], a[2]],
-            burley_radius_mm: [a[3], a[4], a[5]],
-            random_walk_base_color: [a[6], a[7], a[8]],
-            random_walk_radius_mm: [a[9], a[10], a[11]],
-        }
+    fn from_array(a: [f32; STORED]) -> Self {
+        TexelMaterial { albedo: [a[0], a[1], a[2]], base_color: [a[3], a[4], a[5]], radius_mm: [a[6], a[7], a[8]] }
     }
 }
 
@@ -108,44 +103,48 @@ fn unwarp(u: f64, max: f64) -> f64 {
     max * u.powi(3)
 }
 
-/// The table.
+/// The table, for one subsurface method on the request's target.
 #[derive(Debug, Clone)]
 pub struct MaterialTable {
     resolution: TableResolution,
-    /// ln of the 12 outputs per node; node (i, j, k) at ((i * nb) + j) * nh + k.
-    log_values: Vec<[f32; 12]>,
+    method: SubsurfaceMethod,
+    /// ln of the 9 outputs per node; node (i, j, k) at ((i * nb) + j) * nh + k.
+    log_values: Vec<[f32; STORED]>,
 }
 
 impl MaterialTable {
-    /// Evaluate every node (in parallel) with `prepared`.
-    pub fn build(prepared: &Prepared, resolution: TableResolution) -> Result<MaterialTable, SkinError> {
+    /// Evaluate every node (in parallel) with `prepared`, for `method` on the request's target.
+    pub fn build(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableResolution) -> Result<MaterialTable, SkinError> {
         resolution.validate()?;
+        prepared.request().target.method_entry(method)?;
         let r = resolution;
         let log_values = (0..r.node_count())
             .into_par_iter()
             .map(|n| {
                 let p = node_params(r, n);
                 let m = prepared.material(&p)?;
-                Ok(TexelMaterial::from(&m).to_array().map(|v| v.max(MIN_STORED).ln()))
+                Ok(TexelMaterial::of(&m, method)?.to_array().map(|v| v.max(MIN_STORED).ln()))
             })
             .collect::<Result<Vec<_>, SkinError>>()?;
-        Ok(MaterialTable { resolution, log_values })
+        Ok(MaterialTable { resolution, method, log_values })
+    }
+
+    /// The method the table holds.
+    pub fn method(&self) -> SubsurfaceMethod {
+        self.method
     }
 
     pub fn resolution(&self) -> TableResolution {
         self.resolution
     }
 
-    /// Base Color and radius (mm) of one method: the half of [`MaterialTable::lookup`] a texture needs.
-    pub fn lookup_method(&self, method: SubsurfaceMethod, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> ([f32; 3], [f32; 3]) {
-        let offset = match method {
-            SubsurfaceMethod::Burley => 0,
-            SubsurfaceMethod::RandomWalk => 6,
-        };
+    /// Base Color and radius (mm) of the table's method: the part of [`MaterialTable::lookup`] a texture needs.
+    pub fn lookup_method(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> ([f32; 3], [f32; 3]) {
+        const OFFSET: usize = 3;
         let mut out = [0.0f32; 6];
         self.interpolate(melanin, melanin_blend, hemoglobin, |w, v| {
             for q in 0..6 {
-                out[q] += w * v[offset + q];
+                out[q] += w * v[OFFSET + q];
             }
         });
         let e = out.map(f32::exp);
@@ -154,9 +153,9 @@ impl MaterialTable {
 
     /// Trilinear interpolation in the warped coordinates of the logarithms. Inputs are clamped to the domain.
     pub fn lookup(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> TexelMaterial {
-        let mut out = [0.0f32; 12];
+        let mut out = [0.0f32; STORED];
         self.interpolate(melanin, melanin_blend, hemoglobin, |w, v| {
-            for q in 0..12 {
+            for q in 0..STORED {
                 out[q] += w * v[q];
             }
         });
@@ -165,7 +164,7 @@ impl MaterialTable {
 
     /// Calls `add(weight, node_values)` for the eight corners of the cell around the point.
     #[inline]
-    fn interpolate(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32, mut add: impl FnMut(f32, &[f32; 12])) {
+    fn interpolate(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32, mut add: impl FnMut(f32, &[f32; STORED])) {
         let r = self.resolution;
         let axis = |u: f64, n: usize| {
             let x = u.clamp(0.0, 1.0) * (n - 1) as f64;
@@ -189,14 +188,16 @@ impl MaterialTable {
     /// else built (and then stored there, best effort). Returns whether it came from the cache.
     pub fn load_or_build(
         prepared: &Prepared,
+        method: SubsurfaceMethod,
         resolution: TableResolution,
         cache_dir: Option<&Path>,
     ) -> Result<(MaterialTable, bool), SkinError> {
-        let path = cache_dir.map(|d| d.join(format!("table-{:016x}.bin", cache_key(prepared, resolution))));
-        if let Some(table) = path.as_deref().and_then(|p| MaterialTable::read(p, resolution)) {
+        let key = cache_key(prepared, method, resolution);
+        let path = cache_dir.map(|d| d.join(format!("table-{key:016x}.bin")));
+        if let Some(table) = path.as_deref().and_then(|p| MaterialTable::read(p, method, resolution)) {
             return Ok((table, true));
         }
-        let table = MaterialTable::build(prepared, resolution)?;
+        let table = MaterialTable::build(prepared, method, resolution)?;
         if let Some(p) = &path {
             // A cache that cannot be written is no error: the table is still good.
             if std::fs::create_dir_all(p.parent().unwrap_or(Path::new("."))).is_ok() {
@@ -208,7 +209,7 @@ impl MaterialTable {
 
     fn to_bytes(&self) -> Vec<u8> {
         let r = self.resolution;
-        let mut bytes = Vec::with_capacity(CACHE_MAGIC.len() + 12 + self.log_values.len() * 48);
+        let mut bytes = Vec::with_capacity(CACHE_MAGIC.len() + 12 + self.log_values.len() * STORED * 4);
         bytes.extend_from_slice(CACHE_MAGIC);
         for n in [r.melanin, r.melanin_blend, r.hemoglobin] {
             bytes.extend_from_slice(&(n as u32).to_le_bytes());
@@ -222,33 +223,34 @@ impl MaterialTable {
     }
 
     /// A cached table, or None if the file is missing, of another size, or damaged.
-    fn read(path: &Path, resolution: TableResolution) -> Option<MaterialTable> {
+    fn read(path: &Path, method: SubsurfaceMethod, resolution: TableResolution) -> Option<MaterialTable> {
         let bytes = std::fs::read(path).ok()?;
         let body = bytes.strip_prefix(CACHE_MAGIC)?;
         let header: Vec<usize> = body.get(..12)?.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize).collect();
         let r = resolution;
-        if header != [r.melanin, r.melanin_blend, r.hemoglobin] || body.len() != 12 + r.node_count() * 48 {
+        if header != [r.melanin, r.melanin_blend, r.hemoglobin] || body.len() != 12 + r.node_count() * STORED * 4 {
             return None;
         }
         let floats: Vec<f32> = body[12..].chunks(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         if floats.iter().any(|x| !x.is_finite()) {
             return None;
         }
-        let log_values = floats.chunks(12).map(|c| std::array::from_fn(|q| c[q])).collect();
-        Some(MaterialTable { resolution, log_values })
+        let log_values = floats.chunks(STORED).map(|c| std::array::from_fn(|q| c[q])).collect();
+        Some(MaterialTable { resolution, method, log_values })
     }
 }
 
 /// First bytes of a cached table file.
-const CACHE_MAGIC: &[u8] = b"spectral-skin table v1\n";
+const CACHE_MAGIC: &[u8] = b"spectral-skin table v2\n";
 
-/// FNV-1a hash of everything the table depends on: crate version, request (accuracy, model, working space) and
-/// resolution. Stable across runs and platforms.
-fn cache_key(prepared: &Prepared, resolution: TableResolution) -> u64 {
+/// FNV-1a hash of everything the table depends on: crate version, request (accuracy, model, working space, target),
+/// method and resolution. Stable across runs and platforms.
+fn cache_key(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableResolution) -> u64 {
     let text = format!(
-        "{}|{}|{:?}",
+        "{}|{}|{}|{:?}",
         env!("CARGO_PKG_VERSION"),
         serde_json::to_string(prepared.request()).unwrap_or_default(),
+        method.name(),
         resolution
     );
     text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
@@ -283,7 +285,8 @@ pub struct TableError {
     pub samples: usize,
     pub max_albedo_relative: f64,
     pub max_radius_relative: f64,
-    pub max_random_walk_base_color_relative: f64,
+    /// Base Color of the table's method (for Burley and EEVEE the albedo itself).
+    pub max_base_color_relative: f64,
 }
 
 /// Measure the table's error at `samples` points: cell centres (where trilinear error peaks) and pseudo-random points
@@ -314,13 +317,13 @@ pub fn measure_error(table: &MaterialTable, prepared: &Prepared, samples: usize)
                 hemoglobin: unwarp(u[2], HEMOGLOBIN_RANGE.1),
                 oiliness: 0.0,
             };
-            let exact = TexelMaterial::from(&prepared.material(&p)?);
+            let exact = TexelMaterial::of(&prepared.material(&p)?, table.method)?;
             let approx = table.lookup(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
             let rel = |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| ((a[c] - b[c]) / b[c]).abs() as f64).fold(0.0, f64::max);
             Ok([
                 rel(approx.albedo, exact.albedo),
-                rel(approx.burley_radius_mm, exact.burley_radius_mm).max(rel(approx.random_walk_radius_mm, exact.random_walk_radius_mm)),
-                rel(approx.random_walk_base_color, exact.random_walk_base_color),
+                rel(approx.radius_mm, exact.radius_mm),
+                rel(approx.base_color, exact.base_color),
             ])
         })
         .collect::<Result<Vec<_>, SkinError>>()?;
@@ -329,6 +332,6 @@ pub fn measure_error(table: &MaterialTable, prepared: &Prepared, samples: usize)
         samples,
         max_albedo_relative: max(0),
         max_radius_relative: max(1),
-        max_random_walk_base_color_relative: max(2),
+        max_base_color_relative: max(2),
     })
 }

@@ -14,6 +14,7 @@ use super::io::{commit_all, read_params, stage_bytes, stage_channels_exr, ExrOpt
 use super::lut::{measure_error, MaterialTable, TableError, TableResolution, TexelMaterial};
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
+use crate::fit::blender_target::TargetInfo;
 use crate::fit::SubsurfaceMethod;
 use crate::skin::SkinParams;
 use crate::surface::{specular_from_oiliness, SpecularParams};
@@ -101,9 +102,9 @@ pub enum SpecularOutput {
 pub struct MapResult {
     pub width: usize,
     pub height: usize,
-    /// Principled Base Color for the chosen method, linear RGB planes.
+    /// Principled Base Color for the chosen method and target, linear RGB planes.
     pub base_color: [Vec<f32>; 3],
-    /// Principled Subsurface Radius x Scale for the chosen method, mm, RGB planes.
+    /// Principled Subsurface Radius x Scale for the chosen method and target, mm, RGB planes.
     pub radius_mm: [Vec<f32>; 3],
     pub specular: SpecularOutput,
     pub report: MapReport,
@@ -116,6 +117,8 @@ pub struct MapReport {
     pub width: usize,
     pub height: usize,
     pub method: SubsurfaceMethod,
+    /// The Blender version and engine the maps are for.
+    pub target: TargetInfo,
     pub color_space: &'static str,
     pub strategy: Strategy,
     pub clamped: Vec<BadTexels>,
@@ -200,23 +203,22 @@ pub fn compute_maps(
     }
     settings.table.validate()?;
     let prepared = Prepared::new(&settings.request)?;
+    let method = settings.method;
+    // The method must be one the target's Blender offers (an error naming those that are).
+    settings.request.target.method_entry(method)?;
     let n = image.texel_count();
     let [m, b, hb, oil] = &image.planes;
     let evaluate_one = |t: [f32; 3]| -> Result<TexelMaterial, SkinError> {
         // Texels passed `check_planes` in f32; widening can step just past a bound (0.1f32 > 0.1), so round back in.
         let v = |k: usize| (t[k] as f64).clamp(PARAM_RANGES[k].0, PARAM_RANGES[k].1);
         let p = SkinParams::new(v(0), v(1), v(2), 0.0)?;
-        Ok(TexelMaterial::from(&prepared.material(&p)?))
+        TexelMaterial::of(&prepared.material(&p)?, method)
     };
     let tuple = |i: usize| [m.value(i), b.value(i), hb.value(i)];
 
     let mut base_color = [vec![0f32; n], vec![0f32; n], vec![0f32; n]];
     let mut radius = [vec![0f32; n], vec![0f32; n], vec![0f32; n]];
-    let method = settings.method;
-    let select = |t: &TexelMaterial| match method {
-        SubsurfaceMethod::Burley => (t.albedo, t.burley_radius_mm),
-        SubsurfaceMethod::RandomWalk => (t.random_walk_base_color, t.random_walk_radius_mm),
-    };
+    let select = |t: &TexelMaterial| (t.base_color, t.radius_mm);
 
     let all_constant = uniform_value(m).is_some() && uniform_value(b).is_some() && uniform_value(hb).is_some();
     let strategy = if all_constant {
@@ -263,7 +265,7 @@ pub fn compute_maps(
         Strategy::Exact { evaluations: n }
     } else {
         let build = Instant::now();
-        let (table, from_cache) = MaterialTable::load_or_build(&prepared, settings.table, settings.table_cache.as_deref())?;
+        let (table, from_cache) = MaterialTable::load_or_build(&prepared, method, settings.table, settings.table_cache.as_deref())?;
         let build_seconds = build.elapsed().as_secs_f64();
         // A freshly built table is checked against direct evaluation; a cached one was checked when it was built.
         let measured_error = if from_cache || settings.table_check_samples == 0 {
@@ -273,7 +275,7 @@ pub fn compute_maps(
         };
         fill_rows(w, &mut base_color, &mut radius, progress, |i| {
             let t = tuple(i);
-            table.lookup_method(method, t[0], t[1], t[2])
+            table.lookup_method(t[0], t[1], t[2])
         });
         let (resolution, nodes) = (settings.table, settings.table.node_count());
         Strategy::Table { resolution, nodes, from_cache, build_seconds, measured_error }
@@ -297,6 +299,7 @@ pub fn compute_maps(
         width: w,
         height: h,
         method,
+        target: settings.request.target.info(),
         color_space: settings.request.working_space.name(),
         strategy,
         clamped: Vec::new(),

@@ -44,7 +44,10 @@ PRESETS = ("caucasian", "asian", "african")
 
 
 def _evaluate(preset: str) -> dict:
-    return spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"))
+    import bpy
+
+    # The mapping for the Blender that renders (Random Walk changed in 5.2).
+    return spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"), blender=tuple(bpy.app.version))
 
 
 def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, size_px: int = 64, region_px: int = 32,

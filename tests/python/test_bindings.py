@@ -253,8 +253,8 @@ def test_error_class_is_exported():
     assert issubclass(SpectralSkinError, ValueError)
     assert spectral_skin.SpectralSkinError is spectral_skin._core.SpectralSkinError
     assert set(spectral_skin.__all__) == {
-        "SpectralSkinError", "__version__", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets",
-        "profile"
+        "SpectralSkinError", "__version__", "blender_targets", "evaluate", "layered_reflectance", "maps",
+        "parameter_ranges", "presets", "profile"
     }
 
 
