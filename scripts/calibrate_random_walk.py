@@ -6,7 +6,8 @@ For each subsurface method this Blender offers among RANDOM_WALK, RANDOM_WALK_LE
 and each Base Color A in --albedos, a thick slab is rendered across a hard shadow edge (the scene of
 tests/blender/test_renders.py's edge test: sun from straight above, black world, an invisible black half-plane 1.5 mm
 above the slab) with the Radius chosen so that the walk's mean free path is --mfp-mm (the walk reads Radius*Scale
-differently per version and method: see tests/blender/walk_reference.py). The rendered edge is fitted by
+differently per version and method: the convention is taken from the core's table, spectral_skin.blender_targets(),
+which tests/blender/test_versions.py checks against thin-slab renders). The rendered edge is fitted by
 scale * BurleyEdge(x; d) with the scale (the rendered flat albedo) and d free. Recorded per case: d in mm,
 d / (Radius*Scale), d / mfp, the scale, and the rms residual of the fit over the image / scale (how Burley-shaped the
 walk's edge is). Three albedos share one render (one per RGB channel, radius per channel).
@@ -78,8 +79,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     helpers = _load("_spectral_skin_blender_conftest", TESTS / "conftest.py")
     walk = _load("_spectral_skin_walk_reference", TESTS / "walk_reference.py")
     version = "%d.%d" % bpy.app.version[:2]
-    offered = walk.subsurface_methods()
-    methods = [m for m in args.methods if m in offered]
+    models = walk.core_walk_models(bpy.app.version)  # the core's radius convention per method for this Blender
+    methods = [m for m in args.methods if m in models and m in walk.subsurface_methods()]
     entries = []
     for method in methods:
         cases = []
@@ -87,7 +88,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         for start in range(0, len(albedos), 3):
             group = albedos[start : start + 3]
             base = group + [group[-1]] * (3 - len(group))
-            radius_mm = [args.mfp_mm / walk.mean_free_path_per_radius(method, bpy.app.version, a) for a in base]
+            radius_mm = [args.mfp_mm / walk.mean_free_path_per_radius(models[method], a) for a in base]
             scene = helpers.reset_scene()
             mat, _ = helpers.principled_sss("Walk", method, base, radius_mm)
             t0 = time.perf_counter()

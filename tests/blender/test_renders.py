@@ -272,10 +272,12 @@ def test_random_walk_flat_slab_albedo(scene, preset):
 BLENDER = "%d.%d" % tuple(bpy.app.version[:2])
 RW_EDGE_SPP = 256
 RW_EDGE_METHODS = ("random_walk", "random_walk_legacy", "random_walk_skin")
-# rms of (render - expected_albedo * BurleyEdge(x; core d)) / expected_albedo over the image, per channel. Measured
-# per version (see the module docstring and the report); the walk's edge is not Burley-shaped (and its width model in
-# the core is approximate), so this bounds how far the walk's edge is from the model's, it is not a noise bound.
-RW_EDGE_RMS_BOUND = 0.05
+# rms of (render - expected_albedo * BurleyEdge(x; core d)) / expected_albedo over the image, per channel: how far
+# the walk's edge is from the model's (the walk's edge is not exactly Burley-shaped, the core's width model is fitted,
+# and 256 spp leave about 0.3-0.4 % of noise per column). Measured on caucasian in bpy 5.3.0: 0.54-0.58 % for
+# random_walk, random_walk_legacy and random_walk_skin, with the fitted Burley d within 2.4 % of the core's d (the
+# per-version figures: docs/blender-render-tests.md). Bound 1 %: a radius 10 % off moves it past 1 %.
+RW_EDGE_RMS_BOUND = 0.01
 
 
 def _evaluate_for_this_blender(preset: str) -> dict:

@@ -5,8 +5,9 @@ Thin slab (the length scale): a 0.5 mm slab, sun from straight above, black worl
 Scale 1 mm, Specular IOR Level 0, seen from straight above. A thick slab renders almost the same reflectance whatever
 the walk's length scale, a thin one does not: 0.72 where the walk divides Radius*Scale by 4 pi (random walk up to 5.1,
 Random Walk (Legacy)), 0.20 where it reads Radius*Scale as the mean free path (random walk from 5.2). Each random-walk
-method this Blender offers is compared with a Monte Carlo of the walk (walk_reference.py) under the convention the
-Blender source gives for this version and method, so a changed radius convention (or alpha inversion) fails here.
+method this Blender offers is compared with a Monte Carlo of the walk (walk_reference.py) under the radius convention
+and alpha model the core's table gives for this version and method (spectral_skin.blender_targets()), so a changed
+convention in Blender, or a wrong row in the core, fails here.
 
 Run: <venv>/bin/python -m pytest tests/blender/test_versions.py -q -s
 """
@@ -15,11 +16,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 bpy = pytest.importorskip("bpy")
 pytest.importorskip("OpenImageIO")
+pytest.importorskip("spectral_skin")
 
 import walk_reference as walk  # noqa: E402
 from conftest import MM, add_box, add_sun, add_top_camera, assign, principled_sss, render, set_world  # noqa: E402
@@ -41,15 +42,24 @@ RW_ATOL = 0.01
 SKIN_ATOL = 0.04
 
 
-def test_methods_offered():
-    """Random Walk (Legacy) exists from 5.2 on; Burley, Random Walk and Random Walk (Skin) in every version."""
-    methods = set(walk.subsurface_methods())
-    expected = {"BURLEY", "RANDOM_WALK", "RANDOM_WALK_SKIN"} | ({"RANDOM_WALK_LEGACY"} if VERSION >= (5, 2) else set())
-    assert methods == expected
+def test_core_table_matches_this_blender():
+    """The core's row for this version offers exactly the subsurface methods bpy offers (Random Walk (Legacy) from
+    5.2 on), and its engine ids are the ones bpy knows."""
+    row = walk.core_target(VERSION)
+    assert {m["blender_id"] for m in row["methods"]} == set(walk.subsurface_methods())
+    assert row["tested"]
+    render = bpy.context.scene.render
+    before = render.engine
+    try:
+        for engine_id in row["engine_ids"].values():  # bpy raises TypeError for an id it does not know
+            render.engine = engine_id
+            assert render.engine == engine_id
+    finally:
+        render.engine = before
 
 
 def _thin_slab_reflectance(scene, method: str) -> float:
-    """piL/E at the centre of the thin slab (rendered, region mean over all pixels, grey so channels averaged)."""
+    """piL/E of the thin slab (rendered, mean over the image and the three equal channels)."""
     set_world(scene, strength=0.0, color=(0.0, 0.0, 0.0))
     slab = add_box("ThinSlab", -0.5, 0.5, -0.5, 0.5, -THIN_MM * MM, 0.0)
     mat, bsdf = principled_sss("Thin", method, [THIN_ALBEDO] * 3, [THIN_RADIUS_MM] * 3)
@@ -63,29 +73,30 @@ def _thin_slab_reflectance(scene, method: str) -> float:
     return float(math.pi * img.mean())
 
 
-def _reference(method: str) -> tuple[float, float]:
-    if method == "RANDOM_WALK_SKIN":
-        mfp = THIN_RADIUS_MM * walk.skin_radius_factor(THIN_ALBEDO, SKIN_IOR)
-        return walk.slab_top_exit(THIN_MM / mfp, walk.alpha_wrenninge(THIN_ALBEDO), paths=200_000,
-                                  diffuse_entry_fraction=0.5)
-    mfp = THIN_RADIUS_MM * walk.mean_free_path_per_radius(method, VERSION, THIN_ALBEDO)
-    return walk.slab_top_exit(THIN_MM / mfp, walk.walk_alpha(method, VERSION, THIN_ALBEDO), paths=200_000)
+def _walk(model: dict, thickness_mm: float, paths: int) -> tuple[float, float]:
+    """Monte Carlo thin-slab reflectance of the walk under a core random-walk model."""
+    mfp = THIN_RADIUS_MM * walk.mean_free_path_per_radius(model, THIN_ALBEDO, SKIN_IOR)
+    skin = model["radius"] == "skin_dipole"
+    return walk.slab_top_exit(thickness_mm / mfp, walk.walk_alpha(model, THIN_ALBEDO), paths=paths,
+                              diffuse_entry_fraction=0.5 if skin else 0.0)
 
 
 @pytest.mark.parametrize("method", ["RANDOM_WALK", "RANDOM_WALK_LEGACY", "RANDOM_WALK_SKIN"])
 def test_thin_slab_length_scale(scene, method):
-    if method not in walk.subsurface_methods():
-        pytest.skip(f"{method} is not offered by Blender {bpy.app.version_string}")
+    """The core's radius convention and alpha model for this version's walk (its table) against the render."""
+    models = walk.core_walk_models(VERSION)
+    if method not in models:
+        pytest.skip(f"{method} is not a method of Blender {bpy.app.version_string}")
+    model = models[method]
     rendered = _thin_slab_reflectance(scene, method)
-    expected, stderr = _reference(method)
+    expected, stderr = _walk(model, THIN_MM, 200_000)
     # what the other convention would give, to show the test tells them apart
     other = None
-    if method != "RANDOM_WALK_SKIN":
-        mfp_other = THIN_RADIUS_MM * (1 / (4 * math.pi) if walk.walk_reads_mean_free_path(method, VERSION) else 1.0)
-        other = walk.slab_top_exit(THIN_MM / mfp_other, walk.walk_alpha(method, VERSION, THIN_ALBEDO),
-                                   paths=50_000)[0]
-    print(f"\n[thin slab] Blender {bpy.app.version_string} {method}: rendered {rendered:.4f}, walk Monte Carlo "
-          f"{expected:.4f} +- {stderr:.4f} (diff {rendered - expected:+.4f})"
+    if model["radius"] != "skin_dipole":
+        swapped = dict(model, radius="mean_free_path" if model["radius"] == "four_pi_mean_free_path"
+                       else "four_pi_mean_free_path")
+        other = _walk(swapped, THIN_MM, 50_000)[0]
+    print(f"\n[thin slab] Blender {bpy.app.version_string} {method} ({model['alpha']}, {model['radius']}): rendered "
+          f"{rendered:.4f}, walk Monte Carlo {expected:.4f} +- {stderr:.4f} (diff {rendered - expected:+.4f})"
           + (f"; the other radius convention would give {other:.3f}" if other is not None else ""))
     assert abs(rendered - expected) < (SKIN_ATOL if method == "RANDOM_WALK_SKIN" else RW_ATOL)
-    np.testing.assert_array_less(0.0, rendered)

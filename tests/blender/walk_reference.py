@@ -106,27 +106,41 @@ def subsurface_methods() -> list[str]:
     return [item.identifier for item in prop.enum_items]
 
 
-def walk_reads_mean_free_path(method: str, version: tuple[int, ...]) -> bool:
-    """True where the walk takes Radius*Scale as the mean free path itself (RANDOM_WALK from Blender 5.2: measured in
-    bpy 5.2.3 and 5.3.0, source commit e5f416414), False where it divides by 4 pi first (RANDOM_WALK before 5.2,
-    RANDOM_WALK_LEGACY)."""
-    if method == "RANDOM_WALK":
-        return tuple(version[:2]) >= (5, 2)
-    if method == "RANDOM_WALK_LEGACY":
-        return False
-    raise ValueError(f"method {method!r}: expected RANDOM_WALK or RANDOM_WALK_LEGACY")
+ALPHA_MODELS = {"wrenninge_fit": alpha_wrenninge, "van_de_hulst": alpha_van_de_hulst}
 
 
-def walk_alpha(method: str, version: tuple[int, ...], albedo: float) -> float:
-    """The single-scattering albedo Cycles' walk uses for Base Color `albedo` (g = 0)."""
-    if method == "RANDOM_WALK" and tuple(version[:2]) >= (5, 2):
-        return alpha_van_de_hulst(albedo)
-    return alpha_wrenninge(albedo)
-
-
-def mean_free_path_per_radius(method: str, version: tuple[int, ...], albedo: float, ior: float = 1.4) -> float:
-    """The walk's mean free path per unit Radius*Scale (g = 0) for a method in a Blender version; RANDOM_WALK_SKIN
-    uses the Subsurface IOR `ior`."""
-    if method == "RANDOM_WALK_SKIN":
+def mean_free_path_per_radius(model: dict, albedo: float, ior: float = 1.4) -> float:
+    """The walk's mean free path per unit Radius*Scale (g = 0) under a random-walk model of the core's Blender target
+    table (``blender_targets()["versions"][i]["methods"][j]["model"]``): "four_pi_mean_free_path" (Radius*Scale =
+    4 pi mfp: RANDOM_WALK before 5.2, RANDOM_WALK_LEGACY), "mean_free_path" (RANDOM_WALK from 5.2), "skin_dipole"
+    (RANDOM_WALK_SKIN, at the Subsurface IOR `ior`)."""
+    radius = model["radius"]
+    if radius == "four_pi_mean_free_path":
+        return 1.0 / (4 * math.pi)
+    if radius == "mean_free_path":
+        return 1.0
+    if radius == "skin_dipole":
         return skin_radius_factor(albedo, ior)
-    return 1.0 if walk_reads_mean_free_path(method, version) else 1.0 / (4 * math.pi)
+    raise ValueError(f"radius convention {radius!r}: expected four_pi_mean_free_path, mean_free_path or skin_dipole")
+
+
+def walk_alpha(model: dict, albedo: float) -> float:
+    """The single-scattering albedo the walk of a core random-walk model uses for Base Color `albedo` (g = 0)."""
+    return ALPHA_MODELS[model["alpha"]](albedo)
+
+
+def core_target(version: tuple[int, ...]) -> dict:
+    """The core's table row for a tested Blender version (spectral_skin.blender_targets(); every version the tests
+    run in has its own row)."""
+    import spectral_skin
+
+    rows = spectral_skin.blender_targets()["versions"]
+    name = "%d.%d" % tuple(version[:2])
+    found = [r for r in rows if r["version"] == name]
+    assert found, f"Blender {name} has no row of its own in the core's table ({[r['version'] for r in rows]})"
+    return found[0]
+
+
+def core_walk_models(version: tuple[int, ...]) -> dict[str, dict]:
+    """Blender enum id -> the core's random-walk model, for the methods the core maps as walks in this version."""
+    return {m["blender_id"]: m["model"] for m in core_target(version)["methods"] if m["model"]["kind"] == "random_walk"}
