@@ -77,6 +77,11 @@ def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, siz
 # renders take about a second.
 BURLEY_SPP = 512
 BURLEY_TEXEL_SPP = 1024
+# The 4 texels span 25.6 mm of the slab (0.4 mm per pixel): Blender 4.2 renders a subsurface channel whose radius is
+# below about a quarter of a pixel as diffuse, and with some channels diffuse and some not, the others' Burley estimate
+# is biased (measured in 4.2.23: red +0.56 % with 15.6 mm pixels, the texels spanning 1 m); at 0.4 mm per pixel every
+# channel's radius (>= 0.115 mm) is above a quarter pixel.
+TEXEL_SPAN_M = 0.0256
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_burley_flat_slab_albedo(scene, preset):
@@ -116,8 +121,9 @@ def test_burley_per_texel_maps(scene, tmp_path):
     coords = nt.nodes.new("ShaderNodeTexCoord")
     mapping = nt.nodes.new("ShaderNodeMapping")
     mapping.vector_type = "POINT"
-    mapping.inputs["Location"].default_value = (0.5, 0.5, 0.0)  # object x, y in [-0.5, 0.5] m -> u, v in [0, 1]
-    mapping.inputs["Scale"].default_value = (1.0, 1.0, 1.0)
+    # object x, y in [-span/2, span/2] -> u, v in [0, 1] (u = x / span + 0.5)
+    mapping.inputs["Location"].default_value = (0.5, 0.5, 0.0)
+    mapping.inputs["Scale"].default_value = (1.0 / TEXEL_SPAN_M, 1.0 / TEXEL_SPAN_M, 1.0)
     nt.links.new(coords.outputs["Object"], mapping.inputs["Vector"])
     for path, colorspace, socket in (
         (albedo_path, "Linear Rec.709", "Base Color"),
@@ -135,11 +141,12 @@ def test_burley_per_texel_maps(scene, tmp_path):
 
     px_per_texel = 16
     width, height = n * px_per_texel, 16
-    add_top_camera(scene, ortho_scale=1.0, width=width, height=height)  # the image spans the slab's x extent
+    add_top_camera(scene, ortho_scale=TEXEL_SPAN_M, width=width, height=height)  # the image spans the 4 texels
     img = render(scene, samples=BURLEY_TEXEL_SPP)
     worst = 0.0
     for k in range(n):
-        # interior: 3 px (47 mm, >> 16 d) away from the texel's boundaries
+        # interior: 3 px away from the texel's boundaries (the response depends on the entry point's texel only:
+        # blender.md section 2)
         region = img[2:-2, k * px_per_texel + 3 : (k + 1) * px_per_texel - 3]
         mean = region.reshape(-1, 3).mean(axis=0)
         rel = mean / base[k] - 1.0
