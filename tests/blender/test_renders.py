@@ -255,18 +255,32 @@ RW_SPP = 1024
 RW_ORTHO_M = 0.01
 
 
-@pytest.mark.parametrize("preset", PRESETS)
-def test_random_walk_flat_slab_albedo(scene, preset):
+# The core's Random Walk (Skin) Base Color inverts a flat-slab response measured at Base Color 0.05-0.95 (its
+# "best effort" target, tested: false); the african albedos (0.02-0.035) lie below that table and render 2.4 / 5.1 /
+# 6.9 % bright in 5.3.0 (2.3 / 10.3 / 10.3 % in 4.2.23). Caucasian and asian are within 0.5 %.
+_SKIN_BELOW_TABLE = pytest.mark.xfail(strict=True, reason="Skin Base Color below the core's measured table")
+
+
+@pytest.mark.parametrize(
+    "preset, method",
+    [(p, m) for p in PRESETS for m in ("random_walk", "random_walk_legacy")]
+    + [pytest.param(p, "random_walk_skin", marks=_SKIN_BELOW_TABLE if p == "african" else ()) for p in PRESETS],
+)
+def test_random_walk_flat_slab_albedo(scene, preset, method):
     res = _evaluate(preset)
-    rw = res["methods"]["random_walk"]
+    if method not in res["methods"]:
+        pytest.skip(f"{method} is not a target of Blender {bpy.app.version_string}")
+    rw = res["methods"][method]
     expected = np.asarray(res["diffuse_reflectance_rgb"])
+    # Random Walk (Skin) walks from Blender's default Subsurface IOR, 1.4 in every version, which the core's Skin
+    # mapping assumes (principled_sss leaves the socket at its default).
     mean = _flat_slab_mean(
-        scene, "RANDOM_WALK", rw["base_color"], rw["subsurface_radius_mm"], samples=RW_SPP, region_px=48,
+        scene, method.upper(), rw["base_color"], rw["subsurface_radius_mm"], samples=RW_SPP, region_px=48,
         ortho_m=RW_ORTHO_M,
     )
     rel = mean / expected - 1.0
     print(
-        f"\n[albedo/random_walk] {preset}: base_color {np.array2string(np.asarray(rw['base_color']), precision=5)} "
+        f"\n[albedo/{method}] {preset}: base_color {np.array2string(np.asarray(rw['base_color']), precision=5)} "
         f"rendered {np.array2string(mean, precision=6)} expected {np.array2string(expected, precision=6)} "
         f"rel.err {np.array2string(rel * 100, precision=4)} %"
     )
