@@ -27,18 +27,15 @@ pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
 from conftest import (  # noqa: E402
-    MM,
-    add_plane,
     add_slab,
-    add_sun,
     add_top_camera,
     assign,
-    black_material,
     burley_edge_response,
-    pixel_centres_x,
+    fit_burley_edge,
     principled_sss,
     profile_edge_fraction,
     render,
+    render_edge,
     set_world,
     write_exr,
 )
@@ -53,13 +50,15 @@ def _evaluate(preset: str) -> dict:
     return spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"), blender=tuple(bpy.app.version))
 
 
-def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, size_px: int = 64, region_px: int = 32):
-    """Render the white-world flat slab; return the mean RGB over the central region_px x region_px pixels."""
+def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, size_px: int = 64, region_px: int = 32,
+                    ortho_m: float = 0.1):
+    """Render the white-world flat slab (an image ortho_m wide); return the mean RGB over the central region_px x
+    region_px pixels."""
     set_world(scene, strength=1.0)
     slab = add_slab()
     mat, _ = principled_sss("Skin", method, base_color, radius_mm)
     assign(slab, mat)
-    add_top_camera(scene, ortho_scale=0.1, width=size_px, height=size_px)
+    add_top_camera(scene, ortho_scale=ortho_m, width=size_px, height=size_px)
     img = render(scene, samples=samples)
     lo = (size_px - region_px) // 2
     region = img[lo : lo + region_px, lo : lo + region_px]
@@ -78,6 +77,11 @@ def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, siz
 # renders take about a second.
 BURLEY_SPP = 512
 BURLEY_TEXEL_SPP = 1024
+# The 4 texels span 25.6 mm of the slab (0.4 mm per pixel): Blender 4.2 renders a subsurface channel whose radius is
+# below about a quarter of a pixel as diffuse, and with some channels diffuse and some not, the others' Burley estimate
+# is biased (measured in 4.2.23: red +0.56 % with 15.6 mm pixels, the texels spanning 1 m); at 0.4 mm per pixel every
+# channel's radius (>= 0.115 mm) is above a quarter pixel.
+TEXEL_SPAN_M = 0.0256
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_burley_flat_slab_albedo(scene, preset):
@@ -117,8 +121,9 @@ def test_burley_per_texel_maps(scene, tmp_path):
     coords = nt.nodes.new("ShaderNodeTexCoord")
     mapping = nt.nodes.new("ShaderNodeMapping")
     mapping.vector_type = "POINT"
-    mapping.inputs["Location"].default_value = (0.5, 0.5, 0.0)  # object x, y in [-0.5, 0.5] m -> u, v in [0, 1]
-    mapping.inputs["Scale"].default_value = (1.0, 1.0, 1.0)
+    # object x, y in [-span/2, span/2] -> u, v in [0, 1] (u = x / span + 0.5)
+    mapping.inputs["Location"].default_value = (0.5, 0.5, 0.0)
+    mapping.inputs["Scale"].default_value = (1.0 / TEXEL_SPAN_M, 1.0 / TEXEL_SPAN_M, 1.0)
     nt.links.new(coords.outputs["Object"], mapping.inputs["Vector"])
     for path, colorspace, socket in (
         (albedo_path, "Linear Rec.709", "Base Color"),
@@ -136,11 +141,12 @@ def test_burley_per_texel_maps(scene, tmp_path):
 
     px_per_texel = 16
     width, height = n * px_per_texel, 16
-    add_top_camera(scene, ortho_scale=1.0, width=width, height=height)  # the image spans the slab's x extent
+    add_top_camera(scene, ortho_scale=TEXEL_SPAN_M, width=width, height=height)  # the image spans the 4 texels
     img = render(scene, samples=BURLEY_TEXEL_SPP)
     worst = 0.0
     for k in range(n):
-        # interior: 3 px (47 mm, >> 16 d) away from the texel's boundaries
+        # interior: 3 px away from the texel's boundaries (the response depends on the entry point's texel only:
+        # blender.md section 2)
         region = img[2:-2, k * px_per_texel + 3 : (k + 1) * px_per_texel - 3]
         mean = region.reshape(-1, 3).mean(axis=0)
         rel = mean / base[k] - 1.0
@@ -165,21 +171,8 @@ EDGE_SPP = 512
 
 def _render_edge(scene, base_color, radius_mm) -> tuple[np.ndarray, np.ndarray]:
     """piL(x)/E across a hard shadow edge at x = 0 (lit for x < 0); returns (x in mm, (W, 3) row-averaged)."""
-    set_world(scene, strength=0.0, color=(0.0, 0.0, 0.0))
-    slab = add_slab()
     mat, _ = principled_sss("Skin", "BURLEY", base_color, radius_mm)
-    assign(slab, mat)
-    occluder = add_plane("Occluder", 0.0, 1.0, -1.0, 1.0, z=1.5 * MM)  # covers x > 0, 1.5 mm above the slab
-    assign(occluder, black_material())
-    occluder.visible_camera = False  # casts the shadow, but camera rays pass through
-    add_sun(scene, strength=1.0, angle=0.0)  # irradiance 1 W/m^2: piL = A on a lit white-world-free Lambertian
-    ortho = EDGE_ORTHO_MM * MM
-    add_top_camera(scene, ortho_scale=ortho, width=EDGE_W, height=EDGE_H)
-    img = render(scene, samples=EDGE_SPP, filter_width=0.01)  # pixel-centre sampling
-    # The EXR holds radiance L; a sun of strength 1 gives irradiance E = 1 W/m^2, so piL/E = pi * L.
-    pi_l = math.pi * img.mean(axis=0)
-    x_mm = pixel_centres_x(ortho, EDGE_W) / MM
-    return x_mm, pi_l
+    return render_edge(scene, mat, EDGE_ORTHO_MM, EDGE_W, EDGE_H, EDGE_SPP)
 
 
 def test_burley_edge_profile(scene):
@@ -256,20 +249,88 @@ def test_burley_edge_profile(scene):
 # predicted at all. 1 % = that 0.3 % model allowance plus > 4 standard errors in every channel.
 RW_RTOL = 1.0e-2
 RW_SPP = 1024
+# The random-walk slab is seen close up, 10 mm over 64 px (0.16 mm per pixel): Blender 4.2 renders a random-walk
+# channel whose radius is below about a quarter of a pixel as plain diffuse with its Base Color (measured: the
+# african blue channel, Radius*Scale 0.34 mm, came out 21.6 % bright at 1.56 mm per pixel); 4.5 and later do not.
+RW_ORTHO_M = 0.01
 
 
-@pytest.mark.parametrize("preset", PRESETS)
-def test_random_walk_flat_slab_albedo(scene, preset):
+# The core's Random Walk (Skin) Base Color inverts a flat-slab response measured at Base Color 0.05-0.95 (its
+# "best effort" target, tested: false); the african albedos (0.02-0.035) lie below that table and render 2.4 / 5.1 /
+# 6.9 % bright in 5.3.0 (2.3 / 10.3 / 10.3 % in 4.2.23). Caucasian and asian are within 0.5 %.
+_SKIN_BELOW_TABLE = pytest.mark.xfail(strict=True, reason="Skin Base Color below the core's measured table")
+
+
+@pytest.mark.parametrize(
+    "preset, method",
+    [(p, m) for p in PRESETS for m in ("random_walk", "random_walk_legacy")]
+    + [pytest.param(p, "random_walk_skin", marks=_SKIN_BELOW_TABLE if p == "african" else ()) for p in PRESETS],
+)
+def test_random_walk_flat_slab_albedo(scene, preset, method):
     res = _evaluate(preset)
-    rw = res["methods"]["random_walk"]
+    if method not in res["methods"]:
+        pytest.skip(f"{method} is not a target of Blender {bpy.app.version_string}")
+    rw = res["methods"][method]
     expected = np.asarray(res["diffuse_reflectance_rgb"])
+    # Random Walk (Skin) walks from Blender's default Subsurface IOR, 1.4 in every version, which the core's Skin
+    # mapping assumes (principled_sss leaves the socket at its default).
     mean = _flat_slab_mean(
-        scene, "RANDOM_WALK", rw["base_color"], rw["subsurface_radius_mm"], samples=RW_SPP, region_px=48
+        scene, method.upper(), rw["base_color"], rw["subsurface_radius_mm"], samples=RW_SPP, region_px=48,
+        ortho_m=RW_ORTHO_M,
     )
     rel = mean / expected - 1.0
     print(
-        f"\n[albedo/random_walk] {preset}: base_color {np.array2string(np.asarray(rw['base_color']), precision=5)} "
+        f"\n[albedo/{method}] {preset}: base_color {np.array2string(np.asarray(rw['base_color']), precision=5)} "
         f"rendered {np.array2string(mean, precision=6)} expected {np.array2string(expected, precision=6)} "
         f"rel.err {np.array2string(rel * 100, precision=4)} %"
     )
     np.testing.assert_allclose(mean, expected, rtol=RW_RTOL)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# 4. Random-walk edges vs the core's target profile, for the running Blender
+
+BLENDER = "%d.%d" % tuple(bpy.app.version[:2])
+RW_EDGE_SPP = 256
+RW_EDGE_METHODS = ("random_walk", "random_walk_legacy", "random_walk_skin")
+# rms of (render - expected_albedo * BurleyEdge(x; core d)) / expected_albedo over the image, per channel: how far
+# the walk's edge is from the model's (the walk's edge is not exactly Burley-shaped, the core's width model is fitted,
+# and 256 spp leave about 0.3-0.4 % of noise per column). Measured on caucasian in bpy 5.3.0: 0.54-0.58 % for
+# random_walk, random_walk_legacy and random_walk_skin, with the fitted Burley d within 2.4 % of the core's d (the
+# per-version figures: docs/blender-render-tests.md). Bound 1 %: a radius 10 % off moves it past 1 %.
+RW_EDGE_RMS_BOUND = 0.01
+
+
+def _evaluate_for_this_blender(preset: str) -> dict:
+    """The core's mapping for the running Blender (Cycles); skips where the core has no per-version targets yet."""
+    try:
+        return spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"), blender=BLENDER, engine="cycles")
+    except TypeError:
+        if bpy.app.version[:2] >= (5, 2):
+            pytest.skip("the core maps random walks for Blender <= 5.1 only (no blender= targets yet)")
+        return spectral_skin.evaluate(preset=preset, outputs=("albedo", "radius"))
+
+
+@pytest.mark.parametrize("method", RW_EDGE_METHODS)
+def test_random_walk_edge_vs_core(scene, method):
+    res = _evaluate_for_this_blender(EDGE_PRESET)
+    if method not in res["methods"] or method.upper() not in [
+        e.identifier for e in bpy.types.ShaderNodeBsdfPrincipled.bl_rna.properties["subsurface_method"].enum_items
+    ]:
+        pytest.skip(f"{method} is not a target of Blender {BLENDER}")
+    m = res["methods"][method]
+    expected = np.asarray(m["expected_albedo"])
+    d_core = np.array([f["d_mm"] for f in res["radius_fit"]])
+    mat, _ = principled_sss("Skin", method.upper(), m["base_color"], m["subsurface_radius_mm"])
+    x_mm, measured = render_edge(scene, mat, EDGE_ORTHO_MM, EDGE_W, EDGE_H, RW_EDGE_SPP)
+    rms = np.zeros(3)
+    width = np.zeros(3)
+    for c in range(3):
+        model = burley_edge_response(x_mm, d_core[c], expected[c])
+        rms[c] = math.sqrt(np.mean(((measured[:, c] - model) / expected[c]) ** 2))
+        width[c] = fit_burley_edge(x_mm, measured[:, c], 0.01, 5.0)[0] / d_core[c]
+    print(
+        f"\n[edge/{method}] Blender {bpy.app.version_string} {EDGE_PRESET}: rms err / A vs the core's Burley edge "
+        f"{np.array2string(rms * 100, precision=3)} %; fitted Burley d / core d {np.array2string(width, precision=3)}"
+    )
+    assert np.all(rms < RW_EDGE_RMS_BOUND), rms
