@@ -9,6 +9,7 @@ use spectral_skin::diffusion::{
     MultipoleTerms,
 };
 use spectral_skin::evaluate::Prepared;
+use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::{Outputs, Request, SkinParams};
 
 const INF: f64 = f64::INFINITY;
@@ -256,10 +257,10 @@ fn corrupted_table_cache_is_rebuilt() {
     };
     let dir = tempfile::tempdir().unwrap();
     let (fresh, cached) =
-        MaterialTable::load_or_build(&prepared, resolution, Some(dir.path())).unwrap();
+        MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path())).unwrap();
     assert!(!cached);
     assert!(
-        MaterialTable::load_or_build(&prepared, resolution, Some(dir.path()))
+        MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path()))
             .unwrap()
             .1,
         "second load from the cache"
@@ -277,7 +278,7 @@ fn corrupted_table_cache_is_rebuilt() {
         bad[at] ^= 0x10;
         std::fs::write(&file, &bad).unwrap();
         let (rebuilt, cached) =
-            MaterialTable::load_or_build(&prepared, resolution, Some(dir.path())).unwrap();
+            MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path())).unwrap();
         assert!(!cached, "byte {at} flipped: the corrupted cache was used");
         assert_eq!(probe(&rebuilt), probe(&fresh));
         assert_eq!(
