@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+from typing import Any
 
 import bpy
 import numpy as np
@@ -13,7 +14,8 @@ from .core import PARAMETER_INFO, PARAMETERS, ParameterMap, SkinSettings, read_m
 from .core import methods as core_methods
 from .nodes import scene_target, scene_working_space
 
-_PRESETS = spectral_skin.presets()
+# Plain dicts (name -> value) for lookups by parameter name.
+_PRESETS: dict[str, dict[str, Any]] = {name: dict(p) for name, p in spectral_skin.presets().items()}
 _DEFAULT_PRESET = "caucasian" if "caucasian" in _PRESETS else next(iter(_PRESETS))
 
 PRESET_ITEMS = [("CUSTOM", "Custom", "Parameters as set below")] + [
@@ -209,10 +211,12 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
     props = material.spectral_skin
     maps = material_maps(material)
     output_dir = texture_folder(props) if maps else ""
+    target = scene_target(scene)
     return SkinSettings(
         **{name: getattr(props, name) for name in PARAMETERS}, method=props.method, accuracy=props.accuracy, maps=maps,
         clamp=props.clamp, output_dir=output_dir, file_prefix=texture_prefix(bpy.data.filepath, material.name),
-        scale_length=scene.unit_settings.scale_length, working_space=scene_working_space(), **scene_target(scene))
+        scale_length=scene.unit_settings.scale_length, working_space=scene_working_space(),
+        blender=target["blender"], engine=target["engine"])
 
 
 def store_result(material: bpy.types.Material, plan: dict) -> None:

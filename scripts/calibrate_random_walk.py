@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
-import math
 import os
 import sys
 import tempfile
@@ -32,8 +31,6 @@ import time
 from pathlib import Path
 from types import ModuleType
 from typing import Any
-
-import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 TESTS = ROOT / "tests" / "blender"
@@ -78,7 +75,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
     helpers = _load("_spectral_skin_blender_conftest", TESTS / "conftest.py")
     walk = _load("_spectral_skin_walk_reference", TESTS / "walk_reference.py")
-    version = "%d.%d" % bpy.app.version[:2]
+    version = "{}.{}".format(*bpy.app.version[:2])
     models = walk.core_walk_models(bpy.app.version)  # the core's radius convention per method for this Blender
     methods = [m for m in args.methods if m in models and m in walk.subsurface_methods()]
     entries = []

@@ -1,16 +1,22 @@
 #!/usr/bin/env bash
-# Set up a fresh machine and run every test: Rust unit and integration tests (release mode: the Monte Carlo
-# references need it), the Python bindings' pytest suite, and the Blender add-on and render tests (bpy, Cycles CPU).
+# Set up a fresh machine and run every test: Rust tests, the Python bindings' tests, the Blender extension build, the
+# add-on and render tests in every supported Blender version (one venv each), and the reduced reports.
+# Each stage is a script of its own and can be run alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup-python.sh
-cargo test --release
-.venv/bin/python -m pytest tests/python -q
-.venv/bin/python -m mypy.stubtest spectral_skin._core
-# The Blender extension (built and validated by Blender's own validator), then the add-on and render tests via bpy.
-bash scripts/build_addon.sh
-.venv/bin/python -m pytest tests/blender -q
+stage() { echo; echo "=== $* ($(date -u +%H:%M:%S))"; }
+stage setup; bash scripts/setup-python.sh
+stage rust; bash scripts/test-rust.sh
+stage python; bash scripts/test-python.sh
+# The Blender extension (built and validated by Blender's own validator), then the add-on and render tests via bpy in
+# each version of scripts/blender-versions.txt.
+stage extension; bash scripts/build_addon.sh
+stage blender; bash scripts/setup-blender.sh && bash scripts/test-blender.sh
 # The map performance report in its reduced form, so the report code cannot rot (the full one: see README).
-.venv/bin/python scripts/maps_report.py --quick --out "$(mktemp -d)/maps-performance.md"
+stage reports
+report_dir=$(mktemp -d)
+trap 'rm -rf "$report_dir"' EXIT
+.venv/bin/python scripts/maps_report.py --quick --out "$report_dir/maps-performance.md"
 # The accuracy-vs-time report, reduced (the full one: bash scripts/accuracy_report.sh).
 bash scripts/accuracy_report.sh --quick
+stage done

@@ -1,7 +1,6 @@
 """The add-on's portable part: settings and the material plan, computed by spectral_skin. No bpy imports."""
 
 from .plan import describe_error, make_plan, subsurface_scale, texture_prefix, write_textures
-from .targets import engine_name, method_name, methods, version_text
 from .settings import (
     ACCURACY_LEVELS,
     DEFAULT_WORKING_SPACE,
@@ -13,6 +12,7 @@ from .settings import (
     check,
     read_map_file,
 )
+from .targets import engine_name, method_name, methods, version_text
 
 __all__ = [
     "ACCURACY_LEVELS",

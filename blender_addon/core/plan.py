@@ -50,7 +50,7 @@ def texture_prefix(blend_path: str, material_name: str) -> str:
     return f"{stem}_{material_name}" if stem else material_name
 
 
-def describe_error(error: Exception) -> str:
+def describe_error(error: BaseException) -> str:
     """An error's message for an artist: bad texels in a parameter map (the core's ``bad_texels``) are described
     with the panel's words; any other error keeps the core's message (it names the input and its range)."""
     bad = getattr(error, "bad_texels", None)

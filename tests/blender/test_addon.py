@@ -23,10 +23,11 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
+from conftest import material_snapshot  # noqa: E402
+
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 from blender_addon.ops import apply_skin  # noqa: E402
-from conftest import material_snapshot  # noqa: E402
 
 ZIP = REPO / "dist" / "spectral_skin-0.1.0.zip"
 BLENDER_EXT = pathlib.Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"

@@ -26,10 +26,11 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
+from conftest import material_snapshot, read_exr  # noqa: E402
+
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 from blender_addon.ops import _Work  # noqa: E402
-from conftest import material_snapshot, read_exr  # noqa: E402
 
 CLI = REPO / "target" / "release" / "spectral-skin"
 PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")

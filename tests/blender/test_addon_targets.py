@@ -23,8 +23,9 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
-from blender_addon import nodes as addon_nodes  # noqa: E402
 from conftest import read_exr  # noqa: E402
+
+from blender_addon import nodes as addon_nodes  # noqa: E402
 
 
 def _eevee_id() -> str:

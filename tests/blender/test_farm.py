@@ -32,11 +32,21 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
+from conftest import (  # noqa: E402
+    add_slab,
+    add_sun,
+    add_top_camera,
+    assign,
+    material_snapshot,
+    new_material,
+    read_exr,
+    reset_scene,
+    set_world,
+)
+
 from blender_addon import batch  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
-from conftest import (add_slab, add_sun, add_top_camera, assign, material_snapshot, new_material,  # noqa: E402
-                      read_exr, reset_scene, set_world)
 
 BATCH = REPO / "blender_addon" / "batch.py"
 SIZE = 64

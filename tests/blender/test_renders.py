@@ -290,7 +290,7 @@ def test_random_walk_flat_slab_albedo(scene, preset, method):
 # ---------------------------------------------------------------------------------------------------------------
 # 4. Random-walk edges vs the core's target profile, for the running Blender
 
-BLENDER = "%d.%d" % tuple(bpy.app.version[:2])
+BLENDER = "{}.{}".format(*bpy.app.version[:2])
 RW_EDGE_SPP = 256
 RW_EDGE_METHODS = ("random_walk", "random_walk_legacy", "random_walk_skin")
 # rms of (render - expected_albedo * BurleyEdge(x; core d)) / expected_albedo over the image, per channel: how far

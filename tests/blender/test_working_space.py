@@ -30,10 +30,11 @@ REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
+from conftest import add_slab, add_top_camera, assign, render, reset_scene, set_world  # noqa: E402
+
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import WORKING_SPACES, ParameterMap, SkinSettings, make_plan  # noqa: E402
 from blender_addon.ops import apply_skin, scene_working_space  # noqa: E402
-from conftest import add_slab, add_top_camera, assign, render, reset_scene, set_world  # noqa: E402
 
 PRESET = "caucasian"
 # 256 spp: Cycles' Burley flat-slab estimate with unequal RGB radii has a correlated error of about 0.12 % at 64-256

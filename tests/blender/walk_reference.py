@@ -135,7 +135,7 @@ def core_target(version: tuple[int, ...]) -> dict:
     import spectral_skin
 
     rows = spectral_skin.blender_targets()["versions"]
-    name = "%d.%d" % tuple(version[:2])
+    name = "{}.{}".format(*version[:2])
     found = [r for r in rows if r["version"] == name]
     assert found, f"Blender {name} has no row of its own in the core's table ({[r['version'] for r in rows]})"
     return found[0]

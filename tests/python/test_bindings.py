@@ -6,7 +6,6 @@ import threading
 
 import numpy as np
 import pytest
-
 import spectral_skin
 from spectral_skin import SpectralSkinError
 
@@ -284,7 +283,7 @@ def test_concurrent_calls_finish_and_agree():
 def test_parameter_ranges_bound_what_evaluate_accepts():
     ranges = spectral_skin.parameter_ranges()
     assert ranges == {"melanin": (0.0, 0.5), "melanin_blend": (0.0, 1.0), "hemoglobin": (0.0, 0.1), "oiliness": (0.0, 1.0)}
-    for name, (low, high) in ranges.items():
+    for name, (_low, high) in ranges.items():
         values = {"melanin": 0.1, "melanin_blend": 0.5, "hemoglobin": 0.01, "oiliness": 0.2}
         spectral_skin.evaluate(**{**values, name: high}, outputs=("albedo",))
         with pytest.raises(spectral_skin.SpectralSkinError, match=name):

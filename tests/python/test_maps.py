@@ -4,7 +4,6 @@ one evaluation per call, no pipeline), the strategies, specular, bad texels, sha
 
 import numpy as np
 import pytest
-
 import spectral_skin
 from spectral_skin import SpectralSkinError
 

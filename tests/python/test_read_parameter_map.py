@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import spectral_skin
 from spectral_skin import SpectralSkinError
 
