@@ -10,5 +10,5 @@ if [ ! -x .venv/bin/python ]; then
     "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q "maturin>=1.5,<2" pytest mypy "numpy<2" "openimageio>=3.0,<3.1" "bpy==5.0.1"
+.venv/bin/python -m pip install -q "maturin>=1.5,<2" pytest mypy ruff "numpy<2" "openimageio>=3.0,<3.1" "bpy==5.0.1"
 VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release -q
