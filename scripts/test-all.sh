@@ -6,6 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 stage() { echo; echo "=== $* ($(date -u +%H:%M:%S))"; }
 stage setup; bash scripts/setup-python.sh
+stage lint; bash scripts/lint.sh
 stage rust; bash scripts/test-rust.sh
 stage python; bash scripts/test-python.sh
 # The Blender extension (built and validated by Blender's own validator), then the add-on and render tests via bpy in
