@@ -4,19 +4,20 @@
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::Mutex;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use numpy::ndarray::{Array2, Array3, ArrayView2, Axis, Ix2, Ix3};
 use numpy::{
-    AllowTypeChange, Element, PyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayLike1, PyArrayMethods,
-    PyArrayDescrMethods, PyUntypedArray, PyUntypedArrayMethods,
+    AllowTypeChange, Element, PyArray, PyArray1, PyArray2, PyArray3, PyArrayDescrMethods, PyArrayDyn, PyArrayLike1,
+    PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
 };
-use rayon::prelude::*;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyInterruptedError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
+use rayon::prelude::*;
 use serde::Serialize;
 use serde_json::Value;
 
@@ -82,15 +83,66 @@ fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> Result<T, SkinError> + 
     let result = py.detach(|| catch_unwind(AssertUnwindSafe(f)));
     match result {
         Ok(value) => Ok(value?),
-        Err(payload) => {
-            let message = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".to_string());
-            Err(PyRuntimeError::new_err(format!("spectral-skin internal error (please report it): {message}")))
-        }
+        Err(payload) => Err(panic_error(payload)),
     }
+}
+
+/// How often a long call's own thread wakes to run Python's signal handlers (Ctrl-C) while the work runs.
+const SIGNAL_POLL: Duration = Duration::from_millis(100);
+
+/// [`detached`] for long work that can stop early: the work runs on a scoped thread while the calling thread, with
+/// the GIL released, wakes every [`SIGNAL_POLL`] to run Python's signal handlers (CPython runs them on the main
+/// thread only, so the watching must happen here). An exception from a handler (KeyboardInterrupt for Ctrl-C) sets
+/// `cancel`, waits for the work to stop at its next check, and is raised instead of the result.
+fn detached_interruptible<T: Send>(
+    py: Python<'_>,
+    cancel: &AtomicBool,
+    f: impl FnOnce() -> Result<T, SkinError> + Send,
+) -> PyResult<T> {
+    let (sender, receiver) = mpsc::channel();
+    let (result, interrupted) = std::thread::scope(|scope| {
+        scope.spawn(move || {
+            // Nothing to do if the receiver is gone: it only goes when this scope ends, after the work.
+            let _ = sender.send(catch_unwind(AssertUnwindSafe(f)));
+        });
+        let mut interrupted: Option<PyErr> = None;
+        let mut receiver = receiver;
+        loop {
+            // The receiver travels into the GIL-free closure and back (it is Send, not Sync).
+            let (received, back) = py.detach(move || (receiver.recv_timeout(SIGNAL_POLL), receiver));
+            receiver = back;
+            match received {
+                Ok(result) => return (Some(result), interrupted),
+                Err(RecvTimeoutError::Timeout) => {
+                    if interrupted.is_none() {
+                        if let Err(e) = py.check_signals() {
+                            cancel.store(true, Ordering::Relaxed);
+                            interrupted = Some(e);
+                        }
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => return (None, interrupted),
+            }
+        }
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    match result {
+        Some(Ok(value)) => Ok(value?),
+        Some(Err(payload)) => Err(panic_error(payload)),
+        None => Err(internal("the worker thread ended without a result")),
+    }
+}
+
+/// A panic (a bug: the core validates its input) as a RuntimeError instead of a PanicException.
+fn panic_error(payload: Box<dyn std::any::Any + Send>) -> PyErr {
+    let message = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".to_string());
+    PyRuntimeError::new_err(format!("spectral-skin internal error (please report it): {message}"))
 }
 
 fn invalid(name: impl Into<String>, reason: impl Into<String>) -> PyErr {
@@ -457,7 +509,8 @@ fn evaluate_py<'py>(
     blender: Option<&Bound<'py, PyAny>>,
     engine: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let explicit = [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
+    let explicit =
+        [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
     let mut values = [None; 4];
     for (value, (name, obj)) in values.iter_mut().zip(explicit) {
         *value = real_arg(name, obj)?;
@@ -512,7 +565,8 @@ fn profile_py<'py>(
     combination: &str,
     working_space: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let explicit = [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
+    let explicit =
+        [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
     let mut values = [None; 4];
     for (value, (name, obj)) in values.iter_mut().zip(explicit) {
         *value = real_arg(name, obj)?;
@@ -757,11 +811,8 @@ fn table_resolution(obj: Option<&Bound<'_, PyAny>>) -> PyResult<TableResolution>
         melanin_blend: count("melanin_blend", b)?,
         hemoglobin: count("hemoglobin", h)?,
     };
-    r.melanin
-        .checked_mul(r.melanin_blend)
-        .and_then(|n| n.checked_mul(r.hemoglobin))
-        .filter(|&n| n <= MAX_TEXELS)
-        .ok_or_else(|| invalid("table_resolution", format!("at most {MAX_TEXELS} nodes in all; got {m} x {b} x {h}")))?;
+    // The core's bound (lut.rs, `TableResolution::validate`), checked before anything is allocated.
+    r.validate()?;
     Ok(r)
 }
 
@@ -1043,7 +1094,10 @@ fn maps_py<'py>(
         report: crate::maps::MapReport,
     }
     let hook = progress.as_ref();
-    let computed = detached(py, move || {
+    // Ctrl-C (and a progress callback's False or exception) stops the work through one flag.
+    let own_flag = AtomicBool::new(false);
+    let cancel = hook.map_or(&own_flag, |h| &h.stopped);
+    let computed = detached_interruptible(py, cancel, move || {
         let clamped = check_planes(&mut image, clamp)?;
         let read = start.elapsed().as_secs_f64();
         let report = |done: usize, total: usize| {
@@ -1055,8 +1109,6 @@ fn maps_py<'py>(
         if hook.is_some_and(Progress::stopped) {
             return Ok(None);
         }
-        let never = AtomicBool::new(false);
-        let cancel = hook.map_or(&never, |h| &h.stopped);
         let progress = hook.map(|_| &report as &(dyn Fn(usize, usize) + Sync));
         let mut result = compute_maps_cancellable(&image, &settings, progress, cancel)?;
         drop(image);
