@@ -164,3 +164,72 @@ fn eval_and_maps_take_a_target() {
     let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
     assert_eq!(sidecar["report"]["target"], serde_json::json!({"blender": "4.5", "engine": "eevee", "tested": true}));
 }
+
+/// A negative number after an option is its value, so the range check answers with its own message (clap would
+/// otherwise report an unknown argument '-0').
+#[test]
+fn negative_values_reach_the_range_check() {
+    let out = run(&["eval", "--melanin", "-0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("melanin must be in [0, 0.5]") && err.contains("-0.1"), "{err}");
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("face.exr");
+    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]).status.success());
+    let out_dir = dir.path().join("maps");
+    let out = run(&[
+        "maps", "--melanin-map", params.to_str().unwrap(), "--melanin-blend", "0.5", "--hemoglobin", "-0.02",
+        "--oiliness", "0.3", "--out", out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("hemoglobin") && err.contains("[0, 0.1]") && !err.contains("unexpected argument"), "{err}");
+    assert!(!out_dir.exists(), "nothing written on bad input");
+}
+
+/// `--table-check` is bounded before any work, with the allowed range in the message (10^12 used to abort).
+#[test]
+fn table_check_is_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("maps");
+    let out = run(&[
+        "maps", "--melanin", "0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3",
+        "--table-check", "1000000000000", "--out", out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    let max = spectral_skin::maps::pipeline::MAX_TABLE_CHECK_SAMPLES.to_string();
+    assert!(err.contains("--table-check") && err.contains(&max), "{err}");
+    assert!(!out_dir.exists());
+}
+
+/// A run with constant oiliness writes no specular.exr and removes the one an earlier run left, so the folder holds
+/// exactly what the sidecar lists.
+#[test]
+fn a_new_run_leaves_no_stale_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let face = dir.path().join("face.exr");
+    assert!(run(&["example", "--out", face.to_str().unwrap(), "--size", "16"]).status.success());
+    let out_dir = dir.path().join("maps");
+    let maps = |extra: &[&str]| {
+        let mut args = vec!["maps", "--out", out_dir.to_str().unwrap(), "--no-cache", "--table-check", "0"];
+        args.extend_from_slice(extra);
+        let out = run(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    };
+    maps(&["--params", face.to_str().unwrap()]);
+    assert!(out_dir.join("specular.exr").is_file(), "varying oiliness writes a specular map");
+    maps(&["--melanin-map", face.to_str().unwrap(), "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+    let mut listed: Vec<String> =
+        sidecar["outputs"].as_object().unwrap().keys().filter(|k| k.ends_with(".exr")).cloned().collect();
+    listed.push("skin_maps.json".into());
+    listed.sort();
+    let mut present: Vec<String> =
+        std::fs::read_dir(&out_dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    present.sort();
+    assert_eq!(present, listed, "the folder holds exactly the sidecar's files");
+    assert!(!out_dir.join("specular.exr").exists());
+    assert!(sidecar["outputs"]["specular_constants"].is_object());
+}

@@ -26,6 +26,9 @@ pub const MAX_DISTINCT_TUPLES: usize = 2048;
 const LISTED_BAD_TEXELS: usize = 5;
 /// Points at which a freshly built table's error is measured by default (each a direct evaluation).
 pub const DEFAULT_TABLE_CHECK_SAMPLES: usize = 64;
+/// Most check points a caller may ask for: each is one direct evaluation (about 0.25 ms on one core of the
+/// 2-core machine of docs/maps-performance.md), so 10^6 is minutes of work; more is a mistake, not a finer check.
+pub const MAX_TABLE_CHECK_SAMPLES: usize = 1_000_000;
 
 /// How texels are evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
@@ -442,7 +445,24 @@ pub fn run_maps(
     let sidecar = sidecar_json(&report, inputs, &result.specular, exr);
     staged.push(stage_bytes(&out_dir.join(SIDECAR_FILE), sidecar.as_bytes())?);
     commit_all(staged)?;
+    remove_stale_outputs(out_dir, &result.specular)?;
     Ok(report)
+}
+
+/// Remove an output of an earlier run that this run did not write (today only `specular.exr`, absent when the
+/// oiliness is constant), so the folder holds exactly the files the new sidecar lists. Runs after the new files are
+/// in place: if it fails, the sidecar (which lists the current files) is still right, and the error says which file
+/// is stale.
+fn remove_stale_outputs(out_dir: &Path, specular: &SpecularOutput) -> Result<(), SkinError> {
+    if matches!(specular, SpecularOutput::Map { .. }) {
+        return Ok(());
+    }
+    let stale = out_dir.join(SPECULAR_FILE);
+    match std::fs::remove_file(&stale) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(SkinError::io(&stale, format!("cannot remove the previous run's output (not written by this run): {e}"))),
+    }
 }
 
 /// The sidecar: what each file holds (channels, meaning, units, colour space), the inputs, and the report.
