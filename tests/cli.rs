@@ -233,3 +233,40 @@ fn a_new_run_leaves_no_stale_outputs() {
     assert!(!out_dir.join("specular.exr").exists());
     assert!(sidecar["outputs"]["specular_constants"].is_object());
 }
+
+/// Ctrl-C during `maps` stops it within seconds with exit code 130 and leaves the output folder as it was: no new
+/// file, no temporary file.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_maps_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let face = dir.path().join("face.exr");
+    assert!(run(&["example", "--out", face.to_str().unwrap(), "--size", "512"]).status.success());
+    let out_dir = dir.path().join("maps");
+    std::fs::create_dir(&out_dir).unwrap();
+    std::fs::write(out_dir.join("keep.txt"), b"earlier").unwrap();
+    // Exact evaluation of 512 x 512 texels: far longer than the 1.5 s before the signal.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_spectral-skin"))
+        .args(["maps", "--params", face.to_str().unwrap(), "--exact", "--no-cache", "--out", out_dir.to_str().unwrap()])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let sent = std::time::Instant::now();
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if sent.elapsed().as_secs() > 30 {
+            child.kill().unwrap();
+            panic!("maps still running 30 s after SIGINT");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert!(sent.elapsed().as_secs_f64() < 5.0, "took {:?} to stop", sent.elapsed());
+    assert_eq!(status.code(), Some(130), "exit code 130 after Ctrl-C");
+    let names: Vec<String> =
+        std::fs::read_dir(&out_dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, ["keep.txt"], "nothing new, no temporaries");
+}

@@ -294,7 +294,35 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::from(2)
+            // 130 = 128 + SIGINT, the shells' code for a run stopped by Ctrl-C.
+            ExitCode::from(if ctrl_c::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) { 130 } else { 2 })
+        }
+    }
+}
+
+/// Ctrl-C for `maps`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the pipeline reads before each row and
+/// before renaming its outputs into place, so the run stops without leaving partial files; a second Ctrl-C ends the
+/// process at once (the default action is restored by the first).
+mod ctrl_c {
+    use std::sync::atomic::AtomicBool;
+
+    pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+    #[cfg(unix)]
+    extern "C" fn on_sigint(_: libc::c_int) {
+        INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
+        // SAFETY: signal() is async-signal-safe (POSIX.1-2008, 2.4.3); an atomic store is too.
+        unsafe {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+        }
+    }
+
+    /// Install the handler (a no-op where there is no SIGINT).
+    pub fn catch() {
+        #[cfg(unix)]
+        // SAFETY: the handler only stores to an atomic and calls signal(), both async-signal-safe.
+        unsafe {
+            libc::signal(libc::SIGINT, on_sigint as extern "C" fn(libc::c_int) as libc::sighandler_t);
         }
     }
 }
@@ -400,7 +428,15 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
         bar.inc(done as u64);
     };
-    let report = spectral_skin::maps::run_maps(&inputs, &args.out, &settings, exr, Some(&progress))
+    ctrl_c::catch();
+    let report = spectral_skin::maps::pipeline::run_maps_cancellable(
+        &inputs,
+        &args.out,
+        &settings,
+        exr,
+        Some(&progress),
+        &ctrl_c::INTERRUPTED,
+    )
         .map_err(|e| e.with_clamp_advice("use --clamp"))?;
     bar.finish_and_clear();
     println!(

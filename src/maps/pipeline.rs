@@ -409,12 +409,30 @@ pub fn run_maps(
     exr: ExrOptions,
     progress: Option<&(dyn Fn(usize, usize) + Sync)>,
 ) -> Result<MapReport, SkinError> {
+    run_maps_cancellable(inputs, out_dir, settings, exr, progress, &AtomicBool::new(false))
+}
+
+/// [`run_maps`] that stops once `cancel` is set (the CLI's Ctrl-C): the computation skips the rows not started, and
+/// a run cancelled before its files are renamed into place writes nothing (the staged temporaries are deleted), so
+/// the output folder keeps the previous run's files. The table build does not look at the flag.
+pub fn run_maps_cancellable(
+    inputs: &ParamInputs,
+    out_dir: &Path,
+    settings: &MapSettings,
+    exr: ExrOptions,
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    cancel: &AtomicBool,
+) -> Result<MapReport, SkinError> {
+    let cancelled = || SkinError::invalid("maps", "interrupted before the outputs were written; nothing was changed");
     let start = Instant::now();
     let mut image = read_params(inputs)?;
     let clamped = check_planes(&mut image, settings.clamp)?;
     let read = start.elapsed().as_secs_f64();
-    let mut result = compute_maps(&image, settings, progress)?;
+    let mut result = compute_maps_cancellable(&image, settings, progress, cancel)?;
     drop(image);
+    if cancel.load(Ordering::Relaxed) {
+        return Err(cancelled());
+    }
     std::fs::create_dir_all(out_dir).map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
 
     let write_start = Instant::now();
@@ -444,6 +462,11 @@ pub fn run_maps(
     report.seconds.total = start.elapsed().as_secs_f64();
     let sidecar = sidecar_json(&report, inputs, &result.specular, exr);
     staged.push(stage_bytes(&out_dir.join(SIDECAR_FILE), sidecar.as_bytes())?);
+    if cancel.load(Ordering::Relaxed) {
+        // Dropping the staged files deletes them.
+        drop(staged);
+        return Err(cancelled());
+    }
     commit_all(staged)?;
     remove_stale_outputs(out_dir, &result.specular)?;
     Ok(report)
