@@ -4,19 +4,20 @@
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::Mutex;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use numpy::ndarray::{Array2, Array3, ArrayView2, Axis, Ix2, Ix3};
 use numpy::{
-    AllowTypeChange, Element, PyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayLike1, PyArrayMethods,
-    PyUntypedArray, PyUntypedArrayMethods,
+    AllowTypeChange, Element, PyArray, PyArray1, PyArray2, PyArray3, PyArrayDescrMethods, PyArrayDyn, PyArrayLike1,
+    PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
 };
-use rayon::prelude::*;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyInterruptedError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
+use rayon::prelude::*;
 use serde::Serialize;
 use serde_json::Value;
 
@@ -82,15 +83,66 @@ fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> Result<T, SkinError> + 
     let result = py.detach(|| catch_unwind(AssertUnwindSafe(f)));
     match result {
         Ok(value) => Ok(value?),
-        Err(payload) => {
-            let message = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".to_string());
-            Err(PyRuntimeError::new_err(format!("spectral-skin internal error (please report it): {message}")))
-        }
+        Err(payload) => Err(panic_error(payload)),
     }
+}
+
+/// How often a long call's own thread wakes to run Python's signal handlers (Ctrl-C) while the work runs.
+const SIGNAL_POLL: Duration = Duration::from_millis(100);
+
+/// [`detached`] for long work that can stop early: the work runs on a scoped thread while the calling thread, with
+/// the GIL released, wakes every [`SIGNAL_POLL`] to run Python's signal handlers (CPython runs them on the main
+/// thread only, so the watching must happen here). An exception from a handler (KeyboardInterrupt for Ctrl-C) sets
+/// `cancel`, waits for the work to stop at its next check, and is raised instead of the result.
+fn detached_interruptible<T: Send>(
+    py: Python<'_>,
+    cancel: &AtomicBool,
+    f: impl FnOnce() -> Result<T, SkinError> + Send,
+) -> PyResult<T> {
+    let (sender, receiver) = mpsc::channel();
+    let (result, interrupted) = std::thread::scope(|scope| {
+        scope.spawn(move || {
+            // Nothing to do if the receiver is gone: it only goes when this scope ends, after the work.
+            let _ = sender.send(catch_unwind(AssertUnwindSafe(f)));
+        });
+        let mut interrupted: Option<PyErr> = None;
+        let mut receiver = receiver;
+        loop {
+            // The receiver travels into the GIL-free closure and back (it is Send, not Sync).
+            let (received, back) = py.detach(move || (receiver.recv_timeout(SIGNAL_POLL), receiver));
+            receiver = back;
+            match received {
+                Ok(result) => return (Some(result), interrupted),
+                Err(RecvTimeoutError::Timeout) => {
+                    if interrupted.is_none() {
+                        if let Err(e) = py.check_signals() {
+                            cancel.store(true, Ordering::Relaxed);
+                            interrupted = Some(e);
+                        }
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => return (None, interrupted),
+            }
+        }
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    match result {
+        Some(Ok(value)) => Ok(value?),
+        Some(Err(payload)) => Err(panic_error(payload)),
+        None => Err(internal("the worker thread ended without a result")),
+    }
+}
+
+/// A panic (a bug: the core validates its input) as a RuntimeError instead of a PanicException.
+fn panic_error(payload: Box<dyn std::any::Any + Send>) -> PyErr {
+    let message = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".to_string());
+    PyRuntimeError::new_err(format!("spectral-skin internal error (please report it): {message}"))
 }
 
 fn invalid(name: impl Into<String>, reason: impl Into<String>) -> PyErr {
@@ -104,6 +156,78 @@ fn reject_string(obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<()> {
         return Err(PyTypeError::new_err(format!("{expected}, not a string")));
     }
     Ok(())
+}
+
+/// The Python type of `obj`, for messages.
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+}
+
+/// True for Python's and numpy's booleans: they convert to numbers, but `True` as a concentration or a step is a
+/// mistake, not a 1.
+fn is_boolean(obj: &Bound<'_, PyAny>) -> bool {
+    obj.is_instance_of::<PyBool>() || type_name(obj) == "bool_" || type_name(obj) == "bool"
+}
+
+/// The one rule for every numeric argument: an int or a float (or a numpy scalar of either), never a bool, str or
+/// bytes. A wrong type is a TypeError whose message names the argument (pyo3 only adds the name as a note).
+fn number_type_check(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<()> {
+    if is_boolean(obj) || obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyBytes>() {
+        return Err(PyTypeError::new_err(format!("{name} must be {what}; got {} {}", type_name(obj), obj.repr()?)));
+    }
+    Ok(())
+}
+
+/// A real number (see [`number_type_check`]).
+#[derive(Debug, Clone, Copy)]
+struct Real(f64);
+
+/// An integer (see [`number_type_check`]); a float is a TypeError too.
+#[derive(Debug, Clone, Copy)]
+struct Count(i64);
+
+const A_NUMBER: &str = "a number (int or float)";
+const AN_INTEGER: &str = "an integer";
+
+fn real_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Real> {
+    number_type_check(name, obj, A_NUMBER)?;
+    obj.extract::<f64>()
+        .map(Real)
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be {A_NUMBER}; got {}", type_name(obj))))
+}
+
+fn count_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Count> {
+    number_type_check(name, obj, AN_INTEGER)?;
+    obj.extract::<i64>()
+        .map(Count)
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be {AN_INTEGER}; got {}", type_name(obj))))
+}
+
+/// An optional numeric keyword argument (None is absent).
+fn real_arg(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Real>> {
+    obj.filter(|o| !o.is_none()).map(|o| real_of(name, o)).transpose()
+}
+
+fn count_arg(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Count>> {
+    obj.filter(|o| !o.is_none()).map(|o| count_of(name, o)).transpose()
+}
+
+/// `obj` as a sequence of numbers under the rule of [`Real`]; a wrong element is a TypeError naming `name[i]`.
+fn real_sequence(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<f64>> {
+    reject_string(obj, &format!("{name} must be {expected}"))?;
+    let iter = obj
+        .try_iter()
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be {expected}; got {}", type_name(obj))))?;
+    iter.enumerate().map(|(i, item)| Ok(real_of(&format!("{name}[{i}]"), &item?)?.0)).collect()
+}
+
+/// `obj` as a sequence of integers under the rule of [`Count`]; a wrong element is a TypeError naming `name[i]`.
+fn count_sequence(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<i64>> {
+    reject_string(obj, &format!("{name} must be {expected}"))?;
+    let iter = obj
+        .try_iter()
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be {expected}; got {}", type_name(obj))))?;
+    iter.enumerate().map(|(i, item)| Ok(count_of(&format!("{name}[{i}]"), &item?)?.0)).collect()
 }
 
 /// The serde name of a core enum value (e.g. "directional", "Linear Rec.709").
@@ -149,7 +273,8 @@ fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Outputs> {
 
 /// A preset and/or the four parameters: explicit parameters override the preset's; without a preset all four are
 /// required. The core validates the ranges.
-fn resolve_params(preset: Option<&str>, explicit: [Option<f64>; 4]) -> PyResult<SkinParams> {
+fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) -> PyResult<SkinParams> {
+    let explicit = explicit.map(|v| v.map(|r| r.0));
     let base = preset.map(SkinParams::preset).transpose()?;
     let from_preset = base.map(|p| [p.melanin, p.melanin_blend, p.hemoglobin, p.oiliness]);
     let values: [Option<f64>; 4] = [0, 1, 2, 3].map(|i| explicit[i].or(from_preset.map(|p| p[i])));
@@ -178,10 +303,10 @@ fn target_from(blender: Option<&Bound<'_, PyAny>>, engine: &str) -> PyResult<Tar
         None => CURRENT_RELEASE,
         Some(obj) if obj.is_instance_of::<PyString>() => obj.extract::<String>()?.parse::<BlenderVersion>()?,
         Some(obj) => {
-            if obj.is_instance_of::<PyBytes>() || obj.is_instance_of::<PyBool>() {
+            if obj.is_instance_of::<PyBytes>() || is_boolean(obj) {
                 return Err(PyTypeError::new_err(EXPECTED));
             }
-            let parts: Vec<i64> = obj.extract().map_err(|_| PyTypeError::new_err(EXPECTED))?;
+            let parts = count_sequence("blender", obj, EXPECTED.trim_start_matches("blender must be "))?;
             BlenderVersion::from_parts(&parts)?
         }
     };
@@ -200,12 +325,12 @@ fn to_u32(name: &'static str, meaning: &'static str, value: i64) -> PyResult<u32
 struct Knobs<'a> {
     /// A named level (draft, default, reference); the knobs below override it where given.
     accuracy: &'a str,
-    wavelength_step_nm: Option<f64>,
+    wavelength_step_nm: Option<Real>,
     wavelength_placement: Option<&'a str>,
-    multipole_pairs: Option<i64>,
-    profile_r_min_mm: Option<f64>,
-    profile_r_max_mm: Option<f64>,
-    profile_count: Option<i64>,
+    multipole_pairs: Option<Count>,
+    profile_r_min_mm: Option<Real>,
+    profile_r_max_mm: Option<Real>,
+    profile_count: Option<Count>,
     combination: &'a str,
     working_space: &'a str,
     target: Target,
@@ -216,23 +341,23 @@ impl Knobs<'_> {
         let level = AccuracyLevel::from_name(self.accuracy)?.accuracy();
         let defaults = level.profile_grid;
         let count = match self.profile_count {
-            Some(n) => to_u32("profile_count", "number of profile radii", n)? as usize,
+            Some(Count(n)) => to_u32("profile_count", "number of profile radii", n)? as usize,
             None => defaults.count,
         };
         let multipole_terms = match self.multipole_pairs {
-            Some(n) => MultipoleTerms::Pairs(to_u32("multipole_pairs", "image pairs per side", n)?),
+            Some(Count(n)) => MultipoleTerms::Pairs(to_u32("multipole_pairs", "image pairs per side", n)?),
             None => level.multipole_terms,
         };
         let accuracy = Accuracy {
-            wavelength_step_nm: self.wavelength_step_nm.unwrap_or(level.wavelength_step_nm),
+            wavelength_step_nm: self.wavelength_step_nm.map_or(level.wavelength_step_nm, |r| r.0),
             wavelength_placement: match self.wavelength_placement {
                 Some(name) => by_name("wavelength_placement", name, &WAVELENGTH_PLACEMENTS)?,
                 None => level.wavelength_placement,
             },
             multipole_terms,
             profile_grid: ProfileGrid {
-                r_min_mm: self.profile_r_min_mm.unwrap_or(defaults.r_min_mm),
-                r_max_mm: self.profile_r_max_mm.unwrap_or(defaults.r_max_mm),
+                r_min_mm: self.profile_r_min_mm.map_or(defaults.r_min_mm, |r| r.0),
+                r_max_mm: self.profile_r_max_mm.map_or(defaults.r_max_mm, |r| r.0),
                 count,
             },
             ..level
@@ -366,33 +491,39 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
 #[allow(clippy::too_many_arguments)]
 fn evaluate_py<'py>(
     py: Python<'py>,
-    melanin: Option<f64>,
-    melanin_blend: Option<f64>,
-    hemoglobin: Option<f64>,
-    oiliness: Option<f64>,
+    melanin: Option<&Bound<'py, PyAny>>,
+    melanin_blend: Option<&Bound<'py, PyAny>>,
+    hemoglobin: Option<&Bound<'py, PyAny>>,
+    oiliness: Option<&Bound<'py, PyAny>>,
     preset: Option<&str>,
     outputs: Option<&Bound<'py, PyAny>>,
     accuracy: &str,
-    wavelength_step_nm: Option<f64>,
+    wavelength_step_nm: Option<&Bound<'py, PyAny>>,
     wavelength_placement: Option<&str>,
-    multipole_pairs: Option<i64>,
-    profile_r_min_mm: Option<f64>,
-    profile_r_max_mm: Option<f64>,
-    profile_count: Option<i64>,
+    multipole_pairs: Option<&Bound<'py, PyAny>>,
+    profile_r_min_mm: Option<&Bound<'py, PyAny>>,
+    profile_r_max_mm: Option<&Bound<'py, PyAny>>,
+    profile_count: Option<&Bound<'py, PyAny>>,
     combination: &str,
     working_space: &str,
     blender: Option<&Bound<'py, PyAny>>,
     engine: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let params = resolve_params(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
+    let explicit =
+        [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
+    let mut values = [None; 4];
+    for (value, (name, obj)) in values.iter_mut().zip(explicit) {
+        *value = real_arg(name, obj)?;
+    }
+    let params = resolve_params(preset, values)?;
     let knobs = Knobs {
         accuracy,
-        wavelength_step_nm,
+        wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
         wavelength_placement,
-        multipole_pairs,
-        profile_r_min_mm,
-        profile_r_max_mm,
-        profile_count,
+        multipole_pairs: count_arg("multipole_pairs", multipole_pairs)?,
+        profile_r_min_mm: real_arg("profile_r_min_mm", profile_r_min_mm)?,
+        profile_r_max_mm: real_arg("profile_r_max_mm", profile_r_max_mm)?,
+        profile_count: count_arg("profile_count", profile_count)?,
         combination,
         working_space,
         target: target_from(blender, engine)?,
@@ -418,31 +549,37 @@ fn evaluate_py<'py>(
 #[allow(clippy::too_many_arguments)]
 fn profile_py<'py>(
     py: Python<'py>,
-    melanin: Option<f64>,
-    melanin_blend: Option<f64>,
-    hemoglobin: Option<f64>,
-    oiliness: Option<f64>,
+    melanin: Option<&Bound<'py, PyAny>>,
+    melanin_blend: Option<&Bound<'py, PyAny>>,
+    hemoglobin: Option<&Bound<'py, PyAny>>,
+    oiliness: Option<&Bound<'py, PyAny>>,
     preset: Option<&str>,
     spectral: bool,
     accuracy: &str,
-    wavelength_step_nm: Option<f64>,
+    wavelength_step_nm: Option<&Bound<'py, PyAny>>,
     wavelength_placement: Option<&str>,
-    multipole_pairs: Option<i64>,
-    profile_r_min_mm: Option<f64>,
-    profile_r_max_mm: Option<f64>,
-    profile_count: Option<i64>,
+    multipole_pairs: Option<&Bound<'py, PyAny>>,
+    profile_r_min_mm: Option<&Bound<'py, PyAny>>,
+    profile_r_max_mm: Option<&Bound<'py, PyAny>>,
+    profile_count: Option<&Bound<'py, PyAny>>,
     combination: &str,
     working_space: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let params = resolve_params(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
+    let explicit =
+        [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
+    let mut values = [None; 4];
+    for (value, (name, obj)) in values.iter_mut().zip(explicit) {
+        *value = real_arg(name, obj)?;
+    }
+    let params = resolve_params(preset, values)?;
     let knobs = Knobs {
         accuracy,
-        wavelength_step_nm,
+        wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
         wavelength_placement,
-        multipole_pairs,
-        profile_r_min_mm,
-        profile_r_max_mm,
-        profile_count,
+        multipole_pairs: count_arg("multipole_pairs", multipole_pairs)?,
+        profile_r_min_mm: real_arg("profile_r_min_mm", profile_r_min_mm)?,
+        profile_r_max_mm: real_arg("profile_r_max_mm", profile_r_max_mm)?,
+        profile_count: count_arg("profile_count", profile_count)?,
         combination,
         working_space,
         target: Target::default(),
@@ -496,15 +633,36 @@ fn parameter_ranges_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// One layer from a 4-sequence of numbers.
 fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<Layer> {
     reject_string(item, &format!("layers[{index}] must be a tuple {LAYER_FIELDS}"))?;
-    let values: Vec<f64> = item.extract().map_err(|e: PyErr| {
-        PyTypeError::new_err(format!("layers[{index}] must be a tuple of 4 numbers {LAYER_FIELDS}: {e}"))
-    })?;
+    let values = real_sequence(&format!("layers[{index}]"), item, &format!("a tuple of 4 numbers {LAYER_FIELDS}"))?;
     match values[..] {
         [thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior] => {
             Ok(Layer { thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior })
         }
         _ => Err(invalid(format!("layer {index}"), format!("expected 4 values {LAYER_FIELDS}; got {}", values.len()))),
     }
+}
+
+/// A 1-D numpy array of ints or floats (any strides, read-only too) or a sequence of numbers under the rule of
+/// [`Real`]. A bool, str or other dtype is a TypeError, another number of dimensions a SpectralSkinError; both name
+/// `name`.
+fn real_vector(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<f64>> {
+    let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
+        return real_sequence(name, obj, expected);
+    };
+    let kind = untyped.dtype().kind();
+    if !matches!(kind, b'f' | b'i' | b'u') {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must be {expected}; got an array of dtype {}",
+            untyped.dtype()
+        )));
+    }
+    if untyped.ndim() != 1 {
+        return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(untyped.shape()))));
+    }
+    let values = obj
+        .extract::<PyArrayLike1<'_, f64, AllowTypeChange>>()
+        .map_err(|e| PyTypeError::new_err(format!("{name} must be {expected}: {e}")))?;
+    Ok(values.as_array().iter().copied().collect())
 }
 
 /// Total diffuse reflectance and radial profile R(r) (mm^-2, at radii_mm) of a stack of layers under air, top to
@@ -520,14 +678,7 @@ fn layered_reflectance_py<'py>(
     reject_string(layers, &format!("layers must be a list of tuples {LAYER_FIELDS}"))?;
     let layers: Vec<Layer> =
         layers.try_iter()?.enumerate().map(|(i, item)| extract_layer(i, &item?)).collect::<PyResult<_>>()?;
-    reject_string(radii_mm, "radii_mm must be a 1-D array-like of radii in mm")?;
-    let radii: Vec<f64> = radii_mm
-        .extract::<PyArrayLike1<'py, f64, AllowTypeChange>>()
-        .map_err(|e| PyTypeError::new_err(format!("radii_mm must be a 1-D array-like of radii in mm: {e}")))?
-        .as_array()
-        .iter()
-        .copied()
-        .collect();
+    let radii = real_vector("radii_mm", radii_mm, "a 1-D array-like of radii in mm")?;
     let (total, profile) = detached(py, move || crate::diffusion::layered_reflectance(&layers, &radii))?;
     Ok((total, PyArray1::from_vec(py, profile)))
 }
@@ -633,7 +784,7 @@ fn map_input<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<MapInput<'py>
         let type_name = obj.get_type().name().map(|n| n.to_string()).unwrap_or_default();
         PyTypeError::new_err(format!("{name} must be {PARAM_ARRAY}; got {type_name}"))
     };
-    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyBytes>() || obj.is_instance_of::<PyBool>() {
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyBytes>() || is_boolean(obj) {
         return Err(type_error());
     }
     obj.extract::<f64>().map(MapInput::Constant).map_err(|_| type_error())
@@ -645,10 +796,7 @@ fn table_resolution(obj: Option<&Bound<'_, PyAny>>) -> PyResult<TableResolution>
     let Some(obj) = obj else {
         return Ok(TableResolution::default());
     };
-    reject_string(obj, &format!("table_resolution must be {EXPECTED}"))?;
-    let counts: Vec<i64> = obj
-        .extract()
-        .map_err(|e: PyErr| PyTypeError::new_err(format!("table_resolution must be {EXPECTED}: {e}")))?;
+    let counts = count_sequence("table_resolution", obj, EXPECTED)?;
     let [m, b, h] = counts[..] else {
         return Err(invalid("table_resolution", format!("expected {EXPECTED}; got {} values", counts.len())));
     };
@@ -663,11 +811,8 @@ fn table_resolution(obj: Option<&Bound<'_, PyAny>>) -> PyResult<TableResolution>
         melanin_blend: count("melanin_blend", b)?,
         hemoglobin: count("hemoglobin", h)?,
     };
-    r.melanin
-        .checked_mul(r.melanin_blend)
-        .and_then(|n| n.checked_mul(r.hemoglobin))
-        .filter(|&n| n <= MAX_TEXELS)
-        .ok_or_else(|| invalid("table_resolution", format!("at most {MAX_TEXELS} nodes in all; got {m} x {b} x {h}")))?;
+    // The core's bound (lut.rs, `TableResolution::validate`), checked before anything is allocated.
+    r.validate()?;
     Ok(r)
 }
 
@@ -812,7 +957,7 @@ fn maps_py<'py>(
     exact: bool,
     clamp: bool,
     accuracy: &str,
-    wavelength_step_nm: Option<f64>,
+    wavelength_step_nm: Option<&Bound<'py, PyAny>>,
     wavelength_placement: Option<&str>,
     working_space: &str,
     table_resolution: Option<&Bound<'py, PyAny>>,
@@ -832,7 +977,7 @@ fn maps_py<'py>(
     // Settings first: their errors come before any copy.
     let knobs = Knobs {
         accuracy,
-        wavelength_step_nm,
+        wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
         wavelength_placement,
         multipole_pairs: None,
         profile_r_min_mm: None,
@@ -949,7 +1094,10 @@ fn maps_py<'py>(
         report: crate::maps::MapReport,
     }
     let hook = progress.as_ref();
-    let computed = detached(py, move || {
+    // Ctrl-C (and a progress callback's False or exception) stops the work through one flag.
+    let own_flag = AtomicBool::new(false);
+    let cancel = hook.map_or(&own_flag, |h| &h.stopped);
+    let computed = detached_interruptible(py, cancel, move || {
         let clamped = check_planes(&mut image, clamp)?;
         let read = start.elapsed().as_secs_f64();
         let report = |done: usize, total: usize| {
@@ -961,8 +1109,6 @@ fn maps_py<'py>(
         if hook.is_some_and(Progress::stopped) {
             return Ok(None);
         }
-        let never = AtomicBool::new(false);
-        let cancel = hook.map_or(&never, |h| &h.stopped);
         let progress = hook.map(|_| &report as &(dyn Fn(usize, usize) + Sync));
         let mut result = compute_maps_cancellable(&image, &settings, progress, cancel)?;
         drop(image);

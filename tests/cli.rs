@@ -164,3 +164,109 @@ fn eval_and_maps_take_a_target() {
     let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
     assert_eq!(sidecar["report"]["target"], serde_json::json!({"blender": "4.5", "engine": "eevee", "tested": true}));
 }
+
+/// A negative number after an option is its value, so the range check answers with its own message (clap would
+/// otherwise report an unknown argument '-0').
+#[test]
+fn negative_values_reach_the_range_check() {
+    let out = run(&["eval", "--melanin", "-0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("melanin must be in [0, 0.5]") && err.contains("-0.1"), "{err}");
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("face.exr");
+    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]).status.success());
+    let out_dir = dir.path().join("maps");
+    let out = run(&[
+        "maps", "--melanin-map", params.to_str().unwrap(), "--melanin-blend", "0.5", "--hemoglobin", "-0.02",
+        "--oiliness", "0.3", "--out", out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("hemoglobin") && err.contains("[0, 0.1]") && !err.contains("unexpected argument"), "{err}");
+    assert!(!out_dir.exists(), "nothing written on bad input");
+}
+
+/// `--table-check` is bounded before any work, with the allowed range in the message (10^12 used to abort).
+#[test]
+fn table_check_is_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("maps");
+    let out = run(&[
+        "maps", "--melanin", "0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3",
+        "--table-check", "1000000000000", "--out", out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    let max = spectral_skin::maps::pipeline::MAX_TABLE_CHECK_SAMPLES.to_string();
+    assert!(err.contains("--table-check") && err.contains(&max), "{err}");
+    assert!(!out_dir.exists());
+}
+
+/// A run with constant oiliness writes no specular.exr and removes the one an earlier run left, so the folder holds
+/// exactly what the sidecar lists.
+#[test]
+fn a_new_run_leaves_no_stale_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let face = dir.path().join("face.exr");
+    assert!(run(&["example", "--out", face.to_str().unwrap(), "--size", "16"]).status.success());
+    let out_dir = dir.path().join("maps");
+    let maps = |extra: &[&str]| {
+        let mut args = vec!["maps", "--out", out_dir.to_str().unwrap(), "--no-cache", "--table-check", "0"];
+        args.extend_from_slice(extra);
+        let out = run(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    };
+    maps(&["--params", face.to_str().unwrap()]);
+    assert!(out_dir.join("specular.exr").is_file(), "varying oiliness writes a specular map");
+    maps(&["--melanin-map", face.to_str().unwrap(), "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+    let mut listed: Vec<String> =
+        sidecar["outputs"].as_object().unwrap().keys().filter(|k| k.ends_with(".exr")).cloned().collect();
+    listed.push("skin_maps.json".into());
+    listed.sort();
+    let mut present: Vec<String> =
+        std::fs::read_dir(&out_dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    present.sort();
+    assert_eq!(present, listed, "the folder holds exactly the sidecar's files");
+    assert!(!out_dir.join("specular.exr").exists());
+    assert!(sidecar["outputs"]["specular_constants"].is_object());
+}
+
+/// Ctrl-C during `maps` stops it within seconds with exit code 130 and leaves the output folder as it was: no new
+/// file, no temporary file.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_maps_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let face = dir.path().join("face.exr");
+    assert!(run(&["example", "--out", face.to_str().unwrap(), "--size", "512"]).status.success());
+    let out_dir = dir.path().join("maps");
+    std::fs::create_dir(&out_dir).unwrap();
+    std::fs::write(out_dir.join("keep.txt"), b"earlier").unwrap();
+    // Exact evaluation of 512 x 512 texels: far longer than the 1.5 s before the signal.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_spectral-skin"))
+        .args(["maps", "--params", face.to_str().unwrap(), "--exact", "--no-cache", "--out", out_dir.to_str().unwrap()])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let sent = std::time::Instant::now();
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if sent.elapsed().as_secs() > 30 {
+            child.kill().unwrap();
+            panic!("maps still running 30 s after SIGINT");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert!(sent.elapsed().as_secs_f64() < 5.0, "took {:?} to stop", sent.elapsed());
+    assert_eq!(status.code(), Some(130), "exit code 130 after Ctrl-C");
+    let names: Vec<String> =
+        std::fs::read_dir(&out_dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, ["keep.txt"], "nothing new, no temporaries");
+}

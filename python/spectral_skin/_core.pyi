@@ -295,6 +295,10 @@ def maps(
             cancels: the rows being filled are finished, the others skipped, nothing is returned and
             InterruptedError is raised (a lookup table being built is finished first). An exception raised by the callback cancels the same way and is re-raised.
 
+    Ctrl-C (KeyboardInterrupt, or any exception a Python signal handler raises) stops the call the same way: the
+    calling thread checks for signals every 0.1 s while the work runs, the rows being filled are finished and the
+    exception is raised. A lookup table being built is finished first (its build has no stop hook yet).
+
     Returns:
         A dict:
         "base_color": float32 (H, W, 3), Principled Base Color for ``method``, linear RGB in ``working_space``;
@@ -318,9 +322,12 @@ def maps(
             each input's shape); params not (H, W, 4) or a keyword array not (H, W); an empty map or one over 2^28
             texels; only constants and no array; a parameter given neither by params nor by its keyword; an unknown
             method, a method the target's Blender lacks, an unknown working space or engine, a Blender version older
-            than 4.2; a wavelength step out of range; a table resolution below 2 nodes per axis.
+            than 4.2; a wavelength step out of range; a table resolution below 2 nodes per axis or over the core's node bound
+            (checked before anything is allocated).
         TypeError: an input that is not a numpy array of float32 or float64 (or, for the keywords, a number): e.g. a
-            list, an integer array, a string, a bool; a progress that is not callable.
+            list, an integer array, a string, a bool (Python's or numpy's); a non-integer in table_resolution; a
+            progress that is not callable. The message names the argument. Non-contiguous and read-only arrays are
+            read as they are.
         InterruptedError: the progress callback returned False.
 
     A SpectralSkinError for NaN, infinite or out-of-range texels (clamp=False) also has an attribute

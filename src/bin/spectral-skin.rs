@@ -23,10 +23,13 @@ struct Cli {
     command: Command,
 }
 
+// Every subcommand reads a negative number after an option as its value (so `--melanin -0.1` reaches the range
+// check and its message), not as an unknown flag `-0`.
 #[derive(Subcommand)]
 enum Command {
     /// Albedo, Base Color and Subsurface Radius per subsurface method, and specular inputs, for one set of
     /// parameters and one Blender target.
+    #[command(allow_negative_numbers = true)]
     Eval {
         #[command(flatten)]
         skin: SkinArgs,
@@ -43,6 +46,7 @@ enum Command {
         json: bool,
     },
     /// Radial reflectance profile R(r) in mm^-2.
+    #[command(allow_negative_numbers = true)]
     Profile {
         #[command(flatten)]
         skin: SkinArgs,
@@ -67,8 +71,10 @@ enum Command {
     /// List the named presets.
     Presets,
     /// Parameter maps in, Principled texture maps out: albedo.exr, radius.exr, specular.exr, skin_maps.json.
+    #[command(allow_negative_numbers = true)]
     Maps(MapsArgs),
     /// Write the built-in example parameter map (a face-like test card) as one four-channel EXR.
+    #[command(allow_negative_numbers = true)]
     Example {
         /// Output file.
         #[arg(long, default_value = "face_params.exr")]
@@ -129,8 +135,9 @@ struct MapsArgs {
     #[arg(long)]
     half: bool,
     /// Points at which a freshly built table is checked against direct evaluation (reported in the sidecar).
-    #[arg(long, default_value_t = spectral_skin::maps::pipeline::DEFAULT_TABLE_CHECK_SAMPLES)]
-    table_check: usize,
+    #[arg(long, default_value_t = spectral_skin::maps::pipeline::DEFAULT_TABLE_CHECK_SAMPLES as u64,
+          value_parser = clap::value_parser!(u64).range(0..=spectral_skin::maps::pipeline::MAX_TABLE_CHECK_SAMPLES as u64))]
+    table_check: u64,
     /// Build the lookup table afresh instead of reusing one kept in the cache folder
     /// ($SPECTRAL_SKIN_CACHE_DIR, else $XDG_CACHE_HOME/spectral-skin, else ~/.cache/spectral-skin).
     #[arg(long)]
@@ -287,7 +294,35 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::from(2)
+            // 130 = 128 + SIGINT, the shells' code for a run stopped by Ctrl-C.
+            ExitCode::from(if ctrl_c::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) { 130 } else { 2 })
+        }
+    }
+}
+
+/// Ctrl-C for `maps`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the pipeline reads before each row and
+/// before renaming its outputs into place, so the run stops without leaving partial files; a second Ctrl-C ends the
+/// process at once (the default action is restored by the first).
+mod ctrl_c {
+    use std::sync::atomic::AtomicBool;
+
+    pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+    #[cfg(unix)]
+    extern "C" fn on_sigint(_: libc::c_int) {
+        INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
+        // SAFETY: signal() is async-signal-safe (POSIX.1-2008, 2.4.3); an atomic store is too.
+        unsafe {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+        }
+    }
+
+    /// Install the handler (a no-op where there is no SIGINT).
+    pub fn catch() {
+        #[cfg(unix)]
+        // SAFETY: the handler only stores to an atomic and calls signal(), both async-signal-safe.
+        unsafe {
+            libc::signal(libc::SIGINT, on_sigint as extern "C" fn(libc::c_int) as libc::sighandler_t);
         }
     }
 }
@@ -363,7 +398,7 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         method: args.method,
         strategy: if args.exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
         clamp: args.clamp,
-        table_check_samples: args.table_check,
+        table_check_samples: args.table_check as usize,
         table_cache: if args.no_cache { None } else { spectral_skin::maps::lut::default_cache_dir() },
         ..MapSettings::default()
     };
@@ -393,7 +428,15 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
         bar.inc(done as u64);
     };
-    let report = spectral_skin::maps::run_maps(&inputs, &args.out, &settings, exr, Some(&progress))
+    ctrl_c::catch();
+    let report = spectral_skin::maps::pipeline::run_maps_cancellable(
+        &inputs,
+        &args.out,
+        &settings,
+        exr,
+        Some(&progress),
+        &ctrl_c::INTERRUPTED,
+    )
         .map_err(|e| e.with_clamp_advice("use --clamp"))?;
     bar.finish_and_clear();
     println!(

@@ -26,6 +26,9 @@ pub const MAX_DISTINCT_TUPLES: usize = 2048;
 const LISTED_BAD_TEXELS: usize = 5;
 /// Points at which a freshly built table's error is measured by default (each a direct evaluation).
 pub const DEFAULT_TABLE_CHECK_SAMPLES: usize = 64;
+/// Most check points a caller may ask for: each is one direct evaluation (about 0.25 ms on one core of the
+/// 2-core machine of docs/maps-performance.md), so 10^6 is minutes of work; more is a mistake, not a finer check.
+pub const MAX_TABLE_CHECK_SAMPLES: usize = 1_000_000;
 
 /// How texels are evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
@@ -406,12 +409,30 @@ pub fn run_maps(
     exr: ExrOptions,
     progress: Option<&(dyn Fn(usize, usize) + Sync)>,
 ) -> Result<MapReport, SkinError> {
+    run_maps_cancellable(inputs, out_dir, settings, exr, progress, &AtomicBool::new(false))
+}
+
+/// [`run_maps`] that stops once `cancel` is set (the CLI's Ctrl-C): the computation skips the rows not started, and
+/// a run cancelled before its files are renamed into place writes nothing (the staged temporaries are deleted), so
+/// the output folder keeps the previous run's files. The table build does not look at the flag.
+pub fn run_maps_cancellable(
+    inputs: &ParamInputs,
+    out_dir: &Path,
+    settings: &MapSettings,
+    exr: ExrOptions,
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    cancel: &AtomicBool,
+) -> Result<MapReport, SkinError> {
+    let cancelled = || SkinError::invalid("maps", "interrupted before the outputs were written; nothing was changed");
     let start = Instant::now();
     let mut image = read_params(inputs)?;
     let clamped = check_planes(&mut image, settings.clamp)?;
     let read = start.elapsed().as_secs_f64();
-    let mut result = compute_maps(&image, settings, progress)?;
+    let mut result = compute_maps_cancellable(&image, settings, progress, cancel)?;
     drop(image);
+    if cancel.load(Ordering::Relaxed) {
+        return Err(cancelled());
+    }
     std::fs::create_dir_all(out_dir).map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
 
     let write_start = Instant::now();
@@ -441,8 +462,30 @@ pub fn run_maps(
     report.seconds.total = start.elapsed().as_secs_f64();
     let sidecar = sidecar_json(&report, inputs, &result.specular, exr);
     staged.push(stage_bytes(&out_dir.join(SIDECAR_FILE), sidecar.as_bytes())?);
+    if cancel.load(Ordering::Relaxed) {
+        // Dropping the staged files deletes them.
+        drop(staged);
+        return Err(cancelled());
+    }
     commit_all(staged)?;
+    remove_stale_outputs(out_dir, &result.specular)?;
     Ok(report)
+}
+
+/// Remove an output of an earlier run that this run did not write (today only `specular.exr`, absent when the
+/// oiliness is constant), so the folder holds exactly the files the new sidecar lists. Runs after the new files are
+/// in place: if it fails, the sidecar (which lists the current files) is still right, and the error says which file
+/// is stale.
+fn remove_stale_outputs(out_dir: &Path, specular: &SpecularOutput) -> Result<(), SkinError> {
+    if matches!(specular, SpecularOutput::Map { .. }) {
+        return Ok(());
+    }
+    let stale = out_dir.join(SPECULAR_FILE);
+    match std::fs::remove_file(&stale) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(SkinError::io(&stale, format!("cannot remove the previous run's output (not written by this run): {e}"))),
+    }
 }
 
 /// The sidecar: what each file holds (channels, meaning, units, colour space), the inputs, and the report.

@@ -1,0 +1,57 @@
+"""Long calls stop on Ctrl-C: a child process runs a long exact map, gets SIGINT, and must end with
+KeyboardInterrupt within a few seconds (the work checks its cancel flag before each row)."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+CHILD = r"""
+import sys
+import numpy as np
+import spectral_skin
+# 1024 x 1024 exact texels: minutes of work on a small machine.
+rng = np.random.default_rng(0)
+params = (rng.random((1024, 1024, 4)) * np.array([0.5, 1.0, 0.1, 1.0])).astype(np.float32)
+print("started", flush=True)
+try:
+    spectral_skin.maps(params, exact=True, table_cache=False)
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+    sys.exit(3)
+print("finished", flush=True)
+"""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+def test_ctrl_c_stops_a_long_maps_call():
+    child = subprocess.Popen([sys.executable, "-c", CHILD], stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "started"
+        time.sleep(1.5)  # well inside the call (the array is built before "started")
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        out, _ = child.communicate(timeout=60)
+        elapsed = time.monotonic() - sent
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+    assert child.returncode == 3, (child.returncode, out)
+    assert "interrupted" in out
+    assert elapsed < 5.0, f"the call took {elapsed:.1f} s to stop after SIGINT"
+
+
+def test_table_resolution_is_bounded_before_allocation():
+    import numpy as np
+
+    import spectral_skin
+
+    params = np.full((2, 2, 4), 0.05, dtype=np.float32)
+    start = time.monotonic()
+    with pytest.raises(spectral_skin.SpectralSkinError, match="table resolution"):
+        spectral_skin.maps(params, table_resolution=(2000, 2000, 2000), table_cache=False)
+    assert time.monotonic() - start < 5.0
