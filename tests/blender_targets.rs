@@ -9,6 +9,7 @@ use spectral_skin::fit::random_walk::{
     base_color_for, flat_albedo, half_space_hemispherical_albedo, van_de_hulst_single_scatter_albedo, width_factor,
     RandomWalkModel,
 };
+use spectral_skin::fit::random_walk_skin::skin_width_factor;
 use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
@@ -239,9 +240,40 @@ fn legacy_method_only_from_5_2() {
 /// The engine ids per version (`scene.render.engine`).
 #[test]
 fn engine_ids() {
-    for (v, eevee) in [("4.2", "BLENDER_EEVEE_NEXT"), ("4.5", "BLENDER_EEVEE_NEXT"), ("5.0", "BLENDER_EEVEE"), ("5.3", "BLENDER_EEVEE")] {
+    for (v, eevee) in [
+        ("4.2", "BLENDER_EEVEE_NEXT"),
+        ("4.5", "BLENDER_EEVEE_NEXT"),
+        ("5.0", "BLENDER_EEVEE"),
+        ("5.3", "BLENDER_EEVEE"),
+    ] {
         let version: BlenderVersion = v.parse().unwrap();
         assert_eq!(Engine::Eevee.blender_id(version), eevee);
         assert_eq!(Engine::Cycles.blender_id(version), "CYCLES");
     }
+}
+
+/// The width factors reproduce the edge renders in `docs/data/random_walk_width.json` (read here on its own, not
+/// through the core's table): at each measured Base Color, 1 / width factor is the rendered d / mean free path.
+#[test]
+fn width_factors_reproduce_the_edge_renders() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/data/random_walk_width.json"))
+        .expect("calibration file");
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let mut seen = 0;
+    for entry in json["entries"].as_array().unwrap() {
+        let (blender, method) = (entry["blender"].as_str().unwrap(), entry["method"].as_str().unwrap());
+        let factor: fn(f64) -> f64 = match (blender, method) {
+            ("5.0", "RANDOM_WALK") => |a| width_factor(RandomWalkModel::WrenningeFit, a),
+            ("5.3", "RANDOM_WALK") => |a| width_factor(RandomWalkModel::VanDeHulst, a),
+            ("5.0", "RANDOM_WALK_SKIN") => skin_width_factor,
+            _ => continue,
+        };
+        for case in entry["cases"].as_array().unwrap() {
+            let a = case["albedo"].as_f64().unwrap();
+            let k = case["d_over_mfp"].as_f64().unwrap();
+            assert!((1.0 / factor(a) / k - 1.0).abs() < 1e-9, "{blender} {method} A = {a}: {} vs {k}", 1.0 / factor(a));
+            seen += 1;
+        }
+    }
+    assert_eq!(seen, 27);
 }

@@ -14,7 +14,7 @@ use std::str::FromStr;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::random_walk::{base_color_for, christensen_burley_s, width_factor, RandomWalkModel};
-use super::random_walk_skin::{skin_base_color, skin_radius_factor, SKIN_SUBSURFACE_IOR};
+use super::random_walk_skin::{skin_base_color, skin_radius_factor, skin_width_factor, SKIN_SUBSURFACE_IOR};
 use super::{MethodParams, SubsurfaceMethod};
 use crate::error::SkinError;
 
@@ -35,7 +35,15 @@ impl BlenderVersion {
     /// Errors name the input and the supported range.
     pub fn from_parts(parts: &[i64]) -> Result<BlenderVersion, SkinError> {
         let shown = parts.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(".");
-        let bad = || SkinError::invalid("blender version", format!("expected MAJOR.MINOR (e.g. \"5.3\") or (major, minor[, patch]); got {shown:?}. {}", supported_range()));
+        let bad = || {
+            SkinError::invalid(
+                "blender version",
+                format!(
+                    "expected MAJOR.MINOR (e.g. \"5.3\") or (major, minor[, patch]); got {shown:?}. {}",
+                    supported_range()
+                ),
+            )
+        };
         if !(2..=3).contains(&parts.len()) || parts.iter().any(|&p| !(0..=i64::from(u16::MAX)).contains(&p)) {
             return Err(bad());
         }
@@ -273,7 +281,12 @@ impl Target {
             let offered: Vec<&str> = entry.methods.iter().map(|m| m.method.name()).collect();
             SkinError::invalid(
                 "subsurface method",
-                format!("{} is not offered by Blender {} (methods there: {})", method.name(), self.blender, offered.join(", ")),
+                format!(
+                    "{} is not offered by Blender {} (methods there: {})",
+                    method.name(),
+                    self.blender,
+                    offered.join(", ")
+                ),
             )
         })
     }
@@ -301,13 +314,15 @@ impl Target {
                 });
                 let base_color = colors.map(|c| c.base_color);
                 let subsurface_radius_mm = [0, 1, 2].map(|c| {
-                    // The walk's transport mean free path for Burley length d = radius / (4 pi).
-                    let mean_free_path_mm = burley_radius_mm[c] / (4.0 * PI) * width_factor(alpha, base_color[c]);
+                    // The walk's transport mean free path for Burley length d = radius / (4 pi), from the measured
+                    // width of the walk that renders it.
+                    let d_mm = burley_radius_mm[c] / (4.0 * PI);
                     match radius {
-                        RadiusConvention::FourPiMeanFreePath => 4.0 * PI * mean_free_path_mm,
-                        RadiusConvention::MeanFreePath => mean_free_path_mm,
+                        RadiusConvention::FourPiMeanFreePath => 4.0 * PI * d_mm * width_factor(alpha, base_color[c]),
+                        RadiusConvention::MeanFreePath => d_mm * width_factor(alpha, base_color[c]),
                         RadiusConvention::SkinDipole => {
-                            mean_free_path_mm / skin_radius_factor(base_color[c], SKIN_SUBSURFACE_IOR)
+                            d_mm * skin_width_factor(base_color[c])
+                                / skin_radius_factor(base_color[c], SKIN_SUBSURFACE_IOR)
                         }
                     }
                 });

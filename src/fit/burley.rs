@@ -48,7 +48,11 @@ fn squared_norm(s: &[f64], f: impl Fn(usize) -> f64) -> f64 {
 pub fn edge_misfit(s: &[f64], normalized: &[f64], d_mm: f64) -> f64 {
     let blur = squared_norm(s, |i| normalized[i] - 1.0);
     let misfit = squared_norm(s, |i| normalized[i] - burley_transform(s[i], d_mm));
-    if blur > 0.0 { (misfit / blur).sqrt() } else { 0.0 }
+    if blur > 0.0 {
+        (misfit / blur).sqrt()
+    } else {
+        0.0
+    }
 }
 
 /// Frequency (mm^-1) at which [`fit_burley_second_moment`] reads the curvature of the transfer function: low enough
@@ -74,7 +78,10 @@ pub fn fit_burley(s: &[f64], normalized: &[f64]) -> BurleyFit {
     const SCAN: usize = 48;
     let (lo, hi) = ((0.1 / s[s.len() - 1]).ln(), (10.0 / s[0]).ln());
     let ln_d = |k: f64| lo + (hi - lo) * k / SCAN as f64;
-    let best = (0..=SCAN).map(|k| (k, misfit(ln_d(k as f64).exp()))).fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+    let best =
+        (0..=SCAN)
+            .map(|k| (k, misfit(ln_d(k as f64).exp())))
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
     let (mut a, mut b) = (ln_d(best.0 as f64 - 1.0), ln_d(best.0 as f64 + 1.0));
     let phi = 0.5 * (5f64.sqrt() - 1.0);
     let (mut c, mut e) = (b - phi * (b - a), a + phi * (b - a));

@@ -4,6 +4,7 @@ pub mod blender_target;
 pub mod burley;
 pub mod random_walk;
 pub mod random_walk_skin;
+pub mod walk_width;
 
 use serde::{Deserialize, Serialize};
 
@@ -70,7 +71,10 @@ impl SubsurfaceMethod {
     pub fn from_name(name: &str) -> Result<SubsurfaceMethod, crate::SkinError> {
         SubsurfaceMethod::ALL.into_iter().find(|m| m.name() == name).ok_or_else(|| {
             let names: Vec<&str> = SubsurfaceMethod::ALL.iter().map(|m| m.name()).collect();
-            crate::SkinError::invalid("subsurface method", format!("expected one of {}; got {name:?}", names.join(", ")))
+            crate::SkinError::invalid(
+                "subsurface method",
+                format!("expected one of {}; got {name:?}", names.join(", ")),
+            )
         })
     }
 }

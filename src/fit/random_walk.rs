@@ -22,6 +22,8 @@
 
 use std::sync::OnceLock;
 
+use super::walk_width::{measured_k, MeasuredWalk};
+
 use serde::Serialize;
 
 use crate::numeric::gauss_legendre;
@@ -140,7 +142,11 @@ pub fn cycles_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f64 {
 /// `RANDOM_WALK` in that commit; NaN counts as 0. alpha(0) = 0 and alpha rises to the clamp near A = 1.
 pub fn van_de_hulst_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f64 {
     let a = clamp_or_low(base_color, 0.0, 1.0);
-    let g = if anisotropy.is_nan() { 0.0 } else { anisotropy.clamp(-VAN_DE_HULST_MAX_ANISOTROPY, VAN_DE_HULST_MAX_ANISOTROPY) };
+    let g = if anisotropy.is_nan() {
+        0.0
+    } else {
+        anisotropy.clamp(-VAN_DE_HULST_MAX_ANISOTROPY, VAN_DE_HULST_MAX_ANISOTROPY)
+    };
     let [r0, r1, r2] = VAN_DE_HULST_ROOT;
     let s = VAN_DE_HULST_OFFSET + VAN_DE_HULST_LINEAR * a - (r0 + r1 * a + r2 * a * a).sqrt();
     let s2 = s * s;
@@ -481,7 +487,7 @@ pub fn christensen_burley_s(albedo: f64) -> f64 {
 /// `s(A)`: factor on a Christensen-Burley Radius (4 pi d for profile length d) that gives Cycles RW about the same
 /// profile width at Base Color A, dimensionless (Christensen & Burley 2015, eq. 6).
 ///
-/// Use `radius_rw = radius_burley * s(A)`. Approximate, to be validated by renders: blender.md section 4 measured
+/// The Blender mapping no longer uses it: [`width_factor`] holds the edge-render calibration. Earlier renders measured
 /// that RW at Radius R renders like a Burley profile with d / (R / 4 pi) = 0.32 / 0.58 / 1.05 at A = 0.2 / 0.5 / 0.8,
 /// against 1/s(A) = 0.34 / 0.58 / 0.91 (so at A = 0.8 this factor makes RW ~15% wider than the Burley target).
 /// A is clamped to [0, 1], NaN counts as 0.
@@ -489,47 +495,16 @@ pub fn random_walk_radius_scale(base_color: f64) -> f64 {
     christensen_burley_s(base_color)
 }
 
-/// Edge-render calibrations of the walk's width, per alpha mapping: (Base Color, k) with k = the Burley d that fits
-/// the rendered edge divided by the walk's transport mean free path. Empty: not calibrated yet, and
-/// [`width_factor`] falls back to Christensen-Burley's s(A). A measured table drops in here (rising Base Color,
-/// k > 0), interpolated linearly and held constant beyond its ends.
-const WRENNINGE_FIT_WIDTH_CALIBRATION: &[(f64, f64)] = &[];
-const VAN_DE_HULST_WIDTH_CALIBRATION: &[(f64, f64)] = &[];
-
-/// `k` at `a` from a calibration table (linear, held at the ends); None if the table is empty.
-fn calibrated_k(table: &[(f64, f64)], a: f64) -> Option<f64> {
-    let (first, last) = (table.first()?, table.last()?);
-    if a <= first.0 {
-        return Some(first.1);
-    }
-    if a >= last.0 {
-        return Some(last.1);
-    }
-    let k = table.partition_point(|&(x, _)| x < a).clamp(1, table.len() - 1);
-    let ((x0, y0), (x1, y1)) = (table[k - 1], table[k]);
-    Some(y0 + (y1 - y0) * (a - x0) / (x1 - x0))
-}
-
 /// Width factor `w` of a walk under `model` at Base Color A, dimensionless: the walk's transport mean free path that
-/// renders an edge like a Burley profile of length d is `w d`. From the model's calibration table when there is one
-/// (w = 1/k), else uncalibrated: s(A') with A' the Wrenninge-fit Base Color that walks with the same
-/// single-scattering albedo (for the fit A' = A, so today's `radius_burley * s(A)`; for Van de Hulst the same medium,
-/// hence the same width, as the fit's mapping of the same target albedo).
+/// renders an edge like a Burley profile of length d is `w d`. `w = 1/k(A)` with k the edge-render calibration of
+/// the model's walk (`walk_width`: bpy 5.0 `RANDOM_WALK` for the fit, bpy 5.3 `RANDOM_WALK` for Van de Hulst), its
+/// trend continued above the measured Base Colors up to the model's saturation (where alpha stops changing).
 pub fn width_factor(model: RandomWalkModel, base_color: f64) -> f64 {
-    let table = match model {
-        RandomWalkModel::WrenningeFit => WRENNINGE_FIT_WIDTH_CALIBRATION,
-        RandomWalkModel::VanDeHulst => VAN_DE_HULST_WIDTH_CALIBRATION,
+    let walk = match model {
+        RandomWalkModel::WrenningeFit => MeasuredWalk::WrenningeFit,
+        RandomWalkModel::VanDeHulst => MeasuredWalk::VanDeHulst,
     };
-    if let Some(k) = calibrated_k(table, clamp_or_low(base_color, 0.0, 1.0)) {
-        return 1.0 / k;
-    }
-    match model {
-        RandomWalkModel::WrenningeFit => random_walk_radius_scale(base_color),
-        RandomWalkModel::VanDeHulst => {
-            let same_medium = base_color_for(RandomWalkModel::WrenningeFit, flat_albedo(model, base_color));
-            random_walk_radius_scale(same_medium.base_color)
-        }
-    }
+    1.0 / measured_k(walk, base_color, response_table(model).a_sat)
 }
 
 #[cfg(test)]

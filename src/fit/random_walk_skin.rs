@@ -11,13 +11,15 @@
 //! cosine-distributed diffuse, half GGX refraction with roughness 1 at the Subsurface IOR (`subsurface.h`).
 
 use super::random_walk::{invert_response, RandomWalkColor, ResponseTable};
+use super::walk_width::{measured_k, MeasuredWalk};
 
 /// The Subsurface IOR this mapping assumes (Principled BSDF's default for the socket); the material must use it.
 pub const SKIN_SUBSURFACE_IOR: f64 = 1.4;
 
 /// Flat thick slab under a uniform white world, bpy 5.0.1, `RANDOM_WALK_SKIN`, Specular IOR Level 0: rendered value
 /// / Base Color at Base Color 0.05 / 0.2 / 0.5 / 0.8 / 0.95 (blender.md section 3, SKIN column).
-const MEASURED_FLAT_RATIO: [(f64, f64); 5] = [(0.05, 0.9067), (0.2, 0.92), (0.5, 0.9537), (0.8, 0.9908), (0.95, 0.9567)];
+const MEASURED_FLAT_RATIO: [(f64, f64); 5] =
+    [(0.05, 0.9067), (0.2, 0.92), (0.5, 0.9537), (0.8, 0.9908), (0.95, 0.9567)];
 
 /// Cycles' Rd below which `bssrdf_dipole_compute_alpha_prime` returns 0, and at or above which it returns 0.999999.
 const DIPOLE_RD_LOW: f64 = 1e-4;
@@ -67,6 +69,14 @@ pub fn skin_dipole_alpha_prime(rd: f64, eta: f64) -> f64 {
 /// for Base Color `base_color` at Subsurface IOR `eta`. Dimensionless, > 0 (>= 0.0017).
 pub fn skin_radius_factor(base_color: f64, eta: f64) -> f64 {
     (3.0 * (1.0 - skin_dipole_alpha_prime(base_color, eta))).sqrt()
+}
+
+/// Width factor of a Skin walk at Base Color A, dimensionless: the walk's transport mean free path (Radius x Scale x
+/// [`skin_radius_factor`]) that renders an edge like a Burley profile of length d is `w d`; `w = 1/k(A)` from the
+/// bpy 5.0 `RANDOM_WALK_SKIN` edge renders (`walk_width`), held above the highest Base Color a Skin walk is given
+/// (0.95, [`skin_base_color`]).
+pub fn skin_width_factor(base_color: f64) -> f64 {
+    1.0 / measured_k(MeasuredWalk::Skin, base_color, MEASURED_FLAT_RATIO[MEASURED_FLAT_RATIO.len() - 1].0)
 }
 
 /// Flat-slab value Cycles renders for a Skin walk with Base Color A, dimensionless: A times the measured ratio,
