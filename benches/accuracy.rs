@@ -5,7 +5,9 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use spectral_skin::accuracy::ALL_ACCURACY_LEVELS;
 use spectral_skin::color::WavelengthPlacement;
-use spectral_skin::diffusion::{fft_reflectance_profiles, reflectance_profiles, Combination, FftGrid, HankelQuadrature, LayerStack, MultipoleTerms};
+use spectral_skin::diffusion::{
+    fft_reflectance_profiles, reflectance_profiles, Combination, FftGrid, HankelQuadrature, LayerStack, MultipoleTerms,
+};
 use spectral_skin::skin::skin_layers;
 use spectral_skin::{evaluate, Accuracy, Outputs, Request, SkinModel, SkinParams};
 
@@ -13,12 +15,18 @@ fn bench_levels(c: &mut Criterion) {
     let params = SkinParams::preset("caucasian").unwrap();
     let mut group = c.benchmark_group("material/caucasian");
     for level in ALL_ACCURACY_LEVELS {
-        let request = Request { accuracy: level.accuracy(), ..Request::new(Outputs { albedo: true, radius: true, ..Outputs::default() }) };
+        let request = Request {
+            accuracy: level.accuracy(),
+            ..Request::new(Outputs { albedo: true, radius: true, ..Outputs::default() })
+        };
         group.bench_function(level.name(), |b| b.iter(|| evaluate(&params, &request).unwrap()));
     }
-    for (name, placement) in [("cmf_adapted_20nm", WavelengthPlacement::CmfAdapted), ("rgb_shortcut", WavelengthPlacement::RgbShortcut)] {
+    for (name, placement) in
+        [("cmf_adapted_20nm", WavelengthPlacement::CmfAdapted), ("rgb_shortcut", WavelengthPlacement::RgbShortcut)]
+    {
         let accuracy = Accuracy { wavelength_step_nm: 20.0, wavelength_placement: placement, ..Accuracy::default() };
-        let request = Request { accuracy, ..Request::new(Outputs { albedo: true, radius: true, ..Outputs::default() }) };
+        let request =
+            Request { accuracy, ..Request::new(Outputs { albedo: true, radius: true, ..Outputs::default() }) };
         group.bench_function(name, |b| b.iter(|| evaluate(&params, &request).unwrap()));
     }
     group.finish();
@@ -31,10 +39,14 @@ fn bench_profile_routes(c: &mut Criterion) {
     let (comb, terms) = (Combination::Directional, MultipoleTerms::All);
     let mut group = c.benchmark_group("profile_one_wavelength/caucasian_550nm");
     group.sample_size(10);
-    group.bench_function("closed_form_default", |b| b.iter(|| reflectance_profiles(&stack, &radii, comb, terms, &HankelQuadrature::default())));
+    group.bench_function("closed_form_default", |b| {
+        b.iter(|| reflectance_profiles(&stack, &radii, comb, terms, &HankelQuadrature::default()))
+    });
     for size in [256, 512] {
         let grid = FftGrid { size, extent_mm: 40.0 };
-        group.bench_function(format!("fft_{size}_40mm"), |b| b.iter(|| fft_reflectance_profiles(&stack, &radii, comb, terms, grid).unwrap()));
+        group.bench_function(format!("fft_{size}_40mm"), |b| {
+            b.iter(|| fft_reflectance_profiles(&stack, &radii, comb, terms, grid).unwrap())
+        });
     }
     group.finish();
 }

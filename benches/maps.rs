@@ -15,9 +15,12 @@ fn bench_maps(c: &mut Criterion) {
     let mut group = c.benchmark_group("maps");
     group.sample_size(10);
     group.bench_function("table_build_default", |b| {
-        b.iter(|| MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, TableResolution::default()).unwrap())
+        b.iter(|| {
+            MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, TableResolution::default()).unwrap()
+        })
     });
-    let table = MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, TableResolution::default()).unwrap();
+    let table =
+        MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, TableResolution::default()).unwrap();
     group.bench_function("table_lookup_1e5_texels", |b| {
         b.iter(|| {
             let mut sum = 0.0f32;
@@ -30,10 +33,18 @@ fn bench_maps(c: &mut Criterion) {
         })
     });
     let face = face_params(256);
-    group.bench_function("pipeline_table_256", |b| b.iter(|| compute_maps(&face, &MapSettings::default(), None).unwrap()));
+    group.bench_function("pipeline_table_256", |b| {
+        b.iter(|| compute_maps(&face, &MapSettings::default(), None).unwrap())
+    });
     let mask: Vec<f32> = (0..256 * 256).map(|i| 0.02 * ((i / 16) % 16) as f32).collect();
-    let masked = ParamImage { width: 256, height: 256, planes: [Plane::Texels(mask), Plane::Constant(0.6), Plane::Constant(0.01), Plane::Constant(0.2)] };
-    group.bench_function("pipeline_distinct_256", |b| b.iter(|| compute_maps(&masked, &MapSettings::default(), None).unwrap()));
+    let masked = ParamImage {
+        width: 256,
+        height: 256,
+        planes: [Plane::Texels(mask), Plane::Constant(0.6), Plane::Constant(0.01), Plane::Constant(0.2)],
+    };
+    group.bench_function("pipeline_distinct_256", |b| {
+        b.iter(|| compute_maps(&masked, &MapSettings::default(), None).unwrap())
+    });
     group.finish();
 }
 

@@ -13,10 +13,7 @@ struct Lcg(u64);
 
 impl Lcg {
     fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
     fn log_uniform(&mut self, lo: f64, hi: f64) -> f64 {
@@ -25,20 +22,13 @@ impl Lcg {
 }
 
 fn total(layers: &[Layer]) -> f64 {
-    LayerStack::new(layers).unwrap().reflectance_hat(
-        0.0,
-        Combination::Directional,
-        MultipoleTerms::All,
-    )
+    LayerStack::new(layers).unwrap().reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All)
 }
 
 const CLASSES: [&str; 4] = ["tau < 0.1", "0.1 <= tau < 1", "1 <= tau < 3", "tau >= 3"];
 
 fn class(tau: f64) -> usize {
-    [0.1, 1.0, 3.0]
-        .iter()
-        .take_while(|&&edge| tau >= edge)
-        .count()
+    [0.1, 1.0, 3.0].iter().take_while(|&&edge| tau >= edge).count()
 }
 
 fn main() {
@@ -62,25 +52,14 @@ fn main() {
         if whole > 1e6 || piece < 1e-11 || whole - piece < 1e-11 {
             continue;
         }
-        let layer = |t: f64| Layer {
-            thickness_mm: t,
-            sigma_a_per_mm: sa,
-            sigma_s_reduced_per_mm: ss,
-            ior: n,
-        };
+        let layer = |t: f64| Layer { thickness_mm: t, sigma_a_per_mm: sa, sigma_s_reduced_per_mm: ss, ior: n };
         let k = class(piece_tau);
         // Splitting: one layer of whole_tau against a piece of piece_tau over the rest.
-        let (a, b) = (
-            total(&[layer(whole), below]),
-            total(&[layer(piece), layer(whole - piece), below]),
-        );
+        let (a, b) = (total(&[layer(whole), below]), total(&[layer(piece), layer(whole - piece), below]));
         split_n[k] += 1;
         split_worst[k] = split_worst[k].max(((a - b) / a).abs());
         // Monotonicity: 10 % more absorption in a layer of piece_tau.
-        let more = Layer {
-            sigma_a_per_mm: (sa * 1.1).min(1e5),
-            ..layer(piece)
-        };
+        let more = Layer { sigma_a_per_mm: (sa * 1.1).min(1e5), ..layer(piece) };
         let (r0, r1) = (total(&[layer(piece), below]), total(&[more, below]));
         mono_n[k] += 1;
         let rise = (r1 - r0) / r0;
@@ -105,11 +84,7 @@ fn main() {
         let count = 2 + (rng.uniform() * 2.0) as usize;
         let layers: Vec<Layer> = (0..count)
             .map(|i| Layer {
-                thickness_mm: if i + 1 == count {
-                    f64::INFINITY
-                } else {
-                    rng.log_uniform(0.01, 0.5)
-                },
+                thickness_mm: if i + 1 == count { f64::INFINITY } else { rng.log_uniform(0.01, 0.5) },
                 sigma_a_per_mm: rng.log_uniform(1e-3, 3.0),
                 sigma_s_reduced_per_mm: rng.log_uniform(1.0, 30.0),
                 ior: 1.3 + 0.2 * rng.uniform(),

@@ -96,7 +96,11 @@ impl Accuracy {
         Accuracy {
             wavelength_step_nm: 0.5 * self.wavelength_step_nm,
             fit_frequencies_per_decade: 2.0 * self.fit_frequencies_per_decade,
-            hankel: HankelQuadrature { gauss_order: h.gauss_order + 4, refinement: 2.0 * h.refinement, cutoff: 0.1 * h.cutoff },
+            hankel: HankelQuadrature {
+                gauss_order: h.gauss_order + 4,
+                refinement: 2.0 * h.refinement,
+                cutoff: 0.1 * h.cutoff,
+            },
             ..*self
         }
     }
@@ -113,7 +117,13 @@ impl Accuracy {
         check_range("hankel_gauss_order", "nodes per panel", self.hankel.gauss_order as f64, 2.0, 64.0)?;
         check_range("hankel_refinement", "panel refinement", self.hankel.refinement, 0.1, 100.0)?;
         check_range("hankel_cutoff", "transform cutoff", self.hankel.cutoff, 1e-20, 1e-3)?;
-        check_range("fit_frequencies_per_decade", "fit frequencies per decade", self.fit_frequencies_per_decade, 2.0, 200.0)?;
+        check_range(
+            "fit_frequencies_per_decade",
+            "fit frequencies per decade",
+            self.fit_frequencies_per_decade,
+            2.0,
+            200.0,
+        )?;
         Ok(())
     }
 }
@@ -132,7 +142,8 @@ pub enum AccuracyLevel {
 }
 
 /// Every level, cheapest first.
-pub const ALL_ACCURACY_LEVELS: [AccuracyLevel; 3] = [AccuracyLevel::Draft, AccuracyLevel::Default, AccuracyLevel::Reference];
+pub const ALL_ACCURACY_LEVELS: [AccuracyLevel; 3] =
+    [AccuracyLevel::Draft, AccuracyLevel::Default, AccuracyLevel::Reference];
 
 impl AccuracyLevel {
     pub fn name(self) -> &'static str {
@@ -146,7 +157,10 @@ impl AccuracyLevel {
     /// The level called `name` (draft, default, reference).
     pub fn from_name(name: &str) -> Result<AccuracyLevel, SkinError> {
         ALL_ACCURACY_LEVELS.into_iter().find(|l| l.name() == name).ok_or_else(|| {
-            SkinError::invalid("accuracy", format!("unknown accuracy level {name:?}; expected one of draft, default, reference"))
+            SkinError::invalid(
+                "accuracy",
+                format!("unknown accuracy level {name:?}; expected one of draft, default, reference"),
+            )
         })
     }
 

@@ -8,13 +8,7 @@ use thiserror::Error;
 pub enum SkinError {
     /// A scalar parameter is outside its allowed range or not finite.
     #[error("{name} must be in [{min}, {max}] ({meaning}); got {value}")]
-    OutOfRange {
-        name: &'static str,
-        meaning: &'static str,
-        min: f64,
-        max: f64,
-        value: f64,
-    },
+    OutOfRange { name: &'static str, meaning: &'static str, min: f64, max: f64, value: f64 },
     /// An input that is not a single range (a layer list, a radius grid, a preset name) is invalid.
     #[error("invalid {name}: {reason}")]
     Invalid { name: String, reason: String },

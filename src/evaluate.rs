@@ -9,8 +9,10 @@ pub use crate::accuracy::{Accuracy, AccuracyLevel, ProfileGrid};
 use crate::color::{placement_rgb_weights, spectrum_to_rgb, WavelengthGrid, WorkingSpace};
 use crate::diffusion::{reflectance_profiles, Combination, LayerStack};
 use crate::error::{check_range, SkinError};
-use crate::fit::burley::{fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM};
 use crate::fit::blender_target::{Target, TargetInfo};
+use crate::fit::burley::{
+    fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM,
+};
 pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
@@ -36,7 +38,14 @@ pub struct Outputs {
 
 impl Outputs {
     pub fn all() -> Outputs {
-        Outputs { albedo: true, radius: true, profile_rgb: true, profile_spectral: true, spectrum: true, specular: true }
+        Outputs {
+            albedo: true,
+            radius: true,
+            profile_rgb: true,
+            profile_spectral: true,
+            spectrum: true,
+            specular: true,
+        }
     }
     /// What a material needs: albedo, radius and specular.
     pub fn material() -> Outputs {
@@ -209,7 +218,8 @@ impl Prepared {
     fn fits(&self, stacks: &[LayerStack], albedo: [f64; 3], parallel: bool) -> [BurleyFit; 3] {
         let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
         let s = &self.fit_s;
-        let transform = |st: &LayerStack| -> Vec<f64> { s.iter().map(|&x| st.reflectance_hat(x, comb, terms)).collect() };
+        let transform =
+            |st: &LayerStack| -> Vec<f64> { s.iter().map(|&x| st.reflectance_hat(x, comb, terms)).collect() };
         let transforms: Vec<Vec<f64>> =
             if parallel { stacks.par_iter().map(transform).collect() } else { stacks.iter().map(transform).collect() };
         // RGB transfer function per frequency, normalised by the albedo.
@@ -262,15 +272,18 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
 
     let profile = if out.profile_rgb || out.profile_spectral {
         let radii = acc.profile_grid.radii_mm();
-        let spectral =
-            reflectance_profiles(&stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel);
+        let spectral = reflectance_profiles(&stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel);
         work.radial_profiles = spectral.len();
         let rgb = out.profile_rgb.then(|| {
             (0..radii.len())
                 .map(|i| spectrum_to_rgb(&spectral.iter().map(|p| p[i]).collect::<Vec<_>>(), &prepared.weights))
                 .collect()
         });
-        Some(RadialProfile { radii_mm: radii, rgb_per_mm2: rgb, spectral_per_mm2: out.profile_spectral.then_some(spectral) })
+        Some(RadialProfile {
+            radii_mm: radii,
+            rgb_per_mm2: rgb,
+            spectral_per_mm2: out.profile_spectral.then_some(spectral),
+        })
     } else {
         None
     };

@@ -20,7 +20,7 @@ mod table;
 #[cfg(feature = "python")]
 mod python;
 
-pub use error::SkinError;
 pub use accuracy::{Accuracy, AccuracyLevel};
+pub use error::SkinError;
 pub use evaluate::{evaluate, Evaluation, Outputs, Request};
 pub use skin::{SkinModel, SkinParams, PRESETS};

@@ -75,10 +75,7 @@ pub fn legendre_table(order: usize, x: &[f64]) -> Vec<Vec<f64>> {
         let next: Vec<f64> = x
             .iter()
             .enumerate()
-            .map(|(j, &xj)| {
-                ((2 * n + 1) as f64 * xj * table[n][j] - n as f64 * table[n - 1][j])
-                    / (n + 1) as f64
-            })
+            .map(|(j, &xj)| ((2 * n + 1) as f64 * xj * table[n][j] - n as f64 * table[n - 1][j]) / (n + 1) as f64)
             .collect();
         table[n + 1] = next;
     }
@@ -115,20 +112,11 @@ pub fn spherical_bessel_j(count: usize, x: f64) -> Vec<f64> {
             }
         }
     }
-    let norm: f64 = values
-        .iter()
-        .enumerate()
-        .map(|(n, v)| (2 * n + 1) as f64 * v * v)
-        .sum::<f64>()
-        .sqrt();
+    let norm: f64 = values.iter().enumerate().map(|(n, v)| (2 * n + 1) as f64 * v * v).sum::<f64>().sqrt();
     // The sign from whichever of j_0, j_1 is larger in closed form.
     let (s, c) = x.sin_cos();
     let (j0, j1) = (s / x, s / (x * x) - c / x);
-    let sign = if j0.abs() >= j1.abs() {
-        (j0 * values[0]).signum()
-    } else {
-        (j1 * values[1]).signum()
-    };
+    let sign = if j0.abs() >= j1.abs() { (j0 * values[0]).signum() } else { (j1 * values[1]).signum() };
     for (o, v) in out.iter_mut().zip(&values) {
         *o = sign * v / norm;
     }
@@ -157,18 +145,11 @@ mod tests {
             let j = spherical_bessel_j(12, x);
             let (s, c) = (x.sin(), x.cos());
             let j2 = (3.0 / (x * x * x) - 1.0 / x) * s - 3.0 * c / (x * x);
-            assert!(
-                (j[0] - s / x).abs() < 1e-14 && (j[2] - j2).abs() < 1e-12 * j2.abs().max(1e-3),
-                "x={x}: {j:?}"
-            );
+            assert!((j[0] - s / x).abs() < 1e-14 && (j[2] - j2).abs() < 1e-12 * j2.abs().max(1e-3), "x={x}: {j:?}");
         }
         let j = spherical_bessel_j(12, 1e-3);
         let double_factorial_21: f64 = (1..=21).step_by(2).map(|k| k as f64).product();
-        assert!(
-            (j[10] / (1e-30 / double_factorial_21) - 1.0).abs() < 1e-6,
-            "{}",
-            j[10]
-        );
+        assert!((j[10] / (1e-30 / double_factorial_21) - 1.0).abs() < 1e-6, "{}", j[10]);
     }
 
     #[test]

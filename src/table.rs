@@ -12,7 +12,8 @@ impl SpectralTable {
     /// Parse a bundled CSV. The files are compiled in, so a parse failure is a build defect and panics in tests.
     pub(crate) fn parse(text: &str) -> SpectralTable {
         let mut lines = text.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#'));
-        let header: Vec<String> = lines.next().expect("table header").split(',').map(|s| s.trim().to_string()).collect();
+        let header: Vec<String> =
+            lines.next().expect("table header").split(',').map(|s| s.trim().to_string()).collect();
         let n = header.len() - 1;
         let mut wavelengths_nm = Vec::new();
         let mut columns = vec![Vec::new(); n];

@@ -26,7 +26,12 @@ fn default_is_within_bounds_of_the_converged_reference() {
         let (ra, rr) = figures(&reference);
         let (da, dr) = figures(&default);
         let (albedo_error, radius_error) = (max_relative(da, ra), max_relative(dr, rr));
-        println!("{}: default vs reference: albedo {:.4} %, radius {:.4} %", preset.name, 100.0 * albedo_error, 100.0 * radius_error);
+        println!(
+            "{}: default vs reference: albedo {:.4} %, radius {:.4} %",
+            preset.name,
+            100.0 * albedo_error,
+            100.0 * radius_error
+        );
         assert!(albedo_error < 0.002, "{}: albedo {albedo_error}", preset.name);
         assert!(radius_error < 0.01, "{}: radius {radius_error}", preset.name);
     }
@@ -45,7 +50,11 @@ fn reference_is_converged() {
         let b = run(&preset.params, finer);
         let (aa, ar) = figures(&a);
         let (ba, br) = figures(&b);
-        assert!(max_relative(aa, ba) < 1e-6 && max_relative(ar, br) < 1e-6, "{}: {aa:?} {ba:?} {ar:?} {br:?}", preset.name);
+        assert!(
+            max_relative(aa, ba) < 1e-6 && max_relative(ar, br) < 1e-6,
+            "{}: {aa:?} {ba:?} {ar:?} {br:?}",
+            preset.name
+        );
         let (pa, pb) = (a.profile.unwrap(), b.profile.unwrap());
         let (pa, pb) = (pa.rgb_per_mm2.unwrap(), pb.rgb_per_mm2.unwrap());
         let peak = pa[0].iter().cloned().fold(0.0, f64::max);
@@ -76,11 +85,21 @@ fn named_levels() {
         let reference = run(&preset.params, Accuracy::reference());
         let draft = run(&preset.params, Accuracy::draft());
         let default = run(&preset.params, Accuracy::default());
-        assert!(draft.work.transform_samples < default.work.transform_samples / 3, "{:?} {:?}", draft.work, default.work);
+        assert!(
+            draft.work.transform_samples < default.work.transform_samples / 3,
+            "{:?} {:?}",
+            draft.work,
+            default.work
+        );
         let (ra, rr) = figures(&reference);
         let (da, dr) = figures(&draft);
         let (albedo_error, radius_error) = (max_relative(da, ra), max_relative(dr, rr));
-        println!("{}: draft vs reference: albedo {:.4} %, radius {:.4} %", preset.name, 100.0 * albedo_error, 100.0 * radius_error);
+        println!(
+            "{}: draft vs reference: albedo {:.4} %, radius {:.4} %",
+            preset.name,
+            100.0 * albedo_error,
+            100.0 * radius_error
+        );
         assert!(albedo_error < 0.005, "{}: albedo {albedo_error}", preset.name);
         assert!(radius_error < 0.02, "{}: radius {radius_error}", preset.name);
     }

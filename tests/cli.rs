@@ -23,7 +23,9 @@ fn eval_json_has_the_stable_keys() {
     let mut luminance = Vec::new();
     for preset in ["african", "asian", "caucasian"] {
         let j = eval_json(preset);
-        for key in ["params", "color_space", "accuracy", "diffuse_reflectance_rgb", "default_method", "methods", "specular"] {
+        for key in
+            ["params", "color_space", "accuracy", "diffuse_reflectance_rgb", "default_method", "methods", "specular"]
+        {
             assert!(j.get(key).is_some(), "{preset}: missing {key}");
         }
         assert_eq!(j["color_space"], "Linear Rec.709");
@@ -62,7 +64,10 @@ fn profile_csv() {
 fn bad_input_is_a_clear_error() {
     for (args, needle) in [
         (vec!["eval", "--preset", "martian"], "known presets"),
-        (vec!["eval", "--melanin", "0.9", "--melanin-blend", "0.5", "--hemoglobin", "0.01", "--oiliness", "0.2"], "melanin must be in [0, 0.5]"),
+        (
+            vec!["eval", "--melanin", "0.9", "--melanin-blend", "0.5", "--hemoglobin", "0.01", "--oiliness", "0.2"],
+            "melanin must be in [0, 0.5]",
+        ),
         (vec!["eval", "--melanin", "0.1"], "melanin-blend"),
         (vec!["eval", "--preset", "asian", "--wavelength-step-nm", "0"], "wavelength_step_nm"),
         (vec!["eval", "--preset", "asian", "--accuracy", "fast"], "draft"),
@@ -95,7 +100,19 @@ fn maps_on_the_example() {
     }
     // Out-of-range constant: a clear error naming the flag that clamps, and nothing new written.
     let bad = dir.path().join("bad");
-    let out = run(&["maps", "--melanin-map", params.to_str().unwrap(), "--melanin-blend", "0.5", "--hemoglobin", "0.5", "--oiliness", "0.1", "--out", bad.to_str().unwrap()]);
+    let out = run(&[
+        "maps",
+        "--melanin-map",
+        params.to_str().unwrap(),
+        "--melanin-blend",
+        "0.5",
+        "--hemoglobin",
+        "0.5",
+        "--oiliness",
+        "0.1",
+        "--out",
+        bad.to_str().unwrap(),
+    ]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("hemoglobin") && err.contains("--clamp"), "{err}");
@@ -115,7 +132,8 @@ fn accuracy_levels() {
     assert_eq!(draft["work"]["wavelengths"], 21);
     let reference = json(&["eval", "--preset", "caucasian", "--accuracy", "reference", "--json"]);
     assert_eq!(reference["work"]["wavelengths"], 401);
-    let overridden = json(&["eval", "--preset", "caucasian", "--accuracy", "reference", "--wavelength-step-nm", "10", "--json"]);
+    let overridden =
+        json(&["eval", "--preset", "caucasian", "--accuracy", "reference", "--wavelength-step-nm", "10", "--json"]);
     assert_eq!(overridden["work"]["wavelengths"], 41);
     assert_eq!(overridden["accuracy"]["fit_frequencies_per_decade"], 16.0);
 }
@@ -140,7 +158,10 @@ fn eval_and_maps_take_a_target() {
         (vec!["eval", "--preset", "asian", "--blender", "4.1"], "4.2 and newer"),
         (vec!["eval", "--preset", "asian", "--blender", "five"], "MAJOR.MINOR"),
         (vec!["eval", "--preset", "asian", "--engine", "workbench"], "eevee"),
-        (vec!["eval", "--preset", "asian", "--blender", "5.0", "--method", "random-walk-legacy"], "not offered by Blender 5.0"),
+        (
+            vec!["eval", "--preset", "asian", "--blender", "5.0", "--method", "random-walk-legacy"],
+            "not offered by Blender 5.0",
+        ),
     ] {
         let out = run(&args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
@@ -150,8 +171,21 @@ fn eval_and_maps_take_a_target() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("maps");
     let legacy_in_5_0 = run(&[
-        "maps", "--melanin", "0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3",
-        "--out", out_dir.to_str().unwrap(), "--method", "random-walk-legacy", "--blender", "5.0",
+        "maps",
+        "--melanin",
+        "0.1",
+        "--melanin-blend",
+        "0.5",
+        "--hemoglobin",
+        "0.02",
+        "--oiliness",
+        "0.3",
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--method",
+        "random-walk-legacy",
+        "--blender",
+        "5.0",
     ]);
     assert_eq!(legacy_in_5_0.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&legacy_in_5_0.stderr).contains("random_walk_legacy is not offered by Blender 5.0"));
@@ -159,9 +193,20 @@ fn eval_and_maps_take_a_target() {
     // The sidecar names the target.
     let params = dir.path().join("uniform.exr");
     assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "4", "--kind", "uniform"]).status.success());
-    let out = run(&["maps", "--params", params.to_str().unwrap(), "--out", out_dir.to_str().unwrap(), "--blender", "4.5", "--engine", "eevee"]);
+    let out = run(&[
+        "maps",
+        "--params",
+        params.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--blender",
+        "4.5",
+        "--engine",
+        "eevee",
+    ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
     assert_eq!(sidecar["report"]["target"], serde_json::json!({"blender": "4.5", "engine": "eevee", "tested": true}));
 }
 
@@ -169,7 +214,8 @@ fn eval_and_maps_take_a_target() {
 /// otherwise report an unknown argument '-0').
 #[test]
 fn negative_values_reach_the_range_check() {
-    let out = run(&["eval", "--melanin", "-0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
+    let out =
+        run(&["eval", "--melanin", "-0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("melanin must be in [0, 0.5]") && err.contains("-0.1"), "{err}");
@@ -178,8 +224,17 @@ fn negative_values_reach_the_range_check() {
     assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]).status.success());
     let out_dir = dir.path().join("maps");
     let out = run(&[
-        "maps", "--melanin-map", params.to_str().unwrap(), "--melanin-blend", "0.5", "--hemoglobin", "-0.02",
-        "--oiliness", "0.3", "--out", out_dir.to_str().unwrap(),
+        "maps",
+        "--melanin-map",
+        params.to_str().unwrap(),
+        "--melanin-blend",
+        "0.5",
+        "--hemoglobin",
+        "-0.02",
+        "--oiliness",
+        "0.3",
+        "--out",
+        out_dir.to_str().unwrap(),
     ]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
@@ -193,8 +248,19 @@ fn table_check_is_bounded() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("maps");
     let out = run(&[
-        "maps", "--melanin", "0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3",
-        "--table-check", "1000000000000", "--out", out_dir.to_str().unwrap(),
+        "maps",
+        "--melanin",
+        "0.1",
+        "--melanin-blend",
+        "0.5",
+        "--hemoglobin",
+        "0.02",
+        "--oiliness",
+        "0.3",
+        "--table-check",
+        "1000000000000",
+        "--out",
+        out_dir.to_str().unwrap(),
     ]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
@@ -219,7 +285,16 @@ fn a_new_run_leaves_no_stale_outputs() {
     };
     maps(&["--params", face.to_str().unwrap()]);
     assert!(out_dir.join("specular.exr").is_file(), "varying oiliness writes a specular map");
-    maps(&["--melanin-map", face.to_str().unwrap(), "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
+    maps(&[
+        "--melanin-map",
+        face.to_str().unwrap(),
+        "--melanin-blend",
+        "0.5",
+        "--hemoglobin",
+        "0.02",
+        "--oiliness",
+        "0.3",
+    ]);
     let sidecar: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
     let mut listed: Vec<String> =

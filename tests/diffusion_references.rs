@@ -75,7 +75,10 @@ fn split_layer_equals_whole() {
             let whole = layered_reflectance(&[layer(top + bottom, sa, ss)], &[]).unwrap().0;
             let split = layered_reflectance(&[layer(top, sa, ss), layer(bottom, sa, ss)], &[]).unwrap().0;
             let rel = (split - whole) / whole;
-            println!("split layer sa={sa} ss={ss} top={top} bottom={bottom}: whole {whole:.5} split {split:.5} ({:+.3} %)", 100.0 * rel);
+            println!(
+                "split layer sa={sa} ss={ss} top={top} bottom={bottom}: whole {whole:.5} split {split:.5} ({:+.3} %)",
+                100.0 * rel
+            );
             worst = worst.max(rel.abs());
         }
     }
@@ -99,7 +102,8 @@ fn extreme_inputs_are_stable() {
                 assert!(profile.iter().all(|v| v.is_finite() && *v >= 0.0), "sa={sa} ss={ss} t={t}: {profile:?}");
                 let stack = LayerStack::new(&layers[..1]).unwrap();
                 let slab = stack.top();
-                let sum = slab.reflectance_hat(0.0, MultipoleTerms::All) + slab.transmittance_hat(0.0, MultipoleTerms::All);
+                let sum =
+                    slab.reflectance_hat(0.0, MultipoleTerms::All) + slab.transmittance_hat(0.0, MultipoleTerms::All);
                 assert!(sum <= 1.0 + 1e-12, "sa={sa} ss={ss}: R+T = {sum}");
             }
         }

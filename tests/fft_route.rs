@@ -82,8 +82,8 @@ fn single_layer_total_converges_to_dipole_total() {
     for n in [32, 128] {
         let grid = FftGrid::new(n, 20.0).unwrap();
         let stacks = std::slice::from_ref(&stack);
-        let out =
-            fft_reflectance_profiles_with(stacks, &[], Combination::Directional, ALL, grid, PixelSampling::Area).unwrap();
+        let out = fft_reflectance_profiles_with(stacks, &[], Combination::Directional, ALL, grid, PixelSampling::Area)
+            .unwrap();
         let error = out.totals[0] / exact - 1.0;
         println!("area sampling, extent 20 mm N {n}: rel {error:+.2e}");
         assert!(error.abs() < 1e-6, "N={n}: {error:e}");
@@ -160,7 +160,9 @@ fn three_layers_both_combinations_match_closed_form() {
             let out = fft_reflectance_profiles_with(&stacks, &radii, c, ALL, grid, sampling).unwrap();
             let profile_error = worst_relative(&out.profiles[0], &exact);
             let total_error = out.totals[0] / exact_total - 1.0;
-            println!("{c:?} {sampling:?}: total {exact_total:.6} error {total_error:+.2e}, profile {profile_error:.2e}");
+            println!(
+                "{c:?} {sampling:?}: total {exact_total:.6} error {total_error:+.2e}, profile {profile_error:.2e}"
+            );
             assert!(total_error.abs() < 1e-4 && profile_error < 0.01, "{c:?} {sampling:?}");
         }
         totals.push(exact_total);

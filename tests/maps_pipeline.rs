@@ -7,7 +7,9 @@ use spectral_skin::evaluate::Prepared;
 use spectral_skin::fit::blender_target::Target;
 use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::maps::example::{face_params, write_face_params};
-use spectral_skin::maps::io::{read_exr_channels, write_channels_exr, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane};
+use spectral_skin::maps::io::{
+    read_exr_channels, write_channels_exr, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane,
+};
 use spectral_skin::maps::lut::{measure_error, MaterialTable, TableResolution};
 use spectral_skin::maps::pipeline::{check_planes, Strategy, ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE};
 use spectral_skin::maps::{compute_maps, run_maps, MapSettings, StrategyChoice};
@@ -48,7 +50,11 @@ fn exact_mode_equals_evaluate() {
     let m: Vec<f32> = (0..w * h).map(|i| values[i % 4]).collect();
     let b: Vec<f32> = (0..w * h).map(|i| (i as f32 / 11.0).min(1.0)).collect();
     let hb: Vec<f32> = (0..w * h).map(|i| 0.1 * ((i * 7) % 12) as f32 / 11.0).collect();
-    let img = image(w, h, [Plane::Texels(m.clone()), Plane::Texels(b.clone()), Plane::Texels(hb.clone()), Plane::Constant(0.3)]);
+    let img = image(
+        w,
+        h,
+        [Plane::Texels(m.clone()), Plane::Texels(b.clone()), Plane::Texels(hb.clone()), Plane::Constant(0.3)],
+    );
     for (target, method) in [
         (Target::default(), SubsurfaceMethod::Burley),
         (Target::default(), SubsurfaceMethod::RandomWalk),
@@ -76,17 +82,28 @@ fn exact_mode_equals_evaluate() {
 fn strategies_follow_the_input() {
     let settings = MapSettings::default();
     // Constant: one evaluation.
-    let constant = image(64, 64, [Plane::Constant(0.1), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.0)]);
+    let constant =
+        image(64, 64, [Plane::Constant(0.1), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.0)]);
     let r = compute_maps(&constant, &settings, None).unwrap();
     assert_eq!(r.report.strategy, Strategy::Constant);
     // A map whose texels all hold one value is constant too.
-    let uniform = image(64, 64, [Plane::Texels(vec![0.1; 4096]), Plane::Constant(0.5), Plane::Texels(vec![0.02; 4096]), Plane::Texels(vec![0.3; 4096])]);
+    let uniform = image(
+        64,
+        64,
+        [
+            Plane::Texels(vec![0.1; 4096]),
+            Plane::Constant(0.5),
+            Plane::Texels(vec![0.02; 4096]),
+            Plane::Texels(vec![0.3; 4096]),
+        ],
+    );
     let r = compute_maps(&uniform, &settings, None).unwrap();
     assert_eq!(r.report.strategy, Strategy::Constant);
     assert!(matches!(r.specular, spectral_skin::maps::pipeline::SpecularOutput::Constant(_)));
     // A mask with three values: one evaluation per tuple.
     let mask: Vec<f32> = (0..64 * 64).map(|i| [0.01, 0.2, 0.4][(i / 64) % 3]).collect();
-    let masked = image(64, 64, [Plane::Texels(mask), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.2)]);
+    let masked =
+        image(64, 64, [Plane::Texels(mask), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.2)]);
     let r = compute_maps(&masked, &settings, None).unwrap();
     assert_eq!(r.report.strategy, Strategy::DistinctTuples { tuples: 3 });
     // Smooth variation everywhere: the table.
@@ -109,9 +126,18 @@ fn writes_the_documented_files() {
     let params = dir.path().join("face.exr");
     write_face_params(&params, 48).unwrap();
     let out = dir.path().join("out");
-    let report = run_maps(&ParamInputs::Multi { path: params, constants: [None; 4] }, &out, &MapSettings::default(), ExrOptions::default(), None).unwrap();
+    let report = run_maps(
+        &ParamInputs::Multi { path: params, constants: [None; 4] },
+        &out,
+        &MapSettings::default(),
+        ExrOptions::default(),
+        None,
+    )
+    .unwrap();
     assert_eq!(files_in(&out), vec![ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE]);
-    for (f, expected) in [(ALBEDO_FILE, vec!["B", "G", "R"]), (RADIUS_FILE, vec!["B", "G", "R"]), (SPECULAR_FILE, vec!["Y"])] {
+    for (f, expected) in
+        [(ALBEDO_FILE, vec!["B", "G", "R"]), (RADIUS_FILE, vec!["B", "G", "R"]), (SPECULAR_FILE, vec!["Y"])]
+    {
         let (w, h, channels) = read_exr_channels(&out.join(f)).unwrap();
         assert_eq!((w, h), (48, 48));
         let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
@@ -138,7 +164,8 @@ fn writes_the_documented_files() {
         ParamSource::Constant(0.01),
         ParamSource::Constant(0.0),
     ]);
-    run_maps(&separate, &out2, &MapSettings::default(), ExrOptions { half: true, ..ExrOptions::default() }, None).unwrap();
+    run_maps(&separate, &out2, &MapSettings::default(), ExrOptions { half: true, ..ExrOptions::default() }, None)
+        .unwrap();
     assert_eq!(files_in(&out2), vec![ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE]);
     let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out2.join(SIDECAR_FILE)).unwrap()).unwrap();
     assert_eq!(sidecar["outputs"]["specular_constants"]["specular_ior_level"], 0.0);
@@ -153,7 +180,13 @@ fn bad_texels_are_errors_or_clamped() {
     m[9] = 0.7;
     let planes = || [Plane::Texels(m.clone()), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.3)];
     let err = check_planes(&mut image(4, 4, planes()), false).unwrap_err().to_string();
-    assert!(err.contains("melanin") && err.contains("1 NaN") && err.contains("1 infinite") && err.contains("1 out-of-range"), "{err}");
+    assert!(
+        err.contains("melanin")
+            && err.contains("1 NaN")
+            && err.contains("1 infinite")
+            && err.contains("1 out-of-range"),
+        "{err}"
+    );
     assert!(err.contains("(1, 1)") && err.contains("(2, 1)") && err.contains("(1, 2)"), "coordinates: {err}");
     let mut img = image(4, 4, planes());
     let report = check_planes(&mut img, true).unwrap();
@@ -177,7 +210,14 @@ fn failures_leave_no_output() {
     m[17] = f32::NAN;
     let ones = vec![0.5f32; 16 * 16];
     let small = vec![0.01f32; 16 * 16];
-    write_channels_exr(&bad, 16, 16, &[("melanin", &m), ("melanin_blend", &ones), ("hemoglobin", &small), ("oiliness", &ones)], ExrOptions::default()).unwrap();
+    write_channels_exr(
+        &bad,
+        16,
+        16,
+        &[("melanin", &m), ("melanin_blend", &ones), ("hemoglobin", &small), ("oiliness", &ones)],
+        ExrOptions::default(),
+    )
+    .unwrap();
     // Truncated EXR.
     let truncated = dir.path().join("truncated.exr");
     let bytes = std::fs::read(&good).unwrap();
@@ -202,7 +242,8 @@ fn failures_leave_no_output() {
         (ParamInputs::Multi { path: dir.path().join("missing.exr"), constants: [None; 4] }, "missing.exr"),
     ];
     for (inputs, needle) in cases {
-        let err = run_maps(&inputs, &out, &MapSettings::default(), ExrOptions::default(), None).unwrap_err().to_string();
+        let err =
+            run_maps(&inputs, &out, &MapSettings::default(), ExrOptions::default(), None).unwrap_err().to_string();
         assert!(err.contains(needle), "{needle}: {err}");
         assert_eq!(files_in(&out), vec![ALBEDO_FILE], "{needle}: outputs appeared");
         assert_eq!(std::fs::read(out.join(ALBEDO_FILE)).unwrap(), b"previous", "{needle}: clobbered");
@@ -215,9 +256,11 @@ fn table_cache_round_trip() {
     let dir = tempfile::tempdir().unwrap();
     let prepared = Prepared::new(&Request::new(Outputs::material())).unwrap();
     let small = TableResolution { melanin: 5, melanin_blend: 3, hemoglobin: 4 };
-    let (built, cached) = MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
+    let (built, cached) =
+        MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
     assert!(!cached);
-    let (again, cached) = MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
+    let (again, cached) =
+        MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
     assert!(cached);
     for (m, b, h) in [(0.0, 0.0, 0.0), (0.13, 0.4, 0.07), (0.5, 1.0, 0.1)] {
         assert_eq!(built.lookup(m, b, h), again.lookup(m, b, h));
@@ -225,6 +268,7 @@ fn table_cache_round_trip() {
     let file = std::fs::read_dir(dir.path()).unwrap().next().unwrap().unwrap().path();
     let bytes = std::fs::read(&file).unwrap();
     std::fs::write(&file, &bytes[..bytes.len() - 7]).unwrap();
-    let (_, cached) = MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
+    let (_, cached) =
+        MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
     assert!(!cached, "a damaged cache file must be rebuilt");
 }

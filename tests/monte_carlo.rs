@@ -17,12 +17,7 @@ use spectral_skin::diffusion::{layered_reflectance, Layer};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 
 fn semi_infinite(sigma_a: f64, sigma_s: f64, ior: f64) -> Vec<McLayer> {
-    vec![McLayer {
-        thickness_mm: f64::INFINITY,
-        sigma_a_per_mm: sigma_a,
-        sigma_s_per_mm: sigma_s,
-        ior,
-    }]
+    vec![McLayer { thickness_mm: f64::INFINITY, sigma_a_per_mm: sigma_a, sigma_s_per_mm: sigma_s, ior }]
 }
 
 /// Gauss-Legendre nodes and weights on [0, 1] (Newton iteration on P_n).
@@ -59,12 +54,7 @@ fn chandrasekhar_h(a: f64, mu: f64) -> f64 {
     let (x, w) = gauss_legendre_01(64);
     let s = (1.0 - a).sqrt();
     let rhs = |h: &[f64], m: f64| -> f64 {
-        let integral: f64 = x
-            .iter()
-            .zip(&w)
-            .zip(h)
-            .map(|((&xj, &wj), &hj)| wj * xj * hj / (m + xj))
-            .sum();
+        let integral: f64 = x.iter().zip(&w).zip(h).map(|((&xj, &wj), &hj)| wj * xj * hj / (m + xj)).sum();
         1.0 / (s + 0.5 * a * integral)
     };
     let mut h = vec![1.0; x.len()];
@@ -98,11 +88,7 @@ fn mc_non_absorbing_semi_infinite_reflects_everything() {
         assert_eq!(r.transmittance, 0.0);
         assert!(r.absorbed.abs() < 1e-12, "absorbed {}", r.absorbed);
         assert!((r.reflectance + r.unfinished - 1.0).abs() < 1e-12);
-        assert!(
-            r.unfinished < 0.01,
-            "too many photons still inside after the cap: {}",
-            r.unfinished
-        );
+        assert!(r.unfinished < 0.01, "too many photons still inside after the cap: {}", r.unfinished);
     }
 }
 
@@ -111,33 +97,16 @@ fn mc_non_absorbing_semi_infinite_reflects_everything() {
 fn mc_non_scattering_slab_beer_lambert() {
     let (sigma_a, d) = (1.3, 0.6);
     let layers = vec![
-        McLayer {
-            thickness_mm: 0.25,
-            sigma_a_per_mm: sigma_a,
-            sigma_s_per_mm: 0.0,
-            ior: 1.0,
-        },
-        McLayer {
-            thickness_mm: d - 0.25,
-            sigma_a_per_mm: sigma_a,
-            sigma_s_per_mm: 0.0,
-            ior: 1.0,
-        },
+        McLayer { thickness_mm: 0.25, sigma_a_per_mm: sigma_a, sigma_s_per_mm: 0.0, ior: 1.0 },
+        McLayer { thickness_mm: d - 0.25, sigma_a_per_mm: sigma_a, sigma_s_per_mm: 0.0, ior: 1.0 },
     ];
     let n = 200_000;
     let r = simulate(&layers, &McConfig::new(n, 12, vec![]));
     let expect = (-sigma_a * d).exp();
     let binomial_se = (expect * (1.0 - expect) / n as f64).sqrt();
-    println!(
-        "Beer-Lambert: T = {:.5} +- {:.5} (expect {expect:.5})",
-        r.transmittance, r.transmittance_se
-    );
+    println!("Beer-Lambert: T = {:.5} +- {:.5} (expect {expect:.5})", r.transmittance, r.transmittance_se);
     assert_eq!(r.reflectance, 0.0);
-    assert!(
-        (r.transmittance - expect).abs() < 4.0 * binomial_se,
-        "T {} vs {expect}",
-        r.transmittance
-    );
+    assert!((r.transmittance - expect).abs() < 4.0 * binomial_se, "T {} vs {expect}", r.transmittance);
 }
 
 /// Fresnel at normal incidence between two interfaces: a clear 1.4 layer over a clear 1.0 layer.
@@ -145,28 +114,15 @@ fn mc_non_scattering_slab_beer_lambert() {
 #[test]
 fn mc_fresnel_normal_incidence_two_interfaces() {
     let layers = vec![
-        McLayer {
-            thickness_mm: 0.3,
-            sigma_a_per_mm: 0.0,
-            sigma_s_per_mm: 0.0,
-            ior: 1.4,
-        },
-        McLayer {
-            thickness_mm: 1.0,
-            sigma_a_per_mm: 0.0,
-            sigma_s_per_mm: 0.0,
-            ior: 1.0,
-        },
+        McLayer { thickness_mm: 0.3, sigma_a_per_mm: 0.0, sigma_s_per_mm: 0.0, ior: 1.4 },
+        McLayer { thickness_mm: 1.0, sigma_a_per_mm: 0.0, sigma_s_per_mm: 0.0, ior: 1.0 },
     ];
     let n = 400_000;
     let r = simulate(&layers, &McConfig::new(n, 13, vec![]));
     let r0 = (0.4f64 / 2.4).powi(2);
     let expect = r0 / (1.0 + r0);
     let se = (expect * (1.0 - expect) / n as f64).sqrt();
-    println!(
-        "two clear interfaces: R = {:.5} (expect {expect:.5}), T = {:.5}",
-        r.reflectance, r.transmittance
-    );
+    println!("two clear interfaces: R = {:.5} (expect {expect:.5}), T = {:.5}", r.reflectance, r.transmittance);
     assert!((r.reflectance - expect).abs() < 4.0 * se);
     assert!((r.reflectance + r.transmittance - 1.0).abs() < 1e-12);
 }
@@ -218,11 +174,7 @@ fn mc_single_scattering_radial_profile() {
     for (ior, seed) in [(1.0f64, 41u64), (1.4, 42)] {
         // Exit cosines below mu_c are totally reflected. Substituting mu = mu_c + (1 - mu_c) u^2
         // removes the square-root behaviour of F at mu_c; 40 panels of 64 nodes in u.
-        let mu_c = if ior > 1.0 {
-            (1.0 - 1.0 / (ior * ior)).sqrt()
-        } else {
-            0.0
-        };
+        let mu_c = if ior > 1.0 { (1.0 - 1.0 / (ior * ior)).sqrt() } else { 0.0 };
         let escape_in = |r0: f64, r1: f64| -> f64 {
             let panels = 40;
             let mut sum = 0.0;
@@ -257,10 +209,7 @@ fn mc_single_scattering_radial_profile() {
         let mc = simulate(&semi_infinite(0.0, sigma_t, ior), &cfg);
         let total = escape_in(0.0, f64::INFINITY);
         if ior == 1.0 {
-            assert!(
-                (total - 0.5 * (1.0 - std::f64::consts::LN_2)).abs() < 1e-9,
-                "closed form {total}"
-            );
+            assert!((total - 0.5 * (1.0 - std::f64::consts::LN_2)).abs() < 1e-9, "closed form {total}");
         }
         println!(
             "single scattering, ior {ior}: R1 exact {total:.5}, MC {:.5} +- {:.5}",
@@ -284,10 +233,7 @@ fn mc_single_scattering_radial_profile() {
         }
         let over = escape_in(edges[edges.len() - 1], f64::INFINITY);
         assert!((mc.reflectance_beyond_last_edge - over).abs() < 4.5 * (over / 1e6).sqrt() + 1e-6);
-        println!(
-            "single scattering, ior {ior}: {} radial bins, worst deviation {worst:.2} se",
-            edges.len() - 1
-        );
+        println!("single scattering, ior {ior}: {} radial bins, worst deviation {worst:.2} se", edges.len() - 1);
     }
 }
 
@@ -306,11 +252,7 @@ fn mc_matches_chandrasekhar_plane_albedo() {
             r.reflectance_se,
             diff / r.reflectance_se
         );
-        assert!(
-            diff.abs() < 4.0 * r.reflectance_se + 5e-4,
-            "a = {a}: MC {} vs exact {expect}",
-            r.reflectance
-        );
+        assert!(diff.abs() < 4.0 * r.reflectance_se + 5e-4, "a = {a}: MC {} vs exact {expect}", r.reflectance);
     }
 }
 
@@ -319,33 +261,15 @@ fn mc_matches_chandrasekhar_plane_albedo() {
 #[test]
 fn mc_bookkeeping_and_determinism() {
     let layers = vec![
-        McLayer {
-            thickness_mm: 0.25,
-            sigma_a_per_mm: 1.0,
-            sigma_s_per_mm: 6.0,
-            ior: 1.4,
-        },
-        McLayer {
-            thickness_mm: 0.5,
-            sigma_a_per_mm: 0.2,
-            sigma_s_per_mm: 3.0,
-            ior: 1.33,
-        },
-        McLayer {
-            thickness_mm: 2.0,
-            sigma_a_per_mm: 0.1,
-            sigma_s_per_mm: 2.0,
-            ior: 1.5,
-        },
+        McLayer { thickness_mm: 0.25, sigma_a_per_mm: 1.0, sigma_s_per_mm: 6.0, ior: 1.4 },
+        McLayer { thickness_mm: 0.5, sigma_a_per_mm: 0.2, sigma_s_per_mm: 3.0, ior: 1.33 },
+        McLayer { thickness_mm: 2.0, sigma_a_per_mm: 0.1, sigma_s_per_mm: 2.0, ior: 1.5 },
     ];
     let cfg = McConfig::new(50_000, 31, log_edges(0.01, 5.0, 20, true));
     let a = simulate(&layers, &cfg);
     let b = simulate(&layers, &cfg);
     let total = a.reflectance + a.transmittance + a.absorbed + a.unfinished;
-    println!(
-        "three layers: R {:.5} T {:.5} A {:.5} sum {total}",
-        a.reflectance, a.transmittance, a.absorbed
-    );
+    println!("three layers: R {:.5} T {:.5} A {:.5} sum {total}", a.reflectance, a.transmittance, a.absorbed);
     assert!((total - 1.0).abs() < 1e-9, "energy balance {total}");
     let cdf = a.cumulative_reflectance_at_edges();
     assert!((cdf.last().unwrap() + a.reflectance_beyond_last_edge - a.reflectance).abs() < 1e-12);
@@ -419,10 +343,7 @@ fn log_slope(centres: &[f64], values: &[f64], lo: f64, hi: f64) -> f64 {
         .collect();
     assert!(pts.len() >= 3, "too few bins for a slope");
     let n = pts.len() as f64;
-    let (mx, my) = (
-        pts.iter().map(|p| p.0).sum::<f64>() / n,
-        pts.iter().map(|p| p.1).sum::<f64>() / n,
-    );
+    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
     sxy / sxx
@@ -462,29 +383,13 @@ fn compare(name: &str, layers: &[Layer], photons: u64, seed: u64, mfp_mm: f64, l
     let start = std::time::Instant::now();
     let (r_diffusion, profile) = layered_reflectance(layers, &radii).expect("diffusion solver");
     let diffusion_seconds = start.elapsed().as_secs_f64();
-    assert!(
-        r_diffusion.is_finite() && profile.iter().all(|v| v.is_finite()),
-        "{name}: non-finite diffusion output"
-    );
+    assert!(r_diffusion.is_finite() && profile.iter().all(|v| v.is_finite()), "{name}: non-finite diffusion output");
     let bin_weight: Vec<f64> = (0..nbins)
-        .map(|k| {
-            (0..NODES_PER_BIN)
-                .map(|j| profile[k * NODES_PER_BIN + j] * area_weights[k * NODES_PER_BIN + j])
-                .sum()
-        })
+        .map(|k| (0..NODES_PER_BIN).map(|j| profile[k * NODES_PER_BIN + j] * area_weights[k * NODES_PER_BIN + j]).sum())
         .collect();
-    let diff_bins: Vec<f64> = (0..nbins)
-        .map(|k| bin_weight[k] / annulus_area(edges[k], edges[k + 1]))
-        .collect();
-    let centres: Vec<f64> = (0..nbins)
-        .map(|k| {
-            if k == 0 {
-                0.5 * edges[1]
-            } else {
-                (edges[k] * edges[k + 1]).sqrt()
-            }
-        })
-        .collect();
+    let diff_bins: Vec<f64> = (0..nbins).map(|k| bin_weight[k] / annulus_area(edges[k], edges[k + 1])).collect();
+    let centres: Vec<f64> =
+        (0..nbins).map(|k| if k == 0 { 0.5 * edges[1] } else { (edges[k] * edges[k + 1]).sqrt() }).collect();
     if std::env::var("MC_DUMP").is_ok() {
         for k in 0..nbins {
             println!(
@@ -510,12 +415,7 @@ fn compare(name: &str, layers: &[Layer], photons: u64, seed: u64, mfp_mm: f64, l
             continue;
         }
         let mc_bin = mc.profile_per_mm2[k];
-        assert!(
-            mc_bin > 0.0,
-            "{name}: empty MC bin at {}..{} mm",
-            edges[k],
-            edges[k + 1]
-        );
+        assert!(mc_bin > 0.0, "{name}: empty MC bin at {}..{} mm", edges[k], edges[k + 1]);
         let rel = (diff_bins[k] - mc_bin) / mc_bin;
         sq += rel * rel;
         se_sq += (mc.profile_se_per_mm2[k] / mc_bin).powi(2);
@@ -529,20 +429,12 @@ fn compare(name: &str, layers: &[Layer], photons: u64, seed: u64, mfp_mm: f64, l
     let profile_mc_rel_se = (se_sq / count as f64).sqrt();
 
     // Normalised radial CDFs at the edges.
-    let mc_cdf: Vec<f64> = mc
-        .cumulative_reflectance_at_edges()
-        .iter()
-        .map(|c| c / mc.reflectance)
-        .collect();
+    let mc_cdf: Vec<f64> = mc.cumulative_reflectance_at_edges().iter().map(|c| c / mc.reflectance).collect();
     let mut diff_cdf = vec![0.0];
     for k in 0..nbins {
         diff_cdf.push(diff_cdf[k] + bin_weight[k] / r_diffusion);
     }
-    let cdf_max = diff_cdf
-        .iter()
-        .zip(&mc_cdf)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    let cdf_max = diff_cdf.iter().zip(&mc_cdf).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     let profile_integral_ratio = diff_cdf[nbins];
     let r50 = (radius_at(&edges, &diff_cdf, 0.5), radius_at(&edges, &mc_cdf, 0.5));
     let r90 = (radius_at(&edges, &diff_cdf, 0.9), radius_at(&edges, &mc_cdf, 0.9));
@@ -604,10 +496,7 @@ fn assert_high_albedo_agreement(c: &Comparison) {
     // A(1.4) moves the dipole total by ~+35 %, the symmetric combination by ~+18 %.
     assert!(c.rel_total.abs() < 0.08, "total diffuse reflectance: {c:?}");
     // The diffusion profile must integrate to its own total.
-    assert!(
-        (c.profile_integral_ratio - 1.0).abs() < 0.02,
-        "profile integral vs total: {c:?}"
-    );
+    assert!((c.profile_integral_ratio - 1.0).abs() < 0.02, "profile integral vs total: {c:?}");
     // Shape: measured rms ~36-38 %, CDF difference ~0.12, r50 within ~10 %, r90 within ~5 %.
     assert!(c.profile_rms < 0.5, "profile rms: {c:?}");
     assert!(c.cdf_max < 0.18, "radial CDF: {c:?}");
@@ -622,15 +511,7 @@ fn assert_high_albedo_agreement(c: &Comparison) {
 #[test]
 fn diffusion_vs_mc_caucasian_dermis_550_semi_infinite() {
     let [_, dermis] = skin_layers(&SkinParams::preset("caucasian").unwrap(), &SkinModel::default(), 550.0);
-    let c = compare(
-        "caucasian dermis 550 nm",
-        &[dermis],
-        1_000_000,
-        101,
-        transport_mfp_mm(&dermis),
-        0.3,
-        5.0,
-    );
+    let c = compare("caucasian dermis 550 nm", &[dermis], 1_000_000, 101, transport_mfp_mm(&dermis), 0.3, 5.0);
     assert_high_albedo_agreement(&c);
 }
 
@@ -639,15 +520,7 @@ fn diffusion_vs_mc_caucasian_dermis_550_semi_infinite() {
 #[test]
 fn diffusion_vs_mc_caucasian_two_layer_550() {
     let layers = skin_layers(&SkinParams::preset("caucasian").unwrap(), &SkinModel::default(), 550.0);
-    let c = compare(
-        "caucasian two-layer 550 nm",
-        &layers,
-        1_000_000,
-        102,
-        transport_mfp_mm(&layers[1]),
-        0.3,
-        5.0,
-    );
+    let c = compare("caucasian two-layer 550 nm", &layers, 1_000_000, 102, transport_mfp_mm(&layers[1]), 0.3, 5.0);
     assert_high_albedo_agreement(&c);
 }
 
@@ -663,19 +536,8 @@ fn diffusion_vs_mc_african_two_layer_450_low_albedo() {
         epi.sigma_s_reduced_per_mm / (epi.sigma_a_per_mm + epi.sigma_s_reduced_per_mm),
         transport_mfp_mm(&epi)
     );
-    let c = compare(
-        "african two-layer 450 nm",
-        &layers,
-        1_000_000,
-        103,
-        transport_mfp_mm(&epi),
-        0.3,
-        5.0,
-    );
+    let c = compare("african two-layer 450 nm", &layers, 1_000_000, 103, transport_mfp_mm(&epi), 0.3, 5.0);
     assert!(c.r_diffusion > 0.0 && c.r_mc > 0.0);
     assert!(c.rel_total.abs() < 1.0, "total: {c:?}");
-    assert!(
-        (c.profile_integral_ratio - 1.0).abs() < 0.02,
-        "profile integral vs total: {c:?}"
-    );
+    assert!((c.profile_integral_ratio - 1.0).abs() < 0.02, "profile integral vs total: {c:?}");
 }

@@ -4,7 +4,10 @@ use proptest::prelude::*;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
 fn albedo(p: SkinParams) -> [f64; 3] {
-    evaluate(&p, &Request::new(Outputs { albedo: true, ..Outputs::default() })).unwrap().diffuse_reflectance_rgb.unwrap()
+    evaluate(&p, &Request::new(Outputs { albedo: true, ..Outputs::default() }))
+        .unwrap()
+        .diffuse_reflectance_rgb
+        .unwrap()
 }
 
 /// More melanin darkens every channel, and blue most (melanin absorbs most at short wavelengths).
@@ -79,8 +82,13 @@ fn rgb_profile_integrates_to_albedo() {
             // Trapezoid in ln r of 2 pi r^2 R(r), plus the disc inside r_min.
             let g: Vec<f64> = r.iter().zip(&rgb).map(|(r, v)| 2.0 * std::f64::consts::PI * r * r * v[c]).collect();
             let inner = std::f64::consts::PI * r[0] * r[0] * rgb[0][c];
-            let integral: f64 = inner + (1..r.len()).map(|i| 0.5 * (g[i] + g[i - 1]) * (r[i] / r[i - 1]).ln()).sum::<f64>();
-            assert!(((integral - a[c]) / a[c]).abs() < 2e-3, "{preset} channel {c}: integral {integral} albedo {}", a[c]);
+            let integral: f64 =
+                inner + (1..r.len()).map(|i| 0.5 * (g[i] + g[i - 1]) * (r[i] / r[i - 1]).ln()).sum::<f64>();
+            assert!(
+                ((integral - a[c]) / a[c]).abs() < 2e-3,
+                "{preset} channel {c}: integral {integral} albedo {}",
+                a[c]
+            );
         }
     }
 }

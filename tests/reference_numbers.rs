@@ -35,18 +35,20 @@ fn spectral_totals_match_section_11_2() {
 /// model.md 11.3: linear sRGB of R12 at 2 nm (printed to 3 decimals).
 #[test]
 fn preset_colours_match_section_11_3() {
-    let table = [
-        ("caucasian", [0.498, 0.395, 0.353]),
-        ("asian", [0.154, 0.095, 0.060]),
-        ("african", [0.032, 0.023, 0.017]),
-    ];
+    let table =
+        [("caucasian", [0.498, 0.395, 0.353]), ("asian", [0.154, 0.095, 0.060]), ("african", [0.032, 0.023, 0.017])];
     let mut request = Request::new(Outputs { albedo: true, ..Outputs::default() });
     request.accuracy.wavelength_step_nm = 2.0;
     for (preset, expected) in table {
         let ev = evaluate(&SkinParams::preset(preset).unwrap(), &request).unwrap();
         let rgb = ev.diffuse_reflectance_rgb.unwrap();
         for c in 0..3 {
-            assert!((rgb[c] - expected[c]).abs() <= 0.0015, "{preset} channel {c}: got {:.4}, spec {}", rgb[c], expected[c]);
+            assert!(
+                (rgb[c] - expected[c]).abs() <= 0.0015,
+                "{preset} channel {c}: got {:.4}, spec {}",
+                rgb[c],
+                expected[c]
+            );
         }
     }
 }
@@ -118,8 +120,9 @@ fn profile_matches_brute_force_quadrature() {
         let (_, ours) = layered_reflectance(&layers, &radii).unwrap();
         let (ds, s_max) = (2e-3, 2500.0);
         let n = (s_max / ds) as usize;
-        let transform: Vec<f64> =
-            (0..=n).map(|k| stack.reflectance_hat(k as f64 * ds, Combination::Directional, MultipoleTerms::All)).collect();
+        let transform: Vec<f64> = (0..=n)
+            .map(|k| stack.reflectance_hat(k as f64 * ds, Combination::Directional, MultipoleTerms::All))
+            .collect();
         let peak = ours[0];
         for (r, got) in radii.iter().zip(&ours) {
             let brute: f64 = (0..=n)
@@ -132,7 +135,10 @@ fn profile_matches_brute_force_quadrature() {
                 / (2.0 * std::f64::consts::PI);
             // The brute-force sum itself rings at about 1e-9 of the peak in the tail.
             let tolerance = 2e-3 * brute.abs() + 2e-9 * peak;
-            assert!((got - brute).abs() <= tolerance, "{preset} {w} nm r = {r}: ours {got:.5e}, brute force {brute:.5e}");
+            assert!(
+                (got - brute).abs() <= tolerance,
+                "{preset} {w} nm r = {r}: ours {got:.5e}, brute force {brute:.5e}"
+            );
         }
     }
 }

@@ -5,8 +5,7 @@
 use std::f64::consts::PI;
 
 use spectral_skin::diffusion::{
-    layered_reflectance, reflectance_profiles, Combination, HankelQuadrature, Layer, LayerStack,
-    MultipoleTerms,
+    layered_reflectance, reflectance_profiles, Combination, HankelQuadrature, Layer, LayerStack, MultipoleTerms,
 };
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::fit::SubsurfaceMethod;
@@ -15,12 +14,7 @@ use spectral_skin::{Outputs, Request, SkinParams};
 const INF: f64 = f64::INFINITY;
 
 fn layer(thickness_mm: f64, sigma_a_per_mm: f64, sigma_s_reduced_per_mm: f64, ior: f64) -> Layer {
-    Layer {
-        thickness_mm,
-        sigma_a_per_mm,
-        sigma_s_reduced_per_mm,
-        ior,
-    }
+    Layer { thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior }
 }
 
 /// Gauss-Legendre nodes and weights on [-1, 1] (Golub-Welsch would do; Newton on P_n is enough here).
@@ -86,47 +80,22 @@ fn profile_value_does_not_depend_on_the_other_radii() {
     assert!(with_far[2].abs() < 1e-12, "R(1 km) = {}", with_far[2]);
 
     // The Caucasian preset at 6.3 mm, with the profile grid ending at 10 mm or at 1e4 mm.
-    let request = Request::new(Outputs {
-        profile_rgb: true,
-        ..Outputs::default()
-    });
-    let stacks = Prepared::new(&request)
-        .unwrap()
-        .stacks(&SkinParams::preset("caucasian").unwrap())
-        .unwrap();
+    let request = Request::new(Outputs { profile_rgb: true, ..Outputs::default() });
+    let stacks = Prepared::new(&request).unwrap().stacks(&SkinParams::preset("caucasian").unwrap()).unwrap();
     let q = HankelQuadrature::default();
-    let near = reflectance_profiles(
-        &stacks,
-        &[6.3, 10.0],
-        Combination::Directional,
-        MultipoleTerms::All,
-        &q,
-    );
-    let far = reflectance_profiles(
-        &stacks,
-        &[6.3, 1e4],
-        Combination::Directional,
-        MultipoleTerms::All,
-        &q,
-    );
+    let near = reflectance_profiles(&stacks, &[6.3, 10.0], Combination::Directional, MultipoleTerms::All, &q);
+    let far = reflectance_profiles(&stacks, &[6.3, 1e4], Combination::Directional, MultipoleTerms::All, &q);
     for (k, stack) in stacks.iter().enumerate().step_by(8) {
         let reference = brute_force_profile(stack, 6.3);
         let peak = stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
         for value in [near[k][0], far[k][0]] {
-            assert!(
-                (value - reference).abs() < 1e-3 * reference + 1e-10 * peak,
-                "stack {k}: {value} vs {reference}"
-            );
+            assert!((value - reference).abs() < 1e-3 * reference + 1e-10 * peak, "stack {k}: {value} vs {reference}");
         }
     }
 }
 
 fn total(layers: &[Layer]) -> f64 {
-    LayerStack::new(layers).unwrap().reflectance_hat(
-        0.0,
-        Combination::Directional,
-        MultipoleTerms::All,
-    )
+    LayerStack::new(layers).unwrap().reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All)
 }
 
 /// Issue 10, class 3: a vanishing layer vanishes (continuously: thickness -> 0 gives the stack without it), for a top,
@@ -149,12 +118,7 @@ fn vanishing_layer_vanishes() {
     // A vanishing finite last layer leaves the layer above resting on its own index.
     let finite = [layer(0.5, 0.1, 4.0, 1.4)];
     let with_last = [layer(0.5, 0.1, 4.0, 1.4), layer(1e-10, 0.1, 4.0, 1.8)];
-    assert!(
-        (total(&with_last) - total(&finite)).abs() < 3e-5,
-        "{} vs {}",
-        total(&with_last),
-        total(&finite)
-    );
+    assert!((total(&with_last) - total(&finite)).abs() < 3e-5, "{} vs {}", total(&with_last), total(&finite));
 }
 
 /// Issue 10, class 3: splitting a layer into two identical pieces. Pieces of three reduced mean free paths or more agree
@@ -167,16 +131,10 @@ fn splitting_a_layer_agrees() {
         let mfp = 1.0 / (sa + ss);
         for pieces in [3.0, 10.0, 30.0] {
             let split = total(&[layer(pieces * mfp, sa, ss, n), layer(INF, sa, ss, n)]);
-            assert!(
-                ((split - whole) / whole).abs() < 0.015,
-                "{sa} {ss} {n} at {pieces} mfp: {split} vs {whole}"
-            );
+            assert!(((split - whole) / whole).abs() < 0.015, "{sa} {ss} {n} at {pieces} mfp: {split} vs {whole}");
         }
         let thin = total(&[layer(1e-6 * mfp, sa, ss, n), layer(INF, sa, ss, n)]);
-        assert!(
-            ((thin - whole) / whole).abs() < 1e-5,
-            "{sa} {ss} {n}: {thin} vs {whole}"
-        );
+        assert!(((thin - whole) / whole).abs() < 1e-5, "{sa} {ss} {n}: {thin} vs {whole}");
     }
 }
 
@@ -185,20 +143,12 @@ fn splitting_a_layer_agrees() {
 #[test]
 fn ior_outside_the_fits_range_is_a_clear_error() {
     for n in [0.9, 2.01, 2.94, 3.85, 3.9, f64::NAN] {
-        let e = layered_reflectance(&[layer(INF, 0.1, 1.0, n)], &[1.0])
-            .unwrap_err()
-            .to_string();
+        let e = layered_reflectance(&[layer(INF, 0.1, 1.0, n)], &[1.0]).unwrap_err().to_string();
         assert!(e.contains("ior") && e.contains("[1, 2]"), "{n}: {e}");
     }
-    for layers in [
-        vec![layer(INF, 0.1, 1.0, 2.0)],
-        vec![layer(0.3, 0.1, 1.0, 2.0), layer(INF, 0.1, 1.0, 1.0)],
-    ] {
+    for layers in [vec![layer(INF, 0.1, 1.0, 2.0)], vec![layer(0.3, 0.1, 1.0, 2.0), layer(INF, 0.1, 1.0, 1.0)]] {
         let (r, profile) = layered_reflectance(&layers, &[0.0, 1.0]).unwrap();
-        assert!(
-            r.is_finite() && (0.0..=1.0).contains(&r) && profile.iter().all(|p| p.is_finite()),
-            "{r} {profile:?}"
-        );
+        assert!(r.is_finite() && (0.0..=1.0).contains(&r) && profile.iter().all(|p| p.is_finite()), "{r} {profile:?}");
     }
 }
 
@@ -216,9 +166,7 @@ fn extreme_magnitudes_are_clear_errors() {
         let e = layered_reflectance(&[l], &[1.0]).unwrap_err().to_string();
         assert!(e.contains(field) && e.contains("layer 0"), "{l:?}: {e}");
     }
-    let e = layered_reflectance(&[layer(INF, 0.1, 1.0, 1.4)], &[1.0, 1e7])
-        .unwrap_err()
-        .to_string();
+    let e = layered_reflectance(&[layer(INF, 0.1, 1.0, 1.4)], &[1.0, 1e7]).unwrap_err().to_string();
     assert!(e.contains("radii_mm[1]"), "{e}");
     // The edges of the accepted ranges give finite values.
     for l in [
@@ -229,9 +177,7 @@ fn extreme_magnitudes_are_clear_errors() {
     ] {
         let (r, profile) = layered_reflectance(&[l], &[0.0, 1e-6, 1.0, 1e4]).unwrap();
         assert!(
-            r.is_finite()
-                && (0.0..=1.0).contains(&r)
-                && profile.iter().all(|p| p.is_finite() && *p >= 0.0),
+            r.is_finite() && (0.0..=1.0).contains(&r) && profile.iter().all(|p| p.is_finite() && *p >= 0.0),
             "{l:?}: {r} {profile:?}"
         );
     }
@@ -243,34 +189,19 @@ fn extreme_magnitudes_are_clear_errors() {
 fn corrupted_table_cache_is_rebuilt() {
     use spectral_skin::maps::lut::{MaterialTable, TableResolution};
     use spectral_skin::Accuracy;
-    let mut request = Request::new(Outputs {
-        albedo: true,
-        radius: true,
-        ..Outputs::default()
-    });
+    let mut request = Request::new(Outputs { albedo: true, radius: true, ..Outputs::default() });
     request.accuracy = Accuracy::draft();
     let prepared = Prepared::new(&request).unwrap();
-    let resolution = TableResolution {
-        melanin: 2,
-        melanin_blend: 2,
-        hemoglobin: 2,
-    };
+    let resolution = TableResolution { melanin: 2, melanin_blend: 2, hemoglobin: 2 };
     let dir = tempfile::tempdir().unwrap();
     let (fresh, cached) =
         MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path())).unwrap();
     assert!(!cached);
     assert!(
-        MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path()))
-            .unwrap()
-            .1,
+        MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path())).unwrap().1,
         "second load from the cache"
     );
-    let file = std::fs::read_dir(dir.path())
-        .unwrap()
-        .next()
-        .unwrap()
-        .unwrap()
-        .path();
+    let file = std::fs::read_dir(dir.path()).unwrap().next().unwrap().unwrap().path();
     let good = std::fs::read(&file).unwrap();
     let probe = |t: &MaterialTable| t.lookup(0.2, 0.5, 0.03);
     // The last node value, one in the middle, and a byte of the checksum (after the 23-byte magic line).
@@ -282,11 +213,7 @@ fn corrupted_table_cache_is_rebuilt() {
             MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path())).unwrap();
         assert!(!cached, "byte {at} flipped: the corrupted cache was used");
         assert_eq!(probe(&rebuilt), probe(&fresh));
-        assert_eq!(
-            std::fs::read(&file).unwrap(),
-            good,
-            "the cache file is rewritten"
-        );
+        assert_eq!(std::fs::read(&file).unwrap(), good, "the cache file is rewritten");
     }
 }
 
@@ -298,22 +225,10 @@ fn sizes_are_bounded_before_allocation() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.exr");
     for size in [0, 99_999_999, 4_294_967_296] {
-        let e = write_example_params(&out, ExampleKind::Face, size)
-            .unwrap_err()
-            .to_string();
+        let e = write_example_params(&out, ExampleKind::Face, size).unwrap_err().to_string();
         assert!(e.contains("size") && e.contains("8192"), "{size}: {e}");
         assert!(!out.exists());
     }
-    let e = TableResolution {
-        melanin: 400,
-        melanin_blend: 400,
-        hemoglobin: 400,
-    }
-    .validate()
-    .unwrap_err()
-    .to_string();
-    assert!(
-        e.contains("table resolution") && e.contains("1000000"),
-        "{e}"
-    );
+    let e = TableResolution { melanin: 400, melanin_blend: 400, hemoglobin: 400 }.validate().unwrap_err().to_string();
+    assert!(e.contains("table resolution") && e.contains("1000000"), "{e}");
 }

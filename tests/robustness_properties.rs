@@ -8,8 +8,8 @@ use std::f64::consts::PI;
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use spectral_skin::diffusion::{
-    layered_reflectance, raw_reflectance_profiles, Combination, HankelQuadrature, Layer,
-    LayerStack, MultipoleTerms, IOR_RANGE,
+    layered_reflectance, raw_reflectance_profiles, Combination, HankelQuadrature, Layer, LayerStack, MultipoleTerms,
+    IOR_RANGE,
 };
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
@@ -21,20 +21,14 @@ fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
 
 /// One layer of the domain: coefficients 1e-8..1e5 per mm, thickness 1e-6..1e3 mm, ior in the accepted range.
 fn any_layer() -> impl Strategy<Value = Layer> {
-    (
-        log_uniform(1e-6, 1e3),
-        log_uniform(1e-8, 1e5),
-        log_uniform(1e-8, 1e5),
-        IOR_RANGE.0..=IOR_RANGE.1,
+    (log_uniform(1e-6, 1e3), log_uniform(1e-8, 1e5), log_uniform(1e-8, 1e5), IOR_RANGE.0..=IOR_RANGE.1).prop_map(
+        |(thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior)| Layer {
+            thickness_mm,
+            sigma_a_per_mm,
+            sigma_s_reduced_per_mm,
+            ior,
+        },
     )
-        .prop_map(
-            |(thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior)| Layer {
-                thickness_mm,
-                sigma_a_per_mm,
-                sigma_s_reduced_per_mm,
-                ior,
-            },
-        )
 }
 
 /// 1-4 layers; the last one semi-infinite half of the time.
@@ -53,11 +47,7 @@ fn tau(l: &Layer) -> f64 {
 }
 
 fn total(layers: &[Layer]) -> f64 {
-    LayerStack::new(layers).unwrap().reflectance_hat(
-        0.0,
-        Combination::Directional,
-        MultipoleTerms::All,
-    )
+    LayerStack::new(layers).unwrap().reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All)
 }
 
 fn radii() -> impl Strategy<Value = Vec<f64>> {

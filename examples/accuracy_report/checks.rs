@@ -37,7 +37,11 @@ pub fn convergence(refs: &[PresetReference]) -> Convergence {
         let p = evaluate(&r.params, &request(finer, Task::Profile)).expect("finer profile");
         c.albedo_rel = c.albedo_rel.max(max_relative(m.diffuse_reflectance_rgb.unwrap(), r.albedo));
         c.radius_rel = c.radius_rel.max(max_relative(m.methods.unwrap().burley.subsurface_radius_mm, r.radius_mm));
-        c.profile_log = c.profile_log.max(profile_log_error(&PROFILE_GRID.radii_mm(), p.profile.unwrap().rgb_per_mm2.as_ref().unwrap(), &r.profile));
+        c.profile_log = c.profile_log.max(profile_log_error(
+            &PROFILE_GRID.radii_mm(),
+            p.profile.unwrap().rgb_per_mm2.as_ref().unwrap(),
+            &r.profile,
+        ));
     }
     c
 }
@@ -63,11 +67,20 @@ pub fn diffusion_vs_monte_carlo(refs: &[PresetReference], photons: u64) -> Vec<M
     for (k, r) in refs.iter().enumerate() {
         for (j, &wavelength_nm) in MC_WAVELENGTHS_NM.iter().enumerate() {
             let layers = skin_layers(&r.params, &SkinModel::default(), wavelength_nm);
-            let diffusion = LayerStack::new(&layers).expect("layers").reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
+            let diffusion = LayerStack::new(&layers).expect("layers").reflectance_hat(
+                0.0,
+                Combination::Directional,
+                MultipoleTerms::All,
+            );
             // Isotropic scattering with sigma_s = sigma_s' (the similarity relation the diffusion model assumes).
             let mc_layers: Vec<mc::McLayer> = layers
                 .iter()
-                .map(|l| mc::McLayer { thickness_mm: l.thickness_mm, sigma_a_per_mm: l.sigma_a_per_mm, sigma_s_per_mm: l.sigma_s_reduced_per_mm, ior: l.ior })
+                .map(|l| mc::McLayer {
+                    thickness_mm: l.thickness_mm,
+                    sigma_a_per_mm: l.sigma_a_per_mm,
+                    sigma_s_per_mm: l.sigma_s_reduced_per_mm,
+                    ior: l.ior,
+                })
                 .collect();
             let start = std::time::Instant::now();
             let result = mc::simulate(&mc_layers, &mc::McConfig::new(photons, 1000 + 10 * k as u64 + j as u64, vec![]));

@@ -73,17 +73,23 @@ fn run(args: &Args) -> Result<bool, Box<dyn std::error::Error>> {
     let wanted = |key: &str| args.only.is_empty() || args.only.iter().any(|k| k == key);
     let refs = reference::references();
     step("references", start);
-    let convergence = if args.only.is_empty() { checks::convergence(&refs) } else { checks::Convergence::not_measured() };
+    let convergence =
+        if args.only.is_empty() { checks::convergence(&refs) } else { checks::Convergence::not_measured() };
     step("convergence check", start);
     let default_rows: Vec<markdown::PresetErrors> = refs
         .iter()
         .map(|r| {
             let m = errors_of(&evaluate(&r.params, &request(Accuracy::default(), Task::Material)).expect("default"), r);
-            let p = errors_of(&evaluate(&r.params, &request(Accuracy::default(), Task::Profile)).expect("default profile"), r);
+            let p = errors_of(
+                &evaluate(&r.params, &request(Accuracy::default(), Task::Profile)).expect("default profile"),
+                r,
+            );
             markdown::PresetErrors { preset: r.name, material: m, profile_log: p["profile_log"] }
         })
         .collect();
-    let accepted = default_rows.iter().all(|d| d.material["albedo_rel"] < DEFAULT_ALBEDO_BOUND && d.material["radius_rel"] < DEFAULT_RADIUS_BOUND);
+    let accepted = default_rows
+        .iter()
+        .all(|d| d.material["albedo_rel"] < DEFAULT_ALBEDO_BOUND && d.material["radius_rel"] < DEFAULT_RADIUS_BOUND);
     let monte_carlo = if args.only.is_empty() { checks::diffusion_vs_monte_carlo(&refs, photons) } else { Vec::new() };
     step("diffusion vs Monte Carlo", start);
 

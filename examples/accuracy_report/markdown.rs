@@ -109,9 +109,14 @@ fn fmt_metric(key: &str, v: f64) -> String {
 
 /// A markdown table of rows, with the Pareto-front rows (on `metric`) starred and the default in bold.
 fn table(rows: &[Row], metric: &str) -> String {
-    let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.time_s, r.metrics.get(metric).copied().unwrap_or(f64::NAN))).collect();
+    let points: Vec<(f64, f64)> =
+        rows.iter().map(|r| (r.time_s, r.metrics.get(metric).copied().unwrap_or(f64::NAN))).collect();
     let front = pareto_front(&points);
-    let keys: Vec<(&str, &str)> = COLUMNS.iter().cloned().filter(|(k, _)| *k == "time_s" || rows.iter().any(|r| r.metrics.contains_key(k))).collect();
+    let keys: Vec<(&str, &str)> = COLUMNS
+        .iter()
+        .cloned()
+        .filter(|(k, _)| *k == "time_s" || rows.iter().any(|r| r.metrics.contains_key(k)))
+        .collect();
     let mut out = String::from("| setting | ");
     for (_, h) in &keys {
         let _ = write!(out, "{h} | ");
@@ -158,7 +163,8 @@ fn plot_rows(title: &str, rows: &[Row], metric: &str, x_label: &str) -> Plot {
             None => series.push(Series { name: r.series.clone(), points: vec![(r.time_s, y, r.label.clone())] }),
         }
     }
-    let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.time_s, r.metrics.get(metric).copied().unwrap_or(f64::NAN).max(1e-12))).collect();
+    let points: Vec<(f64, f64)> =
+        rows.iter().map(|r| (r.time_s, r.metrics.get(metric).copied().unwrap_or(f64::NAN).max(1e-12))).collect();
     let front = pareto_front(&points).into_iter().map(|i| points[i]).collect();
     let default = rows.iter().position(|r| r.is_default).map(|i| points[i]);
     Plot {
@@ -221,7 +227,11 @@ pub fn write(out_dir: &Path, report: &Report) -> Result<(), Box<dyn std::error::
         (r.seconds / 60.0).ceil().max(1.0)
     );
     if r.quick {
-        let _ = writeln!(md, "> **Reduced run (`--quick`)**: few settings, {0}² maps, few photons. Not the published figures.\n", r.map_size);
+        let _ = writeln!(
+            md,
+            "> **Reduced run (`--quick`)**: few settings, {0}² maps, few photons. Not the published figures.\n",
+            r.map_size
+        );
     }
     let _ = writeln!(
         md,
@@ -361,7 +371,9 @@ fn write_equal_accuracy(md: &mut String, sweep: &Sweep) {
             ratio
         );
     }
-    if let Some(best) = pairs.iter().min_by(|a, b| a.0.metrics["quadrature_log"].total_cmp(&b.0.metrics["quadrature_log"])) {
+    if let Some(best) =
+        pairs.iter().min_by(|a, b| a.0.metrics["quadrature_log"].total_cmp(&b.0.metrics["quadrature_log"]))
+    {
         let ratios: Vec<f64> = pairs.iter().map(|p| p.2).collect();
         let (lo, hi) = ratios.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
         let default_time = sweep.rows.iter().find(|h| h.is_default).map(|h| h.time_s);
@@ -387,11 +399,16 @@ fn write_equal_accuracy(md: &mut String, sweep: &Sweep) {
 fn write_cycles(md: &mut String, r: &Report, out_dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
     let _ = writeln!(md, "## Cycles render samples\n\n{}\n", include_str!("text/cycles.md"));
     let Some(data) = &r.cycles else {
-        let _ = writeln!(md, "*Not measured in this run: `scripts/cycles_samples.py` writes `docs/data/cycles_samples.json`.*\n");
+        let _ = writeln!(
+            md,
+            "*Not measured in this run: `scripts/cycles_samples.py` writes `docs/data/cycles_samples.json`.*\n"
+        );
         return Ok(());
     };
     let cases = data["cases"].as_array().cloned().unwrap_or_default();
-    let worst = |v: &Value| v.as_array().map(|a| a.iter().filter_map(|x| x.as_f64()).map(f64::abs).fold(0.0, f64::max)).unwrap_or(f64::NAN);
+    let worst = |v: &Value| {
+        v.as_array().map(|a| a.iter().filter_map(|x| x.as_f64()).map(f64::abs).fold(0.0, f64::max)).unwrap_or(f64::NAN)
+    };
     let mut rows: Vec<Row> = Vec::new();
     for case in &cases {
         let mut metrics = BTreeMap::new();
@@ -406,8 +423,12 @@ fn write_cycles(md: &mut String, r: &Report, out_dir: &Path) -> Result<(), Box<d
             accuracy: None,
         });
     }
-    let px = data["image_px"].as_array().map(|a| a.iter().filter_map(|v| v.as_u64()).map(|v| v.to_string()).collect::<Vec<_>>().join("×")).unwrap_or_default();
-    let plot = plot_rows("Cycles: pixel error against render time", &rows, "pixel_rms", &format!("render time ({px} px), s"));
+    let px = data["image_px"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|v| v.as_u64()).map(|v| v.to_string()).collect::<Vec<_>>().join("×"))
+        .unwrap_or_default();
+    let plot =
+        plot_rows("Cycles: pixel error against render time", &rows, "pixel_rms", &format!("render time ({px} px), s"));
     write_plot(&out_dir.join("images").join("accuracy").join("cycles_samples.png"), &plot)?;
     let _ = writeln!(
         md,

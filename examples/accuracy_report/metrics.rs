@@ -23,7 +23,11 @@ fn rec709_to_lab(rgb: [f64; 3]) -> Lab<D65, f64> {
     let white = rec709_to_xyz([1.0; 3]);
     let f = |t: f64| {
         const E: f64 = 216.0 / 24389.0; // (6/29)^3
-        if t > E { t.cbrt() } else { (24389.0 / 27.0 * t + 16.0) / 116.0 }
+        if t > E {
+            t.cbrt()
+        } else {
+            (24389.0 / 27.0 * t + 16.0) / 116.0
+        }
     };
     let [fx, fy, fz] = [0, 1, 2].map(|c| f(xyz[c] / white[c]));
     Lab::new(116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz))
@@ -91,7 +95,9 @@ fn dominates(b: (f64, f64), a: (f64, f64)) -> bool {
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     let ok = |p: (f64, f64)| p.0.is_finite() && p.1.is_finite();
     let mut front: Vec<usize> = (0..points.len())
-        .filter(|&i| ok(points[i]) && !(0..points.len()).any(|j| j != i && ok(points[j]) && dominates(points[j], points[i])))
+        .filter(|&i| {
+            ok(points[i]) && !(0..points.len()).any(|j| j != i && ok(points[j]) && dominates(points[j], points[i]))
+        })
         .collect();
     front.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0));
     front

@@ -24,8 +24,14 @@ pub struct Plot {
 }
 
 const SIZE: (u32, u32) = (900, 560);
-const COLORS: [RGBColor; 6] =
-    [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(148, 103, 189), RGBColor(140, 86, 75), RGBColor(227, 119, 194)];
+const COLORS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+];
 
 /// Register the bundled font once (no system font libraries needed).
 pub fn init_fonts() {
@@ -34,7 +40,8 @@ pub fn init_fonts() {
 }
 
 fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
-    let (lo, hi) = values.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) =
+        values.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     if !lo.is_finite() {
         return 1e-3..1.0;
     }
@@ -68,7 +75,10 @@ pub fn render_png(plot: &Plot) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
             .draw()?;
         if plot.front.len() > 1 {
             chart
-                .draw_series(LineSeries::new(plot.front.iter().cloned(), ShapeStyle::from(&BLACK.mix(0.35)).stroke_width(6)))?
+                .draw_series(LineSeries::new(
+                    plot.front.iter().cloned(),
+                    ShapeStyle::from(&BLACK.mix(0.35)).stroke_width(6),
+                ))?
                 .label("Pareto front")
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.mix(0.35).stroke_width(6)));
         }
@@ -81,7 +91,8 @@ pub fn render_png(plot: &Plot) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
                 .legend(move |(x, y)| Circle::new((x + 9, y), 4, color.filled()));
             chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
             chart.draw_series(s.points.iter().filter(|p| p.0 > 0.0 && p.1 > 0.0).map(|p| {
-                EmptyElement::at((p.0, p.1)) + Text::new(p.2.clone(), (6, -14), ("sans-serif", 12).into_font().color(&color.mix(0.9)))
+                EmptyElement::at((p.0, p.1))
+                    + Text::new(p.2.clone(), (6, -14), ("sans-serif", 12).into_font().color(&color.mix(0.9)))
             }))?;
         }
         if let Some(d) = plot.default {
@@ -93,7 +104,10 @@ pub fn render_png(plot: &Plot) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::LowerLeft)
-            .background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 13)).draw()?;
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .draw()?;
         root.present()?;
     }
     let image = image::RgbImage::from_raw(SIZE.0, SIZE.1, rgb).ok_or("plot buffer size")?;

@@ -74,9 +74,14 @@ impl PresetReference {
         let material = evaluate(&params, &request(reference, Task::Material)).expect("reference evaluation");
         let profile = evaluate(&params, &request(reference, Task::Profile)).expect("reference profile");
         let d = Accuracy::default();
-        let same_grid = Accuracy { wavelength_step_nm: d.wavelength_step_nm, wavelength_placement: d.wavelength_placement, ..reference };
+        let same_grid = Accuracy {
+            wavelength_step_nm: d.wavelength_step_nm,
+            wavelength_placement: d.wavelength_placement,
+            ..reference
+        };
         let quadrature = evaluate(&params, &request(same_grid, Task::Profile)).expect("reference quadrature profile");
-        let same_grid_material = evaluate(&params, &request(same_grid, Task::Material)).expect("reference on the default grid");
+        let same_grid_material =
+            evaluate(&params, &request(same_grid, Task::Material)).expect("reference on the default grid");
         let (s_per_mm, normalized) = transfer_function(&params, reference, material.diffuse_reflectance_rgb.unwrap());
         PresetReference {
             name,
@@ -101,7 +106,8 @@ fn transfer_function(params: &SkinParams, accuracy: Accuracy, albedo: [f64; 3]) 
     let rgb: Vec<[f64; 3]> = s
         .iter()
         .map(|&x| {
-            let spectrum: Vec<f64> = stacks.iter().map(|st| st.reflectance_hat(x, Combination::Directional, MultipoleTerms::All)).collect();
+            let spectrum: Vec<f64> =
+                stacks.iter().map(|st| st.reflectance_hat(x, Combination::Directional, MultipoleTerms::All)).collect();
             spectrum_to_rgb(&spectrum, prepared.rgb_weights())
         })
         .collect();
@@ -117,7 +123,8 @@ pub fn references() -> Vec<PresetReference> {
 pub fn errors_of(ev: &Evaluation, reference: &PresetReference) -> BTreeMap<&'static str, f64> {
     let mut m = BTreeMap::new();
     let d = Accuracy::default();
-    let default_grid = ev.accuracy.wavelength_step_nm == d.wavelength_step_nm && ev.accuracy.wavelength_placement == d.wavelength_placement;
+    let default_grid = ev.accuracy.wavelength_step_nm == d.wavelength_step_nm
+        && ev.accuracy.wavelength_placement == d.wavelength_placement;
     if let Some(albedo) = ev.diffuse_reflectance_rgb {
         m.insert("albedo_rel", max_relative(albedo, reference.albedo));
         m.insert("delta_e00", delta_e_2000(albedo, reference.albedo));
@@ -138,7 +145,10 @@ pub fn errors_of(ev: &Evaluation, reference: &PresetReference) -> BTreeMap<&'sta
     if let Some(profile) = ev.profile.as_ref().and_then(|p| p.rgb_per_mm2.as_ref()) {
         m.insert("profile_log", profile_log_error(&PROFILE_GRID.radii_mm(), profile, &reference.profile));
         if default_grid {
-            m.insert("quadrature_log", profile_log_error(&PROFILE_GRID.radii_mm(), profile, &reference.profile_default_wavelengths));
+            m.insert(
+                "quadrature_log",
+                profile_log_error(&PROFILE_GRID.radii_mm(), profile, &reference.profile_default_wavelengths),
+            );
         }
     }
     m
@@ -166,7 +176,12 @@ pub struct Budget {
 /// Measure `accuracy` for `task` over every preset: worst errors, and the median time of the caucasian evaluation on
 /// one thread (steadier than two, and what one table node or one texel costs): `Prepared::material` for a material,
 /// `evaluate` for a profile.
-pub fn measure(refs: &[PresetReference], accuracy: Accuracy, task: Task, budget: Budget) -> (f64, BTreeMap<&'static str, f64>) {
+pub fn measure(
+    refs: &[PresetReference],
+    accuracy: Accuracy,
+    task: Task,
+    budget: Budget,
+) -> (f64, BTreeMap<&'static str, f64>) {
     let req = request(accuracy, task);
     let metrics = worst(refs.iter().map(|r| errors_of(&evaluate(&r.params, &req).expect("evaluation"), r)));
     let timed = &refs[0].params;
@@ -186,7 +201,14 @@ pub fn measure(refs: &[PresetReference], accuracy: Accuracy, task: Task, budget:
 }
 
 /// A measured row.
-pub fn row(refs: &[PresetReference], series: &str, label: String, accuracy: Accuracy, task: Task, budget: Budget) -> Row {
+pub fn row(
+    refs: &[PresetReference],
+    series: &str,
+    label: String,
+    accuracy: Accuracy,
+    task: Task,
+    budget: Budget,
+) -> Row {
     let (time_s, metrics) = measure(refs, accuracy, task, budget);
     let is_default = accuracy == Accuracy::default();
     Row { series: series.to_string(), label, time_s, metrics, is_default, accuracy: Some(accuracy) }

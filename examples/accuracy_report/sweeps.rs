@@ -41,7 +41,11 @@ pub fn wavelengths(refs: &[PresetReference], s: &Settings) -> Sweep {
     let mut rows = Vec::new();
     for (series, placement, steps) in [
         ("uniform", WavelengthPlacement::Uniform, steps),
-        ("CMF-adapted", WavelengthPlacement::CmfAdapted, if s.quick { &[20.0][..] } else { &[5.0, 10.0, 20.0, 40.0][..] }),
+        (
+            "CMF-adapted",
+            WavelengthPlacement::CmfAdapted,
+            if s.quick { &[20.0][..] } else { &[5.0, 10.0, 20.0, 40.0][..] },
+        ),
         ("RGB shortcut", WavelengthPlacement::RgbShortcut, &[5.0][..]),
     ] {
         for &step in steps {
@@ -57,7 +61,13 @@ pub fn wavelengths(refs: &[PresetReference], s: &Settings) -> Sweep {
             rows.push(r);
         }
     }
-    Sweep { key: "wavelengths", title: "Wavelength sampling", timed: "albedo + radius", plot_metric: "albedo_rel", rows }
+    Sweep {
+        key: "wavelengths",
+        title: "Wavelength sampling",
+        timed: "albedo + radius",
+        plot_metric: "albedo_rel",
+        rows,
+    }
 }
 
 pub fn multipole(refs: &[PresetReference], s: &Settings) -> Sweep {
@@ -82,7 +92,14 @@ pub fn hankel(refs: &[PresetReference], s: &Settings) -> Sweep {
         for &gauss_order in orders {
             let hankel = HankelQuadrature { gauss_order, refinement, ..HankelQuadrature::default() };
             let acc = Accuracy { hankel, ..Accuracy::default() };
-            rows.push(row(refs, &format!("panels x{refinement}"), format!("{gauss_order}"), acc, Task::Profile, s.budget));
+            rows.push(row(
+                refs,
+                &format!("panels x{refinement}"),
+                format!("{gauss_order}"),
+                acc,
+                Task::Profile,
+                s.budget,
+            ));
         }
     }
     let cutoffs: &[f64] = if s.quick { &[1e-7] } else { &[1e-5, 1e-7, 1e-11, 1e-13] };
@@ -91,7 +108,13 @@ pub fn hankel(refs: &[PresetReference], s: &Settings) -> Sweep {
         let acc = Accuracy { hankel, ..Accuracy::default() };
         rows.push(row(refs, "cut-off", format!("{cutoff:.0e}"), acc, Task::Profile, s.budget));
     }
-    Sweep { key: "hankel", title: "Inverse-Hankel quadrature (radial profile)", timed: "RGB profile, 41 radii", plot_metric: "quadrature_log", rows }
+    Sweep {
+        key: "hankel",
+        title: "Inverse-Hankel quadrature (radial profile)",
+        timed: "RGB profile, 41 radii",
+        plot_metric: "quadrature_log",
+        rows,
+    }
 }
 
 /// The paper's route: sampled real-space profiles, 2-D FFT, layers combined per frequency bin, inverse FFT. The speed
@@ -107,15 +130,24 @@ pub fn fft(refs: &[PresetReference], s: &Settings, hankel: &Sweep) -> Sweep {
     let radii = PROFILE_GRID.radii_mm();
     let run = |r: &PresetReference, fft_grid: FftGrid, sampling: PixelSampling| {
         let stacks = prepared.stacks(&r.params).expect("layers");
-        let out = fft_reflectance_profiles_with(&stacks, &radii, Combination::Directional, MultipoleTerms::All, fft_grid, sampling)
-            .expect("fft route");
+        let out = fft_reflectance_profiles_with(
+            &stacks,
+            &radii,
+            Combination::Directional,
+            MultipoleTerms::All,
+            fft_grid,
+            sampling,
+        )
+        .expect("fft route");
         let profile: Vec<[f64; 3]> = (0..radii.len())
             .map(|i| spectrum_to_rgb(&out.profiles.iter().map(|p| p[i]).collect::<Vec<_>>(), weights))
             .collect();
         (spectrum_to_rgb(&out.totals, weights), profile)
     };
     let mut rows = Vec::new();
-    for (series, sampling) in [("FFT, pixel centres (DJ05)", PixelSampling::Centre), ("FFT, pixel areas", PixelSampling::Area)] {
+    for (series, sampling) in
+        [("FFT, pixel centres (DJ05)", PixelSampling::Centre), ("FFT, pixel areas", PixelSampling::Area)]
+    {
         for &size in sizes {
             let fft_grid = FftGrid { size, extent_mm };
             // The first preset (caucasian) is the timed one, on one thread like the closed form; large grids are timed
@@ -124,7 +156,8 @@ pub fn fft(refs: &[PresetReference], s: &Settings, hankel: &Sweep) -> Sweep {
             let mut time_s = f64::NAN;
             let metrics = worst(refs.iter().enumerate().map(|(k, r)| {
                 let start = Instant::now();
-                let (albedo, profile) = if k == 0 { one_thread.install(|| run(r, fft_grid, sampling)) } else { run(r, fft_grid, sampling) };
+                let (albedo, profile) =
+                    if k == 0 { one_thread.install(|| run(r, fft_grid, sampling)) } else { run(r, fft_grid, sampling) };
                 if k == 0 {
                     time_s = start.elapsed().as_secs_f64();
                 }
@@ -132,9 +165,15 @@ pub fn fft(refs: &[PresetReference], s: &Settings, hankel: &Sweep) -> Sweep {
                 m.insert("albedo_rel", max_relative(albedo, r.albedo));
                 m.insert("delta_e00", delta_e_2000(albedo, r.albedo));
                 m.insert("profile_log", profile_log_error(&PROFILE_GRID.radii_mm(), &profile, &r.profile));
-                m.insert("quadrature_log_all", profile_log_error(&PROFILE_GRID.radii_mm(), &profile, &r.profile_default_wavelengths));
+                m.insert(
+                    "quadrature_log_all",
+                    profile_log_error(&PROFILE_GRID.radii_mm(), &profile, &r.profile_default_wavelengths),
+                );
                 if k == 0 {
-                    m.insert("quadrature_log", profile_log_error(&PROFILE_GRID.radii_mm(), &profile, &r.profile_default_wavelengths));
+                    m.insert(
+                        "quadrature_log",
+                        profile_log_error(&PROFILE_GRID.radii_mm(), &profile, &r.profile_default_wavelengths),
+                    );
                 }
                 m
             }));
@@ -147,7 +186,14 @@ pub fn fft(refs: &[PresetReference], s: &Settings, hankel: &Sweep) -> Sweep {
             }
             let mut metrics = metrics;
             metrics.insert("pixel_mm", extent_mm / size as f64);
-            rows.push(Row { series: series.into(), label: format!("{size}²"), time_s, metrics, is_default: false, accuracy: None });
+            rows.push(Row {
+                series: series.into(),
+                label: format!("{size}²"),
+                time_s,
+                metrics,
+                is_default: false,
+                accuracy: None,
+            });
         }
     }
     // The closed form on the same preset: the Hankel sweep's settings (their times are already the caucasian ones).
@@ -157,10 +203,19 @@ pub fn fft(refs: &[PresetReference], s: &Settings, hankel: &Sweep) -> Sweep {
         let ev = spectral_skin::evaluate(&caucasian.params, &request(accuracy, Task::Profile)).expect("profile");
         let profile = ev.profile.unwrap().rgb_per_mm2.unwrap();
         let mut metrics = BTreeMap::new();
-        metrics.insert("quadrature_log", profile_log_error(&PROFILE_GRID.radii_mm(), &profile, &caucasian.profile_default_wavelengths));
+        metrics.insert(
+            "quadrature_log",
+            profile_log_error(&PROFILE_GRID.radii_mm(), &profile, &caucasian.profile_default_wavelengths),
+        );
         rows.push(Row { series: format!("closed form, {}", h.series), metrics, accuracy: None, ..h.clone() });
     }
-    Sweep { key: "fft", title: "FFT convolution route (DJ05) vs closed form", timed: "RGB profile, 41 radii", plot_metric: "quadrature_log", rows }
+    Sweep {
+        key: "fft",
+        title: "FFT convolution route (DJ05) vs closed form",
+        timed: "RGB profile, 41 radii",
+        plot_metric: "quadrature_log",
+        rows,
+    }
 }
 
 /// Radius fit: frequencies per decade of the edge fit, and the second-moment shortcut.
@@ -180,8 +235,11 @@ pub fn radius_fit(refs: &[PresetReference], s: &Settings) -> Sweep {
 
 /// Lookup-table resolution of the map pipeline: error against direct evaluation, build time, map time.
 pub fn table(s: &Settings, map_size: usize) -> Sweep {
-    let resolutions: &[(usize, usize, usize)] =
-        if s.quick { &[(9, 3, 5), (17, 4, 9)] } else { &[(9, 3, 5), (17, 4, 9), (25, 5, 13), (33, 7, 17), (49, 10, 25), (65, 13, 33)] };
+    let resolutions: &[(usize, usize, usize)] = if s.quick {
+        &[(9, 3, 5), (17, 4, 9)]
+    } else {
+        &[(9, 3, 5), (17, 4, 9), (25, 5, 13), (33, 7, 17), (49, 10, 25), (65, 13, 33)]
+    };
     let prepared = Prepared::new(&Request::new(Outputs::material())).expect("prepared");
     let face = face_params(map_size);
     let samples = if s.quick { 64 } else { 2000 };
@@ -193,7 +251,12 @@ pub fn table(s: &Settings, map_size: usize) -> Sweep {
         let table = MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, resolution).expect("table");
         let build_s = start.elapsed().as_secs_f64();
         let error = measure_error(&table, &prepared, samples).expect("table error");
-        let settings = MapSettings { table: resolution, table_check_samples: 0, table_cache: Some(cache.path().to_path_buf()), ..MapSettings::default() };
+        let settings = MapSettings {
+            table: resolution,
+            table_check_samples: 0,
+            table_cache: Some(cache.path().to_path_buf()),
+            ..MapSettings::default()
+        };
         compute_maps(&face, &settings, None).expect("maps (builds and caches the table)");
         let map_s = median_seconds(s.budget.min_runs.min(3), 0.0, || {
             let result = compute_maps(&face, &settings, None).expect("maps");
@@ -214,7 +277,13 @@ pub fn table(s: &Settings, map_size: usize) -> Sweep {
             accuracy: None,
         });
     }
-    Sweep { key: "table", title: "Lookup-table resolution (map pipeline)", timed: "table build", plot_metric: "albedo_rel", rows }
+    Sweep {
+        key: "table",
+        title: "Lookup-table resolution (map pipeline)",
+        timed: "table build",
+        plot_metric: "albedo_rel",
+        rows,
+    }
 }
 
 /// The named levels, on every metric, with the time of a material, a profile and a whole map.
@@ -230,14 +299,21 @@ pub fn levels(refs: &[PresetReference], s: &Settings, map_size: usize) -> Sweep 
         let p = row(refs, "level", level.name().into(), acc, Task::Profile, s.budget);
         r.metrics.insert("profile_log", p.metrics["profile_log"]);
         r.metrics.insert("profile_s", p.time_s);
-        let settings = MapSettings { request: Request { accuracy: acc, ..Request::new(Outputs::material()) }, table_check_samples: 0, ..MapSettings::default() };
+        let settings = MapSettings {
+            request: Request { accuracy: acc, ..Request::new(Outputs::material()) },
+            table_check_samples: 0,
+            ..MapSettings::default()
+        };
         let start = Instant::now();
         let result = compute_maps(&face, &settings, None).expect("maps");
         r.metrics.insert("map_cold_s", start.elapsed().as_secs_f64());
         if let Strategy::Table { build_seconds, .. } = result.report.strategy {
             r.metrics.insert("table_build_s", build_seconds);
         }
-        r.metrics.insert("wavelengths", WavelengthGrid::new(acc.wavelength_placement, acc.wavelength_step_nm).wavelengths_nm.len() as f64);
+        r.metrics.insert(
+            "wavelengths",
+            WavelengthGrid::new(acc.wavelength_placement, acc.wavelength_step_nm).wavelengths_nm.len() as f64,
+        );
         rows.push(r);
     }
     Sweep { key: "levels", title: "Named accuracy levels", timed: "albedo + radius", plot_metric: "albedo_rel", rows }

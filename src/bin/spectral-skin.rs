@@ -6,18 +6,22 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use spectral_skin::color::WavelengthPlacement;
+use spectral_skin::diffusion::{Combination, MultipoleTerms};
+use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use spectral_skin::fit::{SubsurfaceMethod, DEFAULT_METHOD};
 use spectral_skin::maps::example::{write_example_params, ExampleKind};
 use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
-use spectral_skin::color::WavelengthPlacement;
-use spectral_skin::diffusion::{Combination, MultipoleTerms};
-use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::{evaluate, AccuracyLevel, Evaluation, Outputs, Request, SkinError, SkinParams, PRESETS};
 
 #[derive(Parser)]
-#[command(name = "spectral-skin", version, about = "Spectral skin BSSRDF (Donner & Jensen 2006) for Blender's Principled BSDF")]
+#[command(
+    name = "spectral-skin",
+    version,
+    about = "Spectral skin BSSRDF (Donner & Jensen 2006) for Blender's Principled BSDF"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -228,8 +232,9 @@ impl SkinArgs {
             None => None,
         };
         let pick = |explicit: Option<f64>, from_preset: Option<f64>, flag: &str| {
-            explicit.or(from_preset).ok_or_else(|| {
-                SkinError::Invalid { name: flag.to_string(), reason: format!("give --preset or --{flag}") }
+            explicit.or(from_preset).ok_or_else(|| SkinError::Invalid {
+                name: flag.to_string(),
+                reason: format!("give --preset or --{flag}"),
             })
         };
         SkinParams::new(
@@ -385,8 +390,12 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
                 sources.push(match (file, constant) {
                     (Some(f), None) => ParamSource::File(f.to_path_buf()),
                     (None, Some(v)) => ParamSource::Constant(v),
-                    (Some(_), Some(_)) => return Err(format!("give either --{0}-map or --{0}, not both", FLAGS[k]).into()),
-                    (None, None) => return Err(format!("missing {0}: give --params, --{0}-map or --{0}", FLAGS[k]).into()),
+                    (Some(_), Some(_)) => {
+                        return Err(format!("give either --{0}-map or --{0}, not both", FLAGS[k]).into())
+                    }
+                    (None, None) => {
+                        return Err(format!("missing {0}: give --params, --{0}-map or --{0}", FLAGS[k]).into())
+                    }
                 });
             }
             ParamInputs::Separate(sources.try_into().map_err(|_| "four sources")?)
@@ -437,7 +446,7 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         Some(&progress),
         &ctrl_c::INTERRUPTED,
     )
-        .map_err(|e| e.with_clamp_advice("use --clamp"))?;
+    .map_err(|e| e.with_clamp_advice("use --clamp"))?;
     bar.finish_and_clear();
     println!(
         "{}x{} texels, strategy {}, {:.2} s (read {:.2}, compute {:.2}, write {:.2}); wrote {}",
@@ -451,7 +460,10 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         args.out.display()
     );
     for bad in &report.clamped {
-        println!("clamped {}: {} NaN, {} infinite, {} out of range", bad.parameter, bad.nan, bad.infinite, bad.out_of_range);
+        println!(
+            "clamped {}: {} NaN, {} infinite, {} out of range",
+            bad.parameter, bad.nan, bad.infinite, bad.out_of_range
+        );
     }
     Ok(())
 }

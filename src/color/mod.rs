@@ -17,7 +17,11 @@ pub fn spectral_rgb_weights(grid: &WavelengthGrid, space: WorkingSpace) -> Vec<[
 
 /// Weights for a grid made by `placement`: the colour integration of [`spectral_rgb_weights`], except for the RGB
 /// shortcut, whose three samples (435.8, 546.1, 700 nm) are taken as B, G and R as they are, in any working space.
-pub fn placement_rgb_weights(grid: &WavelengthGrid, placement: WavelengthPlacement, space: WorkingSpace) -> Vec<[f64; 3]> {
+pub fn placement_rgb_weights(
+    grid: &WavelengthGrid,
+    placement: WavelengthPlacement,
+    space: WorkingSpace,
+) -> Vec<[f64; 3]> {
     match placement {
         WavelengthPlacement::RgbShortcut => vec![[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
         _ => spectral_rgb_weights(grid, space),
@@ -45,7 +49,10 @@ mod tests {
         }
         for placement in [WavelengthPlacement::CmfAdapted, WavelengthPlacement::RgbShortcut] {
             let g = WavelengthGrid::new(placement, 10.0);
-            let rgb = spectrum_to_rgb(&vec![1.0; g.wavelengths_nm.len()], &placement_rgb_weights(&g, placement, WorkingSpace::LinearRec709));
+            let rgb = spectrum_to_rgb(
+                &vec![1.0; g.wavelengths_nm.len()],
+                &placement_rgb_weights(&g, placement, WorkingSpace::LinearRec709),
+            );
             assert!(rgb.iter().all(|v| (v - 1.0).abs() < 1e-12), "{placement:?} {rgb:?}");
         }
     }

@@ -125,7 +125,11 @@ mod tests {
     #[test]
     fn rec709_matches_published_matrix() {
         let m = WorkingSpace::LinearRec709.xyz_to_rgb_matrix([0.95047, 1.0, 1.08883]);
-        let published = [[3.2404542, -1.5371385, -0.4985314], [-0.9692660, 1.8760108, 0.0415560], [0.0556434, -0.2040259, 1.0572252]];
+        let published = [
+            [3.2404542, -1.5371385, -0.4985314],
+            [-0.9692660, 1.8760108, 0.0415560],
+            [0.0556434, -0.2040259, 1.0572252],
+        ];
         for i in 0..3 {
             for j in 0..3 {
                 assert!((m[i][j] - published[i][j]).abs() < 2e-6, "{i}{j}: {} vs {}", m[i][j], published[i][j]);

@@ -37,7 +37,9 @@ impl WavelengthGrid {
     pub fn new(placement: WavelengthPlacement, step_nm: f64) -> WavelengthGrid {
         match placement {
             WavelengthPlacement::Uniform => WavelengthGrid::uniform(step_nm),
-            WavelengthPlacement::CmfAdapted => WavelengthGrid::cmf_adapted(WavelengthGrid::uniform(step_nm).wavelengths_nm.len()),
+            WavelengthPlacement::CmfAdapted => {
+                WavelengthGrid::cmf_adapted(WavelengthGrid::uniform(step_nm).wavelengths_nm.len())
+            }
             WavelengthPlacement::RgbShortcut => WavelengthGrid { wavelengths_nm: CIE_RGB_PRIMARIES_NM.to_vec() },
         }
     }
@@ -65,7 +67,11 @@ impl WavelengthGrid {
             .map(|k| {
                 let target = total * k as f64 / (count - 1) as f64;
                 let (i, t) = bracket(&cumulative, target);
-                if t == 0.0 { nm[i] } else { nm[i] + t * (nm[i + 1] - nm[i]) }
+                if t == 0.0 {
+                    nm[i]
+                } else {
+                    nm[i] + t * (nm[i + 1] - nm[i])
+                }
             })
             .collect();
         WavelengthGrid { wavelengths_nm }
@@ -155,7 +161,8 @@ mod tests {
         for step in [1.0, 5.0, 20.0] {
             let g = WavelengthGrid::uniform(step);
             let xyz = spectrum_to_xyz(&vec![1.0; g.wavelengths_nm.len()], &g.xyz_weights());
-            let ok = (xyz[0] - 0.950423).abs() < 1e-6 && (xyz[1] - 1.0).abs() < 1e-12 && (xyz[2] - 1.088610).abs() < 1e-6;
+            let ok =
+                (xyz[0] - 0.950423).abs() < 1e-6 && (xyz[1] - 1.0).abs() < 1e-12 && (xyz[2] - 1.088610).abs() < 1e-6;
             assert!(ok, "step {step}: {xyz:?}");
         }
     }

@@ -13,8 +13,7 @@ pub fn fdr(eta: f64) -> f64 {
 }
 
 /// Value of the eta >= 1 fit minus that of the eta < 1 fit at eta = 1: 0.0016 - 0.0017.
-const FIT_STEP_AT_ONE: f64 =
-    (-1.440 + 0.710 + 0.668 + 0.0636) - (-0.4399 + 0.7099 - 0.3319 + 0.0636);
+const FIT_STEP_AT_ONE: f64 = (-1.440 + 0.710 + 0.668 + 0.0636) - (-0.4399 + 0.7099 - 0.3319 + 0.0636);
 
 /// `A(eta) = (1 + F_dr) / (1 - F_dr)`: internal-reflection parameter of the boundary (Jensen et al. 2001 eq. 6).
 pub fn internal_reflection_a(eta: f64) -> f64 {
@@ -39,12 +38,7 @@ mod tests {
 
     #[test]
     fn continuous_at_one() {
-        assert!(
-            (fdr(1.0 - 1e-12) - fdr(1.0)).abs() < 1e-10,
-            "{} {}",
-            fdr(1.0 - 1e-12),
-            fdr(1.0)
-        );
+        assert!((fdr(1.0 - 1e-12) - fdr(1.0)).abs() < 1e-10, "{} {}", fdr(1.0 - 1e-12), fdr(1.0));
     }
 
     /// Unpolarised Fresnel reflectance for light inside a medium of relative index eta meeting the boundary at
@@ -63,11 +57,7 @@ mod tests {
     /// The exact diffuse reflectance F_dr = int_0^1 2 mu F(mu) dmu (midpoint rule, 2e5 points).
     fn fdr_exact(eta: f64) -> f64 {
         let n = 200_000;
-        (0..n)
-            .map(|k| (k as f64 + 0.5) / n as f64)
-            .map(|mu| 2.0 * mu * fresnel_inside(eta, mu))
-            .sum::<f64>()
-            / n as f64
+        (0..n).map(|k| (k as f64 + 0.5) / n as f64).map(|mu| 2.0 * mu * fresnel_inside(eta, mu)).sum::<f64>() / n as f64
     }
 
     /// The relative indices a stack can produce (layer indices in `IOR_RANGE`, air above: [1/2, 2]) are where the
@@ -84,15 +74,9 @@ mod tests {
             let eta = (lo / hi) * (hi * hi / lo).powf(k as f64 / 60.0); // log-spaced over [1/2, 2]
             worst = worst.max((internal_reflection_a(eta) / a_exact(eta) - 1.0).abs());
         }
-        assert!(
-            worst < 0.005,
-            "worst relative error of A on [1/2, 2]: {worst}"
-        );
+        assert!(worst < 0.005, "worst relative error of A on [1/2, 2]: {worst}");
         for eta in [0.4, 2.5] {
-            assert!(
-                (internal_reflection_a(eta) / a_exact(eta) - 1.0).abs() > 0.04,
-                "eta {eta}"
-            );
+            assert!((internal_reflection_a(eta) / a_exact(eta) - 1.0).abs() > 0.04, "eta {eta}");
         }
     }
 }

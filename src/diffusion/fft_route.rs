@@ -103,7 +103,10 @@ impl FftGrid {
             ));
         }
         if !(self.extent_mm.is_finite() && self.extent_mm > 0.0) {
-            return Err(SkinError::invalid("grid.extent_mm", format!("must be finite and > 0 mm; got {}", self.extent_mm)));
+            return Err(SkinError::invalid(
+                "grid.extent_mm",
+                format!("must be finite and > 0 mm; got {}", self.extent_mm),
+            ));
         }
         Ok(())
     }
@@ -406,9 +409,7 @@ fn transpose_in_place(buf: &mut [Complex<f64>], n: usize) {
 /// Catmull-Rom cubic through p[1] (u = 0) and p[2] (u = 1).
 fn catmull_rom(p: [f64; 4], u: f64) -> f64 {
     let [p0, p1, p2, p3] = p;
-    p1 + 0.5
-        * u
-        * ((p2 - p0) + u * ((2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) + u * (3.0 * (p1 - p2) + p3 - p0)))
+    p1 + 0.5 * u * ((p2 - p0) + u * ((2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) + u * (3.0 * (p1 - p2) + p3 - p0)))
 }
 
 #[cfg(test)]
@@ -442,7 +443,8 @@ mod tests {
         let grid = FftGrid::new(n, 4.0).unwrap();
         let h = grid.pixel_mm();
         for sigma in [1e-3 * h, 0.1 * h, 0.5 * h, h, 3.0 * h] {
-            let gauss = |r: f64| (-(r * r) / (2.0 * sigma * sigma)).exp() / (2.0 * std::f64::consts::PI * sigma * sigma);
+            let gauss =
+                |r: f64| (-(r * r) / (2.0 * sigma * sigma)).exp() / (2.0 * std::f64::consts::PI * sigma * sigma);
             let mut buf = vec![Complex::default(); n * n];
             sample_pair(&mut buf, grid, PixelSampling::Area, |r| (gauss(r), 2.0 * gauss(r)));
             let cdf = |x: f64| 0.5 * (1.0 + libm::erf(x / (sigma * std::f64::consts::SQRT_2)));

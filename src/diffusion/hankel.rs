@@ -38,11 +38,7 @@ impl Default for HankelQuadrature {
     /// The cheapest setting on the error-time front whose error is negligible (docs/accuracy-vs-time.md): 12 nodes on
     /// panels half as wide as they start (refinement 1), cut at 1e-9.
     fn default() -> Self {
-        HankelQuadrature {
-            gauss_order: 12,
-            refinement: 1.0,
-            cutoff: 1e-9,
-        }
+        HankelQuadrature { gauss_order: 12, refinement: 1.0, cutoff: 1e-9 }
     }
 }
 
@@ -89,10 +85,7 @@ pub fn raw_reflectance_profiles(
     let cuts: Vec<f64> = stacks
         .par_iter()
         .map(|stack| {
-            let scale = stack
-                .reflectance_hat(0.0, combination, terms)
-                .abs()
-                .max(f64::MIN_POSITIVE);
+            let scale = stack.reflectance_hat(0.0, combination, terms).abs().max(f64::MIN_POSITIVE);
             cutoff_frequency(|s| remainder(stack, s), quadrature.cutoff * scale)
         })
         .collect();
@@ -105,10 +98,7 @@ pub fn raw_reflectance_profiles(
         .zip(&cuts)
         .map(|(stack, &cut)| {
             let count = grid.panels.partition_point(|p| p.start() < cut) * grid.order;
-            let mut v: Vec<f64> = grid.nodes[..count]
-                .iter()
-                .map(|&s| s * remainder(stack, s))
-                .collect();
+            let mut v: Vec<f64> = grid.nodes[..count].iter().map(|&s| s * remainder(stack, s)).collect();
             v.resize(grid.nodes.len(), 0.0);
             v
         })
@@ -123,17 +113,14 @@ pub fn raw_reflectance_profiles(
                 .iter()
                 .zip(&samples)
                 .map(|(stack, v)| {
-                    let tail: f64 =
-                        v.iter().zip(&kernel).map(|(a, b)| a * b).sum::<f64>() / (2.0 * PI);
+                    let tail: f64 = v.iter().zip(&kernel).map(|(a, b)| a * b).sum::<f64>() / (2.0 * PI);
                     stack.top().reflectance(r, terms) + tail
                 })
                 .collect()
         })
         .collect();
     // Transpose to per stack.
-    (0..stacks.len())
-        .map(|k| per_radius.iter().map(|row| row[k]).collect())
-        .collect()
+    (0..stacks.len()).map(|k| per_radius.iter().map(|row| row[k]).collect()).collect()
 }
 
 /// The frequency beyond which |f(s)| s^2 stays below `tolerance` on the probe grid (0 if it never exceeds it).
@@ -187,30 +174,13 @@ impl PanelGrid {
         let mut panels = Vec::new();
         let mut a = 0.0;
         while a < s_cut {
-            let width = if a == 0.0 {
-                FIRST_PANEL_PER_MM
-            } else {
-                growth * a
-            };
-            panels.push(Panel {
-                centre: a + 0.5 * width,
-                half: 0.5 * width,
-            });
+            let width = if a == 0.0 { FIRST_PANEL_PER_MM } else { growth * a };
+            panels.push(Panel { centre: a + 0.5 * width, half: 0.5 * width });
             a += width;
         }
-        let nodes = panels
-            .iter()
-            .flat_map(|p| x.iter().map(move |xi| p.centre + p.half * xi))
-            .collect();
+        let nodes = panels.iter().flat_map(|p| x.iter().map(move |xi| p.centre + p.half * xi)).collect();
         let legendre = legendre_table(order, &x);
-        PanelGrid {
-            order,
-            panels,
-            x,
-            w,
-            nodes,
-            legendre,
-        }
+        PanelGrid { order, panels, x, w, nodes, legendre }
     }
 
     /// Weights that turn the samples s R~(s) at the nodes into int_0^s_cut s R~(s) J0(s r) ds.
@@ -220,8 +190,7 @@ impl PanelGrid {
             let omega = panel.half * r_mm;
             if omega <= GAUSS_MAX_HALF_PHASE {
                 for (xi, wi) in self.x.iter().zip(&self.w) {
-                    kernel
-                        .push(panel.half * wi * libm::j0((panel.centre + panel.half * xi) * r_mm));
+                    kernel.push(panel.half * wi * libm::j0((panel.centre + panel.half * xi) * r_mm));
                 }
                 continue;
             }
@@ -281,27 +250,14 @@ mod tests {
         let grid = PanelGrid::new(80.0, &HankelQuadrature::default());
         for r in [0.0, 0.05, 0.3, 1.0] {
             let k = grid.kernel(r);
-            let numeric: f64 = grid
-                .nodes
-                .iter()
-                .zip(&k)
-                .map(|(&s, w)| w * s * (-a * s * s).exp())
-                .sum();
+            let numeric: f64 = grid.nodes.iter().zip(&k).map(|(&s, w)| w * s * (-a * s * s).exp()).sum();
             let exact = (-r * r / (4.0 * a)).exp() / (2.0 * a);
-            assert!(
-                (numeric - exact).abs() < 1e-9 * (1.0 / (2.0 * a)),
-                "r={r}: {numeric} vs {exact}"
-            );
+            assert!((numeric - exact).abs() < 1e-9 * (1.0 / (2.0 * a)), "r={r}: {numeric} vs {exact}");
         }
         // The Gaussian's transform at a radius of 1e3 mm: exp(-2.5e7) = 0, to the accuracy of the quadrature.
         for r in [30.0, 1e3, 1e5] {
             let k = grid.kernel(r);
-            let numeric: f64 = grid
-                .nodes
-                .iter()
-                .zip(&k)
-                .map(|(&s, w)| w * s * (-a * s * s).exp())
-                .sum();
+            let numeric: f64 = grid.nodes.iter().zip(&k).map(|(&s, w)| w * s * (-a * s * s).exp()).sum();
             assert!(numeric.abs() < 1e-9 / (2.0 * a), "r={r}: {numeric}");
         }
     }
@@ -319,27 +275,16 @@ mod tests {
         let slab = *stack.top();
         let t = MultipoleTerms::All;
         let f = |s: f64| slab.reflectance_hat(s, t);
-        let radii: Vec<f64> = (0..=70)
-            .map(|i| 1e-3 * 10f64.powf(i as f64 * 0.1))
-            .collect();
+        let radii: Vec<f64> = (0..=70).map(|i| 1e-3 * 10f64.powf(i as f64 * 0.1)).collect();
         let cut = cutoff_frequency(f, 1e-16);
         let grid = PanelGrid::new(cut, &HankelQuadrature::default());
         let peak = slab.reflectance(0.0, t);
         for &r in &radii {
             let k = grid.kernel(r);
-            let numeric: f64 = grid
-                .nodes
-                .iter()
-                .zip(&k)
-                .map(|(&s, &w)| w * s * f(s))
-                .sum::<f64>()
-                / (2.0 * PI);
+            let numeric: f64 = grid.nodes.iter().zip(&k).map(|(&s, &w)| w * s * f(s)).sum::<f64>() / (2.0 * PI);
             let exact = slab.reflectance(r, t);
             let err = (numeric - exact).abs();
-            assert!(
-                err < 1e-4 * exact + 1e-10 * peak,
-                "r={r}: numeric {numeric} exact {exact}"
-            );
+            assert!(err < 1e-4 * exact + 1e-10 * peak, "r={r}: numeric {numeric} exact {exact}");
         }
     }
 }

@@ -62,14 +62,11 @@ impl Layer {
             ));
         }
         let (c_min, c_max) = COEFFICIENT_RANGE_PER_MM;
-        for (field, value) in [
-            ("sigma_a_per_mm", self.sigma_a_per_mm),
-            ("sigma_s_reduced_per_mm", self.sigma_s_reduced_per_mm),
-        ] {
+        for (field, value) in
+            [("sigma_a_per_mm", self.sigma_a_per_mm), ("sigma_s_reduced_per_mm", self.sigma_s_reduced_per_mm)]
+        {
             if !(value == 0.0 || (c_min..=c_max).contains(&value)) {
-                return bad(format!(
-                    "{field} must be 0 or in [{c_min:e}, {c_max:e}] per mm; got {value:e}"
-                ));
+                return bad(format!("{field} must be 0 or in [{c_min:e}, {c_max:e}] per mm; got {value:e}"));
             }
         }
         if self.sigma_a_per_mm + self.sigma_s_reduced_per_mm <= 0.0 {
@@ -136,8 +133,7 @@ impl LayerStack {
         // Below the last layer: a medium of its own index, or, as far as the last layer lets light through
         // unscattered, of the index it sees above (so a vanishing last layer leaves the one above on its own index).
         let b_last = ballistic[last];
-        let mut below =
-            vec![b_last * above[last] + (1.0 - b_last) * layers[last].ior; layers.len()];
+        let mut below = vec![b_last * above[last] + (1.0 - b_last) * layers[last].ior; layers.len()];
         for i in (0..last).rev() {
             let b = ballistic[i + 1];
             below[i] = b * below[i + 1] + (1.0 - b) * layers[i + 1].ior;
@@ -170,12 +166,7 @@ impl LayerStack {
 
     /// `R~12(s) - R~1+(s)`: light that has crossed the top layer at least twice. Its inverse transform is smooth and
     /// decays fast in s, unlike R~1+ whose real-space form is known (see `hankel`).
-    pub fn below_top_hat(
-        &self,
-        s_per_mm: f64,
-        combination: Combination,
-        terms: MultipoleTerms,
-    ) -> f64 {
+    pub fn below_top_hat(&self, s_per_mm: f64, combination: Combination, terms: MultipoleTerms) -> f64 {
         if self.down.len() == 1 {
             return 0.0;
         }
@@ -185,23 +176,12 @@ impl LayerStack {
     }
 
     /// `R~(s)` of the whole stack; `R~(0)` is the total diffuse reflectance.
-    pub fn reflectance_hat(
-        &self,
-        s_per_mm: f64,
-        combination: Combination,
-        terms: MultipoleTerms,
-    ) -> f64 {
+    pub fn reflectance_hat(&self, s_per_mm: f64, combination: Combination, terms: MultipoleTerms) -> f64 {
         self.reflectance_hat_from(0, s_per_mm, combination, terms)
     }
 
     /// `R~` of the layers from `first` down (adding equation, bottom up).
-    fn reflectance_hat_from(
-        &self,
-        first: usize,
-        s: f64,
-        combination: Combination,
-        terms: MultipoleTerms,
-    ) -> f64 {
+    fn reflectance_hat_from(&self, first: usize, s: f64, combination: Combination, terms: MultipoleTerms) -> f64 {
         let last = self.down.len() - 1;
         let mut below = self.down[last].reflectance_hat(s, terms);
         for i in (first..last).rev() {
@@ -229,25 +209,13 @@ mod tests {
     use super::*;
 
     fn layer(t: f64, sa: f64, ss: f64, n: f64) -> Layer {
-        Layer {
-            thickness_mm: t,
-            sigma_a_per_mm: sa,
-            sigma_s_reduced_per_mm: ss,
-            ior: n,
-        }
+        Layer { thickness_mm: t, sigma_a_per_mm: sa, sigma_s_reduced_per_mm: ss, ior: n }
     }
 
     #[test]
     fn validation_names_layer_and_field() {
-        let e = LayerStack::new(&[
-            layer(f64::INFINITY, 0.1, 1.0, 1.4),
-            layer(1.0, 0.1, 1.0, 1.4),
-        ])
-        .unwrap_err();
-        assert!(
-            e.to_string().contains("layer 0") && e.to_string().contains("thickness_mm"),
-            "{e}"
-        );
+        let e = LayerStack::new(&[layer(f64::INFINITY, 0.1, 1.0, 1.4), layer(1.0, 0.1, 1.0, 1.4)]).unwrap_err();
+        assert!(e.to_string().contains("layer 0") && e.to_string().contains("thickness_mm"), "{e}");
         let e = LayerStack::new(&[layer(1.0, -0.1, 1.0, 1.4)]).unwrap_err();
         assert!(e.to_string().contains("sigma_a_per_mm"), "{e}");
         let e = LayerStack::new(&[layer(1.0, 0.1, f64::NAN, 1.4)]).unwrap_err();
@@ -275,11 +243,7 @@ mod tests {
     #[test]
     fn split_layer_matches_whole() {
         let whole = LayerStack::new(&[layer(f64::INFINITY, 0.05, 2.0, 1.4)]).unwrap();
-        let split = LayerStack::new(&[
-            layer(0.3, 0.05, 2.0, 1.4),
-            layer(f64::INFINITY, 0.05, 2.0, 1.4),
-        ])
-        .unwrap();
+        let split = LayerStack::new(&[layer(0.3, 0.05, 2.0, 1.4), layer(f64::INFINITY, 0.05, 2.0, 1.4)]).unwrap();
         let a = whole.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
         let b = split.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
         assert!(((a - b) / a).abs() < 0.05, "whole {a} split {b}");

@@ -67,14 +67,9 @@ impl Slab {
     ) -> Slab {
         let sigma_t_reduced = sigma_a_per_mm + sigma_s_reduced_per_mm;
         let diffusion_mm = 1.0 / (3.0 * sigma_t_reduced); // D = 1/(3 sigma_t'), Jensen et al. 2001
-        let ballistic_fraction =
-            ballistic_fraction(sigma_a_per_mm, sigma_s_reduced_per_mm, thickness_mm);
+        let ballistic_fraction = ballistic_fraction(sigma_a_per_mm, sigma_s_reduced_per_mm, thickness_mm);
         let tau = sigma_t_reduced * thickness_mm;
-        let source_depth_mm = if tau < 1.0 {
-            0.5 * thickness_mm * (1.0 + tau)
-        } else {
-            1.0 / sigma_t_reduced
-        };
+        let source_depth_mm = if tau < 1.0 { 0.5 * thickness_mm * (1.0 + tau) } else { 1.0 / sigma_t_reduced };
         Slab {
             thickness_mm,
             alpha_prime: sigma_s_reduced_per_mm / sigma_t_reduced,
@@ -98,11 +93,7 @@ impl Slab {
 
     /// The same slab entered from its far face (boundaries swapped), for R-, T- of the layer combination.
     pub fn flipped(&self) -> Slab {
-        Slab {
-            zb_top_mm: self.zb_bottom_mm,
-            zb_bottom_mm: self.zb_top_mm,
-            ..*self
-        }
+        Slab { zb_top_mm: self.zb_bottom_mm, zb_bottom_mm: self.zb_top_mm, ..*self }
     }
 
     fn is_semi_infinite(&self) -> bool {
@@ -122,11 +113,7 @@ impl Slab {
 
     /// Depths of the real and virtual source of image pair i (DJ05; model.md 5.2), measured from the entry face.
     fn image_depths_mm(&self, i: i64) -> (f64, f64) {
-        let shift = if i == 0 {
-            0.0
-        } else {
-            2.0 * i as f64 * self.half_period_mm()
-        };
+        let shift = if i == 0 { 0.0 } else { 2.0 * i as f64 * self.half_period_mm() };
         let l = self.source_depth_mm;
         (shift + l, shift - l - 2.0 * self.zb_top_mm)
     }
@@ -166,8 +153,7 @@ impl Slab {
         if self.is_semi_infinite() {
             return 0.0;
         }
-        self.ballistic_fraction
-            + self.scattered_fraction() * self.multipole_transmittance_hat(s_per_mm, terms)
+        self.ballistic_fraction + self.scattered_fraction() * self.multipole_transmittance_hat(s_per_mm, terms)
     }
 
     /// `T~(s)` of the multipole alone, per unit light it carries.
@@ -221,8 +207,7 @@ impl Slab {
         let r = e_l + e_l * (-2.0 * z_in * q).exp()
             - (-(two_l - l) * q).exp() * expm1_ratio(2.0 * l, two_l, q)
             - (-(two_l - l - 2.0 * z_in) * q).exp() * expm1_ratio(2.0 * l + 4.0 * z_in, two_l, q);
-        let t = expm1_ratio(2.0 * l + 2.0 * z_in, two_l, q)
-            * (e_far + e_far * (-2.0 * z_out * q).exp());
+        let t = expm1_ratio(2.0 * l + 2.0 * z_in, two_l, q) * (e_far + e_far * (-2.0 * z_out * q).exp());
         (0.5 * self.alpha_prime * r, 0.5 * self.alpha_prime * t)
     }
 
@@ -243,10 +228,7 @@ impl Slab {
         }
         let d = self.thickness_mm;
         let s = self.sigma_tr_per_mm;
-        self.scattered_fraction()
-            * self.real_space_sum(terms, |zr, zv| {
-                pole(d - zr, r_mm, s) - pole(d - zv, r_mm, s)
-            })
+        self.scattered_fraction() * self.real_space_sum(terms, |zr, zv| pole(d - zr, r_mm, s) - pole(d - zv, r_mm, s))
     }
 
     /// alpha'/(4 pi) times the sum over image pairs of `pair(z_r,i, z_v,i)`: pairs i = -n..=n, or, for the whole
@@ -278,11 +260,7 @@ impl Slab {
 
 /// `b`, the share of light entering a slab that crosses it without interacting: (1 - tau)^2 below an optical
 /// thickness tau = sigma_t' d of 1, else 0 (see `Slab::new`).
-pub fn ballistic_fraction(
-    sigma_a_per_mm: f64,
-    sigma_s_reduced_per_mm: f64,
-    thickness_mm: f64,
-) -> f64 {
+pub fn ballistic_fraction(sigma_a_per_mm: f64, sigma_s_reduced_per_mm: f64, thickness_mm: f64) -> f64 {
     let tau = (sigma_a_per_mm + sigma_s_reduced_per_mm) * thickness_mm;
     if tau < 1.0 {
         (1.0 - tau) * (1.0 - tau)
@@ -345,19 +323,12 @@ mod tests {
     /// The closed-form series equals the explicit sum of many pairs.
     #[test]
     fn closed_form_series_equals_explicit_sum() {
-        for slab in [
-            epidermis_550(),
-            Slab::new(0.01, 1.0, 0.5, 1.4, 1.3),
-            Slab::new(2.0, 0.5, 0.05, 1.0, 1.4),
-        ] {
+        for slab in [epidermis_550(), Slab::new(0.01, 1.0, 0.5, 1.4, 1.3), Slab::new(2.0, 0.5, 0.05, 1.0, 1.4)] {
             for s in [0.0, 0.3, 2.0, 17.0] {
                 for f in [Slab::reflectance_hat, Slab::transmittance_hat] {
                     let all = f(&slab, s, MultipoleTerms::All);
                     let sum = f(&slab, s, MultipoleTerms::Pairs(400));
-                    assert!(
-                        (all - sum).abs() < 1e-12 * all.abs().max(1e-3),
-                        "s={s}: {all} vs {sum}"
-                    );
+                    assert!((all - sum).abs() < 1e-12 * all.abs().max(1e-3), "s={s}: {all} vs {sum}");
                 }
             }
         }
@@ -366,11 +337,7 @@ mod tests {
     /// The shared-exponential evaluation equals the four separate transforms.
     #[test]
     fn hats_both_ways_equal_separate_calls() {
-        for slab in [
-            epidermis_550(),
-            Slab::new(0.01, 1.0, 0.5, 1.4, 1.3),
-            Slab::new(0.0, 3.0, 0.4, 1.4, 1.0),
-        ] {
+        for slab in [epidermis_550(), Slab::new(0.01, 1.0, 0.5, 1.4, 1.3), Slab::new(0.0, 3.0, 0.4, 1.4, 1.0)] {
             for s in [0.0, 0.3, 2.0, 17.0, 3000.0] {
                 let t = MultipoleTerms::All;
                 let up = slab.flipped();
@@ -398,12 +365,7 @@ mod tests {
         let r = slab.reflectance_hat(0.0, MultipoleTerms::All);
         let t = slab.transmittance_hat(0.0, MultipoleTerms::All);
         assert!((r + t - 1.0).abs() < 1e-14, "{r} + {t}");
-        let (l, zb0, zbd, d) = (
-            slab.source_depth_mm,
-            slab.zb_top_mm,
-            slab.zb_bottom_mm,
-            slab.thickness_mm,
-        );
+        let (l, zb0, zbd, d) = (slab.source_depth_mm, slab.zb_top_mm, slab.zb_bottom_mm, slab.thickness_mm);
         assert!((r - (d + zbd - l) / (d + zb0 + zbd)).abs() < 1e-14);
     }
 
@@ -426,10 +388,7 @@ mod tests {
         let d = 0.25;
         let at = |ss: f64| {
             let slab = Slab::new(0.1, ss, d, 1.4, 1.0);
-            (
-                slab.reflectance_hat(0.0, MultipoleTerms::All),
-                slab.transmittance_hat(0.0, MultipoleTerms::All),
-            )
+            (slab.reflectance_hat(0.0, MultipoleTerms::All), slab.transmittance_hat(0.0, MultipoleTerms::All))
         };
         let sigma_t_at_cap = 1.0 / d;
         let (r_lo, t_lo) = at(sigma_t_at_cap - 0.1 - 1e-9);
@@ -437,10 +396,7 @@ mod tests {
         assert!((r_lo - r_hi).abs() < 1e-7 && (t_lo - t_hi).abs() < 1e-7);
         for ss in [1e-6, 0.01, 0.5, 3.0, 3.9, 4.0, 100.0] {
             let (r, t) = at(ss);
-            assert!(
-                r.is_finite() && t.is_finite() && r >= 0.0 && t >= 0.0 && r + t <= 1.0,
-                "ss={ss}: {r} {t}"
-            );
+            assert!(r.is_finite() && t.is_finite() && r >= 0.0 && t >= 0.0 && r + t <= 1.0, "ss={ss}: {r} {t}");
         }
     }
 }

@@ -115,7 +115,10 @@ pub fn check_example_size(size: usize) -> Result<usize, SkinError> {
     if (1..=MAX_EXAMPLE_SIZE).contains(&size) {
         Ok(size)
     } else {
-        Err(SkinError::invalid("size", format!("the example side must be in [1, {MAX_EXAMPLE_SIZE}] texels; got {size}")))
+        Err(SkinError::invalid(
+            "size",
+            format!("the example side must be in [1, {MAX_EXAMPLE_SIZE}] texels; got {size}"),
+        ))
     }
 }
 

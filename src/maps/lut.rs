@@ -12,9 +12,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::io::write_atomic;
-use crate::fit::SubsurfaceMethod;
 use crate::error::SkinError;
 use crate::evaluate::{Material, Prepared};
+use crate::fit::SubsurfaceMethod;
 use crate::skin::params::{HEMOGLOBIN_RANGE, MELANIN_BLEND_RANGE, MELANIN_RANGE};
 use crate::skin::SkinParams;
 
@@ -117,7 +117,11 @@ pub struct MaterialTable {
 
 impl MaterialTable {
     /// Evaluate every node (in parallel) with `prepared`, for `method` on the request's target.
-    pub fn build(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableResolution) -> Result<MaterialTable, SkinError> {
+    pub fn build(
+        prepared: &Prepared,
+        method: SubsurfaceMethod,
+        resolution: TableResolution,
+    ) -> Result<MaterialTable, SkinError> {
         resolution.validate()?;
         prepared.request().target.method_entry(method)?;
         let r = resolution;
@@ -240,7 +244,8 @@ impl MaterialTable {
         if fnv1a(body) != checksum {
             return None;
         }
-        let header: Vec<usize> = body.get(..12)?.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize).collect();
+        let header: Vec<usize> =
+            body.get(..12)?.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize).collect();
         let r = resolution;
         if header != [r.melanin, r.melanin_blend, r.hemoglobin] || body.len() != 12 + r.node_count() * STORED * 4 {
             return None;
@@ -347,7 +352,8 @@ pub fn measure_error(table: &MaterialTable, prepared: &Prepared, samples: usize)
             };
             let exact = TexelMaterial::of(&prepared.material(&p)?, table.method)?;
             let approx = table.lookup(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
-            let rel = |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| ((a[c] - b[c]) / b[c]).abs() as f64).fold(0.0, f64::max);
+            let rel =
+                |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| ((a[c] - b[c]) / b[c]).abs() as f64).fold(0.0, f64::max);
             Ok([
                 rel(approx.albedo, exact.albedo),
                 rel(approx.radius_mm, exact.radius_mm),

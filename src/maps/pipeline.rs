@@ -11,7 +11,10 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::io::{commit_all, read_params, stage_bytes, stage_channels_exr, ExrOptions, ParamImage, ParamInputs, Plane, PARAM_CHANNELS, PARAM_RANGES};
+use super::io::{
+    commit_all, read_params, stage_bytes, stage_channels_exr, ExrOptions, ParamImage, ParamInputs, Plane,
+    PARAM_CHANNELS, PARAM_RANGES,
+};
 use super::lut::{measure_error, MaterialTable, TableError, TableResolution, TexelMaterial};
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
@@ -76,9 +79,19 @@ impl Default for MapSettings {
 #[serde(rename_all = "snake_case", tag = "name")]
 pub enum Strategy {
     Constant,
-    DistinctTuples { tuples: usize },
-    Table { resolution: TableResolution, nodes: usize, from_cache: bool, build_seconds: f64, measured_error: Option<TableError> },
-    Exact { evaluations: usize },
+    DistinctTuples {
+        tuples: usize,
+    },
+    Table {
+        resolution: TableResolution,
+        nodes: usize,
+        from_cache: bool,
+        build_seconds: f64,
+        measured_error: Option<TableError>,
+    },
+    Exact {
+        evaluations: usize,
+    },
 }
 
 /// Texels that were out of range, NaN or infinite, per parameter (counted whether or not they were clamped).
@@ -98,7 +111,10 @@ pub enum SpecularOutput {
     Constant(SpecularParams),
     /// Principled Specular IOR Level per texel. Roughness and IOR do not depend on oiliness in the surface mapping
     /// (`surface::specular_from_oiliness`): they are the constants in `roughness_and_ior`.
-    Map { specular_ior_level: Vec<f32>, constants: SpecularParams },
+    Map {
+        specular_ior_level: Vec<f32>,
+        constants: SpecularParams,
+    },
 }
 
 /// Everything a map run computed, before it is written.
@@ -286,7 +302,8 @@ pub fn compute_maps_cancellable(
         Strategy::Exact { evaluations: n }
     } else {
         let build = Instant::now();
-        let (table, from_cache) = MaterialTable::load_or_build(&prepared, method, settings.table, settings.table_cache.as_deref())?;
+        let (table, from_cache) =
+            MaterialTable::load_or_build(&prepared, method, settings.table, settings.table_cache.as_deref())?;
         let build_seconds = build.elapsed().as_secs_f64();
         // A freshly built table is checked against direct evaluation; a cached one was checked when it was built.
         let measured_error = if from_cache || settings.table_check_samples == 0 {
@@ -433,17 +450,16 @@ pub fn run_maps_cancellable(
     if cancel.load(Ordering::Relaxed) {
         return Err(cancelled());
     }
-    std::fs::create_dir_all(out_dir).map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
+    std::fs::create_dir_all(out_dir)
+        .map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
 
     let write_start = Instant::now();
     let (w, h) = (result.width, result.height);
     // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
     // in parallel, so overlapping the files keeps both cores busy (measured: 2.4 s -> see docs/maps-performance.md).
     type Channels<'a> = Vec<(&'static str, &'a [f32])>;
-    let mut jobs: Vec<(PathBuf, Channels)> = vec![
-        (out_dir.join(ALBEDO_FILE), rgb(&result.base_color)),
-        (out_dir.join(RADIUS_FILE), rgb(&result.radius_mm)),
-    ];
+    let mut jobs: Vec<(PathBuf, Channels)> =
+        vec![(out_dir.join(ALBEDO_FILE), rgb(&result.base_color)), (out_dir.join(RADIUS_FILE), rgb(&result.radius_mm))];
     if let SpecularOutput::Map { specular_ior_level, .. } = &result.specular {
         jobs.push((out_dir.join(SPECULAR_FILE), vec![("Y", specular_ior_level.as_slice())]));
     }
@@ -484,7 +500,10 @@ fn remove_stale_outputs(out_dir: &Path, specular: &SpecularOutput) -> Result<(),
     match std::fs::remove_file(&stale) {
         Ok(()) => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-        Err(e) => Err(SkinError::io(&stale, format!("cannot remove the previous run's output (not written by this run): {e}"))),
+        Err(e) => Err(SkinError::io(
+            &stale,
+            format!("cannot remove the previous run's output (not written by this run): {e}"),
+        )),
     }
 }
 
@@ -499,10 +518,13 @@ fn sidecar_json(report: &MapReport, inputs: &ParamInputs, specular: &SpecularOut
         ParamInputs::Separate(sources) => serde_json::json!(PARAM_CHANNELS
             .iter()
             .zip(sources)
-            .map(|(n, s)| (n.to_string(), match s {
-                super::io::ParamSource::File(p) => serde_json::json!({"file": p.display().to_string()}),
-                super::io::ParamSource::Constant(v) => serde_json::json!({"constant": v}),
-            }))
+            .map(|(n, s)| (
+                n.to_string(),
+                match s {
+                    super::io::ParamSource::File(p) => serde_json::json!({"file": p.display().to_string()}),
+                    super::io::ParamSource::Constant(v) => serde_json::json!({"constant": v}),
+                }
+            ))
             .collect::<HashMap<_, _>>()),
     };
     let mut outputs = serde_json::json!({

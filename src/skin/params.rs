@@ -51,14 +51,10 @@ impl SkinParams {
 
     /// A named preset (case-insensitive); the error lists the known names.
     pub fn preset(name: &str) -> Result<Self, SkinError> {
-        PRESETS
-            .iter()
-            .find(|p| p.name.eq_ignore_ascii_case(name))
-            .map(|p| p.params)
-            .ok_or_else(|| {
-                let names: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
-                SkinError::invalid("preset", format!("unknown preset {name:?}; known presets: {}", names.join(", ")))
-            })
+        PRESETS.iter().find(|p| p.name.eq_ignore_ascii_case(name)).map(|p| p.params).ok_or_else(|| {
+            let names: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
+            SkinError::invalid("preset", format!("unknown preset {name:?}; known presets: {}", names.join(", ")))
+        })
     }
 }
 
@@ -71,7 +67,11 @@ pub struct Preset {
 }
 
 const fn preset(name: &'static str, description: &'static str, c_m: f64, beta_m: f64, c_h: f64, oil: f64) -> Preset {
-    Preset { name, description, params: SkinParams { melanin: c_m, melanin_blend: beta_m, hemoglobin: c_h, oiliness: oil } }
+    Preset {
+        name,
+        description,
+        params: SkinParams { melanin: c_m, melanin_blend: beta_m, hemoglobin: c_h, oiliness: oil },
+    }
 }
 
 /// The presets. The first three are the skin types of the SIGGRAPH 2006 sketch (Donner & Jensen, teaser caption; model.md section 1).

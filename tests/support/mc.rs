@@ -187,11 +187,7 @@ struct Tally {
 
 impl Tally {
     fn new(nbins: usize) -> Self {
-        Tally {
-            bins: vec![0.0; nbins],
-            bins2: vec![0.0; nbins],
-            ..Default::default()
-        }
+        Tally { bins: vec![0.0; nbins], bins2: vec![0.0; nbins], ..Default::default() }
     }
     fn add(&mut self, o: &Tally) {
         self.r_sum += o.r_sum;
@@ -279,11 +275,7 @@ impl Walker<'_> {
                 } else {
                     f64::INFINITY
                 };
-                let step = if s.sigma_t > 0.0 {
-                    tau / s.sigma_t
-                } else {
-                    f64::INFINITY
-                };
+                let step = if s.sigma_t > 0.0 { tau / s.sigma_t } else { f64::INFINITY };
                 if step < dist_b {
                     x += step * ux;
                     y += step * uy;
@@ -304,11 +296,7 @@ impl Walker<'_> {
                     tau = 0.0;
                 }
                 let down = uz > 0.0;
-                let (z_b, n2) = if down {
-                    (s.z_bottom, s.ior_below)
-                } else {
-                    (s.z_top, s.ior_above)
-                };
+                let (z_b, n2) = if down { (s.z_bottom, s.ior_below) } else { (s.z_top, s.ior_above) };
                 z = z_b;
                 if n2 != s.ior {
                     let (refl, cos_t) = fresnel_unpolarized(s.ior, n2, uz.abs());
@@ -376,10 +364,7 @@ impl Walker<'_> {
 pub fn simulate(layers: &[McLayer], cfg: &McConfig) -> McResult {
     assert!(!layers.is_empty(), "no layers");
     let edges = &cfg.radial_edges_mm;
-    assert!(
-        edges.windows(2).all(|p| p[1] > p[0]),
-        "radial edges must increase strictly"
-    );
+    assert!(edges.windows(2).all(|p| p[1] > p[0]), "radial edges must increase strictly");
     assert!(edges.first().map_or(true, |&e| e >= 0.0), "radial edges must be >= 0");
     assert!(cfg.roulette_survival > 0.0 && cfg.roulette_survival <= 1.0);
     assert!(cfg.chunk_photons > 0);
@@ -391,10 +376,7 @@ pub fn simulate(layers: &[McLayer], cfg: &McConfig) -> McResult {
             l.thickness_mm > 0.0 && (l.thickness_mm.is_finite() || last),
             "layer {i}: thickness must be > 0 and finite except for the last layer"
         );
-        assert!(
-            l.sigma_a_per_mm >= 0.0 && l.sigma_s_per_mm >= 0.0,
-            "layer {i}: negative coefficient"
-        );
+        assert!(l.sigma_a_per_mm >= 0.0 && l.sigma_s_per_mm >= 0.0, "layer {i}: negative coefficient");
         assert!(l.ior.is_finite() && l.ior > 0.0, "layer {i}: bad ior");
         let sigma_t = l.sigma_a_per_mm + l.sigma_s_per_mm;
         slabs.push(Slab {
