@@ -66,7 +66,11 @@ impl Layer {
             [("sigma_a_per_mm", self.sigma_a_per_mm), ("sigma_s_reduced_per_mm", self.sigma_s_reduced_per_mm)]
         {
             if !(value == 0.0 || (c_min..=c_max).contains(&value)) {
-                return bad(format!("{field} must be 0 or in [{c_min:e}, {c_max:e}] per mm; got {value:e}"));
+                let sign = if value < 0.0 { ">= 0: " } else { "" };
+                return bad(format!(
+                    "{field} must be {sign}0 or in [{c_min:e}, {c_max:e}] per mm; got {}",
+                    readable(value)
+                ));
             }
         }
         if self.sigma_a_per_mm + self.sigma_s_reduced_per_mm <= 0.0 {
