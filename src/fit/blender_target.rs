@@ -332,7 +332,7 @@ impl Target {
     }
 }
 
-/// EEVEE's Burley: `d = Radius x Scale / (4 pi) / s(A_n)` with `A_n = A / max(A)` per channel (blender.md 7;
+/// EEVEE's Burley: `d = Radius x Scale / (4 pi) / s(A_n)` with `A_n = A / max(A)` per channel (docs/blender-targets.md, EEVEE;
 /// `burley_setup` in EEVEE's subsurface shaders), so Radius x Scale = 4 pi d s(A_n) gives the Cycles profile. An
 /// all-black albedo (max 0, or not finite) takes A_n = 0. Base Color renders as the albedo.
 pub fn eevee_burley(albedo: [f64; 3], burley_radius_mm: [f64; 3]) -> MethodParams {

@@ -6,8 +6,8 @@
 //! `Rd(alpha') = alpha'/2 (1 + e^(-A_F s')) e^(-s') = Base Color` with `s' = sqrt(3 (1 - alpha'))` (12 bisection
 //! steps on [0, 1]), and the walk's transport mean free path is `Radius * Scale * sqrt(3 (1 - alpha'))` (no 1/(4 pi)).
 //! Source: `bssrdf_dipole_compute_Rd`, `bssrdf_dipole_compute_alpha_prime` and `bssrdf_setup_radius` in
-//! `src/kernel/closure/bssrdf.h`, `blender/cycles` commit 695bae346ba1 (the same in `release/v5.0`, blender.md
-//! section 1). The walk then uses the Wrenninge fit for alpha, like `RANDOM_WALK` up to 5.1; its entry is half
+//! `src/kernel/closure/bssrdf.h`, `blender/cycles` commit 695bae346ba1 (the same in `release/v5.0`, docs/blender-targets.md,
+//! Random Walk (Skin)). The walk then uses the Wrenninge fit for alpha, like `RANDOM_WALK` up to 5.1; its entry is half
 //! cosine-distributed diffuse, half GGX refraction with roughness 1 at the Subsurface IOR (`subsurface.h`).
 
 use super::random_walk::{invert_response, RandomWalkColor, ResponseTable};
@@ -17,7 +17,7 @@ use super::walk_width::{measured_k, MeasuredWalk};
 pub const SKIN_SUBSURFACE_IOR: f64 = 1.4;
 
 /// Flat thick slab under a uniform white world, bpy 5.0.1, `RANDOM_WALK_SKIN`, Specular IOR Level 0: rendered value
-/// / Base Color at Base Color 0.05 / 0.2 / 0.5 / 0.8 / 0.95 (blender.md section 3, SKIN column).
+/// / Base Color at Base Color 0.05 / 0.2 / 0.5 / 0.8 / 0.95 (docs/blender-targets.md, Random Walk (Skin)).
 const MEASURED_FLAT_RATIO: [(f64, f64); 5] =
     [(0.05, 0.9067), (0.2, 0.92), (0.5, 0.9537), (0.8, 0.9908), (0.95, 0.9567)];
 

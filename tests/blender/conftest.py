@@ -278,7 +278,7 @@ def pixel_centres_x(ortho_scale: float, width: int, center_x: float = 0.0) -> np
 
 
 def half_shadow_scene(scene, material, ortho_mm: float, width: int, height: int, occluder_mm: float = 1.5):
-    """The half-shadow edge scene (blender.md section 4): a thick slab with `material` under a sun of irradiance 1 W/m^2
+    """The half-shadow edge scene (docs/blender-render-tests.md): a thick slab with `material` under a sun of irradiance 1 W/m^2
     from straight above, a black world, and a black half-plane `occluder_mm` above the slab over x > 0 that casts a
     hard shadow but is invisible to the camera; an orthographic top camera `ortho_mm` wide. Returns the x (mm) of the
     image columns' centres."""

@@ -1,5 +1,5 @@
 """An independent reference for Cycles' random-walk subsurface scattering in a thin flat slab: a Monte Carlo of the
-walk as the Cycles source describes it (shared design notes, blender.md section 1 and blender-versions.md), in numpy.
+walk as the Cycles source describes it (docs/blender-targets.md, with the Cycles source lines), in numpy.
 
 Used by the length-scale test (test_versions.py): a slab of thickness T under a sun from straight above, seen from
 straight above, renders piL/E = the probability that a walk entering the top face leaves through the top face again
