@@ -4,7 +4,6 @@ and read-only numpy arrays are read as they are."""
 
 import numpy as np
 import pytest
-
 import spectral_skin
 from spectral_skin import SpectralSkinError
 
@@ -34,9 +33,9 @@ def raises_naming(exception, name, call):
 @pytest.mark.parametrize("bad", NOT_NUMBERS, ids=repr)
 def test_every_numeric_keyword_rejects_bool_and_str(function, bad):
     for name in (*REAL_KEYWORDS, *INTEGER_KEYWORDS):
-        raises_naming(TypeError, name, lambda: function(preset="asian", **{name: bad}))
+        raises_naming(TypeError, name, lambda name=name: function(preset="asian", **{name: bad}))
     for name in PARAMETERS:
-        raises_naming(TypeError, name, lambda: function(preset="asian", **{name: bad}))
+        raises_naming(TypeError, name, lambda name=name: function(preset="asian", **{name: bad}))
 
 
 def test_positional_string_parameter_names_the_argument():
@@ -46,7 +45,7 @@ def test_positional_string_parameter_names_the_argument():
 
 def test_integer_keywords_reject_floats():
     for name in INTEGER_KEYWORDS:
-        raises_naming(TypeError, name, lambda: spectral_skin.evaluate(preset="asian", **{name: 16.0}))
+        raises_naming(TypeError, name, lambda name=name: spectral_skin.evaluate(preset="asian", **{name: 16.0}))
 
 
 def test_numpy_number_scalars_are_accepted():

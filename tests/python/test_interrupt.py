@@ -47,7 +47,6 @@ def test_ctrl_c_stops_a_long_maps_call():
 
 def test_table_resolution_is_bounded_before_allocation():
     import numpy as np
-
     import spectral_skin
 
     params = np.full((2, 2, 4), 0.05, dtype=np.float32)
