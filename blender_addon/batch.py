@@ -330,4 +330,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    status = main()
+    # Everything is written (and renamed into place) by now. bpy 4.2 can crash while the interpreter tears the module
+    # down after a save (seen: SIGSEGV after "Saved out.blend"), which would turn a finished job into a failure: end
+    # the process here, after flushing, without that teardown.
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
