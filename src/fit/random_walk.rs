@@ -484,17 +484,6 @@ pub fn christensen_burley_s(albedo: f64) -> f64 {
     BURLEY_S_CONST - a + BURLEY_S_QUADRATIC * (a - BURLEY_S_CENTRE) * (a - BURLEY_S_CENTRE)
 }
 
-/// `s(A)`: factor on a Christensen-Burley Radius (4 pi d for profile length d) that gives Cycles RW about the same
-/// profile width at Base Color A, dimensionless (Christensen & Burley 2015, eq. 6).
-///
-/// The Blender mapping no longer uses it: [`width_factor`] holds the edge-render calibration. Earlier renders measured
-/// that RW at Radius R renders like a Burley profile with d / (R / 4 pi) = 0.32 / 0.58 / 1.05 at A = 0.2 / 0.5 / 0.8,
-/// against 1/s(A) = 0.34 / 0.58 / 0.91 (so at A = 0.8 this factor makes RW ~15% wider than the Burley target).
-/// A is clamped to [0, 1], NaN counts as 0.
-pub fn random_walk_radius_scale(base_color: f64) -> f64 {
-    christensen_burley_s(base_color)
-}
-
 /// Width factor `w` of a walk under `model` at Base Color A, dimensionless: the walk's transport mean free path that
 /// renders an edge like a Burley profile of length d is `w d`. `w = 1/k(A)` with k the edge-render calibration of
 /// the model's walk (`walk_width`: bpy 5.0 `RANDOM_WALK` for the fit, bpy 5.3 `RANDOM_WALK` for Van de Hulst), its
@@ -710,7 +699,7 @@ mod tests {
             assert!(cycles_single_scatter_albedo(x, x).is_finite());
             assert!(chandrasekhar_h(x, x).is_finite());
             assert!(random_walk_flat_albedo(x).is_finite());
-            assert!(random_walk_radius_scale(x).is_finite());
+            assert!(christensen_burley_s(x).is_finite());
         }
         assert_eq!(cycles_single_scatter_albedo(f64::NAN, 0.0), 0.0);
         assert_eq!(cycles_single_scatter_albedo(2.0, 0.0), cycles_single_scatter_albedo(1.0, 0.0));
@@ -718,11 +707,11 @@ mod tests {
 
     /// Christensen-Burley s(A) and blender.md section 4's 1/s = 0.34 / 0.58 / 0.91 at A = 0.2 / 0.5 / 0.8.
     #[test]
-    fn radius_scale_is_burley_s() {
+    fn christensen_burley_s_matches_its_inverse_values() {
         for (a, inv_s) in [(0.2, 0.34), (0.5, 0.58), (0.8, 0.91)] {
-            let s = random_walk_radius_scale(a);
+            let s = christensen_burley_s(a);
             assert!((1.0 / s - inv_s).abs() < 0.006, "A = {a}: 1/s = {}", 1.0 / s);
         }
-        assert!((random_walk_radius_scale(0.8) - 1.1).abs() < 1e-12);
+        assert!((christensen_burley_s(0.8) - 1.1).abs() < 1e-12);
     }
 }
