@@ -16,10 +16,40 @@ use super::walk_width::{measured_k, MeasuredWalk};
 /// The Subsurface IOR this mapping assumes (Principled BSDF's default for the socket); the material must use it.
 pub const SKIN_SUBSURFACE_IOR: f64 = 1.4;
 
-/// Flat thick slab under a uniform white world, bpy 5.0.1, `RANDOM_WALK_SKIN`, Specular IOR Level 0: rendered value
-/// / Base Color at Base Color 0.05 / 0.2 / 0.5 / 0.8 / 0.95 (docs/blender-targets.md, Random Walk (Skin)).
-const MEASURED_FLAT_RATIO: [(f64, f64); 5] =
-    [(0.05, 0.9067), (0.2, 0.92), (0.5, 0.9537), (0.8, 0.9908), (0.95, 0.9567)];
+/// The flat-slab response of a Skin walk as rendered, compiled in: `docs/data/random_walk_skin_flat.json` (written by
+/// `<venv>/bin/python scripts/measure_skin_flat.py`: a thick slab under a uniform white world, `RANDOM_WALK_SKIN`,
+/// Specular IOR Level 0, Subsurface IOR 1.4; the same figures to 4 digits in bpy 4.2, 5.0 and 5.3).
+const FLAT_RESPONSE_JSON: &str = include_str!("../../docs/data/random_walk_skin_flat.json");
+
+#[derive(serde::Deserialize)]
+struct FlatResponseFile {
+    cases: Vec<FlatResponseCase>,
+}
+
+#[derive(serde::Deserialize)]
+struct FlatResponseCase {
+    base_color: f64,
+    ratio: f64,
+}
+
+/// (Base Color, rendered value / Base Color) rows of the measured flat-slab response, rising in Base Color. The JSON
+/// is part of the source: a malformed file is a build defect, caught by this module's tests.
+fn measured_flat_ratio() -> &'static [(f64, f64)] {
+    static ROWS: std::sync::OnceLock<Vec<(f64, f64)>> = std::sync::OnceLock::new();
+    ROWS.get_or_init(|| {
+        let file: FlatResponseFile =
+            serde_json::from_str(FLAT_RESPONSE_JSON).expect("docs/data/random_walk_skin_flat.json parses");
+        let mut rows: Vec<(f64, f64)> = file.cases.iter().map(|c| (c.base_color, c.ratio)).collect();
+        rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+        rows
+    })
+}
+
+/// The highest measured Base Color: a Skin walk is given no brighter one.
+fn highest_measured_base_color() -> f64 {
+    let t = measured_flat_ratio();
+    t[t.len() - 1].0
+}
 
 /// Cycles' Rd below which `bssrdf_dipole_compute_alpha_prime` returns 0, and at or above which it returns 0.999999.
 const DIPOLE_RD_LOW: f64 = 1e-4;
@@ -76,15 +106,15 @@ pub fn skin_radius_factor(base_color: f64, eta: f64) -> f64 {
 /// bpy 5.0 `RANDOM_WALK_SKIN` edge renders (`walk_width`), held above the highest Base Color a Skin walk is given
 /// (0.95, [`skin_base_color`]).
 pub fn skin_width_factor(base_color: f64) -> f64 {
-    1.0 / measured_k(MeasuredWalk::Skin, base_color, MEASURED_FLAT_RATIO[MEASURED_FLAT_RATIO.len() - 1].0)
+    1.0 / measured_k(MeasuredWalk::Skin, base_color, highest_measured_base_color())
 }
 
 /// Flat-slab value Cycles renders for a Skin walk with Base Color A, dimensionless: A times the measured ratio,
-/// interpolated linearly between the measured Base Colors and held at the first ratio below A = 0.05. Measured at
-/// one Subsurface IOR setting in bpy 5.0.1 only: an approximation, not a model of the walk.
+/// interpolated linearly between the measured Base Colors (0.005 to 0.95) and held beyond them. Measured at the
+/// default Subsurface IOR (1.4) only: an interpolation of renders, not a model of the walk.
 pub fn skin_flat_albedo(base_color: f64) -> f64 {
     let a = if base_color.is_nan() { 0.0 } else { base_color.clamp(0.0, 1.0) };
-    let t = &MEASURED_FLAT_RATIO;
+    let t = measured_flat_ratio();
     let ratio = if a <= t[0].0 {
         t[0].1
     } else if a >= t[t.len() - 1].0 {
@@ -101,7 +131,7 @@ pub fn skin_flat_albedo(base_color: f64) -> f64 {
 /// response, up to the highest measured Base Color (0.95).
 pub fn skin_base_color(target_albedo: f64) -> RandomWalkColor {
     static TABLE: std::sync::OnceLock<ResponseTable> = std::sync::OnceLock::new();
-    let a_sat = MEASURED_FLAT_RATIO[MEASURED_FLAT_RATIO.len() - 1].0;
+    let a_sat = highest_measured_base_color();
     let table = TABLE.get_or_init(|| ResponseTable::new(a_sat, skin_flat_albedo));
     invert_response(target_albedo, table, skin_flat_albedo)
 }
@@ -124,6 +154,17 @@ mod tests {
         assert_eq!(skin_dipole_alpha_prime(0.0, 1.4), 0.0);
         assert_eq!(skin_dipole_alpha_prime(0.999, 1.4), DIPOLE_ALPHA_MAX);
         assert_eq!(skin_dipole_alpha_prime(f64::NAN, 1.4), 0.0);
+    }
+
+    /// The compiled-in measurements cover the african preset's Base Colors (0.02-0.04) and the response they give is
+    /// rising, so the inversion is unique.
+    #[test]
+    fn measured_flat_response_is_rising_and_covers_dark_skin() {
+        let t = measured_flat_ratio();
+        assert!(t.len() >= 10 && t[0].0 <= 0.01 && highest_measured_base_color() >= 0.9, "{t:?}");
+        for w in t.windows(2) {
+            assert!(w[1].0 > w[0].0 && w[1].0 * w[1].1 > w[0].0 * w[0].1, "{w:?}");
+        }
     }
 
     /// The measured response is rising, so the inversion is unique, and it round-trips.
