@@ -17,7 +17,8 @@ use super::walk_width::{measured_k, MeasuredWalk};
 pub const SKIN_SUBSURFACE_IOR: f64 = 1.4;
 
 /// Flat thick slab under a uniform white world, bpy 5.0.1, `RANDOM_WALK_SKIN`, Specular IOR Level 0: rendered value
-/// / Base Color at Base Color 0.05 / 0.2 / 0.5 / 0.8 / 0.95 (docs/blender-targets.md, Random Walk (Skin)).
+/// / Base Color at Base Color 0.05 / 0.2 / 0.5 / 0.8 / 0.95 (docs/blender-principled.md, Flat slab under a white
+/// world).
 const MEASURED_FLAT_RATIO: [(f64, f64); 5] =
     [(0.05, 0.9067), (0.2, 0.92), (0.5, 0.9537), (0.8, 0.9908), (0.95, 0.9567)];
 
