@@ -17,7 +17,8 @@ pub struct ProfileGrid {
 }
 
 impl Default for ProfileGrid {
-    /// 0.001 to 20 mm spans dark-skin blue (~0.02 mm wide) to light-skin red tails (model.md 6.2, pitfall 10).
+    /// 0.001 to 20 mm spans dark-skin blue (~0.02 mm wide) to light-skin red tails (docs/model.md, Radial profiles;
+    /// Pitfalls 10).
     fn default() -> Self {
         ProfileGrid { r_min_mm: 0.001, r_max_mm: 20.0, count: 64 }
     }

@@ -1,4 +1,4 @@
-//! The oily surface layer of DJ2006 (model.md section 8) and its mapping to Blender's Principled BSDF specular inputs.
+//! DJ2006's oily surface layer (docs/model.md, Oil layer) and its mapping to the Principled BSDF's specular inputs.
 //!
 //! DJ2006's surface term is a Torrance-Sparrow lobe scaled by the oiliness rho_s:
 //! `f_r = rho_s D G F / (4 cos_i cos_o)`, Beckmann `D` with m = 0.35, the V-cavity `G`, and the exact unpolarised
@@ -6,7 +6,7 @@
 //! `rho_dr(theta_i)` (DJ2006 eq. 2) is the light the surface takes before the rest enters the skin: the BSSRDF carries
 //! `(1 - rho_dr(omega_i)) (1 - rho_dr(omega_o))`.
 //!
-//! Principled BSDF (Cycles 5.0, `src/kernel/svm/closure.h`, blender.md section 1) renders the specular layer as
+//! Principled BSDF (Cycles 5.0, `src/kernel/svm/closure.h`; docs/blender-principled.md) renders the specular layer as
 //! single-scatter GGX with `alpha = Roughness^2`, the height-correlated Smith `G2 = 1 / (1 + Lambda_i + Lambda_o)`
 //! and the real dielectric Fresnel curve at `eta = ior_from_F0(F0(IOR) * 2 * Specular IOR Level)`
 //! (`bsdf_microfacet.h`, `FresnelGeneralizedSchlick` with a negative exponent). It then scales the layers below it,
@@ -20,10 +20,10 @@ use serde::Serialize;
 use crate::numeric::gauss_legendre;
 
 /// Beckmann roughness m of the oil layer: "values for sigma in the range 0.2 - 0.4 give good results for skin, and we
-/// use sigma = 0.35" (DJ2006; DAM `Beckmann(0.35f)`; model.md sections 1 and 8).
+/// use sigma = 0.35" (DJ2006; DAM `Beckmann(0.35f)`; docs/model.md, Parameters and Oil layer).
 pub const BECKMANN_ROUGHNESS_M: f64 = 0.35;
 /// Index of refraction of the skin surface, "a constant index of refraction of 1.4 throughout the skin" (DJ2006;
-/// DAM `FresnelDielectric(1., 1.4f)`; model.md section 8).
+/// DAM `FresnelDielectric(1., 1.4f)`; docs/model.md, Oil layer).
 pub const SKIN_SURFACE_IOR: f64 = 1.4;
 /// Principled BSDF's Specular IOR Level that leaves F0(IOR) unchanged (closure.h: `if (specular_ior_level != 0.5f)`).
 pub const PRINCIPLED_NEUTRAL_SPECULAR_IOR_LEVEL: f64 = 0.5;
@@ -84,7 +84,7 @@ pub fn fresnel_dielectric(cos_theta_i: f64, eta: f64) -> f64 {
 }
 
 /// `D(theta_h) = exp(-tan^2 theta_h / m^2) / (pi m^2 cos^4 theta_h)`: Beckmann distribution of microfacet normals,
-/// sr^-1, normalised so that `int D cos theta_h d omega_h = 1` (model.md section 8). 0 for cos <= 0 or m <= 0.
+/// sr^-1, normalised so that `int D cos theta_h d omega_h = 1` (docs/model.md, Oil layer). 0 for cos <= 0, m <= 0.
 pub fn beckmann_d(cos_theta_h: f64, m: f64) -> f64 {
     let c2 = cos_theta_h * cos_theta_h;
     if !(cos_theta_h > 0.0 && m > 0.0) {
@@ -95,7 +95,7 @@ pub fn beckmann_d(cos_theta_h: f64, m: f64) -> f64 {
 }
 
 /// `G = min(1, 2 cos_h cos_o / (o.h), 2 cos_h cos_i / (o.h))`: Torrance-Sparrow V-cavity shadowing-masking,
-/// dimensionless (model.md section 8; pbrt-v2 `Microfacet::G`). 0 for o.h <= 0.
+/// dimensionless (docs/model.md, Oil layer; pbrt-v2 `Microfacet::G`). 0 for o.h <= 0.
 pub fn v_cavity_g(cos_theta_h: f64, cos_theta_i: f64, cos_theta_o: f64, o_dot_h: f64) -> f64 {
     if o_dot_h.is_nan() || o_dot_h <= 0.0 {
         return 0.0;
@@ -106,7 +106,7 @@ pub fn v_cavity_g(cos_theta_h: f64, cos_theta_i: f64, cos_theta_o: f64, o_dot_h:
 }
 
 /// `f_r(omega_i, omega_o) = rho_s D G F(o.h; 1.4) / (4 cos_i cos_o)`: DJ2006's surface BRDF, sr^-1, for unit
-/// directions in the local frame (z = surface normal) (model.md section 8). 0 unless both are above the surface.
+/// directions in the local frame, z = surface normal (docs/model.md, Oil layer). 0 unless both are above the surface.
 pub fn torrance_sparrow_f_r(omega_i: [f64; 3], omega_o: [f64; 3], oiliness: f64) -> f64 {
     let (cos_i, cos_o) = (omega_i[2], omega_o[2]);
     if !(cos_i > 0.0 && cos_o > 0.0) {
@@ -310,7 +310,7 @@ fn torrance_sparrow_unit_albedo(cos_theta_i: f64, panels: usize) -> f64 {
 }
 
 /// `rho_dr(theta_i) = int f_r cos theta_o d omega_o`: directional albedo of DJ2006's oily surface, dimensionless
-/// (DJ2006 eq. 2; DAM `Wet::integrate_BRDF`; model.md section 8).
+/// (DJ2006 eq. 2; DAM `Wet::integrate_BRDF`; docs/model.md, Oil layer).
 ///
 /// Quadrature over half-vectors h (cos_o d omega_o = 4 (i.h) cos_o d omega_h):
 /// `rho_dr = rho_s int D sin theta_h dtheta_h int dphi G F (i.h) / cos_i`. theta_h is split where the ring of

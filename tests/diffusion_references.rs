@@ -21,7 +21,7 @@ fn forward_hankel(f: impl Fn(f64) -> f64, s: f64) -> f64 {
         * PI
 }
 
-/// The closed-form transforms (model.md 5.3) equal the numerical transform of the real-space sums (model.md 5.2),
+/// The closed-form transforms (docs/model.md, Multipole) equal the numerical transform of the real-space sums,
 /// for the truncated series and for the whole series, reflectance and transmittance, both boundary orders.
 #[test]
 fn closed_form_transforms_match_real_space_quadrature() {

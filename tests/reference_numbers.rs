@@ -1,5 +1,5 @@
-//! The spec's reference numbers (model.md section 11), computed by an independent script from the same equations:
-//! spectra, colours and radial profiles of the three presets.
+//! Reference numbers computed by an independent script from the same equations (docs/model.md, section Reference
+//! numbers; not data from the paper): spectra, colours and radial profiles of the three presets.
 
 use spectral_skin::diffusion::{layered_reflectance, Combination, LayerStack, MultipoleTerms};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
@@ -11,9 +11,9 @@ fn total(preset: &str, wavelength_nm: f64, combination: Combination, model: &Ski
     stack.reflectance_hat(0.0, combination, MultipoleTerms::All)
 }
 
-/// model.md 11.2 (printed to 3 decimals; the reference used a 20 mm dermis, here semi-infinite: equal to 4 decimals).
+/// Totals R~(0) (printed to 3 decimals; the reference used a 20 mm dermis, here semi-infinite: equal to 4 decimals).
 #[test]
-fn spectral_totals_match_section_11_2() {
+fn spectral_totals_match_reference() {
     let wavelengths = [400.0, 450.0, 500.0, 550.0, 575.0, 600.0, 650.0, 700.0];
     let table: [(&str, Combination, [f64; 8]); 4] = [
         ("caucasian", Combination::Directional, [0.330, 0.355, 0.399, 0.389, 0.385, 0.477, 0.521, 0.539]),
@@ -26,15 +26,15 @@ fn spectral_totals_match_section_11_2() {
             for (w, e) in wavelengths.iter().zip(expected) {
                 let got = total(preset, *w, comb, &model);
                 // Half a unit in the last printed digit, plus rounding of the inputs.
-                assert!((got - e).abs() <= 0.0006, "{preset} {comb:?} {w} nm: got {got:.4}, spec {e}");
+                assert!((got - e).abs() <= 0.0006, "{preset} {comb:?} {w} nm: got {got:.4}, reference {e}");
             }
         }
     }
 }
 
-/// model.md 11.3: linear sRGB of R12 at 2 nm (printed to 3 decimals).
+/// Linear sRGB of R12 at 2 nm (printed to 3 decimals).
 #[test]
-fn preset_colours_match_section_11_3() {
+fn preset_colours_match_reference() {
     let table =
         [("caucasian", [0.498, 0.395, 0.353]), ("asian", [0.154, 0.095, 0.060]), ("african", [0.032, 0.023, 0.017])];
     let mut request = Request::new(Outputs { albedo: true, ..Outputs::default() });
@@ -45,7 +45,7 @@ fn preset_colours_match_section_11_3() {
         for c in 0..3 {
             assert!(
                 (rgb[c] - expected[c]).abs() <= 0.0015,
-                "{preset} channel {c}: got {:.4}, spec {}",
+                "{preset} channel {c}: got {:.4}, reference {}",
                 rgb[c],
                 expected[c]
             );
@@ -53,12 +53,13 @@ fn preset_colours_match_section_11_3() {
     }
 }
 
-/// model.md 11.4: the Caucasian radial profile R12(r) in mm^-2 (printed to 3 significant digits).
-/// One entry is not checked: at 450 nm and 4 mm the spec prints 3.6e-7, where this solver gives 3.849e-7 and a brute-force
-/// trapezoid of the full transform (ds = 5e-4 mm^-1 up to 3000 mm^-1, see `profile_matches_brute_force_quadrature`)
-/// gives 3.837e-7; the difference, 2.4e-8 mm^-2 or 4e-9 of R(0), is at the noise floor the spec states for its own grid.
+/// The Caucasian radial profile R12(r) in mm^-2 (printed to 3 significant digits).
+/// One entry is not checked: at 450 nm and 4 mm the reference prints 3.6e-7, where this solver gives 3.849e-7 and a
+/// brute-force trapezoid of the full transform (ds = 5e-4 mm^-1 up to 3000 mm^-1, see
+/// `profile_matches_brute_force_quadrature`) gives 3.837e-7; the difference, 2.4e-8 mm^-2 or 4e-9 of R(0), is at the
+/// noise floor its author stated for the script's own grid.
 #[test]
-fn caucasian_profile_matches_section_11_4() {
+fn caucasian_profile_matches_reference() {
     let radii = [0.0, 0.05, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0];
     // As printed; the tolerance is half a unit in the last printed digit plus 0.3 % for the reference's rounding.
     let table = [
@@ -76,7 +77,7 @@ fn caucasian_profile_matches_section_11_4() {
             }
             let e: f64 = printed.parse().unwrap();
             let tolerance = half_unit_in_last_digit(printed) + 0.003 * e;
-            assert!((got - e).abs() <= tolerance, "{w} nm, r = {r} mm: got {got:.4e}, spec {printed}");
+            assert!((got - e).abs() <= tolerance, "{w} nm, r = {r} mm: got {got:.4e}, reference {printed}");
         }
     }
 }

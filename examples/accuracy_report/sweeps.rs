@@ -94,7 +94,7 @@ pub fn hankel(refs: &[PresetReference], s: &Settings) -> Sweep {
             let acc = Accuracy { hankel, ..Accuracy::default() };
             rows.push(row(
                 refs,
-                &format!("panels x{refinement}"),
+                &format!("refinement {refinement}"),
                 format!("{gauss_order}"),
                 acc,
                 Task::Profile,

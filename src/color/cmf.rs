@@ -1,4 +1,5 @@
-//! CIE 1931 2-degree colour-matching functions and illuminant D65, 1 nm tables from `data/` (model.md section 12).
+//! CIE 1931 2-degree colour-matching functions and illuminant D65, 1 nm tables from `data/` (docs/model.md, section
+//! Data files).
 
 use std::sync::OnceLock;
 

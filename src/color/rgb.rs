@@ -121,7 +121,8 @@ fn invert(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
 mod tests {
     use super::*;
 
-    /// The XYZ -> sRGB matrix of model.md section 7 (Lindbloom's, made with the D65 white XYZ (0.95047, 1, 1.08883)).
+    /// Lindbloom's published XYZ -> sRGB matrix, made with the D65 white XYZ (0.95047, 1, 1.08883) (docs/model.md,
+    /// Colour).
     #[test]
     fn rec709_matches_published_matrix() {
         let m = WorkingSpace::LinearRec709.xyz_to_rgb_matrix([0.95047, 1.0, 1.08883]);

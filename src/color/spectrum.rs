@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cmf::{cie1931_2deg, illuminant_d65};
 
-/// The visible range integrated for colour, nm (model.md 11.3 uses 380-780 nm).
+/// The visible range integrated for colour, nm (as the reference colours of docs/model.md, Reference numbers).
 pub const VISIBLE_RANGE_NM: (f64, f64) = (380.0, 780.0);
 
 /// Where the spectral computation places its wavelengths (the number is set by the step, see [`WavelengthGrid::new`]).
@@ -155,7 +155,7 @@ mod tests {
     }
 
     /// White of D65 over 380-780 nm with these tables, summed at 1 nm by a separate script: XYZ = (0.950423, 1,
-    /// 1.088610). (model.md 12 quotes (0.95047, 1, 1.08883) for the tables' full 360-830 nm range.)
+    /// 1.088610). (Over the tables' full 360-830 nm they give (0.95047, 1, 1.08883); docs/model.md, Colour.)
     #[test]
     fn white_point() {
         for step in [1.0, 5.0, 20.0] {

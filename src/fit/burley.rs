@@ -1,11 +1,13 @@
-//! Christensen-Burley profile length fitted to a model profile, as Cycles' BURLEY method uses it (blender.md 1, 4).
+//! Christensen-Burley profile length fitted to a model profile, as Cycles' BURLEY method uses it (docs/model.md,
+//! Burley fit).
 //!
 //! Cycles renders R(r) = A (e^(-r/d) + e^(-r/3d)) / (8 pi d r) with d = Radius * Scale / (4 pi), and the total A =
-//! Base Color exactly. The fit chooses d so that the edge response (light on a half-plane, the test of blender.md 4)
-//! of the Burley profile is as close as possible, in L2 over the line, to the model's edge response. By the
-//! projection-slice theorem the 1-D Fourier transform of the line-spread function is the 2-D transform R~(s), and by
-//! Parseval || E_model - E_burley ||^2 = (1/pi) int_0^inf (N(s) - B~(s d))^2 / s^2 ds with N = R~ / R~(0): the fit needs
-//! only the Hankel-domain reflectance, never a radial profile.
+//! Base Color exactly. The fit chooses d so that the edge response (light on a half-plane, as in the renders of
+//! docs/blender-principled.md, Edge and spot renders) of the Burley profile is as close as possible, in L2 over the
+//! line, to the model's edge response. By the projection-slice theorem the 1-D Fourier transform of the line-spread
+//! function is the 2-D transform R~(s), and by Parseval
+//! || E_model - E_burley ||^2 = (1/pi) int_0^inf (N(s) - B~(s d))^2 / s^2 ds with N = R~ / R~(0): the fit needs only
+//! the Hankel-domain reflectance, never a radial profile.
 
 use std::f64::consts::PI;
 

@@ -1,4 +1,4 @@
-//! Blender-facing fits: the Subsurface Radius and Base Color per Cycles subsurface method (blender.md).
+//! Blender-facing fits: the Subsurface Radius and Base Color per Cycles subsurface method (docs/blender-targets.md).
 
 pub mod blender_target;
 pub mod burley;
@@ -36,7 +36,7 @@ pub enum RadiusFit {
 }
 
 /// The default method: Christensen-Burley, because Cycles renders its Base Color exactly and its profile is a
-/// closed form the fit can match (blender.md TL;DR).
+/// closed form the fit can match (docs/blender-principled.md, section Subsurface Radius and Subsurface Scale).
 pub const DEFAULT_METHOD: SubsurfaceMethod = SubsurfaceMethod::Burley;
 
 impl SubsurfaceMethod {

@@ -8,17 +8,17 @@
 //! `subsurface_random_walk_coefficients` in `src/kernel/integrator/subsurface_random_walk.h` of the `blender/cycles`
 //! mirror (`intern/cycles/kernel/integrator/subsurface_random_walk.h` in the Blender monorepo), branch `release/v5.0`;
 //! the fit's constants below were transcribed from `blender/cycles` commit 695bae346ba1 and checked identical in
-//! `blender/blender` commit 00dcfdf916c6 (Cycles 3.x). The g = 0 values agree with blender.md section 1, which read
-//! `release/v5.0` (2eba41024174). Cycles after 5.0 (`blender/cycles` 695bae346ba1) also has d'Eon's Van de Hulst
-//! mapping ("A Hitchhiker's Guide to Multiple Scattering", eq. 53.7) for a new walk model and keeps this fit as the
-//! legacy path. [`RandomWalkModel`] names the two alpha mappings; Blender 5.2 and later use the Van de Hulst one for
-//! `RANDOM_WALK` and keep the fit for `RANDOM_WALK_LEGACY` (see `fit::blender_target`).
+//! `blender/blender` commit 00dcfdf916c6 (Cycles 3.x). The g = 0 values agree with `release/v5.0` (2eba41024174;
+//! docs/blender-principled.md, Random walk in Cycles 5.0). Cycles after 5.0 (`blender/cycles` 695bae346ba1) also has
+//! d'Eon's Van de Hulst mapping ("A Hitchhiker's Guide to Multiple Scattering", eq. 53.7) for a new walk model and
+//! keeps this fit as the legacy path. [`RandomWalkModel`] names the two alpha mappings; Blender 5.2 and later use the
+//! Van de Hulst one for `RANDOM_WALK` and keep the fit for `RANDOM_WALK_LEGACY` (see `fit::blender_target`).
 //!
 //! For a thick flat slab seen straight down under a uniform white world (Specular IOR Level 0, so no surface
 //! reflection and an index-matched boundary), the rendered value is the directional albedo of an isotropic,
 //! index-matched half-space, `R(mu0) = 1 - H(mu0; alpha) sqrt(1 - alpha)` with Chandrasekhar's H-function
-//! (Chandrasekhar, "Radiative Transfer", 1950, ch. V; blender.md section 3). Cycles' Burley method, by contrast,
-//! renders exactly Base Color.
+//! (Chandrasekhar, "Radiative Transfer", 1950, ch. V; renders in docs/blender-principled.md, Flat slab under a white
+//! world). Cycles' Burley method, by contrast, renders exactly Base Color.
 
 use std::sync::OnceLock;
 
@@ -32,7 +32,7 @@ use crate::numeric::gauss_legendre;
 pub const CYCLES_MAX_SINGLE_SCATTER_ALBEDO: f64 = 0.999999;
 /// `min_alpha` of `subsurface_random_walk_coefficients`: a smaller alpha walks at 0.2, throughput times alpha / 0.2.
 pub const CYCLES_MIN_SINGLE_SCATTER_ALBEDO: f64 = 0.2;
-/// Largest Subsurface Anisotropy Cycles 5.0 accepts: `bssrdf_setup` clamps g to [0, 0.9] (bssrdf.h L294, blender.md 1).
+/// Largest Subsurface Anisotropy Cycles 5.0 accepts: `bssrdf_setup` clamps g to [0, 0.9] (bssrdf.h L294).
 pub const CYCLES_MAX_ANISOTROPY: f64 = 0.9;
 
 /// `a(g)`: polynomial coefficients, g^0..g^7 (Wrenninge et al. 2017 via `subsurface_random_walk_remap`, `A`).
@@ -293,7 +293,7 @@ fn h_normal_incidence(albedo: f64) -> f64 {
 }
 
 /// `R(mu0; a) = 1 - H(mu0; a) sqrt(1 - a)`: directional albedo of an index-matched, isotropically scattering
-/// half-space lit from direction cosine mu0, dimensionless (Chandrasekhar 1950, ch. V; blender.md section 3).
+/// half-space lit from direction cosine mu0, dimensionless (Chandrasekhar 1950, ch. V).
 pub fn half_space_directional_albedo(mu0: f64, albedo: f64) -> f64 {
     let albedo = clamp_or_low(albedo, 0.0, 1.0);
     1.0 - chandrasekhar_h(mu0, albedo) * (1.0 - albedo).sqrt()
@@ -312,13 +312,13 @@ pub fn half_space_hemispherical_albedo(albedo: f64) -> f64 {
 }
 
 /// Flat-slab value Cycles RW renders for Base Color A at g = 0, viewed straight down under a uniform white world,
-/// dimensionless (blender.md section 3).
+/// dimensionless (docs/blender-principled.md, Flat slab under a white world).
 ///
 /// `R = 1 - H(1; alpha) sqrt(1 - alpha)` with `alpha = alpha(A, 0)`; when alpha < 0.2, Cycles walks at 0.2 and
 /// scales the throughput by alpha / 0.2, so R = (alpha / 0.2) R(1; 0.2). This matched bpy 5.0.1 renders within 0.3%
-/// for A <= 0.8 (0.7724 / 0.8072 / 0.8823 / 0.9624 x A rendered vs 0.7706 / 0.8082 / 0.8832 / 0.9653 x A here at
-/// A = 0.05 / 0.2 / 0.5 / 0.8). Not modelled: Cycles' `BSSRDF_MAX_BOUNCES = 256` cap, which loses the paths still
-/// inside after 256 scatterings: 0.3% at A = 0.8 and 10% at A = 0.95 (rendered 0.9438 x A, here 1.0496 x A).
+/// for A <= 0.8 (the renders and this model side by side: the table of that section; tests below). Not modelled:
+/// Cycles' `BSSRDF_MAX_BOUNCES = 256` cap, which loses the paths still inside after 256 scatterings: 0.3% at
+/// A = 0.8 and 10% at A = 0.95.
 /// A is clamped to [0, 1], NaN counts as 0.
 pub fn random_walk_flat_albedo(base_color: f64) -> f64 {
     flat_albedo(RandomWalkModel::WrenningeFit, base_color)
@@ -539,7 +539,8 @@ mod tests {
         (-mu / std::f64::consts::PI * integral).exp()
     }
 
-    /// Wrenninge et al.'s coefficients at g = 0 as quoted in blender.md section 1 (a..f = 1.82605, 5.11247, ...).
+    /// Wrenninge et al.'s coefficients at g = 0 as read in Cycles 5.0 (docs/blender-principled.md, Random walk in
+    /// Cycles 5.0: a..f = 1.82605, 5.11247, ...).
     #[test]
     fn fit_coefficients_at_zero_anisotropy() {
         let b = FIT_B_CONST + FIT_B_FACTOR;
@@ -552,11 +553,12 @@ mod tests {
             (e, 4.23501),
             (FIT_F[0], 2.40603),
         ] {
-            assert!((got - want).abs() < 1e-5, "got {got}, blender.md {want}");
+            assert!((got - want).abs() < 1e-5, "got {got}, documented {want}");
         }
     }
 
-    /// blender.md: "every A >= 0.918 gives alpha = 0.999999"; the fit is monotonic below.
+    /// Every A >= 0.918 gives alpha = 0.999999 (docs/blender-principled.md, Random walk in Cycles 5.0); the fit is
+    /// monotonic below.
     #[test]
     fn fit_saturates_near_0918_and_is_monotonic() {
         let a_sat = saturation_base_color();
@@ -623,16 +625,16 @@ mod tests {
         }
     }
 
-    /// blender.md section 3, "RW theory, H-fn (uncapped)" column: flat-slab value / Base Color.
+    /// docs/blender-principled.md, Flat slab under a white world, the "RW theory" column: flat-slab value / Base Color.
     #[test]
-    fn flat_albedo_matches_blender_md_theory_column() {
+    fn flat_albedo_matches_documented_theory_column() {
         for (a, ratio) in [(0.05, 0.7706), (0.2, 0.8082), (0.5, 0.8832), (0.8, 0.9653), (0.95, 1.0496)] {
             let got = random_walk_flat_albedo(a) / a;
             assert!((got - ratio).abs() < 1e-4, "A = {a}: {got} vs {ratio}");
         }
     }
 
-    /// blender.md section 3, bpy 5.0.1 renders (RANDOM_WALK column): within 0.4% below A = 0.8.
+    /// The same table, bpy 5.0.1 renders (Random Walk column): within 0.4% below A = 0.8.
     #[test]
     fn flat_albedo_close_to_renders() {
         for (a, rendered) in [(0.05, 0.7724), (0.2, 0.8072), (0.5, 0.8823), (0.8, 0.9624)] {
@@ -641,7 +643,8 @@ mod tests {
         }
     }
 
-    /// blender.md section 1: the fit targets the hemispherical albedo, R_hemi(alpha(A)) = 0.0505/0.202/0.505/0.812.
+    /// The fit targets the hemispherical albedo, R_hemi(alpha(A)) = 0.0505/0.202/0.505/0.812
+    /// (docs/blender-principled.md, Random walk in Cycles 5.0).
     #[test]
     fn fit_targets_hemispherical_albedo() {
         for (a, want) in [(0.05, 0.0505), (0.2, 0.202), (0.5, 0.505), (0.8, 0.812)] {
@@ -705,7 +708,8 @@ mod tests {
         assert_eq!(cycles_single_scatter_albedo(2.0, 0.0), cycles_single_scatter_albedo(1.0, 0.0));
     }
 
-    /// Christensen-Burley s(A) and blender.md section 4's 1/s = 0.34 / 0.58 / 0.91 at A = 0.2 / 0.5 / 0.8.
+    /// Christensen-Burley s(A) and its inverse 1/s = 0.34 / 0.58 / 0.91 at A = 0.2 / 0.5 / 0.8
+    /// (docs/blender-principled.md, Edge and spot renders).
     #[test]
     fn christensen_burley_s_matches_its_inverse_values() {
         for (a, inv_s) in [(0.2, 0.34), (0.5, 0.58), (0.8, 0.91)] {

@@ -1,23 +1,24 @@
-//! Absorption spectra of the skin's chromophores, in mm^-1 (DJ2006 eqs. 3-5; model.md section 2).
+//! Absorption spectra of the skin's chromophores, in mm^-1 (DJ2006 eqs. 3-5; docs/model.md, section Absorption).
 
 use std::sync::OnceLock;
 
 use crate::table::SpectralTable;
 
 /// Eumelanin constant `K_em` of DJ2006 eq. 3, in mm^-1 (with wavelength in nm). The printed 6.6e11 is Jacques' cm^-1 value;
-/// every implementation uses 6.6e10 mm^-1 (model.md section 2.1, pitfall 1).
+/// every implementation uses 6.6e10 mm^-1 (docs/model.md, section Absorption, and Pitfalls 1).
 pub const K_EM_PER_MM: f64 = 6.6e10;
 /// Eumelanin wavelength exponent (DJ2006 eq. 3).
 const EUMELANIN_EXPONENT: f64 = -3.33;
-/// Pheomelanin constant of DJ2006 eq. 4, in mm^-1 (consensus 2.9e14 mm^-1 = 2.9e15 cm^-1; model.md section 2.1).
+/// Pheomelanin constant of DJ2006 eq. 4, in mm^-1 (consensus 2.9e14 mm^-1 = 2.9e15 cm^-1; docs/model.md, section
+/// Absorption).
 pub const K_PM_PER_MM: f64 = 2.9e14;
 /// Pheomelanin wavelength exponent (DJ2006 eq. 4).
 const PHEOMELANIN_EXPONENT: f64 = -4.75;
-/// Oxygenated share of the blood, `gamma` (DJ2006, fixed at 0.75; model.md section 1).
+/// Oxygenated share of the blood, `gamma` (DJ2006, fixed at 0.75; docs/model.md, section Parameters).
 pub const OXY_FRACTION: f64 = 0.75;
-/// Haemoglobin concentration of whole blood, g/L (Prahl's conversion; model.md section 2.3).
+/// Haemoglobin concentration of whole blood, g/L (Prahl's conversion; docs/model.md, section Absorption).
 pub const HEMOGLOBIN_G_PER_L: f64 = 150.0;
-/// Molar mass of haemoglobin, g/mol (Prahl; model.md section 2.3).
+/// Molar mass of haemoglobin, g/mol (Prahl; docs/model.md, section Absorption).
 pub const HEMOGLOBIN_G_PER_MOL: f64 = 64_500.0;
 
 const HEMOGLOBIN_CSV: &str = include_str!("../../data/hemoglobin_extinction.csv");
@@ -42,7 +43,8 @@ pub fn sigma_a_baseline_per_mm(wavelength_nm: f64) -> f64 {
     0.0244 + 8.53 * (-(wavelength_nm - 154.0) / 66.2).exp()
 }
 
-/// Whole-blood absorption from a decadic molar extinction in cm^-1/M: ln(10) eps c / M, then /10 for mm^-1 (model.md 2.3).
+/// Whole-blood absorption from a decadic molar extinction in cm^-1/M: ln(10) eps c / M, then /10 for mm^-1
+/// (docs/model.md, Absorption).
 fn blood_sigma_a_per_mm(extinction_per_cm_per_molar: f64) -> f64 {
     std::f64::consts::LN_10 * extinction_per_cm_per_molar * (HEMOGLOBIN_G_PER_L / HEMOGLOBIN_G_PER_MOL) / 10.0
 }
@@ -65,7 +67,7 @@ mod tests {
         ((a - b) / b).abs() < rel
     }
 
-    /// model.md section 11.1, computed by an independent script from the same equations.
+    /// Independently computed values (docs/model.md, section Reference numbers).
     #[test]
     fn coefficients_match_spec_table() {
         let rows = [
@@ -82,7 +84,7 @@ mod tests {
         }
     }
 
-    /// Prahl's table peaks (model.md section 12): HbO2 Soret at 414 nm.
+    /// Prahl's table peaks (docs/model.md, section Data files): HbO2 Soret at 414 nm.
     #[test]
     fn soret_peak() {
         let peak = sigma_a_oxy_blood_per_mm(414.0);

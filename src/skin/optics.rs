@@ -1,4 +1,5 @@
-//! Per-wavelength optics of the two skin layers from the four parameters (DJ2006 eqs. 6-8; model.md sections 2-4).
+//! Per-wavelength optics of the two skin layers from the four parameters (DJ2006 eqs. 6-8; docs/model.md, sections
+//! Absorption to Layers).
 
 use serde::{Deserialize, Serialize};
 
@@ -7,19 +8,21 @@ use super::params::SkinParams;
 use super::scattering::{sigma_s_reduced_dermis_per_mm, sigma_s_reduced_epidermis_per_mm};
 use crate::diffusion::Layer;
 
-/// Index of refraction of all skin, "a constant index of refraction of 1.4 throughout the skin" (DJ2006; model.md section 1).
+/// Index of refraction of all skin, "a constant index of refraction of 1.4 throughout the skin" (DJ2006; docs/model.md,
+/// section Parameters).
 pub const SKIN_IOR: f64 = 1.4;
-/// Epidermis thickness, mm (DJ2006; model.md section 4).
+/// Epidermis thickness, mm (DJ2006; docs/model.md, section Layers).
 pub const EPIDERMIS_THICKNESS_MM: f64 = 0.25;
 
-/// Model choices that are not accuracy settings. The defaults are the spec's recommendations.
+/// Model choices that are not accuracy settings. The defaults are those of docs/model.md (Absorption, Layers).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SkinModel {
-    /// `K_em` of DJ2006 eq. 3 in mm^-1 (default [`K_EM_PER_MM`]; 6.6e11 is the literal printed value, see model.md 2.1).
+    /// `K_em` of DJ2006 eq. 3 in mm^-1 (default [`K_EM_PER_MM`]; 6.6e11 is the literal printed value, see
+    /// docs/model.md, Absorption).
     pub eumelanin_k_per_mm: f64,
     /// Epidermis thickness, mm.
     pub epidermis_thickness_mm: f64,
-    /// Dermis thickness, mm; `f64::INFINITY` (the default) is a semi-infinite dermis (model.md section 4).
+    /// Dermis thickness, mm; `f64::INFINITY` (the default) is a semi-infinite dermis (docs/model.md, section Layers).
     /// In JSON an infinite thickness is the string "inf".
     #[serde(with = "finite_or_inf")]
     pub dermis_thickness_mm: f64,
@@ -106,7 +109,7 @@ mod tests {
         assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m);
     }
 
-    /// model.md section 11.1: Caucasian at 550 nm.
+    /// Independently computed values, Caucasian at 550 nm (docs/model.md, section Reference numbers).
     #[test]
     fn caucasian_550() {
         let p = SkinParams::preset("caucasian").unwrap();

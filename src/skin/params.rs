@@ -1,10 +1,12 @@
-//! The four physiological parameters of Donner & Jensen 2006 (DJ2006 Table 1; model.md section 1) and the named presets.
+//! The four physiological parameters of Donner & Jensen 2006 (DJ2006 parameter table; docs/model.md, section
+//! Parameters) and the named presets.
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_range, SkinError};
 
-/// Allowed range of the melanin volume fraction `C_m` in the epidermis (DJ2006 parameter table, model.md section 1).
+/// Allowed range of the melanin volume fraction `C_m` in the epidermis (DJ2006 parameter table; docs/model.md, section
+/// Parameters).
 pub const MELANIN_RANGE: (f64, f64) = (0.0, 0.5);
 /// Allowed range of the eumelanin share `beta_m` (1 - beta_m is pheomelanin).
 pub const MELANIN_BLEND_RANGE: (f64, f64) = (0.0, 1.0);
@@ -74,7 +76,8 @@ const fn preset(name: &'static str, description: &'static str, c_m: f64, beta_m:
     }
 }
 
-/// The presets. The first three are the skin types of the SIGGRAPH 2006 sketch (Donner & Jensen, teaser caption; model.md section 1).
+/// The presets. The first three are the skin types of the SIGGRAPH 2006 sketch (Donner & Jensen, teaser caption;
+/// docs/model.md, section Parameters).
 pub const PRESETS: &[Preset] = &[
     preset("caucasian", "Caucasian skin type, DJ2006 sketch teaser caption", 0.005, 0.7, 0.005, 0.3),
     preset("asian", "Asian skin type, DJ2006 sketch teaser caption", 0.15, 0.0, 0.01, 0.3),

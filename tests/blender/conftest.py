@@ -3,10 +3,10 @@
 Everything here imports bpy lazily, so collecting this directory without bpy installed does not fail: the test
 modules themselves call ``pytest.importorskip("bpy")``.
 
-Scene conventions (see shared/design/blender.md, sections 3, 4 and 6): the scene unit is the metre, the slab's top
-face is the plane z = 0, the camera is orthographic and looks straight down (image x = world +x, image up = world
-+y), and every render is Cycles CPU with a fixed seed, no adaptive sampling, no denoising, no clamping, Raw view,
-written to a 32-bit float EXR and read back with OpenImageIO.
+Scene conventions (see docs/blender-principled.md, sections Flat slab under a white world, Edge and spot renders and
+Test scenes): the scene unit is the metre, the slab's top face is the plane z = 0, the camera is orthographic and
+looks straight down (image x = world +x, image up = world +y), and every render is Cycles CPU with a fixed seed, no
+adaptive sampling, no denoising, no clamping, Raw view, written to a 32-bit float EXR and read back with OpenImageIO.
 """
 
 from __future__ import annotations
@@ -181,10 +181,10 @@ def principled_sss(
 ):
     """A Principled BSDF material set up as a pure subsurface scatterer for the flat-slab tests.
 
-    Subsurface Weight 1, Specular IOR Level 0 (no specular closure: blender.md section 1), Roughness 0, the given
-    Cycles subsurface method ("BURLEY" or "RANDOM_WALK"), Base Color = base_color (linear RGB) and Subsurface Radius
-    = radius_mm with Scale = 0.001 (radii in mm in a metre scene). Sockets are set before the method (socket
-    availability changes with the method).
+    Subsurface Weight 1, Specular IOR Level 0 (no specular closure: docs/blender-principled.md, IOR, Specular IOR Level
+    and Roughness), Roughness 0, the given Cycles subsurface method ("BURLEY" or "RANDOM_WALK"), Base Color =
+    base_color (linear RGB) and Subsurface Radius = radius_mm with Scale = 0.001 (radii in mm in a metre scene).
+    Sockets are set before the method (socket availability changes with the method).
     """
     mat, bsdf = new_material(name)
     inp = bsdf.inputs
@@ -332,7 +332,8 @@ def fit_burley_edge(x_mm: np.ndarray, measured: np.ndarray, d_lo_mm: float, d_hi
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# Reference models of the Cycles Christensen-Burley BSSRDF (blender.md sections 1 and 4)
+# Reference models of the Cycles Christensen-Burley BSSRDF (docs/blender-principled.md, Subsurface Radius and
+# Subsurface Scale; Edge and spot renders)
 
 BURLEY_CDF_16D = 0.996379  # Cycles truncates the Burley profile at r = 16 d and renormalises by CDF(16 d)
 

@@ -1,6 +1,7 @@
 """Cycles renders of materials set up from spectral_skin.evaluate / spectral_skin.maps (not through the add-on).
 
-What is checked (design and measurements behind each setup: shared/design/blender.md sections 3, 4 and 6):
+What is checked (the Cycles behaviour and measurements behind each setup: docs/blender-principled.md, sections Flat
+slab under a white world, Edge and spot renders, Test scenes):
 
 1. Albedo, Christensen-Burley: a thick flat slab under a uniform white world renders its Base Color exactly (Cycles'
    Burley profile is normalised and Specular IOR Level 0 removes the specular closure), so the rendered mean must
@@ -146,7 +147,7 @@ def test_burley_per_texel_maps(scene, tmp_path):
     worst = 0.0
     for k in range(n):
         # interior: 3 px away from the texel's boundaries (the response depends on the entry point's texel only:
-        # blender.md section 2)
+        # docs/blender-principled.md, Image textures and colour spaces)
         region = img[2:-2, k * px_per_texel + 3 : (k + 1) * px_per_texel - 3]
         mean = region.reshape(-1, 3).mean(axis=0)
         rel = mean / base[k] - 1.0
@@ -241,12 +242,11 @@ def test_burley_edge_profile(scene):
 # 3. Random walk
 
 # Tolerance for the random-walk flat-slab mean (central 48 x 48 px, 1024 spp) vs the core's diffuse reflectance.
-# Measured (scratch scan, 64 x 64 px, central 48 x 48, seeds 2-4): at 1024 spp |err| <= 0.14 % for all three
-# presets, with a standard error of the region mean (from 4 x 4 block means) of 0.04-0.07 % (caucasian, asian) and
-# 0.13-0.15 % (african, A ~ 0.02-0.04, where the walk is noisiest): no bias is visible, i.e. the core's compensated
-# random-walk Base Color hits the target albedo. (At 256 spp the standard error is 0.07-0.2 % / 0.27-0.45 % and the
-# seed-1 asian blue channel came out at -0.52 %.) blender.md gives ~0.3 % as how well the walk's flat-slab value is
-# predicted at all. 1 % = that 0.3 % model allowance plus > 4 standard errors in every channel.
+# The standard error of the region mean (from 4 x 4 block means, 64 x 64 px, seeds 2-4) is 0.04-0.07 % (caucasian,
+# asian) and 0.13-0.15 % (african, A ~ 0.02-0.04, where the walk is noisiest) at 1024 spp; at 256 spp it is
+# 0.07-0.2 % / 0.27-0.45 % (the seed-1 asian blue channel came out at -0.52 % there). The walk's flat-slab value is
+# predicted to about 0.3 % at all (docs/blender-principled.md, Flat slab under a white world). 1 % = that 0.3 % model
+# allowance plus > 4 standard errors in every channel. The measured errors per version: docs/blender-render-tests.md.
 RW_RTOL = 1.0e-2
 RW_SPP = 1024
 # The random-walk slab is seen close up, 10 mm over 64 px (0.16 mm per pixel): Blender 4.2 renders a random-walk
@@ -256,8 +256,8 @@ RW_ORTHO_M = 0.01
 
 
 # The core's Random Walk (Skin) Base Color inverts a flat-slab response measured at Base Color 0.05-0.95 (its
-# "best effort" target, tested: false); the african albedos (0.02-0.035) lie below that table and render 2.4 / 5.1 /
-# 6.9 % bright in 5.3.0 (2.3 / 10.3 / 10.3 % in 4.2.23). Caucasian and asian are within 0.5 %.
+# "best effort" target, tested: false); the african albedos (0.02-0.035) lie below that table and render several per
+# cent bright (figures per version: docs/blender-render-tests.md). Caucasian and asian are within 0.5 %.
 _SKIN_BELOW_TABLE = pytest.mark.xfail(strict=True, reason="Skin Base Color below the core's measured table")
 
 
@@ -295,9 +295,9 @@ RW_EDGE_SPP = 256
 RW_EDGE_METHODS = ("random_walk", "random_walk_legacy", "random_walk_skin")
 # rms of (render - expected_albedo * BurleyEdge(x; core d)) / expected_albedo over the image, per channel: how far
 # the walk's edge is from the model's (the walk's edge is not exactly Burley-shaped, the core's width model is fitted,
-# and 256 spp leave about 0.3-0.4 % of noise per column). Measured on caucasian in bpy 5.3.0: 0.54-0.58 % for
-# random_walk, random_walk_legacy and random_walk_skin, with the fitted Burley d within 2.4 % of the core's d (the
-# per-version figures: docs/blender-render-tests.md). Bound 1 %: a radius 10 % off moves it past 1 %.
+# and 256 spp leave about 0.3-0.4 % of noise per column). Measured: a little above 0.5 % for every walk, with the
+# fitted Burley d within a few per cent of the core's d (per-version figures: docs/blender-render-tests.md). Bound
+# 1 %: a radius 10 % off moves it past 1 %.
 RW_EDGE_RMS_BOUND = 0.01
 
 
