@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             cases.append({"base_color": a, "rendered": float(mean[c]), "ratio": ratio})
             print(f"[{bpy.app.version_string} RANDOM_WALK_SKIN] Base Color {a:.3f}: rendered {mean[c]:.6f} = "
                   f"{ratio:.4f} x Base Color ({seconds:.1f} s)", flush=True)
-    if any(b["rendered"] <= a["rendered"] for a, b in zip(cases, cases[1:])):
+    if any(b["rendered"] <= a["rendered"] for a, b in zip(cases, cases[1:], strict=False)):
         raise SystemExit("measured response is not rising in Base Color: more samples needed")
     data = {
         "description": "Random Walk (Skin) thick flat slab under a uniform white world: rendered value / Base Color; "
