@@ -203,6 +203,10 @@ fn version_table_rules() {
         assert!(t.info().tested, "{v}");
         assert_eq!(t.blender.entry().version.to_string(), *v);
     }
+    // EEVEE is render-tested from 4.5 on (4.2's EEVEE subsurface does not repeat under llvmpipe).
+    for v in &tested {
+        assert_eq!(target(v, "eevee").info().tested, v != "4.2", "{v} eevee");
+    }
     for (v, resolves_to) in [("4.3", "4.2"), ("5.1", "5.0"), ("5.9", "5.3"), ("6.0", "5.3"), ("5.2.3", "5.2")] {
         let t = target(v, "cycles");
         assert_eq!(t.blender.entry().version.to_string(), resolves_to, "{v}");

@@ -274,7 +274,7 @@ def maps(
         hemoglobin: C_h, whole-blood volume fraction of the dermis, 0..0.1; as melanin (channel 2).
         oiliness: rho_s, scale of the surface's specular lobe, 0..1; as melanin (channel 3).
         method: the subsurface method the maps are for: "burley" (Christensen-Burley), "random_walk",
-            "random_walk_legacy" (Blender 5.2 and later only) or "random_walk_skin" (best effort, untested).
+            "random_walk_legacy" (Blender 5.2 and later only) or "random_walk_skin".
         blender, engine: the target, as for :func:`evaluate`; the radius (and for the random walks Base Color) is
             computed for it per texel (for EEVEE from each texel's own albedo).
         exact: evaluate every texel (or distinct tuple) directly, never the table.
@@ -363,7 +363,7 @@ def blender_targets() -> dict[str, Any]:
         {"oldest_supported": "4.2", "current_release": "5.3", "default": {"blender", "engine", "tested"},
         "tested_versions": ["4.2", ...], "engines": [{"name": "cycles"}, {"name": "eevee"}],
         "methods": [{"name": "burley", "blender_id": "BURLEY"}, ...] (every method of any version),
-        "versions": one entry per table row, oldest first: {"version": "4.2", "tested": bool,
+        "versions": one entry per table row, oldest first: {"version": "4.2", "tested": bool (Cycles), "eevee_tested": bool,
         "engine_ids": {"cycles": "CYCLES", "eevee": "BLENDER_EEVEE_NEXT"}, "methods": [{"name", "blender_id",
         "tested", "model"}, ...] in Blender's menu order}. A version resolves to the newest row at or below it.
     """
