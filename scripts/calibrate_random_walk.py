@@ -22,14 +22,12 @@ script in another version adds or replaces that version's entries. Written atomi
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import os
 import sys
 import tempfile
 import time
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -42,19 +40,6 @@ WIDTH, HEIGHT = 256, 32
 SAMPLES = 512
 SEED = 1
 METHODS = ("RANDOM_WALK", "RANDOM_WALK_LEGACY", "RANDOM_WALK_SKIN")
-
-
-def _load(name: str, path: Path) -> ModuleType:
-    """Import a helper module of tests/blender from its path under a private name (no clash with pytest's)."""
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, path)
-    if spec is None or spec.loader is None:
-        raise ImportError(f"cannot load {path}")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -73,8 +58,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
     import bpy
 
-    helpers = _load("_spectral_skin_blender_conftest", TESTS / "conftest.py")
-    walk = _load("_spectral_skin_walk_reference", TESTS / "walk_reference.py")
+    sys.path.insert(0, str(TESTS))
+    import blender_scenes as helpers
+    import walk_reference as walk
     version = "{}.{}".format(*bpy.app.version[:2])
     models = walk.core_walk_models(bpy.app.version)  # the core's radius convention per method for this Blender
     methods = [m for m in args.methods if m in models and m in walk.subsurface_methods()]

@@ -4,7 +4,7 @@ Christensen-Burley and Random Walk subsurface methods at the presets' albedos, r
 
 Scene: the flat-slab albedo test of tests/blender/test_renders.py (a Principled BSDF slab, Subsurface Weight 1,
 Specular IOR Level 0, under a uniform white world, seen by an orthographic top camera over 100 mm of the slab's
-centre). The scene helpers are imported from tests/blender/conftest.py. Every pixel of the image lies more than
+centre). The scene helpers are imported from tests/blender/blender_scenes.py. Every pixel of the image lies more than
 450 mm from the slab's edges, so every pixel's expected value is the core's ``expected_albedo`` for the method.
 
     .venv/bin/python scripts/cycles_samples.py                      # 3 presets x 2 methods, 64x64 px, 1-1024 spp
@@ -14,14 +14,13 @@ Per render it records the wall time of the bpy.ops.render.render call alone (aft
 scene, so kernel loading and the first scene sync are not counted), per channel: the relative rms pixel noise
 std(pixels)/mean (the noise of one pixel), the relative error of the image mean vs the expected albedo, and the
 rms over pixels of (pixel - expected)/expected. Cycles CPU, fixed seed, no adaptive sampling, no denoising (as
-conftest.reset_scene sets up), threads left at AUTO (the count used is recorded). Writes JSON atomically.
+blender_scenes.reset_scene sets up), threads left at AUTO (the count used is recorded). Writes JSON atomically.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import importlib.util
 import json
 import os
 import sys
@@ -35,7 +34,7 @@ from typing import Any
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-CONFTEST = ROOT / "tests" / "blender" / "conftest.py"
+SCENES_DIR = ROOT / "tests" / "blender"
 DEFAULT_OUT = ROOT / "docs" / "data" / "cycles_samples.json"
 
 METHODS: dict[str, str] = {"burley": "BURLEY", "random_walk": "RANDOM_WALK"}  # core name -> Cycles method
@@ -46,23 +45,17 @@ QUICK_SIZE_PX = 32
 QUICK_PRESETS: tuple[str, ...] = ("caucasian",)
 ORTHO_SCALE_M = 0.1  # image width on the slab (100 mm), as the render tests' flat slab
 SEED = 1
-FILTER_WIDTH = 1.5  # Cycles' default pixel filter width (px), as conftest.render
+FILTER_WIDTH = 1.5  # Cycles' default pixel filter width (px), as blender_scenes.render
 WARMUP_SAMPLES = 1
 
 
 def load_helpers() -> ModuleType:
-    """Import tests/blender/conftest.py (the render tests' scene helpers) from its path, under a private name so it
-    does not clash with pytest's own ``conftest`` module when this script runs inside a test."""
-    name = "_spectral_skin_blender_conftest"
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, CONFTEST)
-    if spec is None or spec.loader is None:
-        raise ImportError(f"cannot load the scene helpers from {CONFTEST}")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
+    """The render tests' scene helpers (tests/blender/blender_scenes.py, a plain module without pytest)."""
+    if str(SCENES_DIR) not in sys.path:
+        sys.path.insert(0, str(SCENES_DIR))
+    import blender_scenes
+
+    return blender_scenes
 
 
 def setup_flat_slab(helpers: ModuleType, method: str, base_color: np.ndarray, radius_mm: np.ndarray, size_px: int):
@@ -95,7 +88,7 @@ def quiet_stdout() -> Iterator[None]:
 
 def timed_render(helpers: ModuleType, scene, samples: int, workdir: str) -> tuple[np.ndarray, float]:
     """Render the scene with Cycles at `samples` spp; returns (RGB float64 (H, W, 3), wall seconds of the
-    bpy.ops.render.render call alone). Same settings as conftest.render; the Render Result is saved to a 32-bit
+    bpy.ops.render.render call alone). Same settings as blender_scenes.render; the Render Result is saved to a 32-bit
     float EXR after the timed call (save_render: the same pixels as write_still) and read back with OpenImageIO."""
     import bpy
 

@@ -18,14 +18,12 @@ The JSON is compiled into the core (`fit::random_walk_skin`); written atomically
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import os
 import sys
 import tempfile
 import time
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -39,19 +37,6 @@ ORTHO_M = 0.01
 SIZE_PX, REGION_PX = 64, 48
 SAMPLES = 1024
 SEED = 1
-
-
-def _load(name: str, path: Path) -> ModuleType:
-    """Import a helper module of tests/blender from its path under a private name (no clash with pytest's)."""
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, path)
-    if spec is None or spec.loader is None:
-        raise ImportError(f"cannot load {path}")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -69,7 +54,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     import bpy
 
 
-    helpers = _load("_spectral_skin_blender_conftest", TESTS / "conftest.py")
+    sys.path.insert(0, str(TESTS))
+    import blender_scenes as helpers
     colors = sorted(args.base_colors)
     cases = []
     for start in range(0, len(colors), 3):

@@ -28,8 +28,8 @@ for v in "${versions[@]}"; do
     log="$ROOT/logs/$v.log"
     echo "=== Blender $v ($py) ==="
     start=$SECONDS
-    # The timeout guards against a bpy that hangs at interpreter exit (seen in 4.5 after EEVEE; conftest ends the
-    # process with os._exit, this is the fallback).
+    # The timeout guards against a bpy that hangs at interpreter exit (seen once in 4.5 after EEVEE; the batch script
+    # ends with os._exit, the test process relies on this guard).
     timeout --kill-after=30 "${BLENDER_TEST_TIMEOUT_S:-2400}" "$py" -m pytest tests/blender -q -p no:cacheprovider "$@" 2>&1 | tee "$log"
     rc=${PIPESTATUS[0]}
     secs=$((SECONDS - start))

@@ -23,7 +23,7 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-from conftest import material_snapshot  # noqa: E402
+from blender_scenes import material_snapshot  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402

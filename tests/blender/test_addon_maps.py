@@ -26,7 +26,7 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
-from conftest import material_snapshot, read_exr  # noqa: E402
+from blender_scenes import material_snapshot, read_exr  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402

@@ -23,7 +23,7 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
-from conftest import read_exr  # noqa: E402
+from blender_scenes import read_exr  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 

@@ -32,7 +32,7 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
-from conftest import (  # noqa: E402
+from blender_scenes import (  # noqa: E402
     add_slab,
     add_sun,
     add_top_camera,
@@ -222,7 +222,7 @@ def test_unreadable_map_changes_nothing(addon, tmp_path):
     maps_dir = tmp_path / "skin_maps"
     # An image whose file is gone (e.g. a .blend moved without its maps).
     source = tmp_path / "melanin.exr"
-    from conftest import write_exr
+    from blender_scenes import write_exr
 
     write_exr(str(source), np.repeat(MELANIN[:, :, None], 3, axis=2))
     image = bpy.data.images.load(str(source))

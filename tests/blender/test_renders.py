@@ -27,7 +27,7 @@ bpy = pytest.importorskip("bpy")
 pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
-from conftest import (  # noqa: E402
+from blender_scenes import (  # noqa: E402
     add_slab,
     add_top_camera,
     assign,

@@ -23,7 +23,7 @@ pytest.importorskip("OpenImageIO")
 pytest.importorskip("spectral_skin")
 
 import walk_reference as walk  # noqa: E402
-from conftest import MM, add_box, add_sun, add_top_camera, assign, principled_sss, render, set_world  # noqa: E402
+from blender_scenes import MM, add_box, add_sun, add_top_camera, assign, principled_sss, render, set_world  # noqa: E402
 
 VERSION = tuple(bpy.app.version)
 THIN_MM = 0.5

@@ -30,7 +30,7 @@ REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-from conftest import add_slab, add_top_camera, assign, render, reset_scene, set_world  # noqa: E402
+from blender_scenes import add_slab, add_top_camera, assign, render, reset_scene, set_world  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import WORKING_SPACES, ParameterMap, SkinSettings, make_plan  # noqa: E402
@@ -54,7 +54,7 @@ SPACES = _spaces()
 
 
 def _scene_in(space: str):
-    """A fresh render scene (conftest.reset_scene) whose file working space is ``space``."""
+    """A fresh render scene (blender_scenes.reset_scene) whose file working space is ``space``."""
     scene = reset_scene()
     if space != scene_working_space():
         assert bpy.ops.wm.set_working_color_space(working_space=space, convert_colors=False) == {"FINISHED"}
