@@ -130,7 +130,8 @@ def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.
         "Base Color": None if plan["base_color"] is None else [*plan["base_color"], 1.0],
         "Subsurface Radius": plan["radius"],
         "Specular IOR Level": plan["specular_ior_level"],
-        "Subsurface Weight": 1.0,
+        # 0 where the scene analysis dropped subsurface scattering (core/scene.py): plain diffuse, same albedo.
+        "Subsurface Weight": float(plan.get("subsurface_weight", 1.0)),
         "Subsurface Scale": plan["scale"],
         "Roughness": plan["roughness"],
         "IOR": plan["ior"],

@@ -1,0 +1,176 @@
+"""The add-on's portable scene analysis (blender_addon/core/scene.py), loaded without bpy: pixel footprints from
+hand-computed camera geometry, the decisions and their overrides, and the plan they change (against the core's own
+evaluate() for the albedo)."""
+
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+import spectral_skin
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+
+
+def _load_core():
+    """blender_addon/core as a top-level package: its own __init__ imports nothing of Blender's."""
+    if "addon_core" in sys.modules:
+        return sys.modules["addon_core"]
+    folder = REPO / "blender_addon" / "core"
+    spec = importlib.util.spec_from_file_location("addon_core", folder / "__init__.py",
+                                                  submodule_search_locations=[str(folder)])
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["addon_core"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+core = _load_core()
+scene = importlib.import_module("addon_core.scene")
+
+BOX_AT_ORIGIN = tuple((x, y, z) for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1))
+
+
+def _camera(distance: float, **kw) -> scene.CameraFacts:
+    """A camera on -Y at ``distance`` from the origin looking along +Y."""
+    return scene.CameraFacts(name=kw.pop("name", "Camera"), type=kw.pop("type", "PERSP"),
+                             location=(0.0, -distance, 0.0), forward=(0.0, 1.0, 0.0), **kw)
+
+
+def _facts(distance: float, x: int = 1920, y: int = 1080, pct: int = 100, frame: int = 1, **kw) -> scene.SceneFacts:
+    cam = _camera(distance, **kw)
+    return scene.SceneFacts(resolution_x=x, resolution_y=y, resolution_percentage=pct,
+                            views=(scene.View("Head", frame, cam, BOX_AT_ORIGIN),))
+
+
+def test_perspective_footprint_by_hand():
+    # 36 mm sensor over a 50 mm lens spans 0.72 m at 1 m; 1920 px wide: 0.375 mm per pixel at 1 m.
+    cam = _camera(3.0)
+    assert scene.footprint_mm(_facts(3.0), cam, 1.0) == pytest.approx(0.375)
+    # Half the resolution percentage doubles it.
+    assert scene.footprint_mm(_facts(3.0, pct=50), cam, 1.0) == pytest.approx(0.75)
+    # Portrait frame with AUTO: the sensor width spans the taller side (1920 px).
+    assert scene.footprint_mm(_facts(3.0, x=1080, y=1920), cam, 1.0) == pytest.approx(0.375)
+    # VERTICAL: the 24 mm sensor height spans the 1080 px height: 24/50/1080 m per pixel at 1 m.
+    vertical = _camera(3.0, sensor_fit="VERTICAL")
+    assert scene.footprint_mm(_facts(3.0), vertical, 1.0) == pytest.approx(24 / 50 / 1080 * 1000)
+    # HORIZONTAL on a portrait frame: the width (1080 px) takes the sensor width.
+    horizontal = _camera(3.0, sensor_fit="HORIZONTAL")
+    assert scene.footprint_mm(_facts(3.0, x=1080, y=1920), horizontal, 1.0) == pytest.approx(36 / 50 / 1080 * 1000)
+
+
+def test_orthographic_footprint_and_scene_units():
+    cam = _camera(5.0, type="ORTHO", ortho_scale=2.0)
+    facts = scene.SceneFacts(resolution_x=1000, resolution_y=500, scale_length=0.01)
+    # 2 scene units of 1 cm over 1000 px: 0.02 mm per pixel, whatever the depth.
+    assert scene.footprint_mm(facts, cam, 1.0) == pytest.approx(0.02)
+    assert scene.footprint_mm(facts, cam, 50.0) == pytest.approx(0.02)
+    with pytest.raises(ValueError, match="PANO"):
+        scene.footprint_mm(facts, _camera(5.0, type="PANO"), 1.0)
+
+
+def test_nearest_depth_of_a_box():
+    # The box's near face is 0.1 in front of the origin.
+    assert scene.nearest_depth(_camera(2.0), BOX_AT_ORIGIN) == pytest.approx(1.9)
+    # Camera inside the box: the clip start.
+    assert scene.nearest_depth(_camera(0.0, clip_start=0.05), BOX_AT_ORIGIN) == pytest.approx(0.05)
+    # Box behind the camera: not seen.
+    behind = scene.CameraFacts("Back", "PERSP", (0.0, -2.0, 0.0), (0.0, -1.0, 0.0))
+    assert scene.nearest_depth(behind, BOX_AT_ORIGIN) is None
+
+
+def _constant_plan(**kw):
+    return core.make_plan(core.SkinSettings.from_preset("caucasian", **kw))
+
+
+def test_far_object_drops_subsurface_close_keeps_it():
+    plan = _constant_plan()
+    largest = max(plan["radius"])  # mm
+    # Footprint at depth d: 0.375 mm per metre; choose d so the largest radius is 0.1 px (far) and 5 px (close).
+    far_depth = largest / 0.1 / 0.375
+    close_depth = largest / 5 / 0.375
+    settings = core.SkinSettings.from_preset("caucasian")
+    far = scene.decide(plan, settings, _facts(far_depth + 0.1, frame=7, name="Far Cam"))
+    entry = next(e for e in far if e["effect"] == "subsurface")
+    assert entry["enabled"] is False
+    assert entry["figures"]["largest_radius_px"] == pytest.approx(0.1, rel=1e-6)
+    assert "frame 7" in entry["reason"] and "Far Cam" in entry["reason"] and "0.1 px" in entry["reason"]
+    close = scene.decide(plan, settings, _facts(close_depth + 0.1))
+    assert scene.enabled(close, "subsurface")
+    assert next(e for e in close if e["effect"] == "subsurface")["figures"]["largest_radius_px"] == pytest.approx(5)
+    # The smallest footprint over views wins: a far and a close view keep subsurface.
+    both = scene.SceneFacts(1920, 1080, views=(*_facts(far_depth).views, *_facts(close_depth).views))
+    assert scene.enabled(scene.decide(plan, settings, both), "subsurface")
+
+
+def test_no_view_keeps_subsurface_with_the_reason():
+    plan = _constant_plan()
+    facts = scene.SceneFacts(1920, 1080, note="the scene has no camera")
+    entry = next(e for e in scene.decide(plan, core.SkinSettings(), facts) if e["effect"] == "subsurface")
+    assert entry["enabled"] and "no camera" in entry["reason"]
+
+
+def test_overrides_win_and_bad_override_is_refused():
+    plan = _constant_plan()
+    settings = core.SkinSettings.from_preset("caucasian")
+    far = _facts(1e4)
+    forced = scene.decide(plan, settings, far, {"subsurface": "ON"})
+    entry = next(e for e in forced if e["effect"] == "subsurface")
+    assert entry["enabled"] and entry["override"] == "ON" and "automatic" in entry["reason"]
+    off = scene.decide(plan, settings, _facts(0.5), {"subsurface": "OFF", "specular": "OFF"})
+    assert not scene.enabled(off, "subsurface") and not scene.enabled(off, "specular")
+    with pytest.raises(ValueError, match="AUTO, ON, OFF"):
+        scene.decide(plan, settings, far, {"subsurface": "MAYBE"})
+
+
+def test_scene_plan_far_is_plain_diffuse_with_the_cores_albedo():
+    far = _facts(1e4)
+    expected = spectral_skin.evaluate(preset="caucasian")["methods"]["burley"]["base_color"]
+    for method in ("BURLEY", "RANDOM_WALK"):
+        plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", method=method), far)
+        assert plan["subsurface_weight"] == 0.0
+        np.testing.assert_allclose(plan["base_color"], expected, rtol=1e-6)
+    close = scene.scene_plan(core.SkinSettings.from_preset("caucasian"), _facts(0.5))
+    assert close["subsurface_weight"] == 1.0
+
+
+def test_zero_oiliness_means_no_specular(tmp_path):
+    plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", oiliness=0.0), None)
+    entry = next(e for e in plan["effects"] if e["effect"] == "specular")
+    assert not entry["enabled"] and "oil" in entry["reason"] and plan["specular_ior_level"] == 0.0
+    # A map of zero oiliness beside a varying haemoglobin map: no specular texture, the albedo is a texture.
+    hemoglobin = np.linspace(0.001, 0.05, 16, dtype=np.float32).reshape(4, 4)
+    maps = {"hemoglobin": core.ParameterMap(hemoglobin, False), "oiliness": core.ParameterMap(np.zeros((4, 4), np.float32), False)}
+    settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
+    plan = scene.scene_plan(settings, None)
+    assert "specular" not in plan["textures"] and plan["specular_ior_level"] == 0.0
+    assert "albedo" in plan["textures"]
+    oily = settings.replace(maps={**maps, "oiliness": core.ParameterMap(np.full((4, 4), 0.3, np.float32), False)})
+    assert scene.enabled(scene.scene_plan(oily, None)["effects"], "specular")
+
+
+def test_constant_maps_become_values(tmp_path):
+    maps = {"melanin": core.ParameterMap(np.full((4, 4), 0.02, np.float32), False)}
+    settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
+    plan = scene.scene_plan(settings, None)
+    assert plan["textures"] == {}
+    expected = spectral_skin.evaluate(0.02, 0.7, 0.005, 0.3)["methods"]["burley"]
+    np.testing.assert_allclose(plan["base_color"], expected["base_color"], rtol=1e-5)
+    np.testing.assert_allclose(plan["radius"], expected["subsurface_radius_mm"], rtol=1e-5)
+    entry = next(e for e in plan["effects"] if e["effect"] == "constant maps")
+    # A constant oiliness gives specular values already (the core's constant detection): only two images were made.
+    assert entry["figures"]["constant"] == ["albedo", "radius"]
+
+
+def test_frames_and_camera_switching():
+    assert scene.sample_frames(1, 250, count=3) == [1, 63, 125, 188, 250]
+    assert scene.sample_frames(1, 1) == [1]
+    assert scene.sample_frames(1, 10, count=0, extra=[5, 40]) == [1, 5, 10]
+    markers = [(10, "B"), (20, "C")]
+    assert scene.active_camera(5, "A", markers) == "B"  # before the first marker: the earliest marker's camera
+    assert scene.active_camera(15, "A", markers) == "B"
+    assert scene.active_camera(20, "A", markers) == "C"
+    assert scene.active_camera(5, "A", []) == "A"
