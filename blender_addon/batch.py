@@ -16,7 +16,9 @@ or as a script::
 
 (``batch.py in.blend out.blend --material ...`` without a subcommand still means ``apply``.)
 
-Apply: every material's plan is computed (and its maps written) before any material changes; on an error nothing
+Apply: the scene decides which effects each material needs (blender_addon/core/scene.py: subsurface scattering
+no camera can resolve is dropped, zero oiliness writes no specular map, ...), as the operator does; the decisions
+are printed, one line each, and stored on the material. Every material's plan is computed (and its maps written) before any material changes; on an error nothing
 is saved. The saved .blend refers to the textures by paths relative to itself, or packs them with ``pack=True``.
 
 Render: Cycles on the CPU (or the engine named), the .blend's own settings unless overridden; a texture file that
@@ -91,11 +93,16 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     scene = bpy.context.scene
     output_dir = bpy.path.abspath(settings.output_dir or "//skin_maps")
     plans = {}
+    scene_facts = _addon_module("scene_facts")
+    analysis = _addon_module("core.scene")
     for name in material_names:
         material_settings = settings.replace(
             file_prefix=core.texture_prefix(blend_path, name), output_dir=output_dir, scale_length=scene.unit_settings.scale_length,
             working_space=nodes.scene_working_space(), **nodes.scene_target(scene))
-        plans[name] = core.make_plan(material_settings)
+        # What the scene calls for (the operator's path: scene_facts.scene_plan); the decisions go to the log.
+        plans[name] = scene_facts.scene_plan(bpy.data.materials[name], scene, material_settings)
+        for line in analysis.describe(plans[name]["effects"]):
+            print(f"spectral-skin batch: {name}: {line}", flush=True)
     for plan in plans.values():
         core.write_textures(plan)
     for name, plan in plans.items():
@@ -109,7 +116,26 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     out_blend = os.path.abspath(out_blend)
     os.makedirs(os.path.dirname(out_blend), exist_ok=True)
     bpy.ops.wm.save_as_mainfile(filepath=out_blend, relative_remap=True)
+    _write_sidecar(out_blend, plans)
     return plans
+
+
+def sidecar_path(out_blend: str) -> str:
+    """The JSON written next to the saved .blend: ``<out>.spectral_skin.json``."""
+    return os.path.splitext(os.path.abspath(out_blend))[0] + ".spectral_skin.json"
+
+
+def _write_sidecar(out_blend: str, plans: dict[str, dict[str, Any]]) -> None:
+    """Per material: the target, the decisions (``effects``) and the texture files, as JSON next to the .blend."""
+    import json
+
+    content = {name: {"target": plan["target"], "method": plan["method"], "effects": plan["effects"],
+                      "textures": plan["textures"]} for name, plan in plans.items()}
+    path = sidecar_path(out_blend)
+    tmp = f"{path}.{os.getpid()}.tmp"
+    with open(tmp, "w", encoding="utf-8") as file:
+        json.dump(content, file, indent=2, default=float)
+    os.replace(tmp, path)
 
 
 def _read_map(path: str, name: str | None) -> Any:

@@ -13,8 +13,9 @@ from typing import Any
 import bpy
 import spectral_skin
 
-from . import nodes, props
-from .core import SkinSettings, describe_error, make_plan, write_textures
+from . import nodes, props, scene_facts
+from .core import SkinSettings, describe_error, write_textures
+from .core import scene as analysis
 from .nodes import scene_target, scene_working_space
 
 ERRORS = (spectral_skin.SpectralSkinError, ValueError, OSError)
@@ -26,16 +27,20 @@ def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
     Raises spectral_skin.SpectralSkinError / ValueError for bad settings and OSError when a map cannot be written;
     the material and existing files are then unchanged. The plan is computed in the scene's working space
     (:func:`scene_working_space`) and for the running Blender and the scene's engine (:func:`scene_target`), whatever
-    ``settings`` says.
+    ``settings`` says. The scene decides which effects are simulated (:mod:`scene_facts`, ``plan["effects"]``).
     """
-    plan = compute_plan(settings.replace(**scene_target(bpy.context.scene)))
+    scene = bpy.context.scene
+    facts, overrides = scene_facts.gather(scene, material), scene_facts.overrides(material)
+    plan = compute_plan(settings.replace(**scene_target(scene)), facts, overrides)
     finish_apply(material, plan)
     return plan
 
 
-def compute_plan(settings: SkinSettings, progress: Any = None) -> dict:
-    """The part of Apply that needs no bpy data: the plan and its written maps (safe in a worker thread)."""
-    plan = make_plan(settings.replace(working_space=scene_working_space()), progress)
+def compute_plan(settings: SkinSettings, facts: analysis.SceneFacts | None, overrides: dict[str, str],
+                 progress: Any = None) -> dict:
+    """The part of Apply that needs no bpy data (safe in a worker thread): the plan for the scene's facts (gathered
+    beforehand on the main thread) and its written maps."""
+    plan = analysis.scene_plan(settings.replace(working_space=scene_working_space()), facts, overrides, progress)
     write_textures(plan)
     return plan
 
@@ -59,21 +64,21 @@ def _find_material(name: str, context: bpy.types.Context) -> bpy.types.Material 
 class _Work:
     """Apply's computation in a worker thread: its progress, a cancel flag, and its outcome."""
 
-    def __init__(self, settings: SkinSettings) -> None:
+    def __init__(self, settings: SkinSettings, facts: analysis.SceneFacts, overrides: dict[str, str]) -> None:
         self.fraction = 0.0
         self.cancel = threading.Event()
         self.writing = False
         self.plan: dict | None = None
         self.error: BaseException | None = None
-        self.thread = threading.Thread(target=self._run, args=(settings,), daemon=True)
+        self.thread = threading.Thread(target=self._run, args=(settings, facts, overrides), daemon=True)
 
     def _progress(self, done: int, total: int) -> bool:
         self.fraction = done / total if total else 1.0
         return not self.cancel.is_set()
 
-    def _run(self, settings: SkinSettings) -> None:
+    def _run(self, settings: SkinSettings, facts: analysis.SceneFacts, overrides: dict[str, str]) -> None:
         try:
-            plan = make_plan(settings, self._progress)
+            plan = analysis.scene_plan(settings, facts, overrides, self._progress)
             if self.cancel.is_set():
                 return
             self.writing = True
@@ -114,6 +119,8 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
     def _done(self, plan: dict) -> set[str]:
         summary = plan["summary"]
         self.report({"INFO"}, f"Spectral Skin: {summary['computed']} in {summary['seconds']:.2f} s")
+        for line in analysis.describe(plan.get("effects", [])):
+            self.report({"INFO"}, f"Spectral Skin: {line}")
         for warning in summary["warnings"]:
             self.report({"WARNING"}, warning)
         return {"FINISHED"}
@@ -136,7 +143,8 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
         if not settings.maps or context.window is None:
             return self.execute(context)  # one evaluation: no time to show
         self._material_name = material.name
-        self._work = _Work(settings.replace(working_space=scene_working_space()))
+        self._work = _Work(settings.replace(working_space=scene_working_space()),
+                           scene_facts.gather(context.scene, material), scene_facts.overrides(material))
         self._work.thread.start()
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import bpy
 
 from .core import PARAMETERS
+from .props import stored_effects
 
 
 class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
@@ -37,6 +38,10 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         layout.prop(props, "method")
         layout.prop(props, "accuracy")
         layout.prop(props, "output_dir")
+        overrides = layout.box()
+        overrides.label(text="Effects (Auto: decided from the scene's cameras and maps)")
+        overrides.prop(props, "override_subsurface")
+        overrides.prop(props, "override_specular")
         row = layout.row(align=True)
         row.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
         row.operator("spectral_skin.remove", icon="X", text="Remove").material = material.name
@@ -49,6 +54,9 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
             result.label(text=f"{props.result_computed} in {props.result_seconds:.2f} s")
             if props.result_warning:
                 result.label(text=props.result_warning, icon="ERROR")
+            for effect in stored_effects(material):
+                icon = "CHECKBOX_HLT" if effect["enabled"] else "CHECKBOX_DEHLT"
+                result.label(text=f"{effect['effect']}: {effect['reason']}", icon=icon)
 
 
 classes = (SPECTRAL_SKIN_PT_material,)

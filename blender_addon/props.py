@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import tempfile
 from typing import Any
@@ -13,6 +14,7 @@ import spectral_skin
 from .core import PARAMETER_INFO, PARAMETERS, ParameterMap, SkinSettings, read_map_file, texture_prefix
 from .core import methods as core_methods
 from .nodes import scene_target, scene_working_space
+from .scene_facts import OVERRIDE_ITEMS
 
 # Plain dicts (name -> value) for lookups by parameter name.
 _PRESETS: dict[str, dict[str, Any]] = {name: dict(p) for name, p in spectral_skin.presets().items()}
@@ -125,6 +127,13 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
         description="Folder for the texture maps computed from parameter maps ('//' is the .blend's folder); the "
         "files are named <blend>_<material>_albedo.exr etc., so .blend files sharing a folder keep their own maps",
         default="//skin_maps", subtype="DIR_PATH")
+    # Overrides of the scene analysis (core/scene.py): Auto decides from the scene; they survive re-applying.
+    override_subsurface: bpy.props.EnumProperty(
+        name="Subsurface", description="Subsurface scattering: Auto drops it where no camera can resolve the largest "
+        "radius (plain diffuse with the same albedo)", items=OVERRIDE_ITEMS, default="AUTO")
+    override_specular: bpy.props.EnumProperty(
+        name="Specular", description="The oil layer's specular lobe: Auto drops it (Specular IOR Level 0, no "
+        "texture) where the oiliness is zero everywhere", items=OVERRIDE_ITEMS, default="AUTO")
 
     # What the last Apply computed, for the panel.
     has_result: bpy.props.BoolProperty(name="Applied", default=False)
@@ -139,6 +148,9 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     result_warning: bpy.props.StringProperty(name="Warning", description="Warnings of the last Apply")
     result_target: bpy.props.StringProperty(
         name="Target", description="The Blender version and render engine the last Apply computed for")
+    result_effects: bpy.props.StringProperty(
+        name="Effects", description="The last Apply's decisions as JSON: [{effect, enabled, reason, figures, "
+        "override}] (core/scene.py)")
 
 
 def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str, ParameterMap]:
@@ -230,6 +242,13 @@ def store_result(material: bpy.types.Material, plan: dict) -> None:
     props.result_warning = "; ".join(summary["warnings"])
     target = plan["target"]
     props.result_target = f"Blender {target['blender']}, {target['engine'].upper()}"
+    props.result_effects = json.dumps(plan.get("effects", []), default=float)
+
+
+def stored_effects(material: bpy.types.Material) -> list[dict]:
+    """The decisions of the material's last Apply (empty before the first)."""
+    text = material.spectral_skin.result_effects
+    return list(json.loads(text)) if text else []
 
 
 classes = (SpectralSkinSettings,)

@@ -1,0 +1,148 @@
+"""The scene decides what is simulated (blender_addon/scene_facts.py + core/scene.py) in Blender, headless: a far
+object's material renders plain diffuse with the core's albedo, a close one keeps subsurface, zero oiliness writes
+no specular texture, overrides win and survive re-applying, and the batch path decides exactly as the operator.
+
+Run: .venv-blender/5.0/bin/python -m pytest tests/blender/test_scene_effects.py -q
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import pathlib
+import sys
+
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+import numpy as np  # noqa: E402
+import spectral_skin  # noqa: E402
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+from blender_scenes import add_box, assign  # noqa: E402
+
+from blender_addon import batch  # noqa: E402
+from blender_addon import nodes as addon_nodes  # noqa: E402
+from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
+from blender_addon.ops import apply_skin  # noqa: E402
+from blender_addon.props import stored_effects  # noqa: E402
+
+# 640 px across a 36 mm sensor behind a 50 mm lens: 36 / 50 / 640 m = 1.125 mm per pixel per metre of depth. The
+# caucasian preset's largest radius (4.35 mm) is then 0.039 px at 100 m (dropped) and 3.9 px at 1 m (kept).
+FAR_M, CLOSE_M = 100.0, 1.0
+
+
+def _scene_with_far_and_close():
+    """A perspective camera at the origin looking along +y; a 20 cm cube with material Far at 100 m and one with
+    material Close at 1 m (near faces)."""
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 640, 360, 100
+    data = bpy.data.cameras.new("Camera")
+    data.lens, data.sensor_width, data.sensor_fit = 50.0, 36.0, "AUTO"
+    camera = bpy.data.objects.new("Camera", data)
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)  # -z (the view axis) onto +y
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    materials = {}
+    for name, near in (("Far", FAR_M), ("Close", CLOSE_M)):
+        materials[name] = bpy.data.materials.new(name)
+        assign(add_box(f"{name}Cube", -0.1, 0.1, near, near + 0.2, -0.1, 0.1), materials[name])
+    return materials
+
+
+def _principled(material):
+    found = addon_nodes.tagged_nodes(material.node_tree, "principled")
+    assert len(found) == 1
+    return found[0]
+
+
+def _effect(material, name):
+    return next(e for e in stored_effects(material) if e["effect"] == name)
+
+
+def test_far_is_plain_diffuse_with_the_cores_albedo_close_keeps_subsurface(addon):
+    materials = _scene_with_far_and_close()
+    for name in materials:
+        assert bpy.ops.spectral_skin.apply(material=name) == {"FINISHED"}
+    burley = spectral_skin.evaluate(preset="caucasian", blender=bpy.app.version)["methods"]["burley"]
+    largest_mm = max(burley["subsurface_radius_mm"])
+    far, close = _principled(materials["Far"]), _principled(materials["Close"])
+    assert far.inputs["Subsurface Weight"].default_value == 0.0
+    np.testing.assert_allclose(far.inputs["Base Color"].default_value[:3], burley["base_color"], rtol=1e-6)
+    assert close.inputs["Subsurface Weight"].default_value == 1.0
+    far_entry, close_entry = _effect(materials["Far"], "subsurface"), _effect(materials["Close"], "subsurface")
+    assert not far_entry["enabled"] and far_entry["figures"]["camera"] == "Camera"
+    # The figure against the camera geometry computed here by hand.
+    assert far_entry["figures"]["largest_radius_px"] == pytest.approx(largest_mm / (36 / 50 / 640 * FAR_M * 1000), rel=1e-4)
+    assert "frame 1" in far_entry["reason"] and "Camera" in far_entry["reason"]
+    assert close_entry["enabled"]
+    assert close_entry["figures"]["largest_radius_px"] == pytest.approx(largest_mm / (36 / 50 / 640 * CLOSE_M * 1000), rel=1e-4)
+
+
+def test_zero_oiliness_writes_no_specular_texture(addon, tmp_path):
+    material = bpy.data.materials.new("Skin")
+    hemoglobin = np.linspace(0.001, 0.05, 12, dtype=np.float32).reshape(3, 4)
+    maps = {"hemoglobin": ParameterMap(hemoglobin, False)}
+    settings = SkinSettings.from_preset("caucasian", output_dir=str(tmp_path), file_prefix="Skin")
+    # Varying oiliness: a specular texture (the check below could fail).
+    oily = np.linspace(0.1, 0.9, 12, dtype=np.float32).reshape(3, 4)
+    apply_skin(material, settings.replace(maps={**maps, "oiliness": ParameterMap(oily, False)}))
+    assert addon_nodes.tagged_nodes(material.node_tree, "specular")
+    assert (tmp_path / "Skin_specular.exr").exists()
+    (tmp_path / "Skin_specular.exr").unlink()
+    apply_skin(material, settings.replace(maps={**maps, "oiliness": ParameterMap(np.zeros((3, 4), np.float32), False)}))
+    assert not addon_nodes.tagged_nodes(material.node_tree, "specular")
+    assert not (tmp_path / "Skin_specular.exr").exists()
+    assert _principled(material).inputs["Specular IOR Level"].default_value == 0.0
+    entry = _effect(material, "specular")
+    assert not entry["enabled"] and "oil" in entry["reason"]
+
+
+def test_override_wins_and_survives_reapplying(addon):
+    materials = _scene_with_far_and_close()
+    materials["Far"].spectral_skin.override_subsurface = "ON"
+    materials["Close"].spectral_skin.override_subsurface = "OFF"
+    for _ in range(2):
+        for name in materials:
+            assert bpy.ops.spectral_skin.apply(material=name) == {"FINISHED"}
+        assert _principled(materials["Far"]).inputs["Subsurface Weight"].default_value == 1.0
+        assert _principled(materials["Close"]).inputs["Subsurface Weight"].default_value == 0.0
+        assert _effect(materials["Far"], "subsurface")["override"] == "ON"
+    materials["Far"].spectral_skin.override_subsurface = "AUTO"
+    assert bpy.ops.spectral_skin.apply(material="Far") == {"FINISHED"}
+    assert _principled(materials["Far"]).inputs["Subsurface Weight"].default_value == 0.0
+
+
+def _decision(entry):
+    return {k: entry[k] for k in ("effect", "enabled", "reason", "override")}
+
+
+def test_batch_decides_as_the_operator(addon, tmp_path):
+    materials = _scene_with_far_and_close()
+    materials["Close"].spectral_skin.override_specular = "OFF"
+    source = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    plans = batch.apply_to_materials(str(source), ["Far", "Close"], SkinSettings.from_preset("caucasian"),
+                                     str(tmp_path / "out.blend"))
+    headless = {name: json.loads(json.dumps(plan["effects"], default=float)) for name, plan in plans.items()}
+    sidecar = json.loads(pathlib.Path(batch.sidecar_path(str(tmp_path / "out.blend"))).read_text())
+    assert {name: entry["effects"] for name, entry in sidecar.items()} == headless
+    bpy.ops.wm.open_mainfile(filepath=str(source))
+    for name in ("Far", "Close"):
+        assert bpy.ops.spectral_skin.apply(material=name) == {"FINISHED"}
+        # The operator reads the parameters from the material's float32 properties, the batch from the preset: the
+        # decisions are identical, the figures equal to float32 precision.
+        operator = stored_effects(bpy.data.materials[name])
+        assert [_decision(e) for e in operator] == [_decision(e) for e in headless[name]]
+        for mine, theirs in zip(operator, headless[name], strict=True):
+            assert mine["figures"].keys() == theirs["figures"].keys()
+            for key, value in theirs["figures"].items():
+                number = isinstance(value, float)
+                assert mine["figures"][key] == (pytest.approx(value, rel=1e-6) if number else value), key
+    assert not next(e for e in headless["Far"] if e["effect"] == "subsurface")["enabled"]
+    assert not next(e for e in headless["Close"] if e["effect"] == "specular")["enabled"]
