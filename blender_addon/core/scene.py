@@ -11,7 +11,8 @@ Effects:
   compared with the material's largest Subsurface Radius × Scale (mm). When the largest radius is below
   :data:`SUBSURFACE_MIN_RADIUS_PX` pixels everywhere, subsurface scattering is dropped: Subsurface Weight 0 with the
   skin's total diffuse reflectance (the albedo) as Base Color, which keeps the total reflectance exact and only
-  loses the blur no pixel can show.
+  loses the blur no pixel can show (Subsurface Weight 0 is a diffuse closure of weight Base Color:
+  docs/blender-principled.md, Subsurface Weight).
 - ``specular``: the model's only surface term is the oil layer on the skin (Donner & Jensen 2006, ρ_s scales the
   Torrance-Sparrow lobe); oiliness zero everywhere means no oil film, hence no specular lobe at all: Specular IOR
   Level 0 and no specular texture.
