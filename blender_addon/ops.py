@@ -64,7 +64,8 @@ def _find_material(name: str, context: bpy.types.Context) -> bpy.types.Material 
 class _Work:
     """Apply's computation in a worker thread: its progress, a cancel flag, and its outcome."""
 
-    def __init__(self, settings: SkinSettings, facts: analysis.SceneFacts, overrides: dict[str, str]) -> None:
+    def __init__(self, settings: SkinSettings, facts: analysis.SceneFacts | None = None,
+                 overrides: dict[str, str] | None = None) -> None:
         self.fraction = 0.0
         self.cancel = threading.Event()
         self.writing = False
@@ -76,7 +77,7 @@ class _Work:
         self.fraction = done / total if total else 1.0
         return not self.cancel.is_set()
 
-    def _run(self, settings: SkinSettings, facts: analysis.SceneFacts, overrides: dict[str, str]) -> None:
+    def _run(self, settings: SkinSettings, facts: analysis.SceneFacts | None, overrides: dict[str, str] | None) -> None:
         try:
             plan = analysis.scene_plan(settings, facts, overrides, self._progress)
             if self.cancel.is_set():

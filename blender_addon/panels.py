@@ -42,6 +42,7 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         overrides.label(text="Effects (Auto: decided from the scene's cameras and maps)")
         overrides.prop(props, "override_subsurface")
         overrides.prop(props, "override_specular")
+        overrides.prop(props, "override_constant_maps")
         row = layout.row(align=True)
         row.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
         row.operator("spectral_skin.remove", icon="X", text="Remove").material = material.name

@@ -134,6 +134,9 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     override_specular: bpy.props.EnumProperty(
         name="Specular", description="The oil layer's specular lobe: Auto drops it (Specular IOR Level 0, no "
         "texture) where the oiliness is zero everywhere", items=OVERRIDE_ITEMS, default="AUTO")
+    override_constant_maps: bpy.props.EnumProperty(
+        name="Constant Maps", description="Auto (or On) sets an output map of one value as a value; Off writes it "
+        "as a texture all the same", items=OVERRIDE_ITEMS, default="AUTO")
 
     # What the last Apply computed, for the panel.
     has_result: bpy.props.BoolProperty(name="Applied", default=False)

@@ -82,9 +82,15 @@ def gather(scene: bpy.types.Scene, material: bpy.types.Material) -> analysis.Sce
 
 
 def overrides(material: bpy.types.Material) -> dict[str, str]:
-    """The material's overrides (Spectral Skin settings): {"subsurface": "AUTO" | "ON" | "OFF", "specular": ...}."""
+    """The material's overrides (Spectral Skin settings): {"subsurface": "AUTO" | "ON" | "OFF", "specular": ...,
+    "constant maps": ...}."""
     props = material.spectral_skin
-    return {effect: getattr(props, f"override_{effect}") for effect in analysis.OVERRIDABLE}
+    return {effect: getattr(props, override_property(effect)) for effect in analysis.OVERRIDABLE}
+
+
+def override_property(effect: str) -> str:
+    """The name of an effect's override on the material's Spectral Skin settings: ``override_constant_maps``."""
+    return "override_" + effect.replace(" ", "_")
 
 
 def scene_plan(material: bpy.types.Material, scene: bpy.types.Scene, settings: Any, progress: Any = None) -> dict:

@@ -16,7 +16,8 @@ Effects:
 - ``specular``: the model's only surface term is the oil layer on the skin (Donner & Jensen 2006, ρ_s scales the
   Torrance-Sparrow lobe); oiliness zero everywhere means no oil film, hence no specular lobe at all: Specular IOR
   Level 0 and no specular texture.
-- ``constant maps``: an output map whose texels all hold one value is set as a value, not written as a texture.
+- ``constant maps``: an output map whose texels all hold one value is set as a value, not written as a texture
+  (exact; the override Off writes the texture all the same).
 - ``engine/version``: the target the core computed for (core/targets.py), recorded as the plan's first entry.
 """
 
@@ -32,8 +33,9 @@ from typing import Any
 SUBSURFACE_MIN_RADIUS_PX = 0.25
 
 OVERRIDES = ("AUTO", "ON", "OFF")
-# Effects an artist can force on or off (the others are exact simplifications or required by the target).
-OVERRIDABLE = ("subsurface", "specular")
+# Effects an artist can force on or off (engine/version is required by the target). "constant maps" on: an output
+# map of one value is set as a value; off: written as a texture all the same.
+OVERRIDABLE = ("subsurface", "specular", "constant maps")
 
 MM_PER_METRE = 1000.0
 
@@ -265,7 +267,8 @@ def apply_decisions(plan: dict[str, Any], effects: list[dict[str, Any]], albedo:
     if not enabled(effects, "specular"):
         plan["specular_ior_level"] = 0.0
         _drop_texture(plan, "specular")
-    constant = next(e for e in effects if e["effect"] == "constant maps")["figures"].get("constant", [])
+    entry = next(e for e in effects if e["effect"] == "constant maps")
+    constant = entry["figures"].get("constant", []) if entry["enabled"] else []
     for kind in constant:
         if kind not in plan["images"]:
             continue

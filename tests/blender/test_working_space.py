@@ -125,6 +125,7 @@ def test_albedo_texture_tagged_with_working_space(addon, space, tmp_path):
         maps={"melanin": ParameterMap(np.full((2, 2), preset["melanin"], dtype=np.float32), normalized=False),
               "oiliness": ParameterMap(oiliness, normalized=False)},
         output_dir=str(tmp_path))
+    material.spectral_skin.override_constant_maps = "OFF"  # the textures of one value, not values: their path
     plan = apply_skin(material, settings)
     assert plan["working_space"] == space
     colorspaces = {role: addon_nodes.tagged_nodes(material.node_tree, role)[0].image.colorspace_settings.name

@@ -174,3 +174,10 @@ def test_frames_and_camera_switching():
     assert scene.active_camera(15, "A", markers) == "B"
     assert scene.active_camera(20, "A", markers) == "C"
     assert scene.active_camera(5, "A", []) == "A"
+
+
+def test_constant_maps_override_off_keeps_the_textures(tmp_path):
+    maps = {"melanin": core.ParameterMap(np.full((4, 4), 0.02, np.float32), False)}
+    settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
+    plan = scene.scene_plan(settings, None, {"constant maps": "OFF"})
+    assert sorted(plan["textures"]) == ["albedo", "radius"] and plan["base_color"] is None
