@@ -295,6 +295,21 @@ def half_shadow_scene(scene, material, ortho_mm: float, width: int, height: int,
     return pixel_centres_x(ortho, width) / MM
 
 
+def shadow_edge_scene(scene, material, ortho_mm: float, width: int, height: int, occluder_mm: float = 1.5):
+    """half_shadow_scene with the slab and the occluder sized to the view, which can be metres wide (the scene-effects
+    measurement and test, docs/scene-effects.md): a slab 4 times the view wide (at least 1 m), so no pixel sees its
+    edges."""
+    size = max(1.0, 4.0 * ortho_mm * MM)
+    set_world(scene, strength=0.0, color=(0.0, 0.0, 0.0))
+    slab = add_box("Slab", -size / 2, size / 2, -size / 2, size / 2, -0.2, 0.0)
+    assign(slab, material)
+    occluder = add_plane("Occluder", 0.0, size, -size, size, z=occluder_mm * MM)
+    assign(occluder, black_material())
+    occluder.visible_camera = False  # casts the shadow, but camera rays pass through
+    add_sun(scene, strength=1.0, angle=0.0)
+    add_top_camera(scene, ortho_scale=ortho_mm * MM, width=width, height=height)
+
+
 def render_edge(scene, material, ortho_mm: float, width: int, height: int, samples: int, seed: int = 1):
     """Cycles render of half_shadow_scene: returns (x in mm, piL(x)/E as (width, 3), rows averaged). Pixel-centre
     sampling (filter width 0.01 px); the EXR holds radiance L and the sun gives E = 1 W/m^2, so piL/E = pi * L."""
