@@ -56,9 +56,10 @@ const PROBES_PER_DECADE: f64 = 10.0;
 const GAUSS_MAX_HALF_PHASE: f64 = PI / 2.0;
 
 /// Reflectance profiles R(r) in mm^-2 of several stacks (typically one per wavelength) at the same radii (mm).
-/// Values below zero are clamped to zero: round-off far in the tail, and the negative lobe that the flux-only
-/// multipole of a thin top layer has where its top extrapolation distance exceeds its thickness plus the bottom one
-/// (docs/robustness.md); `raw_reflectance_profiles` gives them unclamped.
+/// Values below zero are clamped to zero: round-off far in the tail and, with `Boundaries::Paper` (the default), the
+/// negative lobe a stack can have where a slab's top extrapolation distance exceeds its thickness plus the bottom one
+/// and the layers below do not fill it (`Slab::capped`, docs/robustness.md). With `Boundaries::Capped` only round-off
+/// is removed. `raw_reflectance_profiles` gives the values unclamped.
 pub fn reflectance_profiles(
     stacks: &[LayerStack],
     radii_mm: &[f64],

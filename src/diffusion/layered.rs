@@ -96,6 +96,26 @@ fn readable(x: f64) -> String {
     }
 }
 
+/// How a stack sets up its boundaries (docs/robustness.md, "Negative profile lobes and monotonicity").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Boundaries {
+    /// The default: each face's extrapolation distance is z_b = 2 A D (DJ05), whatever the thickness, and across a
+    /// layer thinner than one reduced mean free path its neighbours see the index blend with weight w = b, its
+    /// ballistic share (1 - tau)^2 (see [`LayerStack::new`]). Where a slab's z_b,0 exceeds d + z_b,d its own R(r) has
+    /// a negative tail (`Slab::capped`); the skin presets' epidermis is such a slab in the red, filled by the dermis,
+    /// and there this agrees with Monte Carlo better than `Capped` does.
+    #[default]
+    Paper,
+    /// Every slab capped (`Slab::capped`): every slab's R(r) and T(r), from either side, is >= 0, and so is every
+    /// stack's profile (the adding series is a sum of convolutions of them). And the blend weight is the share that
+    /// crosses without scattering, w = (1 - sigma_s' d)^2 below sigma_s' d = 1, which absorption does not change (light
+    /// absorbed in a thin layer reveals no index): with both, more absorption never gives more reflectance
+    /// (tests/robustness_properties.rs). Where no cap acts and every finite layer has sigma_s' d >= 1 it is the paper's
+    /// stack, bit for bit. Not the default: it moves the presets' red and thin epidermis away from Monte Carlo
+    /// (docs/robustness.md).
+    Capped,
+}
+
 /// A validated stack of layers under air, reduced to slabs seen from above (`Slab::flipped` sees them from below).
 #[derive(Debug, Clone)]
 pub struct LayerStack {
@@ -103,14 +123,20 @@ pub struct LayerStack {
 }
 
 impl LayerStack {
-    /// Validate the layers (top to bottom) and set up their boundaries. A finite last layer rests on a medium of its
-    /// own index; the medium above the first layer is air.
+    /// Validate the layers (top to bottom) and set up their boundaries ([`Boundaries::Paper`]). A finite last layer
+    /// rests on a medium of its own index; the medium above the first layer is air.
     ///
     /// A layer thinner than one reduced mean free path lets a share b of the light through without interacting (see
-    /// `Slab::new`); its neighbours then see, for the index across their shared boundary, the blend b n' + (1 - b) n
-    /// of its own index n and of what lies beyond it n'. As a layer vanishes (b -> 1) its neighbours thus meet each
-    /// other's indices, as in the stack without it; at b = 0 (any layer of one mean free path or more) nothing changes.
+    /// `Slab::new`); its neighbours then see, for the index across their shared boundary, the blend w n' + (1 - w) n
+    /// of its own index n and of what lies beyond it n', with w = b. As a layer vanishes (w -> 1) its neighbours thus
+    /// meet each other's indices, as in the stack without it; at w = 0 (any layer of one mean free path or more)
+    /// nothing changes.
     pub fn new(layers: &[Layer]) -> Result<LayerStack, SkinError> {
+        LayerStack::with_boundaries(layers, Boundaries::Paper)
+    }
+
+    /// [`LayerStack::new`] with the boundaries set up as `boundaries` says.
+    pub fn with_boundaries(layers: &[Layer], boundaries: Boundaries) -> Result<LayerStack, SkinError> {
         if layers.is_empty() {
             return Err(SkinError::invalid("layers", "need at least one layer"));
         }
@@ -118,13 +144,16 @@ impl LayerStack {
         for (i, layer) in layers.iter().enumerate() {
             layer.validate(i, i == last)?;
         }
+        // The blend weight w of each layer (1 - w of its own index, w of what lies beyond it).
         let ballistic: Vec<f64> = layers
             .iter()
             .map(|l| {
-                if l.thickness_mm.is_finite() {
-                    ballistic_fraction(l.sigma_a_per_mm, l.sigma_s_reduced_per_mm, l.thickness_mm)
-                } else {
-                    0.0
+                if !l.thickness_mm.is_finite() {
+                    return 0.0;
+                }
+                match boundaries {
+                    Boundaries::Paper => ballistic_fraction(l.sigma_a_per_mm, l.sigma_s_reduced_per_mm, l.thickness_mm),
+                    Boundaries::Capped => ballistic_fraction(0.0, l.sigma_s_reduced_per_mm, l.thickness_mm),
                 }
             })
             .collect();
@@ -146,13 +175,17 @@ impl LayerStack {
             .iter()
             .enumerate()
             .map(|(i, layer)| {
-                Slab::new(
+                let slab = Slab::new(
                     layer.sigma_a_per_mm,
                     layer.sigma_s_reduced_per_mm,
                     layer.thickness_mm,
                     layer.ior / above[i],
                     layer.ior / below[i],
-                )
+                );
+                match boundaries {
+                    Boundaries::Paper => slab,
+                    Boundaries::Capped => slab.capped(),
+                }
             })
             .collect();
         Ok(LayerStack { down })

@@ -8,7 +8,9 @@ pub mod multipole;
 
 pub use fft_route::{fft_reflectance_profiles, fft_reflectance_profiles_with, FftGrid, FftProfiles, PixelSampling};
 pub use hankel::{raw_reflectance_profiles, reflectance_profiles, HankelQuadrature, MAX_RADIUS_MM};
-pub use layered::{Combination, Layer, LayerStack, COEFFICIENT_RANGE_PER_MM, IOR_RANGE, THICKNESS_RANGE_MM};
+pub use layered::{
+    Boundaries, Combination, Layer, LayerStack, COEFFICIENT_RANGE_PER_MM, IOR_RANGE, THICKNESS_RANGE_MM,
+};
 pub use multipole::{MultipoleTerms, Slab};
 
 use crate::error::SkinError;

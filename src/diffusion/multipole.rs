@@ -81,6 +81,26 @@ impl Slab {
         }
     }
 
+    /// The slab with each extrapolation distance capped at the thickness plus the other one: z_b,0 <= d + z_b,d and
+    /// z_b,d <= d + z_b,0 (at most one cap acts; none for a semi-infinite slab). Unchanged, bit for bit, where neither
+    /// cap acts, and continuous across them (`layered::Boundaries::Capped` uses it).
+    ///
+    /// Why: the multipole is the Green's function G of the slab extended to Dirichlet planes z_b,0 above its entry face
+    /// and z_b,d below its far face (L = d + z_b,0 + z_b,d), and the reflectance is the flux D dG/dz at the real face
+    /// z = 0. By moving planes, dG/dz >= 0 at every r on every plane between the upper Dirichlet plane and both the
+    /// source (depth l > 0) and the extended slab's mid-plane: on the upper side of such a plane, G's mirror image
+    /// about it is >= G (maximum principle: the difference has only the mirrored source there and is >= 0 on the
+    /// boundary, as the mirror of the upper side stays inside the extended slab), so G rises through the plane. The
+    /// face z = 0 is one iff z_b,0 <= d + z_b,d; the far face likewise iff z_b,d <= d + z_b,0 (l <= d). So with the caps
+    /// R(r) >= 0 and T(r) >= 0 from either side, for the whole image series (`MultipoleTerms::All`; a truncated sum of
+    /// pairs is not the Green's function) and for the thin-slab source l = d (1 + tau) / 2 in (d/2, d]. Beyond a cap
+    /// the fundamental mode sin(pi (z + z_b,0) / L) peaks above the face and the flux through it turns inward at r of
+    /// the order of L: R(r), and T(r) entered from below, have negative far tails (leading term ~ cos(pi z_b,0 / L)).
+    pub fn capped(self) -> Slab {
+        let (top, bottom, d) = (self.zb_top_mm, self.zb_bottom_mm, self.thickness_mm);
+        Slab { zb_top_mm: top.min(d + bottom), zb_bottom_mm: bottom.min(d + top), ..self }
+    }
+
     /// The share of the entering light the multipole carries, 1 - b (computed without cancellation).
     fn scattered_fraction(&self) -> f64 {
         let b = self.ballistic_fraction;
