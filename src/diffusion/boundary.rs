@@ -1,7 +1,7 @@
 //! Boundary conditions of the diffusion approximation: diffuse Fresnel reflectance and the extrapolation distance.
 
 /// `F_dr(eta)`: average diffuse Fresnel reflectance for relative index eta = n_inside / n_outside
-/// (Egan & Hilgeman polynomial fits as used by Jensen et al. 2001 and DJ05; model.md section 5.1, pitfall 13).
+/// (Egan & Hilgeman polynomial fits as used by Jensen et al. 2001 and DJ05; docs/model.md, Boundary, and Pitfalls 13).
 /// As published the two fits meet at eta = 1 with a step of 1e-4 (0.0016 above, 0.0017 below); the one below is
 /// shifted by that step so that F_dr, and every output, is continuous in the indices (a vanishing layer must vanish).
 pub fn fdr(eta: f64) -> f64 {
@@ -25,7 +25,7 @@ pub fn internal_reflection_a(eta: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// model.md section 5.1 examples.
+    /// Independently computed values (docs/model.md, Boundary).
     #[test]
     fn spec_values() {
         assert!((fdr(1.4) - 0.52949).abs() < 5e-5);

@@ -1,7 +1,7 @@
-//! Radial profiles from Hankel-domain reflectance: R(r) = (1/2 pi) int_0^inf R~(s) J0(s r) s ds (model.md 6.2).
+//! Radial profiles from Hankel-domain reflectance: R(r) = (1/2 pi) int_0^inf R~(s) J0(s r) s ds (docs/model.md, Radial profiles).
 //!
 //! The transform of the top layer alone, R~1+, decays only like e^(-l s) and its real-space form is known, so the
-//! profile is split (model.md 6.2, recommendation 3):  R(r) = R1+(r) [image sum]  +  H^-1[R~ - R~1+](r).
+//! profile is split (docs/model.md, Radial profiles):  R(r) = R1+(r) [image sum]  +  H^-1[R~ - R~1+](r).
 //! The remainder is smooth and decays fast. It is sampled once per stack at Gauss-Legendre nodes on panels that grow
 //! geometrically in s (each panel a fixed fraction wider than where it starts, from a first panel [0, 1e-6 mm^-1]) up
 //! to where |R~ - R~1+| s^2 has fallen below a tolerance relative to the total reflectance. The panels depend on

@@ -1,4 +1,4 @@
-//! Layers combined in the Hankel domain by the adding equations (DJ05; model.md section 6.1):
+//! Layers combined in the Hankel domain by the adding equations (DJ05; docs/model.md, section Adding layers):
 //! R12 = R1+ + T1+ R2 T1- / (1 - R2 R1-), applied from the bottom layer up.
 
 use serde::{Deserialize, Serialize};
@@ -25,7 +25,7 @@ pub struct Layer {
     pub ior: f64,
 }
 
-/// Which transport through the top layer the combination uses (model.md section 6.1).
+/// Which transport through the top layer the combination uses (docs/model.md, section Adding layers).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Combination {

@@ -1,4 +1,4 @@
-//! Diffusion: the multipole slab model, the layer combination and radial profiles (model.md sections 5-6).
+//! Diffusion: the multipole slab model, the layer combination and radial profiles (docs/model.md, sections Multipole to Radial profiles).
 
 pub mod boundary;
 pub mod fft_route;

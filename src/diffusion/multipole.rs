@@ -1,5 +1,5 @@
 //! The multipole model of one slab (Donner & Jensen 2005) and its semi-infinite limit, the dipole (Jensen et al. 2001),
-//! in real space and in closed form in the Hankel (2-D Fourier) domain (model.md sections 5.1-5.3).
+//! in real space and in closed form in the Hankel (2-D Fourier) domain (docs/model.md, section Multipole).
 //!
 //! Conventions: z points into the slab from its entry face; the 2-D transform is F(s) = 2 pi int_0^inf f(r) J0(s r) r dr,
 //! so F(0) is the total (hemispherical) reflectance or transmittance per unit flux entering the slab.
@@ -26,7 +26,7 @@ const MAX_REAL_SPACE_PAIRS: i64 = 20_000;
 /// Relative size of an image pair below which the real-space series is considered converged.
 const REAL_SPACE_TOLERANCE: f64 = 1e-13;
 
-/// One homogeneous slab between two boundaries, reduced to the quantities the multipole needs (model.md section 5.1).
+/// One homogeneous slab between two boundaries, reduced to the quantities the multipole needs (docs/model.md, section Multipole).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Slab {
     /// `d`: thickness, mm (`f64::INFINITY` for a semi-infinite medium).
@@ -131,14 +131,14 @@ impl Slab {
         (self.sigma_tr_per_mm * self.sigma_tr_per_mm + s_per_mm * s_per_mm).sqrt()
     }
 
-    /// Depths of the real and virtual source of image pair i (DJ05; model.md 5.2), measured from the entry face.
+    /// Depths of the real and virtual source of image pair i (DJ05; docs/model.md, Multipole), measured from the entry face.
     fn image_depths_mm(&self, i: i64) -> (f64, f64) {
         let shift = if i == 0 { 0.0 } else { 2.0 * i as f64 * self.half_period_mm() };
         let l = self.source_depth_mm;
         (shift + l, shift - l - 2.0 * self.zb_top_mm)
     }
 
-    /// `R~(s)`: Hankel transform of the reflectance profile (model.md 5.3). `R~(0)` is the total diffuse reflectance.
+    /// `R~(s)`: Hankel transform of the reflectance profile (docs/model.md, Multipole). `R~(0)` is the total diffuse reflectance.
     pub fn reflectance_hat(&self, s_per_mm: f64, terms: MultipoleTerms) -> f64 {
         self.scattered_fraction() * self.multipole_reflectance_hat(s_per_mm, terms)
     }
@@ -167,7 +167,7 @@ impl Slab {
         }
     }
 
-    /// `T~(s)`: Hankel transform of the transmittance profile through the far face (model.md 5.3); 0 if semi-infinite.
+    /// `T~(s)`: Hankel transform of the transmittance profile through the far face (docs/model.md, Multipole); 0 if semi-infinite.
     /// The light crossing without interacting adds b at every s (a point at r = 0).
     pub fn transmittance_hat(&self, s_per_mm: f64, terms: MultipoleTerms) -> f64 {
         if self.is_semi_infinite() {
@@ -216,7 +216,7 @@ impl Slab {
 
     /// `(R~, T~)` of a finite slab for the whole image series at decay rate q, entered through the face whose
     /// extrapolation distance is `z_in` (the far face's is `z_out`). The images i >= 1 and i <= -1 form geometric
-    /// series in x = e^(-2Lq), summed with E(a, b) = (1 - e^(-aq)) / (1 - e^(-bq)) (model-notes.md):
+    /// series in x = e^(-2Lq), summed with E(a, b) = (1 - e^(-aq)) / (1 - e^(-bq)) (docs/model.md, Multipole):
     ///   R~ = alpha'/2 [e^(-lq) + e^(-(l+2z_in)q) - e^(-(2L-l)q) E(2l, 2L) - e^(-(2L-l-2z_in)q) E(2l+4z_in, 2L)]
     ///   T~ = alpha'/2 E(2l+2z_in, 2L) [e^(-(d-l)q) + e^(-(d-l+2z_out)q)]
     fn closed_form(&self, q: f64, z_in: f64, z_out: f64) -> (f64, f64) {
@@ -314,11 +314,11 @@ mod tests {
     use super::*;
 
     fn epidermis_550() -> Slab {
-        // Caucasian epidermis at 550 nm (model.md 11.1): sigma_a = 0.26062, sigma_s' = 6.0823.
+        // Caucasian epidermis at 550 nm (docs/model.md, Reference numbers): sigma_a = 0.26062, sigma_s' = 6.0823.
         Slab::new(0.26062, 6.0823, 0.25, 1.4, 1.0)
     }
 
-    /// model.md 11.1 derived quantities.
+    /// Independently computed derived quantities (docs/model.md, Reference numbers).
     #[test]
     fn derived_quantities() {
         let s = epidermis_550();
@@ -329,7 +329,7 @@ mod tests {
         assert!((s.zb_bottom_mm - 0.10544).abs() < 2e-4);
     }
 
-    /// model.md 6.1: R1+ = 0.252, T1+ = 0.592, R1- = 0.491, T1- = 0.344 at 550 nm, Caucasian.
+    /// docs/model.md, Adding layers: R1+ = 0.252, T1+ = 0.592, R1- = 0.491, T1- = 0.344 at 550 nm, Caucasian.
     #[test]
     fn directional_layer_totals() {
         let s = epidermis_550();
