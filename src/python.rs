@@ -870,7 +870,10 @@ impl Progress {
         if self.stopped() || (increment > 0 && self.reported_percent.fetch_max(percent, Ordering::Relaxed) >= percent) {
             return;
         }
-        Python::attach(|py| match self.callback.call1(py, (done, total)) {
+        // Calls are serialised by the GIL but may arrive out of order (a thread that counted fewer texels can get the
+        // GIL after the one that finished), so each call reports the count as it stands once the GIL is held: what
+        // the callback sees never goes backwards, and the last call says total.
+        Python::attach(|py| match self.callback.call1(py, (self.done.load(Ordering::Relaxed).min(total), total)) {
             Ok(answer) => {
                 if answer.bind(py).is_instance_of::<PyBool>() && !answer.bind(py).is_truthy().unwrap_or(true) {
                     self.stopped.store(true, Ordering::Relaxed);
