@@ -25,7 +25,6 @@ import argparse
 import json
 import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -108,12 +107,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                   "mfp_mm": args.mfp_mm},
         "entries": sorted(keep + entries, key=lambda e: (e["blender"], e["method"])),
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=args.out.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
-        json.dump(data, f, indent=1)
-        f.write("\n")
-    os.replace(tmp, args.out)
+    helpers.write_json_atomically(args.out, data)
     return data
 
 

@@ -18,10 +18,8 @@ The JSON is compiled into the core (`fit::random_walk_skin`); written atomically
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -89,12 +87,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "cases": cases,
     }
 
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=args.out.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
-        json.dump(data, f, indent=1)
-        f.write("\n")
-    os.replace(tmp, args.out)
+    helpers.write_json_atomically(args.out, data)
     return data
 
 

@@ -422,3 +422,17 @@ def profile_edge_fraction(x: np.ndarray, radii: np.ndarray, profile: np.ndarray)
         f = pr * 2 * r * np.arccos(np.clip(xi / r, -1, 1)) * 2 * t
         out[i] = _trapezoid(f, t) / total
     return out, total
+
+
+def write_json_atomically(path, data) -> None:
+    """Write ``data`` as indented JSON to ``path`` through a temporary file renamed over it (never half-written)."""
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    with os.fdopen(fd, "w") as f:
+        json.dump(data, f, indent=1)
+        f.write("\n")
+    os.replace(tmp, path)
