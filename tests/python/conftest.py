@@ -15,15 +15,21 @@ def isolated_table_cache(tmp_path_factory: pytest.TempPathFactory) -> Iterator[N
     mp.undo()
 
 
-def _assert_releases_gil(call: Callable[[], object]) -> None:
+def _assert_releases_gil(call: Callable[[], object], busy_seconds: float = 0.3) -> None:
     """While ``call`` runs in a worker thread, this thread keeps running Python: it could not if the call held the
-    GIL. Asserts at least 3 ticks of this thread inside the middle half of the call."""
-    span: list[float] = []
+    GIL. The worker repeats ``call`` until the calls add up to ``busy_seconds`` (one call can be a few milliseconds,
+    too short to see on a loaded 2-core machine); asserts at least 3 ticks of this thread inside the middle halves of
+    the calls."""
+    spans: list[tuple[float, float]] = []
 
     def work() -> None:
-        start = time.perf_counter()
-        call()
-        span.extend([start, time.perf_counter()])
+        busy = 0.0
+        while busy < busy_seconds and len(spans) < 1000:
+            start = time.perf_counter()
+            call()
+            end = time.perf_counter()
+            spans.append((start, end))
+            busy += end - start
 
     worker = threading.Thread(target=work)
     ticks = []
@@ -32,10 +38,8 @@ def _assert_releases_gil(call: Callable[[], object]) -> None:
         ticks.append(time.perf_counter())
         time.sleep(0.0005)
     worker.join()
-    start, end = span
-    quarter = (end - start) / 4
-    inside = [t for t in ticks if start + quarter < t < end - quarter]
-    assert len(inside) >= 3, (end - start, len(ticks), len(inside))
+    inside = [t for t in ticks for start, end in spans if start + (end - start) / 4 < t < end - (end - start) / 4]
+    assert len(inside) >= 3, (len(spans), sum(e - s for s, e in spans), len(ticks), len(inside))
 
 
 @pytest.fixture
