@@ -3,8 +3,9 @@
 use std::path::Path;
 
 use spectral_skin::maps::io::{
-    commit_all, read_exr_channels, read_params, stage_bytes, stage_rgb_exr, write_atomic, write_channels_exr,
-    write_rgb_exr, Compression, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, PARAM_CHANNELS, PARAM_RANGES,
+    commit_all, read_exr_channels, read_params, read_params_from_bytes, stage_bytes, stage_rgb_exr, write_atomic,
+    write_channels_exr, write_rgb_exr, Compression, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane,
+    PARAM_CHANNELS, PARAM_RANGES,
 };
 
 const ALL_OPTIONS: [ExrOptions; 6] = [
@@ -530,4 +531,43 @@ fn param_image_helpers() {
     assert_eq!(img.texel_count(), 2);
     assert_eq!(img.texel(1), [0.2, 0.5, 0.01, 0.4]);
     assert!(img.planes[1].is_constant());
+}
+
+/// The bytes reader (what the fuzz target drives) gives what the file reader gives, for the four-channel EXR and for
+/// one-parameter EXR, PNG and TIFF files; the other planes are NaN constants; errors name the label; a bad parameter
+/// index is an error.
+#[test]
+fn bytes_reader_equals_file_reader() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (5, 3);
+    let multi = dir.path().join("multi.exr");
+    let planes: Vec<Vec<f32>> = (0..4).map(|p| plane(w, h, p as f32)).collect();
+    let channels: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().zip(&planes).map(|(n, v)| (*n, v.as_slice())).collect();
+    write_channels_exr(&multi, w, h, &channels, ExrOptions::default()).unwrap();
+    let from_file = read_params(&ParamInputs::Multi { path: multi.clone(), constants: [None; 4] }).unwrap();
+    let from_bytes = read_params_from_bytes(&std::fs::read(&multi).unwrap(), "multi", None).unwrap();
+    assert_eq!(from_bytes, from_file);
+
+    let single = dir.path().join("single.exr");
+    write_channels_exr(&single, w, h, &[("Y", &planes[2])], ExrOptions::default()).unwrap();
+    let png = dir.path().join("m.png");
+    save_l8(&png, w as u32, h as u32, (0..w * h).map(|i| (i * 17) as u8).collect());
+    let tif = dir.path().join("m.tif");
+    save_l16(&tif, w as u32, h as u32, (0..w * h).map(|i| (i * 4000) as u16).collect());
+    for (p, path) in [(2, &single), (0, &png), (3, &tif)] {
+        let mut sources: [ParamSource; 4] = std::array::from_fn(|_| ParamSource::Constant(0.0));
+        sources[p] = file(path);
+        let from_file = read_params(&ParamInputs::Separate(sources)).unwrap();
+        let from_bytes = read_params_from_bytes(&std::fs::read(path).unwrap(), "m", Some(p)).unwrap();
+        assert_eq!((from_bytes.width, from_bytes.height), (w, h));
+        assert_eq!(from_bytes.planes[p], from_file.planes[p], "{}", path.display());
+        for (k, plane) in from_bytes.planes.iter().enumerate().filter(|(k, _)| *k != p) {
+            assert!(matches!(plane, Plane::Constant(v) if v.is_nan()), "plane {k}: {plane:?}");
+        }
+    }
+
+    let e = err_text(read_params_from_bytes(b"not an image", "packed image", Some(0)));
+    assert!(e.contains("packed image") && e.contains("EXR, PNG or TIFF"), "{e}");
+    let e = err_text(read_params_from_bytes(&std::fs::read(&multi).unwrap(), "multi", Some(4)));
+    assert!(e.contains("parameter index") && e.contains("got 4"), "{e}");
 }
