@@ -571,3 +571,34 @@ fn bytes_reader_equals_file_reader() {
     let e = err_text(read_params_from_bytes(&std::fs::read(&multi).unwrap(), "multi", Some(4)));
     assert!(e.contains("parameter index") && e.contains("got 4"), "{e}");
 }
+
+/// A chunk whose declared size runs past the end of the file is an error naming the chunk before anything is read:
+/// the exr crate would first allocate and zero-fill that size (up to the largest block the header allows: here
+/// 64 MiB, for a file of a few hundred bytes; a fuzzed 690-byte file made it touch 1 GB). The file is one of our own,
+/// with the data window widened to 2^24 texels and the chunk's size field patched (OpenEXR's layout: after the
+/// header one u64 offset per chunk; a scan-line chunk starts `y: i32, size: i32`).
+#[test]
+fn chunk_sizes_past_the_end_are_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.exr");
+    let options = ExrOptions { half: false, compression: Compression::None };
+    write_channels_exr(&path, 4, 1, &[("Y", &[0.1, 0.2, 0.3, 0.4])], options).unwrap();
+    let mut bytes = std::fs::read(&path).unwrap();
+    let window = bytes.windows(17).position(|w| w == b"dataWindow\0box2i\0").unwrap() + 17 + 4;
+    bytes[window + 8..window + 12].copy_from_slice(&((1i32 << 24) - 1).to_le_bytes()); // xmax
+    let header_end = bytes.len() - 8 - (8 + 16); // one offset, one chunk of 4 f32
+    let chunk = u64::from_le_bytes(bytes[header_end..header_end + 8].try_into().unwrap()) as usize;
+    assert_eq!(chunk, header_end + 8, "the chunk follows the offset table");
+    bytes[chunk + 4..chunk + 8].copy_from_slice(&(1i32 << 26).to_le_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+    let mut sources: [ParamSource; 4] = std::array::from_fn(|_| ParamSource::Constant(0.0));
+    sources[0] = file(&path);
+    let e = err_text(read_params(&ParamInputs::Separate(sources)));
+    assert!(e.contains("m.exr") && e.contains("chunk 0") && e.contains("claims 67108864 bytes"), "{e}");
+    let e = err_text(read_params_from_bytes(&bytes, "packed", Some(0)));
+    assert!(e.contains("packed") && e.contains("claims 67108864 bytes"), "{e}");
+    // The unpatched size with the wide window is still a clear error (too few texels), not the chunk check's.
+    bytes[chunk + 4..chunk + 8].copy_from_slice(&16i32.to_le_bytes());
+    let e = err_text(read_params_from_bytes(&bytes, "packed", Some(0)));
+    assert!(e.contains("packed") && !e.contains("claims"), "{e}");
+}

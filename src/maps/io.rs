@@ -674,6 +674,7 @@ fn read_exr_planes(
                 format!("{}: the file changed while being read", path.display()),
             )));
         }
+        check_chunks(src, what, reader.meta_data()).map_err(ReadFailure::Skin)?;
         let mut slot_of_channel: Vec<Option<usize>> = vec![None; probe.channels.len()];
         for (slot, &c) in indices.iter().enumerate() {
             slot_of_channel[c] = Some(slot);
@@ -735,6 +736,85 @@ fn read_exr_planes(
         Ok(Err(ReadFailure::Exr(e))) => Err(decode_error(e.to_string())),
         Ok(Err(ReadFailure::Message(m))) => Err(decode_error(m)),
         Err(panic) => Err(decode_error(panic)),
+    }
+}
+
+/// Check that every chunk of a probed EXR lies inside the file before any chunk is read: the offset table fits, each
+/// offset points into the file, and each chunk's declared data size ends within it. The exr crate allocates and
+/// zero-fills a chunk's declared size (up to the largest block the header allows) before reading it, so without this
+/// a few hundred damaged bytes could make it touch a gigabyte (found by fuzzing: docs/robustness.md, "Fuzzing").
+///
+/// The layout is OpenEXR's ("OpenEXR File Layout", single-part files): after the header, one u64 offset per chunk;
+/// at each offset a scan-line chunk is `y: i32, size: i32, data` and a tile chunk `x, y, level x, level y: i32,
+/// size: i32, data`, each preceded by `part: i32` when the file has the multi-part flag.
+fn check_chunks(src: Source<'_>, what: &str, meta: &MetaData) -> Result<(), SkinError> {
+    let path = src.label();
+    let damaged = |reason: String| {
+        SkinError::io(path, format!("cannot read {what}: EXR data is truncated or corrupt ({reason})"))
+    };
+    let io_error = |e: std::io::Error| damaged(e.to_string());
+    let [header] = meta.headers.as_slice() else {
+        return Err(damaged("expected one part".into()));
+    };
+    let mut reader = src.open(what)?;
+    let file_len = reader.seek(SeekFrom::End(0)).map_err(io_error)?;
+    reader.seek(SeekFrom::Start(0)).map_err(io_error)?;
+    // Where the header ends: what reading it again consumed.
+    let mut counting = CountingReader { inner: &mut reader, count: 0 };
+    guard(|| MetaData::read_from_buffered(&mut counting, false))
+        .and_then(|r| r.map_err(|e| e.to_string()))
+        .map_err(damaged)?;
+    let table_start = counting.count;
+    let chunks = header.chunk_count as u64;
+    let table_end = chunks.checked_mul(8).and_then(|n| n.checked_add(table_start));
+    if table_end.map_or(true, |end| end > file_len) {
+        return Err(damaged(format!("an offset table of {chunks} chunks does not fit in {file_len} bytes")));
+    }
+    let table_end = table_end.unwrap_or(file_len);
+    let mut table = vec![0u8; (table_end - table_start) as usize];
+    reader.seek(SeekFrom::Start(table_start)).map_err(io_error)?;
+    reader.read_exact(&mut table).map_err(io_error)?;
+    // The i32 fields before the size: the part number if multi-part, then y (scan lines) or x, y, levels (tiles).
+    let before_size = 4
+        * (usize::from(meta.requirements.is_multilayer())
+            + if matches!(header.blocks, BlockDescription::ScanLines) { 1 } else { 4 });
+    let mut fields = vec![0u8; before_size + 4];
+    for (index, entry) in table.chunks_exact(8).enumerate() {
+        let offset = u64::from_le_bytes(entry.try_into().unwrap_or([0xff; 8]));
+        if offset.checked_add(fields.len() as u64).map_or(true, |end| end > file_len) || offset < table_end {
+            return Err(damaged(format!(
+                "chunk {index} starts at byte {offset}, outside the data of a {file_len}-byte file"
+            )));
+        }
+        reader.seek(SeekFrom::Start(offset)).map_err(io_error)?;
+        reader.read_exact(&mut fields).map_err(io_error)?;
+        let size = i32::from_le_bytes([
+            fields[before_size],
+            fields[before_size + 1],
+            fields[before_size + 2],
+            fields[before_size + 3],
+        ]);
+        let end = offset + fields.len() as u64 + u64::try_from(size).unwrap_or(u64::MAX / 2);
+        if size < 0 || end > file_len {
+            return Err(damaged(format!(
+                "chunk {index} at byte {offset} claims {size} bytes; the file ends at {file_len}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A reader that counts the bytes read through it.
+struct CountingReader<R> {
+    inner: R,
+    count: u64,
+}
+
+impl<R: Read> Read for CountingReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.count += n as u64;
+        Ok(n)
     }
 }
 
