@@ -166,6 +166,9 @@ impl Compression {
 ///   the parameter's range ([`PARAM_RANGES`]), computed in f64 (so 255 in an 8-bit melanin map gives exactly 0.5).
 /// - Constants are used as given (converted to f32).
 ///
+/// - Before an EXR's pixel data is read, its offset table and every chunk's declared size are checked against the
+///   file's length: a damaged file is an error naming the chunk, never an allocation of the size it claims.
+///
 /// If every source is a constant there is no size to use: that is an error asking for at least one map.
 /// Values are not range-checked here (NaN, infinities and out-of-range values pass through).
 pub fn read_params(inputs: &ParamInputs) -> Result<ParamImage, SkinError> {
