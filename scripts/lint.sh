@@ -4,7 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo fmt --check
+cargo fmt --check --manifest-path fuzz/Cargo.toml
 cargo clippy --all-targets --features python -q -- -D warnings
-.venv/bin/ruff check python blender_addon scripts tests
+.venv/bin/ruff check python blender_addon scripts tests fuzz
 .venv/bin/python -m mypy python/spectral_skin blender_addon
 echo "lint: clean"

@@ -8,6 +8,9 @@ stage() { echo; echo "=== $* ($(date -u +%H:%M:%S))"; }
 stage setup; bash scripts/setup-python.sh
 stage lint; bash scripts/lint.sh
 stage rust; bash scripts/test-rust.sh
+# libFuzzer smoke run: each fuzz target for a few seconds from the committed seed corpus (cargo-fuzz, installed if
+# missing).
+stage fuzz; bash scripts/fuzz-smoke.sh
 stage python; bash scripts/test-python.sh
 # The Blender extension (built and validated by Blender's own validator), then the add-on and render tests via bpy in
 # each version of scripts/blender-versions.txt.

@@ -6,7 +6,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 pub use crate::accuracy::{Accuracy, AccuracyLevel, ProfileGrid};
-use crate::color::{placement_rgb_weights, spectrum_to_rgb, WavelengthGrid, WorkingSpace};
+use crate::color::{
+    placement_rgb_weights, rgb_luminance_weights, spectrum_to_rgb, RgbMapping, WavelengthGrid, WorkingSpace,
+};
 use crate::diffusion::{reflectance_profiles, Combination, LayerStack};
 use crate::error::{check_range, SkinError};
 use crate::fit::blender_target::{Target, TargetInfo};
@@ -63,6 +65,11 @@ pub struct Request {
     pub working_space: WorkingSpace,
     /// The Blender version and engine the Principled inputs are for.
     pub target: Target,
+    /// How the RGB radial profile's colours are formed: linearly (the default, with negative channels where the
+    /// light is outside the gamut) or made non-negative at the same luminance ([`RgbMapping`]). Absent from JSON
+    /// when linear.
+    #[serde(default, skip_serializing_if = "RgbMapping::is_linear")]
+    pub rgb_mapping: RgbMapping,
 }
 
 impl Request {
@@ -103,9 +110,10 @@ impl Methods {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RadialProfile {
     pub radii_mm: Vec<f64>,
-    /// R(r) per RGB channel, mm^-2 (if requested). Far in the tail only red light is left, which lies outside the
-    /// Rec.709 gamut: the green and blue channels there can be slightly negative (about 1e-6 of the peak), as the
-    /// colour transform demands; the spectral profiles are never negative.
+    /// R(r) per RGB channel, mm^-2 (if requested), formed as `Request::rgb_mapping` says. With the default
+    /// [`RgbMapping::Linear`] a channel is negative at radii whose light lies outside the working space's gamut (in
+    /// the far tail only red light is left; README.md, "Radial profiles", gives the figures per preset); with
+    /// [`RgbMapping::NonNegative`] no value is negative. The spectral profiles are never negative.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rgb_per_mm2: Option<Vec<[f64; 3]>>,
     /// R(r) per wavelength: `spectral_per_mm2[k][i]` at wavelength k and radius i, mm^-2 (if requested).
@@ -162,6 +170,8 @@ pub struct Prepared {
     request: Request,
     grid: WavelengthGrid,
     weights: Vec<[f64; 3]>,
+    /// Y = luminance . rgb for the RGB the weights make (for `RgbMapping`).
+    luminance: [f64; 3],
     fit_s: Vec<f64>,
 }
 
@@ -180,11 +190,12 @@ impl Prepared {
         let acc = &request.accuracy;
         let grid = WavelengthGrid::new(acc.wavelength_placement, acc.wavelength_step_nm);
         let weights = placement_rgb_weights(&grid, acc.wavelength_placement, request.working_space);
+        let luminance = rgb_luminance_weights(&grid, request.working_space);
         let fit_s = match acc.radius_fit {
             RadiusFit::EdgeL2 => fit_frequencies(acc.fit_frequencies_per_decade),
             RadiusFit::SecondMoment => vec![SECOND_MOMENT_FREQUENCY_PER_MM],
         };
-        Ok(Prepared { request: *request, grid, weights, fit_s })
+        Ok(Prepared { request: *request, grid, weights, luminance, fit_s })
     }
 
     pub fn request(&self) -> &Request {
@@ -276,7 +287,10 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
         work.radial_profiles = spectral.len();
         let rgb = out.profile_rgb.then(|| {
             (0..radii.len())
-                .map(|i| spectrum_to_rgb(&spectral.iter().map(|p| p[i]).collect::<Vec<_>>(), &prepared.weights))
+                .map(|i| {
+                    let rgb = spectrum_to_rgb(&spectral.iter().map(|p| p[i]).collect::<Vec<_>>(), &prepared.weights);
+                    request.rgb_mapping.apply(rgb, prepared.luminance)
+                })
                 .collect()
         });
         Some(RadialProfile {

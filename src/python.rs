@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::color::{WavelengthPlacement, WorkingSpace, ALL_WORKING_SPACES};
+use crate::color::{WavelengthPlacement, WorkingSpace, ALL_RGB_MAPPINGS, ALL_WORKING_SPACES};
 use crate::diffusion::{Combination, Layer, MultipoleTerms};
 use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
@@ -333,6 +333,7 @@ struct Knobs<'a> {
     profile_count: Option<Count>,
     combination: &'a str,
     working_space: &'a str,
+    rgb_mapping: &'a str,
     target: Target,
 }
 
@@ -367,6 +368,7 @@ impl Knobs<'_> {
             accuracy,
             combination: by_name("combination", self.combination, &COMBINATIONS)?,
             working_space: by_name("working_space", self.working_space, &WORKING_SPACES)?,
+            rgb_mapping: by_name("rgb_mapping", self.rgb_mapping, &ALL_RGB_MAPPINGS)?,
             target: self.target,
             ..Request::default()
         })
@@ -485,7 +487,8 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
         preset = None, outputs = None, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
-        combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles"
+        combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles",
+        rgb_mapping = "linear"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -508,6 +511,7 @@ fn evaluate_py<'py>(
     working_space: &str,
     blender: Option<&Bound<'py, PyAny>>,
     engine: &str,
+    rgb_mapping: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let explicit =
         [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
@@ -526,6 +530,7 @@ fn evaluate_py<'py>(
         profile_count: count_arg("profile_count", profile_count)?,
         combination,
         working_space,
+        rgb_mapping,
         target: target_from(blender, engine)?,
     };
     let request = knobs.request(parse_outputs(outputs)?)?;
@@ -543,7 +548,7 @@ fn evaluate_py<'py>(
         preset = None, spectral = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
-        combination = "directional", working_space = "Linear Rec.709"
+        combination = "directional", working_space = "Linear Rec.709", rgb_mapping = "linear"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -564,6 +569,7 @@ fn profile_py<'py>(
     profile_count: Option<&Bound<'py, PyAny>>,
     combination: &str,
     working_space: &str,
+    rgb_mapping: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let explicit =
         [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
@@ -582,6 +588,7 @@ fn profile_py<'py>(
         profile_count: count_arg("profile_count", profile_count)?,
         combination,
         working_space,
+        rgb_mapping,
         target: Target::default(),
     };
     let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
@@ -988,6 +995,7 @@ fn maps_py<'py>(
         profile_count: None,
         combination: "directional",
         working_space,
+        rgb_mapping: "linear",
         target: target_from(blender, engine)?,
     };
     let method = SubsurfaceMethod::from_name(method)?;
@@ -1113,11 +1121,13 @@ fn maps_py<'py>(
             return Ok(None);
         }
         let progress = hook.map(|_| &report as &(dyn Fn(usize, usize) + Sync));
-        let mut result = compute_maps_cancellable(&image, &settings, progress, cancel)?;
+        let computed = compute_maps_cancellable(&image, &settings, progress, cancel);
         drop(image);
+        // A stopped table build is an error; the callback's answer (or exception) is what the caller sees.
         if hook.is_some_and(Progress::stopped) {
             return Ok(None);
         }
+        let mut result = computed?;
         let write = Instant::now();
         let base_color = interleave(width, std::mem::take(&mut result.base_color));
         let radius_mm = interleave(width, std::mem::take(&mut result.radius_mm));

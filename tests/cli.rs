@@ -314,15 +314,26 @@ fn a_new_run_leaves_no_stale_outputs() {
 #[cfg(unix)]
 #[test]
 fn ctrl_c_stops_maps_and_writes_nothing() {
+    // Exact evaluation of 512 x 512 texels: far longer than the 1.5 s before the signal.
+    interrupt_maps(&["--exact", "--no-cache"]);
+    // The table (built afresh: about a second) and then its check at 10^6 points (minutes): the signal lands in
+    // the build or the check, and either stops.
+    interrupt_maps(&["--no-cache", "--table-check", "1000000"]);
+}
+
+/// Run `maps` on a 512 x 512 example with `args`, send SIGINT after 1.5 s, and check that it stops within 5 s with
+/// exit code 130, writing nothing.
+#[cfg(unix)]
+fn interrupt_maps(args: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let face = dir.path().join("face.exr");
     assert!(run(&["example", "--out", face.to_str().unwrap(), "--size", "512"]).status.success());
     let out_dir = dir.path().join("maps");
     std::fs::create_dir(&out_dir).unwrap();
     std::fs::write(out_dir.join("keep.txt"), b"earlier").unwrap();
-    // Exact evaluation of 512 x 512 texels: far longer than the 1.5 s before the signal.
     let mut child = Command::new(env!("CARGO_BIN_EXE_spectral-skin"))
-        .args(["maps", "--params", face.to_str().unwrap(), "--exact", "--no-cache", "--out", out_dir.to_str().unwrap()])
+        .args(["maps", "--params", face.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
+        .args(args)
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
@@ -335,13 +346,38 @@ fn ctrl_c_stops_maps_and_writes_nothing() {
         }
         if sent.elapsed().as_secs() > 30 {
             child.kill().unwrap();
-            panic!("maps still running 30 s after SIGINT");
+            panic!("maps {args:?} still running 30 s after SIGINT");
         }
         std::thread::sleep(std::time::Duration::from_millis(50));
     };
-    assert!(sent.elapsed().as_secs_f64() < 5.0, "took {:?} to stop", sent.elapsed());
-    assert_eq!(status.code(), Some(130), "exit code 130 after Ctrl-C");
+    assert!(sent.elapsed().as_secs_f64() < 5.0, "{args:?}: took {:?} to stop", sent.elapsed());
+    assert_eq!(status.code(), Some(130), "{args:?}: exit code 130 after Ctrl-C");
     let names: Vec<String> =
         std::fs::read_dir(&out_dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    assert_eq!(names, ["keep.txt"], "nothing new, no temporaries");
+    assert_eq!(names, ["keep.txt"], "{args:?}: nothing new, no temporaries");
+}
+
+/// `profile --rgb-mapping`: the help says the linear RGB profile can be negative; the default (linear) has negative
+/// values in the african tail; `non-negative` has none and the same rows where the linear ones are all >= 0.
+#[test]
+fn profile_rgb_mapping() {
+    let help = String::from_utf8(run(&["profile", "--help"]).stdout).unwrap();
+    assert!(help.contains("negative") && help.contains("--rgb-mapping"), "{help}");
+    let rows = |extra: &[&str]| -> Vec<Vec<f64>> {
+        let out = run(&[&["profile", "--preset", "african", "--count", "32"], extra].concat());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8(out.stdout).unwrap();
+        text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect()
+    };
+    let (linear, mapped) = (rows(&[]), rows(&["--rgb-mapping", "non-negative"]));
+    assert!(linear.iter().any(|r| r[1..].iter().any(|&v| v < 0.0)), "the linear tail is out of gamut");
+    assert!(mapped.iter().all(|r| r[1..].iter().all(|&v| v >= 0.0)));
+    for (l, m) in linear.iter().zip(&mapped) {
+        if l[1..].iter().all(|&v| v >= 0.0) {
+            assert_eq!(l, m);
+        }
+    }
+    let bad = run(&["profile", "--preset", "african", "--rgb-mapping", "clip"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("non-negative"));
 }

@@ -5,6 +5,7 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use spectral_skin::maps::example::face_params;
+use spectral_skin::maps::io::{ParamImage, Plane};
 use spectral_skin::maps::pipeline::{check_planes, compute_maps_cancellable};
 use spectral_skin::maps::{compute_maps, MapSettings, StrategyChoice};
 
@@ -42,4 +43,57 @@ fn cancel_skips_the_rows_not_started() {
             assert_eq!(part.base_color[0][row.clone()], full.base_color[0][row], "a finished row is complete");
         }
     }
+}
+
+/// A table build stops once the flag is set: set from the build's own tick (about once per percent of the nodes),
+/// the build returns an error after at most one more node per worker thread instead of all 100 ticks, and nothing
+/// is stored in the cache folder. The pipeline passes the tick on as a progress call `(0, texels)`, so a progress
+/// callback can cancel a build it is not otherwise told about.
+#[test]
+fn cancel_stops_a_table_build() {
+    use spectral_skin::evaluate::{Outputs, Prepared, Request};
+    use spectral_skin::fit::SubsurfaceMethod;
+    use spectral_skin::maps::lut::{MaterialTable, TableResolution};
+
+    let prepared = Prepared::new(&Request::new(Outputs::material())).expect("request");
+    // 27 000 nodes: about 10 s of work on 2 cores if the flag were ignored.
+    let resolution = TableResolution { melanin: 30, melanin_blend: 30, hemoglobin: 30 };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let cancel = AtomicBool::new(false);
+    let ticks = AtomicUsize::new(0);
+    let tick = || {
+        if ticks.fetch_add(1, Ordering::SeqCst) + 1 >= 3 {
+            cancel.store(true, Ordering::SeqCst);
+        }
+    };
+    let result = MaterialTable::load_or_build_cancellable(
+        &prepared,
+        SubsurfaceMethod::Burley,
+        resolution,
+        Some(dir.path()),
+        &cancel,
+        Some(&tick),
+    );
+    let e = result.expect_err("a cancelled build is an error").to_string();
+    assert!(e.contains("interrupted"), "{e}");
+    let seen = ticks.load(Ordering::SeqCst);
+    assert!(seen <= 3 + rayon::current_num_threads(), "{seen} ticks of 100: the build went on");
+    assert_eq!(std::fs::read_dir(dir.path()).expect("cache dir").count(), 0, "a cancelled table was cached");
+
+    // Through the pipeline: a 64 x 64 map of 4096 distinct texels takes the table; the progress callback cancels
+    // at its first call, which is a build tick.
+    let n = 64 * 64;
+    let ramp = |scale: f32| Plane::Texels((0..n).map(|i| scale * i as f32 / n as f32).collect());
+    let image = ParamImage { width: 64, height: 64, planes: [ramp(0.5), ramp(1.0), ramp(0.1), Plane::Constant(0.3)] };
+    let settings = MapSettings { table: resolution, ..MapSettings::default() };
+    let cancel = AtomicBool::new(false);
+    let calls = AtomicUsize::new(0);
+    let progress = |done: usize, _: usize| {
+        assert_eq!(done, 0, "no texel is done while the table is built");
+        calls.fetch_add(1, Ordering::SeqCst);
+        cancel.store(true, Ordering::SeqCst);
+    };
+    let e = compute_maps_cancellable(&image, &settings, Some(&progress), &cancel).expect_err("cancelled").to_string();
+    assert!(e.contains("interrupted"), "{e}");
+    assert!(calls.load(Ordering::SeqCst) <= 1 + rayon::current_num_threads());
 }

@@ -3,8 +3,9 @@
 use std::path::Path;
 
 use spectral_skin::maps::io::{
-    commit_all, read_exr_channels, read_params, stage_bytes, stage_rgb_exr, write_atomic, write_channels_exr,
-    write_rgb_exr, Compression, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, PARAM_CHANNELS, PARAM_RANGES,
+    commit_all, read_exr_channels, read_params, read_params_from_bytes, stage_bytes, stage_rgb_exr, write_atomic,
+    write_channels_exr, write_rgb_exr, Compression, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane,
+    PARAM_CHANNELS, PARAM_RANGES,
 };
 
 const ALL_OPTIONS: [ExrOptions; 6] = [
@@ -530,4 +531,74 @@ fn param_image_helpers() {
     assert_eq!(img.texel_count(), 2);
     assert_eq!(img.texel(1), [0.2, 0.5, 0.01, 0.4]);
     assert!(img.planes[1].is_constant());
+}
+
+/// The bytes reader (what the fuzz target drives) gives what the file reader gives, for the four-channel EXR and for
+/// one-parameter EXR, PNG and TIFF files; the other planes are NaN constants; errors name the label; a bad parameter
+/// index is an error.
+#[test]
+fn bytes_reader_equals_file_reader() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (5, 3);
+    let multi = dir.path().join("multi.exr");
+    let planes: Vec<Vec<f32>> = (0..4).map(|p| plane(w, h, p as f32)).collect();
+    let channels: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().zip(&planes).map(|(n, v)| (*n, v.as_slice())).collect();
+    write_channels_exr(&multi, w, h, &channels, ExrOptions::default()).unwrap();
+    let from_file = read_params(&ParamInputs::Multi { path: multi.clone(), constants: [None; 4] }).unwrap();
+    let from_bytes = read_params_from_bytes(&std::fs::read(&multi).unwrap(), "multi", None).unwrap();
+    assert_eq!(from_bytes, from_file);
+
+    let single = dir.path().join("single.exr");
+    write_channels_exr(&single, w, h, &[("Y", &planes[2])], ExrOptions::default()).unwrap();
+    let png = dir.path().join("m.png");
+    save_l8(&png, w as u32, h as u32, (0..w * h).map(|i| (i * 17) as u8).collect());
+    let tif = dir.path().join("m.tif");
+    save_l16(&tif, w as u32, h as u32, (0..w * h).map(|i| (i * 4000) as u16).collect());
+    for (p, path) in [(2, &single), (0, &png), (3, &tif)] {
+        let mut sources: [ParamSource; 4] = std::array::from_fn(|_| ParamSource::Constant(0.0));
+        sources[p] = file(path);
+        let from_file = read_params(&ParamInputs::Separate(sources)).unwrap();
+        let from_bytes = read_params_from_bytes(&std::fs::read(path).unwrap(), "m", Some(p)).unwrap();
+        assert_eq!((from_bytes.width, from_bytes.height), (w, h));
+        assert_eq!(from_bytes.planes[p], from_file.planes[p], "{}", path.display());
+        for (k, plane) in from_bytes.planes.iter().enumerate().filter(|(k, _)| *k != p) {
+            assert!(matches!(plane, Plane::Constant(v) if v.is_nan()), "plane {k}: {plane:?}");
+        }
+    }
+
+    let e = err_text(read_params_from_bytes(b"not an image", "packed image", Some(0)));
+    assert!(e.contains("packed image") && e.contains("EXR, PNG or TIFF"), "{e}");
+    let e = err_text(read_params_from_bytes(&std::fs::read(&multi).unwrap(), "multi", Some(4)));
+    assert!(e.contains("parameter index") && e.contains("got 4"), "{e}");
+}
+
+/// A chunk whose declared size runs past the end of the file is an error naming the chunk before anything is read:
+/// the exr crate would first allocate and zero-fill that size (up to the largest block the header allows: here
+/// 64 MiB, for a file of a few hundred bytes; a fuzzed 690-byte file made it touch 1 GB). The file is one of our own,
+/// with the data window widened to 2^24 texels and the chunk's size field patched (OpenEXR's layout: after the
+/// header one u64 offset per chunk; a scan-line chunk starts `y: i32, size: i32`).
+#[test]
+fn chunk_sizes_past_the_end_are_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.exr");
+    let options = ExrOptions { half: false, compression: Compression::None };
+    write_channels_exr(&path, 4, 1, &[("Y", &[0.1, 0.2, 0.3, 0.4])], options).unwrap();
+    let mut bytes = std::fs::read(&path).unwrap();
+    let window = bytes.windows(17).position(|w| w == b"dataWindow\0box2i\0").unwrap() + 17 + 4;
+    bytes[window + 8..window + 12].copy_from_slice(&((1i32 << 24) - 1).to_le_bytes()); // xmax
+    let header_end = bytes.len() - 8 - (8 + 16); // one offset, one chunk of 4 f32
+    let chunk = u64::from_le_bytes(bytes[header_end..header_end + 8].try_into().unwrap()) as usize;
+    assert_eq!(chunk, header_end + 8, "the chunk follows the offset table");
+    bytes[chunk + 4..chunk + 8].copy_from_slice(&(1i32 << 26).to_le_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+    let mut sources: [ParamSource; 4] = std::array::from_fn(|_| ParamSource::Constant(0.0));
+    sources[0] = file(&path);
+    let e = err_text(read_params(&ParamInputs::Separate(sources)));
+    assert!(e.contains("m.exr") && e.contains("chunk 0") && e.contains("claims 67108864 bytes"), "{e}");
+    let e = err_text(read_params_from_bytes(&bytes, "packed", Some(0)));
+    assert!(e.contains("packed") && e.contains("claims 67108864 bytes"), "{e}");
+    // The unpatched size with the wide window is still a clear error (too few texels), not the chunk check's.
+    bytes[chunk + 4..chunk + 8].copy_from_slice(&16i32.to_le_bytes());
+    let e = err_text(read_params_from_bytes(&bytes, "packed", Some(0)));
+    assert!(e.contains("packed") && !e.contains("claims"), "{e}");
 }

@@ -250,6 +250,40 @@ fn failures_leave_no_output() {
     }
 }
 
+/// A cache file with a correct checksum but a node value no build stores (a logarithm whose exp overflows f32, or
+/// NaN) is refused, so a table read back never interpolates to an infinite or NaN output; the same file with
+/// values a build can store is read, and looks up exp(value). The file is assembled here from the format's
+/// description (magic line, FNV-1a of the body, axis sizes, nine f32 per node), with FNV-1a written from its
+/// definition.
+#[test]
+fn cache_file_values_a_build_cannot_store_are_refused() {
+    use spectral_skin::maps::lut::CACHE_MAGIC;
+    let fnv1a = |bytes: &[u8]| {
+        bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3))
+    };
+    let resolution = TableResolution { melanin: 2, melanin_blend: 2, hemoglobin: 2 };
+    let file = |value: f32| {
+        let mut body: Vec<u8> = [2u32, 2, 2].iter().flat_map(|n| n.to_le_bytes()).collect();
+        body.extend((0..8 * 9).flat_map(|_| value.to_le_bytes()));
+        let mut file = CACHE_MAGIC.to_vec();
+        file.extend(fnv1a(&body).to_le_bytes());
+        file.extend(body);
+        file
+    };
+    let read = |value: f32| MaterialTable::from_cache_bytes(&file(value), SubsurfaceMethod::Burley, resolution);
+    let table = read(0.5f32.ln()).expect("a table of ln 0.5 everywhere");
+    let t = table.lookup(0.2, 0.3, 0.05);
+    assert!(t.albedo.iter().chain(&t.radius_mm).all(|v| (v - 0.5).abs() < 1e-6), "{t:?}");
+    for bad in [100.0, -100.0, f32::NAN, f32::INFINITY] {
+        assert!(read(bad).is_none(), "a node value of {bad} was accepted");
+    }
+    // The checksum still guards everything else: one flipped byte of a good file.
+    let mut flipped = file(0.0);
+    let last = flipped.len() - 1;
+    flipped[last] ^= 1;
+    assert!(MaterialTable::from_cache_bytes(&flipped, SubsurfaceMethod::Burley, resolution).is_none());
+}
+
 /// A table kept in the cache folder is reused and equals a fresh one; a damaged cache file is rebuilt.
 #[test]
 fn table_cache_round_trip() {

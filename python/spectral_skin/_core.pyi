@@ -38,6 +38,7 @@ _BlenderVersion = str | tuple[int, int] | tuple[int, int, int]
 _AccuracyLevel = Literal["draft", "default", "reference"]
 _WavelengthPlacement = Literal["uniform", "cmf_adapted", "rgb_shortcut"]
 _Parameter = Literal["melanin", "melanin_blend", "hemoglobin", "oiliness"]
+_RgbMapping = Literal["linear", "non_negative"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
 
 class SpectralSkinError(ValueError):
@@ -75,6 +76,7 @@ def evaluate(
     working_space: _WorkingSpace | str = "Linear Rec.709",
     blender: _BlenderVersion | None = None,
     engine: _Engine | str = "cycles",
+    rgb_mapping: _RgbMapping | str = "linear",
 ) -> dict[str, Any]:
     """Evaluate the skin model; compute only the requested outputs.
 
@@ -111,6 +113,9 @@ def evaluate(
             ``blender_targets()["current_release"]``).
         engine: the render engine, "cycles" or "eevee" (EEVEE renders every subsurface method as Burley, with a
             radius compensated for its albedo-dependent profile).
+        rgb_mapping: how the RGB profile's colour at each radius is formed (only "profile_rgb" uses it), as for
+            :func:`profile`: "linear" (exact; negative in a channel where the light is outside the gamut) or
+            "non_negative".
 
     Returns:
         The CLI's JSON as a dict. Always: "params", "color_space", "accuracy", "model" (model["dermis_thickness_mm"]
@@ -152,14 +157,25 @@ def profile(
     profile_count: int | None = None,
     combination: _Combination | str = "directional",
     working_space: _WorkingSpace | str = "Linear Rec.709",
+    rgb_mapping: _RgbMapping | str = "linear",
 ) -> dict[str, _FloatArray]:
     """The radial reflectance profile R(r) of the skin on a log-spaced radius grid.
+
+    The RGB profile is the spectral profile mapped into ``working_space``. With ``rgb_mapping="linear"`` (the
+    default) that map is linear: the exact colour at each radius, additive, and it integrates (2 pi r dr) to the RGB
+    albedo; but where the light is outside the space's gamut a channel is **negative**. Every preset has such radii:
+    in the far tail only red light is left, more saturated than the red primary (README.md, "Radial profiles", lists
+    the radii and sizes). ``rgb_mapping="non_negative"`` moves each such colour along the line towards the grey of the same
+    luminance (R = G = B = Y) until its most negative channel is 0: no value is negative, luminance and hue are kept,
+    radii inside the gamut are unchanged, but the profile no longer integrates exactly to the albedo. The spectral
+    profiles (``spectral=True``) are never negative.
 
     Arguments:
         melanin, melanin_blend, hemoglobin, oiliness, preset: as for :func:`evaluate`.
         spectral: False: RGB profiles; True: one profile per wavelength.
         accuracy, wavelength_step_nm, wavelength_placement, multipole_pairs, profile_r_min_mm, profile_r_max_mm,
             profile_count, combination, working_space: as for :func:`evaluate`.
+        rgb_mapping: "linear" or "non_negative", see above.
 
     Returns:
         {"radii_mm": (N,), "rgb_per_mm2": (N, 3)} in mm^-2, or with spectral=True
@@ -290,14 +306,15 @@ def maps(
         table_resolution: nodes per axis of the lookup table, (melanin, melanin_blend, hemoglobin), each >= 2;
             None: the core's default (chosen for the error bound above; the report names it). Used only by "table".
         progress: None, or a callable ``progress(done, total)`` told how many texels of ``total`` are done: once
-            with 0 before the computation, then about once per percent as rows are filled (from the core's worker
-            threads, taking the GIL for each call; a "constant" map has no rows to report). Returning False
-            cancels: the rows being filled are finished, the others skipped, nothing is returned and
-            InterruptedError is raised (a lookup table being built is finished first). An exception raised by the callback cancels the same way and is re-raised.
+            with 0 before the computation, with the same ``done`` about once per percent of a lookup table's nodes
+            while one is built, then about once per percent as rows are filled (from the core's worker threads,
+            taking the GIL for each call; a "constant" map has no rows to report). Returning False cancels: the
+            rows (or table nodes) being computed are finished, the others skipped, nothing is returned and
+            InterruptedError is raised. An exception raised by the callback cancels the same way and is re-raised.
 
     Ctrl-C (KeyboardInterrupt, or any exception a Python signal handler raises) stops the call the same way: the
-    calling thread checks for signals every 0.1 s while the work runs, the rows being filled are finished and the
-    exception is raised. A lookup table being built is finished first (its build has no stop hook yet).
+    calling thread checks for signals every 0.1 s while the work runs, the rows or table nodes being computed are
+    finished (a node is about a millisecond) and the exception is raised; a table stopped part-way is not cached.
 
     Returns:
         A dict:

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use spectral_skin::color::WavelengthPlacement;
+use spectral_skin::color::{RgbMapping, WavelengthPlacement};
 use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
@@ -50,6 +50,11 @@ enum Command {
         json: bool,
     },
     /// Radial reflectance profile R(r) in mm^-2.
+    ///
+    /// R, G and B are the spectral profile mapped linearly into Linear Rec.709. At radii whose light lies outside
+    /// that gamut (the far tail, where only red light is left: every preset has such radii) a channel is negative,
+    /// as the exact colour demands. --rgb-mapping non-negative gives values that are never negative (each such
+    /// colour moved towards the grey of the same luminance); --spectral profiles are never negative.
     #[command(allow_negative_numbers = true)]
     Profile {
         #[command(flatten)]
@@ -59,6 +64,11 @@ enum Command {
         /// One column per wavelength instead of R, G, B.
         #[arg(long)]
         spectral: bool,
+        /// How each radius's R, G, B are formed: linear (the exact colour; a channel is negative where the light is
+        /// outside the gamut) or non-negative (such a colour moved towards the grey of the same luminance until no
+        /// channel is negative; luminance and hue kept, radii inside the gamut unchanged).
+        #[arg(long, value_enum, default_value_t = RgbMapping::Linear)]
+        rgb_mapping: RgbMapping,
         /// Print CSV (the only format for now; accepted for explicitness).
         #[arg(long)]
         csv: bool,
@@ -348,10 +358,10 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 print_summary(&ev, method);
             }
         }
-        Command::Profile { skin, accuracy, spectral, csv: _, r_min_mm, r_max_mm, count } => {
+        Command::Profile { skin, accuracy, spectral, rgb_mapping, csv: _, r_min_mm, r_max_mm, count } => {
             let params = skin.params()?;
             let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
-            let mut request = accuracy.request(outputs);
+            let mut request = Request { rgb_mapping, ..accuracy.request(outputs) };
             request.accuracy.profile_grid = ProfileGrid { r_min_mm, r_max_mm, count };
             let ev = evaluate(&params, &request)?;
             print_profile_csv(&ev);

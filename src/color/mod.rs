@@ -1,18 +1,30 @@
 //! Colour: spectra to CIE XYZ (1931 2-degree observer, D65) to a linear RGB working space.
 
 pub mod cmf;
+pub mod gamut;
 pub mod rgb;
 pub mod spectrum;
 
+pub use gamut::{RgbMapping, ALL_RGB_MAPPINGS};
 pub use rgb::{WorkingSpace, ALL_WORKING_SPACES};
 pub use spectrum::{spectrum_to_xyz, WavelengthGrid, WavelengthPlacement};
 
 /// Weights turning a spectrum sampled on `grid` into linear RGB in `space`: rgb[c] = sum_k w[k][c] R(lambda_k).
 pub fn spectral_rgb_weights(grid: &WavelengthGrid, space: WorkingSpace) -> Vec<[f64; 3]> {
     let xyz_w = grid.xyz_weights();
-    let white = spectrum_to_xyz(&vec![1.0; xyz_w.len()], &xyz_w);
-    let m = space.xyz_to_rgb_matrix(white);
+    let m = space.xyz_to_rgb_matrix(grid_white(&xyz_w));
     xyz_w.iter().map(|w| rgb::mat_vec(m, *w)).collect()
+}
+
+/// The luminance of linear RGB in `space` made by [`spectral_rgb_weights`] on `grid`: Y = l . rgb, relative to the
+/// white (l sums to 1), for [`RgbMapping::apply`].
+pub fn rgb_luminance_weights(grid: &WavelengthGrid, space: WorkingSpace) -> [f64; 3] {
+    space.luminance_weights(grid_white(&grid.xyz_weights()))
+}
+
+/// XYZ of the perfect white reflector under the grid's weights (the illuminant's white).
+fn grid_white(xyz_weights: &[[f64; 3]]) -> [f64; 3] {
+    spectrum_to_xyz(&vec![1.0; xyz_weights.len()], xyz_weights)
 }
 
 /// Weights for a grid made by `placement`: the colour integration of [`spectral_rgb_weights`], except for the RGB

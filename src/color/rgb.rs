@@ -72,6 +72,13 @@ impl WorkingSpace {
         }
     }
 
+    /// The luminance of linear RGB in this space for a scene whose white is `white_xyz`: Y = l . rgb with Y relative
+    /// to the white's (so l sums to 1): the middle row of the RGB -> XYZ matrix (the inverse of
+    /// [`WorkingSpace::xyz_to_rgb_matrix`]) divided by the white's Y.
+    pub fn luminance_weights(self, white_xyz: [f64; 3]) -> [f64; 3] {
+        invert(self.xyz_to_rgb_matrix(white_xyz))[1].map(|v| v / white_xyz[1])
+    }
+
     /// The normalised primary matrix (RGB -> XYZ) whose white (1, 1, 1) is `white_xyz` (SMPTE RP 177).
     fn rgb_to_xyz_on_white(self, white_xyz: [f64; 3]) -> [[f64; 3]; 3] {
         // Columns of P are the primaries' XYZ at Y = 1; scale them so that P S (1,1,1) = white.
@@ -135,6 +142,19 @@ mod tests {
             for j in 0..3 {
                 assert!((m[i][j] - published[i][j]).abs() < 2e-6, "{i}{j}: {} vs {}", m[i][j], published[i][j]);
             }
+        }
+    }
+
+    /// Rec.709 on the D65 white (0.95047, 1, 1.08883): the middle row of Lindbloom's sRGB-to-XYZ matrix
+    /// (0.2126729, 0.7151522, 0.0721750); every space's weights sum to 1.
+    #[test]
+    fn luminance_weights_match_published_row() {
+        let l = WorkingSpace::LinearRec709.luminance_weights([0.95047, 1.0, 1.08883]);
+        let published = [0.2126729, 0.7151522, 0.0721750];
+        assert!((0..3).all(|c| (l[c] - published[c]).abs() < 1e-6), "{l:?}");
+        for ws in ALL_WORKING_SPACES {
+            let l = ws.luminance_weights(table_white());
+            assert!((l.iter().sum::<f64>() - 1.0).abs() < 1e-12, "{ws:?} {l:?}");
         }
     }
 

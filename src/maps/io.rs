@@ -13,7 +13,7 @@
 
 use std::cell::Cell;
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufRead, BufReader, BufWriter, Cursor, Read, Seek, SeekFrom, Write};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
@@ -166,18 +166,130 @@ impl Compression {
 ///   the parameter's range ([`PARAM_RANGES`]), computed in f64 (so 255 in an 8-bit melanin map gives exactly 0.5).
 /// - Constants are used as given (converted to f32).
 ///
+/// - Before an EXR's pixel data is read, its offset table and every chunk's declared size are checked against the
+///   file's length: a damaged file is an error naming the chunk, never an allocation of the size it claims.
+///
 /// If every source is a constant there is no size to use: that is an error asking for at least one map.
 /// Values are not range-checked here (NaN, infinities and out-of-range values pass through).
 pub fn read_params(inputs: &ParamInputs) -> Result<ParamImage, SkinError> {
     match inputs {
-        ParamInputs::Multi { path, constants } => read_multi(path, constants),
-        ParamInputs::Separate(sources) => read_separate(sources),
+        ParamInputs::Multi { path, constants } => read_multi(Source::Path(path), constants),
+        ParamInputs::Separate(sources) => read_separate(&sources.each_ref().map(|s| match s {
+            ParamSource::File(path) => Input::File(Source::Path(path)),
+            ParamSource::Constant(value) => Input::Constant(*value),
+        })),
     }
 }
 
-fn read_multi(path: &Path, constants: &[Option<f64>; 4]) -> Result<ParamImage, SkinError> {
+/// [`read_params`] for one file already in memory (a packed image, a download, a fuzzer's input): the same reader
+/// and the same rules, with `label` standing for the file's name in messages.
+///
+/// - `parameter` None: a four-channel parameter EXR, as `ParamInputs::Multi` without constants (every channel of
+///   [`PARAM_CHANNELS`] required).
+/// - `parameter` Some(p): a one-parameter EXR, PNG or TIFF for parameter `p` (an index into [`PARAM_CHANNELS`]), as
+///   that parameter's `ParamSource::File`; the other three planes are `Plane::Constant(NaN)` (no value given), which
+///   [`crate::maps::pipeline::check_planes`] refuses unless they are replaced.
+pub fn read_params_from_bytes(bytes: &[u8], label: &str, parameter: Option<usize>) -> Result<ParamImage, SkinError> {
+    let source = Source::Bytes { label: Path::new(label), bytes };
+    match parameter {
+        None => read_multi(source, &[None; 4]),
+        Some(p) if p < PARAM_CHANNELS.len() => {
+            read_separate(&std::array::from_fn(
+                |k| {
+                    if k == p {
+                        Input::File(source)
+                    } else {
+                        Input::Constant(f64::NAN)
+                    }
+                },
+            ))
+        }
+        Some(p) => Err(SkinError::invalid(
+            "parameter index",
+            format!(
+                "expected 0 to {} (an index into {}); got {p}",
+                PARAM_CHANNELS.len() - 1,
+                PARAM_CHANNELS.join(", ")
+            ),
+        )),
+    }
+}
+
+/// Where one input file's bytes come from: a file, opened afresh for each pass, or bytes in memory. `label` names it
+/// in messages.
+#[derive(Clone, Copy)]
+enum Source<'a> {
+    Path(&'a Path),
+    Bytes { label: &'a Path, bytes: &'a [u8] },
+}
+
+/// A parameter's input inside the reader: a file's bytes or a constant.
+#[derive(Clone, Copy)]
+enum Input<'a> {
+    File(Source<'a>),
+    Constant(f64),
+}
+
+impl<'a> Source<'a> {
+    fn label(&self) -> &'a Path {
+        match *self {
+            Source::Path(path) => path,
+            Source::Bytes { label, .. } => label,
+        }
+    }
+
+    /// A buffered, seekable reader from the first byte.
+    fn open(&self, what: &str) -> Result<SourceReader<'a>, SkinError> {
+        match *self {
+            Source::Path(path) => open_file(path, what).map(|f| SourceReader::File(BufReader::new(f))),
+            Source::Bytes { bytes, .. } => Ok(SourceReader::Bytes(Cursor::new(bytes))),
+        }
+    }
+}
+
+/// The reader of a [`Source`].
+enum SourceReader<'a> {
+    File(BufReader<File>),
+    Bytes(Cursor<&'a [u8]>),
+}
+
+impl Read for SourceReader<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        match self {
+            SourceReader::File(r) => r.read(buf),
+            SourceReader::Bytes(r) => r.read(buf),
+        }
+    }
+}
+
+impl BufRead for SourceReader<'_> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        match self {
+            SourceReader::File(r) => r.fill_buf(),
+            SourceReader::Bytes(r) => r.fill_buf(),
+        }
+    }
+    fn consume(&mut self, amount: usize) {
+        match self {
+            SourceReader::File(r) => r.consume(amount),
+            SourceReader::Bytes(r) => r.consume(amount),
+        }
+    }
+}
+
+impl Seek for SourceReader<'_> {
+    fn seek(&mut self, position: SeekFrom) -> std::io::Result<u64> {
+        match self {
+            SourceReader::File(r) => r.seek(position),
+            SourceReader::Bytes(r) => r.seek(position),
+        }
+    }
+}
+
+fn read_multi(src: Source<'_>, constants: &[Option<f64>; 4]) -> Result<ParamImage, SkinError> {
     let what = "parameter EXR";
-    let probe = probe_exr(path, what)?;
+    let path = src.label();
+    let probe = probe_exr(src, what)?;
     let mut wanted: Vec<(usize, usize)> = Vec::new(); // (parameter index, channel index in the file)
     let mut missing: Vec<&str> = Vec::new();
     for (p, name) in PARAM_CHANNELS.iter().enumerate() {
@@ -204,7 +316,7 @@ fn read_multi(path: &Path, constants: &[Option<f64>; 4]) -> Result<ParamImage, S
         ));
     }
     let indices: Vec<usize> = wanted.iter().map(|&(_, c)| c).collect();
-    let mut read = read_exr_planes(path, what, &probe, &indices)?.into_iter();
+    let mut read = read_exr_planes(src, what, &probe, &indices)?.into_iter();
     let mut planes: [Plane; 4] = std::array::from_fn(|p| Plane::Constant(constants[p].unwrap_or(f64::NAN) as f32));
     for &(p, _) in &wanted {
         // One plane was read per wanted channel, in the same order.
@@ -215,12 +327,12 @@ fn read_multi(path: &Path, constants: &[Option<f64>; 4]) -> Result<ParamImage, S
     Ok(ParamImage { width: probe.width, height: probe.height, planes })
 }
 
-fn read_separate(sources: &[ParamSource; 4]) -> Result<ParamImage, SkinError> {
+fn read_separate(sources: &[Input<'_>; 4]) -> Result<ParamImage, SkinError> {
     // Phase 1: headers only.
-    let mut probes: Vec<(usize, &Path, FileProbe)> = Vec::new();
+    let mut probes: Vec<(usize, Source<'_>, FileProbe)> = Vec::new();
     for (p, source) in sources.iter().enumerate() {
-        if let ParamSource::File(path) = source {
-            probes.push((p, path, probe_param_file(path, p)?));
+        if let Input::File(src) = source {
+            probes.push((p, *src, probe_param_file(*src, p)?));
         }
     }
     let Some((_, _, first)) = probes.first() else {
@@ -233,8 +345,8 @@ fn read_separate(sources: &[ParamSource; 4]) -> Result<ParamImage, SkinError> {
     if probes.iter().any(|(_, _, probe)| probe.width() != width || probe.height() != height) {
         let sizes: Vec<String> = probes
             .iter()
-            .map(|(p, path, probe)| {
-                format!("{} {} is {}x{}", PARAM_CHANNELS[*p], path.display(), probe.width(), probe.height())
+            .map(|(p, src, probe)| {
+                format!("{} {} is {}x{}", PARAM_CHANNELS[*p], src.label().display(), probe.width(), probe.height())
             })
             .collect();
         return Err(SkinError::invalid(
@@ -245,16 +357,16 @@ fn read_separate(sources: &[ParamSource; 4]) -> Result<ParamImage, SkinError> {
 
     // Phase 2: decode.
     let mut planes: [Plane; 4] = std::array::from_fn(|p| match &sources[p] {
-        ParamSource::Constant(value) => Plane::Constant(*value as f32),
-        ParamSource::File(_) => Plane::Constant(f32::NAN), // replaced below
+        Input::Constant(value) => Plane::Constant(*value as f32),
+        Input::File(_) => Plane::Constant(f32::NAN), // replaced below
     });
-    for (p, path, probe) in &probes {
+    for (p, src, probe) in &probes {
         let what = map_name(*p);
         let values = match probe {
             FileProbe::Exr { probe, channel } => {
-                read_exr_planes(path, &what, probe, &[*channel])?.pop().unwrap_or_default()
+                read_exr_planes(*src, &what, probe, &[*channel])?.pop().unwrap_or_default()
             }
-            FileProbe::Integer { width, height, .. } => read_integer_image(path, &what, *p, *width, *height)?,
+            FileProbe::Integer { width, height, .. } => read_integer_image(*src, &what, *p, *width, *height)?,
         };
         planes[*p] = Plane::Texels(values);
     }
@@ -315,9 +427,10 @@ fn open_file(path: &Path, what: &str) -> Result<File, SkinError> {
         .map_err(|e| SkinError::io(path, format!("cannot read {what}: {e} (expected an existing, readable file)")))
 }
 
-fn is_exr(path: &Path, what: &str) -> Result<bool, SkinError> {
+fn is_exr(src: Source<'_>, what: &str) -> Result<bool, SkinError> {
+    let path = src.label();
     let mut magic = [0u8; 4];
-    let mut file = open_file(path, what)?;
+    let mut file = src.open(what)?;
     let mut filled = 0;
     while filled < 4 {
         match file.read(&mut magic[filled..]) {
@@ -341,10 +454,10 @@ fn check_size(path: &Path, what: &str, width: usize, height: usize) -> Result<()
 }
 
 /// Header of an EXR: single part, flat, full-resolution channels.
-fn probe_exr(path: &Path, what: &str) -> Result<ExrProbe, SkinError> {
-    let file = open_file(path, what)?;
-    let meta =
-        guard(|| MetaData::read_from_buffered(BufReader::new(file), false)).and_then(|r| r.map_err(|e| e.to_string()));
+fn probe_exr(src: Source<'_>, what: &str) -> Result<ExrProbe, SkinError> {
+    let path = src.label();
+    let reader = src.open(what)?;
+    let meta = guard(|| MetaData::read_from_buffered(reader, false)).and_then(|r| r.map_err(|e| e.to_string()));
     let meta = meta.map_err(|e| {
         SkinError::io(path, format!("cannot read {what}: not a valid OpenEXR header ({e}); expected an EXR file"))
     })?;
@@ -395,10 +508,11 @@ fn probe_from_headers(path: &Path, what: &str, headers: &[Header]) -> Result<Exr
 }
 
 /// Header check of a one-parameter file.
-fn probe_param_file(path: &Path, p: usize) -> Result<FileProbe, SkinError> {
+fn probe_param_file(src: Source<'_>, p: usize) -> Result<FileProbe, SkinError> {
     let what = map_name(p);
-    if is_exr(path, &what)? {
-        let probe = probe_exr(path, &what)?;
+    let path = src.label();
+    if is_exr(src, &what)? {
+        let probe = probe_exr(src, &what)?;
         let channel = if probe.channels.len() == 1 {
             0
         } else if let Some(c) = probe.channels.iter().position(|(c, _)| c == PARAM_CHANNELS[p]) {
@@ -416,7 +530,7 @@ fn probe_param_file(path: &Path, p: usize) -> Result<FileProbe, SkinError> {
         };
         return Ok(FileProbe::Exr { probe, channel });
     }
-    let reader = image_reader(path, &what)?;
+    let reader = image_reader(src, &what)?;
     let decoder = guard(|| {
         reader.into_decoder().map(|d| (image::ImageDecoder::dimensions(&d), image::ImageDecoder::color_type(&d)))
     })
@@ -430,9 +544,9 @@ fn probe_param_file(path: &Path, p: usize) -> Result<FileProbe, SkinError> {
 }
 
 /// An image reader for a PNG or TIFF, recognised by content.
-fn image_reader(path: &Path, what: &str) -> Result<image::ImageReader<BufReader<File>>, SkinError> {
-    let file = open_file(path, what)?;
-    let reader = image::ImageReader::new(BufReader::new(file))
+fn image_reader<'a>(src: Source<'a>, what: &str) -> Result<image::ImageReader<SourceReader<'a>>, SkinError> {
+    let path = src.label();
+    let reader = image::ImageReader::new(src.open(what)?)
         .with_guessed_format()
         .map_err(|e| SkinError::io(path, format!("cannot read {what}: {e}")))?;
     match reader.format() {
@@ -480,8 +594,15 @@ fn color_name(color: image::ColorType) -> &'static str {
 }
 
 /// Decode a greyscale PNG/TIFF and map its integer values onto parameter `p`'s range.
-fn read_integer_image(path: &Path, what: &str, p: usize, width: usize, height: usize) -> Result<Vec<f32>, SkinError> {
-    let reader = image_reader(path, what)?;
+fn read_integer_image(
+    src: Source<'_>,
+    what: &str,
+    p: usize,
+    width: usize,
+    height: usize,
+) -> Result<Vec<f32>, SkinError> {
+    let path = src.label();
+    let reader = image_reader(src, what)?;
     let img = guard(|| reader.decode())
         .and_then(|r| r.map_err(|e| e.to_string()))
         .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image ({e})")))?;
@@ -533,15 +654,21 @@ fn guard<T>(f: impl FnOnce() -> T) -> Result<T, String> {
 
 /// Read the channels at `indices` (indices into the file's sorted channel list) of a probed EXR into f32 planes,
 /// decompressing blocks in parallel and writing samples straight into the planes.
-fn read_exr_planes(path: &Path, what: &str, probe: &ExrProbe, indices: &[usize]) -> Result<Vec<Vec<f32>>, SkinError> {
+fn read_exr_planes(
+    src: Source<'_>,
+    what: &str,
+    probe: &ExrProbe,
+    indices: &[usize],
+) -> Result<Vec<Vec<f32>>, SkinError> {
+    let path = src.label();
     let decode_error =
         |e: String| SkinError::io(path, format!("cannot read {what}: EXR data is truncated or corrupt ({e})"));
     let (width, height) = (probe.width, probe.height);
     let texels = width * height;
-    let file = open_file(path, what)?;
+    let file = src.open(what)?;
 
     let result = guard(|| -> Result<Vec<Vec<f32>>, ReadFailure> {
-        let reader = exr::block::read(BufReader::new(file), false).map_err(ReadFailure::Exr)?;
+        let reader = exr::block::read(file, false).map_err(ReadFailure::Exr)?;
         // Re-check the header: the file could have changed since it was probed.
         let again = probe_from_headers(path, what, reader.headers()).map_err(ReadFailure::Skin)?;
         if again.width != width || again.height != height || again.channels != probe.channels {
@@ -550,6 +677,7 @@ fn read_exr_planes(path: &Path, what: &str, probe: &ExrProbe, indices: &[usize])
                 format!("{}: the file changed while being read", path.display()),
             )));
         }
+        check_chunks(src, what, reader.meta_data()).map_err(ReadFailure::Skin)?;
         let mut slot_of_channel: Vec<Option<usize>> = vec![None; probe.channels.len()];
         for (slot, &c) in indices.iter().enumerate() {
             slot_of_channel[c] = Some(slot);
@@ -614,6 +742,85 @@ fn read_exr_planes(path: &Path, what: &str, probe: &ExrProbe, indices: &[usize])
     }
 }
 
+/// Check that every chunk of a probed EXR lies inside the file before any chunk is read: the offset table fits, each
+/// offset points into the file, and each chunk's declared data size ends within it. The exr crate allocates and
+/// zero-fills a chunk's declared size (up to the largest block the header allows) before reading it, so without this
+/// a few hundred damaged bytes could make it touch a gigabyte (found by fuzzing: docs/robustness.md, "Fuzzing").
+///
+/// The layout is OpenEXR's ("OpenEXR File Layout", single-part files): after the header, one u64 offset per chunk;
+/// at each offset a scan-line chunk is `y: i32, size: i32, data` and a tile chunk `x, y, level x, level y: i32,
+/// size: i32, data`, each preceded by `part: i32` when the file has the multi-part flag.
+fn check_chunks(src: Source<'_>, what: &str, meta: &MetaData) -> Result<(), SkinError> {
+    let path = src.label();
+    let damaged = |reason: String| {
+        SkinError::io(path, format!("cannot read {what}: EXR data is truncated or corrupt ({reason})"))
+    };
+    let io_error = |e: std::io::Error| damaged(e.to_string());
+    let [header] = meta.headers.as_slice() else {
+        return Err(damaged("expected one part".into()));
+    };
+    let mut reader = src.open(what)?;
+    let file_len = reader.seek(SeekFrom::End(0)).map_err(io_error)?;
+    reader.seek(SeekFrom::Start(0)).map_err(io_error)?;
+    // Where the header ends: what reading it again consumed.
+    let mut counting = CountingReader { inner: &mut reader, count: 0 };
+    guard(|| MetaData::read_from_buffered(&mut counting, false))
+        .and_then(|r| r.map_err(|e| e.to_string()))
+        .map_err(damaged)?;
+    let table_start = counting.count;
+    let chunks = header.chunk_count as u64;
+    let table_end = chunks.checked_mul(8).and_then(|n| n.checked_add(table_start));
+    if table_end.map_or(true, |end| end > file_len) {
+        return Err(damaged(format!("an offset table of {chunks} chunks does not fit in {file_len} bytes")));
+    }
+    let table_end = table_end.unwrap_or(file_len);
+    let mut table = vec![0u8; (table_end - table_start) as usize];
+    reader.seek(SeekFrom::Start(table_start)).map_err(io_error)?;
+    reader.read_exact(&mut table).map_err(io_error)?;
+    // The i32 fields before the size: the part number if multi-part, then y (scan lines) or x, y, levels (tiles).
+    let before_size = 4
+        * (usize::from(meta.requirements.is_multilayer())
+            + if matches!(header.blocks, BlockDescription::ScanLines) { 1 } else { 4 });
+    let mut fields = vec![0u8; before_size + 4];
+    for (index, entry) in table.chunks_exact(8).enumerate() {
+        let offset = u64::from_le_bytes(entry.try_into().unwrap_or([0xff; 8]));
+        if offset.checked_add(fields.len() as u64).map_or(true, |end| end > file_len) || offset < table_end {
+            return Err(damaged(format!(
+                "chunk {index} starts at byte {offset}, outside the data of a {file_len}-byte file"
+            )));
+        }
+        reader.seek(SeekFrom::Start(offset)).map_err(io_error)?;
+        reader.read_exact(&mut fields).map_err(io_error)?;
+        let size = i32::from_le_bytes([
+            fields[before_size],
+            fields[before_size + 1],
+            fields[before_size + 2],
+            fields[before_size + 3],
+        ]);
+        let end = offset + fields.len() as u64 + u64::try_from(size).unwrap_or(u64::MAX / 2);
+        if size < 0 || end > file_len {
+            return Err(damaged(format!(
+                "chunk {index} at byte {offset} claims {size} bytes; the file ends at {file_len}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A reader that counts the bytes read through it.
+struct CountingReader<R> {
+    inner: R,
+    count: u64,
+}
+
+impl<R: Read> Read for CountingReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.count += n as u64;
+        Ok(n)
+    }
+}
+
 enum ReadFailure {
     Exr(exr::error::Error),
     Skin(SkinError),
@@ -626,9 +833,10 @@ enum ReadFailure {
 #[allow(clippy::type_complexity)] // the plain tuple is the documented API
 pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<(String, Vec<f32>)>), SkinError> {
     let what = "EXR";
-    let probe = probe_exr(path, what)?;
+    let src = Source::Path(path);
+    let probe = probe_exr(src, what)?;
     let indices: Vec<usize> = (0..probe.channels.len()).collect();
-    let planes = read_exr_planes(path, what, &probe, &indices)?;
+    let planes = read_exr_planes(src, what, &probe, &indices)?;
     let named = probe.channels.iter().map(|(name, _)| name.clone()).zip(planes).collect();
     Ok((probe.width, probe.height, named))
 }

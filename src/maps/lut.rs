@@ -7,6 +7,7 @@
 //! evaluation is measured, not assumed: see `measure_error` and `tests/maps_pipeline.rs`.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -57,6 +58,19 @@ impl TexelMaterial {
 /// The concentration axes are warped by a cube root: u = (C / C_max)^(1/3) (`warp`, `unwarp`).
 /// Smallest value stored before taking the logarithm (outputs are positive; this guards underflow).
 const MIN_STORED: f32 = 1e-30;
+/// Largest value stored (outputs are reflectances near 1 and radii of millimetres; this keeps exp() of every
+/// interpolated logarithm a finite f32, whatever a cache file holds).
+const MAX_STORED: f32 = 1e30;
+
+/// The stored form of an output: its logarithm, clamped into [ln MIN_STORED, ln MAX_STORED].
+fn stored_log(value: f32) -> f32 {
+    value.clamp(MIN_STORED, MAX_STORED).ln()
+}
+
+/// True for a value [`stored_log`] can give (a cache file holding anything else is damaged).
+fn is_stored_log(x: f32) -> bool {
+    (MIN_STORED.ln()..=MAX_STORED.ln()).contains(&x)
+}
 
 /// Nodes per axis: melanin, melanin blend, haemoglobin.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -122,15 +136,38 @@ impl MaterialTable {
         method: SubsurfaceMethod,
         resolution: TableResolution,
     ) -> Result<MaterialTable, SkinError> {
+        MaterialTable::build_cancellable(prepared, method, resolution, &AtomicBool::new(false), None)
+    }
+
+    /// [`MaterialTable::build`] that stops once `cancel` is set: each node reads the flag before it is evaluated,
+    /// so the build ends within about one node's evaluation per thread (a millisecond or so), with the error
+    /// an error. `tick`, if given, is called about once per percent of the nodes (from the worker threads), so that
+    /// a front whose progress callback decides whether to cancel (and sets `cancel`) is asked during a long build
+    /// too.
+    pub fn build_cancellable(
+        prepared: &Prepared,
+        method: SubsurfaceMethod,
+        resolution: TableResolution,
+        cancel: &AtomicBool,
+        tick: Option<&(dyn Fn() + Sync)>,
+    ) -> Result<MaterialTable, SkinError> {
         resolution.validate()?;
         prepared.request().target.method_entry(method)?;
         let r = resolution;
-        let log_values = (0..r.node_count())
+        let nodes = r.node_count();
+        let every = (nodes / 100).max(1);
+        let log_values = (0..nodes)
             .into_par_iter()
             .map(|n| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(interrupted("table build"));
+                }
+                if let Some(tick) = tick.filter(|_| n % every == 0) {
+                    tick();
+                }
                 let p = node_params(r, n);
                 let m = prepared.material(&p)?;
-                Ok(TexelMaterial::of(&m, method)?.to_array().map(|v| v.max(MIN_STORED).ln()))
+                Ok(TexelMaterial::of(&m, method)?.to_array().map(stored_log))
             })
             .collect::<Result<Vec<_>, SkinError>>()?;
         Ok(MaterialTable { resolution, method, log_values })
@@ -199,12 +236,25 @@ impl MaterialTable {
         resolution: TableResolution,
         cache_dir: Option<&Path>,
     ) -> Result<(MaterialTable, bool), SkinError> {
+        MaterialTable::load_or_build_cancellable(prepared, method, resolution, cache_dir, &AtomicBool::new(false), None)
+    }
+
+    /// [`MaterialTable::load_or_build`] whose build stops once `cancel` is set (see
+    /// [`MaterialTable::build_cancellable`]); a cancelled build is an error and stores nothing in the cache.
+    pub fn load_or_build_cancellable(
+        prepared: &Prepared,
+        method: SubsurfaceMethod,
+        resolution: TableResolution,
+        cache_dir: Option<&Path>,
+        cancel: &AtomicBool,
+        tick: Option<&(dyn Fn() + Sync)>,
+    ) -> Result<(MaterialTable, bool), SkinError> {
         let key = cache_key(prepared, method, resolution);
         let path = cache_dir.map(|d| d.join(format!("table-{key:016x}.bin")));
         if let Some(table) = path.as_deref().and_then(|p| MaterialTable::read(p, method, resolution)) {
             return Ok((table, true));
         }
-        let table = MaterialTable::build(prepared, method, resolution)?;
+        let table = MaterialTable::build_cancellable(prepared, method, resolution, cancel, tick)?;
         if let Some(p) = &path {
             // A cache that cannot be written is no error: the table is still good.
             if std::fs::create_dir_all(p.parent().unwrap_or(Path::new("."))).is_ok() {
@@ -234,10 +284,22 @@ impl MaterialTable {
         bytes
     }
 
-    /// A cached table, or None if the file is missing, of another size, or damaged (checksum mismatch: any flipped
-    /// byte), so that the caller rebuilds it.
+    /// A cached table, or None if the file is missing or not a table of `resolution` (see
+    /// [`MaterialTable::from_cache_bytes`]), so that the caller rebuilds it.
     fn read(path: &Path, method: SubsurfaceMethod, resolution: TableResolution) -> Option<MaterialTable> {
-        let bytes = std::fs::read(path).ok()?;
+        MaterialTable::from_cache_bytes(&std::fs::read(path).ok()?, method, resolution)
+    }
+
+    /// The table in the bytes of a cache file (the format of `load_or_build`'s cache: the magic line, the FNV-1a
+    /// checksum of the body, the axis sizes and the node values), or None if they are not a whole, undamaged table
+    /// of `resolution`: another magic or size, a checksum mismatch (any flipped byte), or a value a build cannot
+    /// have stored (not finite, or a logarithm outside [ln 1e-30, ln 1e30]). A table it returns interpolates to
+    /// finite positive values everywhere.
+    pub fn from_cache_bytes(
+        bytes: &[u8],
+        method: SubsurfaceMethod,
+        resolution: TableResolution,
+    ) -> Option<MaterialTable> {
         let rest = bytes.strip_prefix(CACHE_MAGIC)?;
         let checksum = u64::from_le_bytes(rest.get(..8)?.try_into().ok()?);
         let body = &rest[8..];
@@ -251,7 +313,7 @@ impl MaterialTable {
             return None;
         }
         let floats: Vec<f32> = body[12..].chunks(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-        if floats.iter().any(|x| !x.is_finite()) {
+        if !floats.iter().all(|&x| is_stored_log(x)) {
             return None;
         }
         let log_values = floats.chunks(STORED).map(|c| std::array::from_fn(|q| c[q])).collect();
@@ -261,8 +323,13 @@ impl MaterialTable {
 
 /// First bytes of a cached table file (v3: one method per table, with a checksum; older files are not read and get
 /// rebuilt).
-const CACHE_MAGIC: &[u8] = b"spectral-skin table v3
+pub const CACHE_MAGIC: &[u8] = b"spectral-skin table v3
 ";
+
+/// The error of a build or check stopped by its cancel flag.
+fn interrupted(what: &str) -> SkinError {
+    SkinError::invalid(what, "interrupted (cancelled) before it finished; nothing was stored")
+}
 
 /// 64-bit FNV-1a (Fowler, Noll & Vo; offset basis 0xcbf29ce484222325, prime 0x100000001b3): detects any single
 /// flipped byte and, with probability 1 - 2^-64, any other corruption.
@@ -319,6 +386,16 @@ pub struct TableError {
 /// Measure the table's error at `samples` points: cell centres (where trilinear error peaks) and pseudo-random points
 /// (a fixed low-discrepancy sequence, so the figure is reproducible), against `prepared.material` evaluated directly.
 pub fn measure_error(table: &MaterialTable, prepared: &Prepared, samples: usize) -> Result<TableError, SkinError> {
+    measure_error_cancellable(table, prepared, samples, &AtomicBool::new(false))
+}
+
+/// [`measure_error`] that stops once `cancel` is set (read before each point), with an error.
+pub fn measure_error_cancellable(
+    table: &MaterialTable,
+    prepared: &Prepared,
+    samples: usize,
+    cancel: &AtomicBool,
+) -> Result<TableError, SkinError> {
     if samples > MAX_TABLE_CHECK_SAMPLES {
         return Err(SkinError::invalid(
             "table check samples",
@@ -344,6 +421,9 @@ pub fn measure_error(table: &MaterialTable, prepared: &Prepared, samples: usize)
     let errors = points
         .par_iter()
         .map(|u| {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(interrupted("table check"));
+            }
             let p = SkinParams {
                 melanin: unwarp(u[0], MELANIN_RANGE.1),
                 melanin_blend: u[1],

@@ -15,7 +15,7 @@ use super::io::{
     commit_all, read_params, stage_bytes, stage_channels_exr, ExrOptions, ParamImage, ParamInputs, Plane,
     PARAM_CHANNELS, PARAM_RANGES,
 };
-use super::lut::{measure_error, MaterialTable, TableError, TableResolution, TexelMaterial};
+use super::lut::{measure_error_cancellable, MaterialTable, TableError, TableResolution, TexelMaterial};
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
 use crate::fit::blender_target::TargetInfo;
@@ -223,7 +223,9 @@ pub fn compute_maps(
 
 /// [`compute_maps`] that skips the rows not yet started once `cancel` is set (it is read before each row, so a
 /// front's progress callback can set it). The result is then incomplete: whoever set the flag must discard it. A
-/// lookup table being built is finished first.
+/// lookup table being built (and its check) stops too, within a node's evaluation, and returns an error: the
+/// progress callback is told `(0, texels)` about once per percent of the table's nodes, so it can set the flag
+/// during the build.
 pub fn compute_maps_cancellable(
     image: &ParamImage,
     settings: &MapSettings,
@@ -302,14 +304,21 @@ pub fn compute_maps_cancellable(
         Strategy::Exact { evaluations: n }
     } else {
         let build = Instant::now();
-        let (table, from_cache) =
-            MaterialTable::load_or_build(&prepared, method, settings.table, settings.table_cache.as_deref())?;
+        let tick = progress.map(|p| move || p(0, n));
+        let (table, from_cache) = MaterialTable::load_or_build_cancellable(
+            &prepared,
+            method,
+            settings.table,
+            settings.table_cache.as_deref(),
+            cancel,
+            tick.as_ref().map(|t| t as &(dyn Fn() + Sync)),
+        )?;
         let build_seconds = build.elapsed().as_secs_f64();
         // A freshly built table is checked against direct evaluation; a cached one was checked when it was built.
         let measured_error = if from_cache || settings.table_check_samples == 0 {
             None
         } else {
-            Some(measure_error(&table, &prepared, settings.table_check_samples)?)
+            Some(measure_error_cancellable(&table, &prepared, settings.table_check_samples, cancel)?)
         };
         fill_rows(w, &mut base_color, &mut radius, progress, cancel, |i| {
             let t = tuple(i);
@@ -431,7 +440,7 @@ pub fn run_maps(
 
 /// [`run_maps`] that stops once `cancel` is set (the CLI's Ctrl-C): the computation skips the rows not started, and
 /// a run cancelled before its files are renamed into place writes nothing (the staged temporaries are deleted), so
-/// the output folder keeps the previous run's files. The table build does not look at the flag.
+/// the output folder keeps the previous run's files (a table build stops too: see [`compute_maps_cancellable`]).
 pub fn run_maps_cancellable(
     inputs: &ParamInputs,
     out_dir: &Path,

@@ -54,3 +54,61 @@ def test_table_resolution_is_bounded_before_allocation():
     with pytest.raises(spectral_skin.SpectralSkinError, match="table resolution"):
         spectral_skin.maps(params, table_resolution=(2000, 2000, 2000), table_cache=False)
     assert time.monotonic() - start < 5.0
+
+
+TABLE_CHILD = r"""
+import sys
+import numpy as np
+import spectral_skin
+# 64 x 64 distinct texels take the lookup table; 100^3 nodes are minutes of work on a small machine.
+rng = np.random.default_rng(0)
+params = (rng.random((64, 64, 4)) * np.array([0.5, 1.0, 0.1, 1.0])).astype(np.float32)
+print("started", flush=True)
+try:
+    spectral_skin.maps(params, table_resolution=(100, 100, 100))
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+    sys.exit(3)
+print("finished", flush=True)
+"""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+def test_ctrl_c_stops_a_table_build(tmp_path):
+    env = dict(os.environ, SPECTRAL_SKIN_CACHE_DIR=str(tmp_path))
+    child = subprocess.Popen([sys.executable, "-c", TABLE_CHILD], stdout=subprocess.PIPE, text=True, env=env)
+    try:
+        assert child.stdout.readline().strip() == "started"
+        time.sleep(1.5)  # inside the build (nothing before it takes this long for 4096 texels)
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        out, _ = child.communicate(timeout=60)
+        elapsed = time.monotonic() - sent
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+    assert child.returncode == 3, (child.returncode, out)
+    assert elapsed < 5.0, f"the table build took {elapsed:.1f} s to stop after SIGINT"
+    assert list(tmp_path.iterdir()) == [], "a table stopped part-way was cached"
+
+
+def test_progress_callback_cancels_a_table_build(tmp_path, monkeypatch):
+    import numpy as np
+    import spectral_skin
+
+    monkeypatch.setenv("SPECTRAL_SKIN_CACHE_DIR", str(tmp_path))
+    rng = np.random.default_rng(1)
+    params = (rng.random((64, 64, 4)) * np.array([0.5, 1.0, 0.1, 1.0])).astype(np.float32)
+    calls = []
+
+    def progress(done, total):
+        calls.append((done, total))
+        return len(calls) < 3  # the first call is before the work, the next ones are the build's
+
+    start = time.monotonic()
+    with pytest.raises(InterruptedError, match="cancelled"):
+        spectral_skin.maps(params, table_resolution=(100, 100, 100), progress=progress)
+    assert time.monotonic() - start < 10.0, "the build did not stop"
+    assert all(c == (0, 64 * 64) for c in calls), calls
+    assert list(tmp_path.iterdir()) == []
