@@ -4,13 +4,14 @@
 #
 #   bash scripts/setup-python.sh          # what the main job needs: scripts/requirements.txt (maturin, numpy)
 #   bash scripts/setup-python.sh --test   # and the test and lint tools: scripts/requirements-test.txt (pytest, mypy,
-#                                         # OpenImageIO) and scripts/requirements-dev.txt (ruff, actionlint, zig,
-#                                         # auditwheel, bpy 5.0.1)
+#                                         # OpenImageIO) and scripts/requirements-dev.txt (ruff, check-jsonschema,
+#                                         # ziglang, auditwheel, bpy 5.0.1); the module is then the extension's wheel
 #
 # Needs only the Rust toolchain and Python 3.11+ with pip (PYTHON=... picks the interpreter; default python3).
 # The module (cargo feature `python`) and the CLI (feature `cli`) are compiled with different features, so each has its
 # own target folder: maturin builds in target/python, cargo in target/release. Had they shared one, every switch
-# between `maturin develop` and `cargo build` would recompile the crate.
+# between `maturin develop` and `cargo build` would recompile the crate. After editing the Rust code:
+# `maturin develop --release --target-dir target/python` (in the activated venv) and `cargo build --release`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 test_tools=0
@@ -31,8 +32,16 @@ requirements=(-r scripts/requirements.txt)
 [ "$test_tools" -eq 0 ] || requirements+=(-r scripts/requirements-test.txt -r scripts/requirements-dev.txt)
 .venv/bin/python -m pip install "${requirements[@]}"
 
-say "building the Python module into .venv (maturin develop --release; the first build compiles ~150 crates, minutes)"
-VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release --target-dir target/python
+if [ "$test_tools" -eq 0 ]; then
+    say "building the Python module into .venv (maturin develop --release; the first build compiles ~85 crates: minutes)"
+    VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release --target-dir target/python
+else
+    # The tests run against the wheel the extension ships, built once (scripts/build-wheel.sh; the extension and the
+    # Blender venvs reuse it), instead of a second release build by maturin develop.
+    say "building the extension's wheel (scripts/build-wheel.sh) and installing it into .venv: the tests test what ships"
+    bash scripts/build-wheel.sh
+    .venv/bin/python -m pip install --force-reinstall --no-deps target/wheels/spectral_skin-*-cp311-abi3-*.whl
+fi
 
 say "building the CLI (cargo build --release; the first build compiles its crates again, with the CLI's features)"
 cargo build --release --bin spectral-skin
