@@ -5,7 +5,8 @@
 #   bash scripts/accuracy_report.sh --quick    # the reduced run CI does, written to a temporary folder
 set -euo pipefail
 cd "$(dirname "$0")/.."
-[ -x .venv/bin/python ] || bash scripts/setup-python.sh
+# The Cycles samples measurement needs bpy, one of the test tools.
+.venv/bin/python -c 'import bpy' 2>/dev/null || bash scripts/setup-python.sh --test
 if [ "${1:-}" = "--quick" ]; then
     out="$(mktemp -d)"
     .venv/bin/python scripts/cycles_samples.py --quick --out "$out/data/cycles_samples.json"

@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Create (or reuse) one virtual environment per Blender version for the render tests: .venv-blender/<version>, with
 # the bpy, numpy, OpenImageIO and pytest pinned in scripts/blender-versions.txt, and the project's Python module.
-# The module (an abi3 wheel, cp311-abi3: loads in Python 3.11 and 3.13 alike) is built once by maturin into
-# .venv-blender/wheels and installed into every venv.
+# The module is the extension's own wheel (scripts/build-wheel.sh: abi3, cp311-abi3, so it loads in Python 3.11 and
+# 3.13 alike; manylinux2014 on Linux), built once into target/wheels and installed into every venv.
 #
 # Usage: bash scripts/setup-blender.sh [VERSION...]     (default: every version in scripts/blender-versions.txt)
-# Needs: the Rust toolchain, python3.11, and python3.13 for Blender 5.2+ (found as python3.13, or through pyenv).
+# Needs: the Rust toolchain, python3.11, and python3.13 for Blender 5.2+ (found as python3.13, or through pyenv);
+# .venv with the test tools (made here by bash scripts/setup-python.sh --test if missing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=.venv-blender
@@ -36,16 +37,11 @@ for v in "${versions[@]}"; do
     [ -n "$(pin_line "$v")" ] || { echo "setup-blender: Blender $v is not in $PINS (have: $(all_versions | xargs))" >&2; exit 2; }
 done
 
-# 1. The wheel, built once (maturin from a small build venv on Python 3.11: the abi3 floor).
+# 1. The wheel: the extension's (up to date after scripts/build_addon.sh: then cargo has nothing to compile).
+[ -x .venv/bin/auditwheel ] || bash scripts/setup-python.sh --test
+bash scripts/build-wheel.sh
+wheel=$(ls target/wheels/spectral_skin-*-cp311-abi3-*.whl)
 mkdir -p "$ROOT"
-if [ ! -x "$ROOT/build/bin/maturin" ]; then
-    "$(python_for 3.11)" -m venv "$ROOT/build"
-    "$ROOT/build/bin/python" -m pip install -q --upgrade pip
-    "$ROOT/build/bin/python" -m pip install -q "maturin==1.16.0"
-fi
-rm -rf "$ROOT/wheels"
-"$ROOT/build/bin/maturin" build --release -q -i "$ROOT/build/bin/python" -o "$ROOT/wheels"
-wheel=$(ls "$ROOT"/wheels/*.whl)
 
 # 2. One venv per version.
 for v in "${versions[@]}"; do

@@ -1,14 +1,49 @@
 #!/usr/bin/env bash
-# Create (or reuse) the project's virtual environment in .venv and build the Python module into it.
-# Needs only the Rust toolchain and Python 3.11+ with pip. numpy<2 because Blender's bpy 5.0.1 needs it;
-# OpenImageIO 3.0.x (3.1 requires numpy>=2) to check the written EXRs independently; bpy 5.0.1 (Blender as a Python
-# module) for the add-on and the render tests.
+# Create (or reuse) the project's virtual environment in .venv, build the Python module into it and put the CLI next
+# to it, so that `.venv/bin/spectral-skin` and `.venv/bin/python -c "import spectral_skin"` work.
+#
+#   bash scripts/setup-python.sh          # what the main job needs: scripts/requirements.txt (maturin, numpy)
+#   bash scripts/setup-python.sh --test   # and the test and lint tools: scripts/requirements-test.txt (pytest, mypy,
+#                                         # OpenImageIO) and scripts/requirements-dev.txt (ruff, check-jsonschema,
+#                                         # ziglang, auditwheel, bpy 5.0.1); the module is then the extension's wheel
+#
+# Needs only the Rust toolchain and Python 3.11+ with pip (PYTHON=... picks the interpreter; default python3).
+# The module (cargo feature `python`) and the CLI (feature `cli`) are compiled with different features, so each has its
+# own target folder: maturin builds in target/python, cargo in target/release. Had they shared one, every switch
+# between `maturin develop` and `cargo build` would recompile the crate. After editing the Rust code:
+# `maturin develop --release --target-dir target/python` (in the activated venv) and `cargo build --release`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+test_tools=0
+case "${1:-}" in
+    "") ;;
+    --test) test_tools=1 ;;
+    *) echo "usage: bash scripts/setup-python.sh [--test]" >&2; exit 2 ;;
+esac
+say() { echo "setup-python: $*"; }
 PYTHON=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
+    say "creating .venv with $("$PYTHON" --version)"
     "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip
-.venv/bin/python -m pip install -q "maturin>=1.5,<2" pytest mypy ruff "numpy<2" "openimageio>=3.0,<3.1" "bpy==5.0.1"
-VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release -q
+say "installing the pinned Python packages"
+requirements=(-r scripts/requirements.txt)
+[ "$test_tools" -eq 0 ] || requirements+=(-r scripts/requirements-test.txt -r scripts/requirements-dev.txt)
+.venv/bin/python -m pip install "${requirements[@]}"
+
+if [ "$test_tools" -eq 0 ]; then
+    say "building the Python module into .venv (maturin develop --release; the first build compiles ~85 crates: minutes)"
+    VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release --target-dir target/python
+else
+    # The tests run against the wheel the extension ships, built once (scripts/build-wheel.sh; the extension and the
+    # Blender venvs reuse it), instead of a second release build by maturin develop.
+    say "building the extension's wheel (scripts/build-wheel.sh) and installing it into .venv: the tests test what ships"
+    bash scripts/build-wheel.sh
+    .venv/bin/python -m pip install --force-reinstall --no-deps target/wheels/spectral_skin-*-cp311-abi3-*.whl
+fi
+
+say "building the CLI (cargo build --release; the first build compiles its crates again, with the CLI's features)"
+cargo build --release --bin spectral-skin
+install -m 755 target/release/spectral-skin .venv/bin/spectral-skin
+say "ready: .venv/bin/spectral-skin, .venv/bin/python with spectral_skin (or: source .venv/bin/activate)"

@@ -5,7 +5,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 stage() { echo; echo "=== $* ($(date -u +%H:%M:%S))"; }
-stage setup; bash scripts/setup-python.sh
+# Every temporary file of the run (pytest's, the Blender sessions' blender_* folders, the reports') goes into one
+# folder, removed at the end; a failed run keeps it and says where.
+run_tmp=$(mktemp -d)
+export TMPDIR=$run_tmp
+cleanup() { if [ $? -eq 0 ]; then rm -rf "$run_tmp"; else echo "test-all: temporary files kept in $run_tmp" >&2; fi; }
+trap cleanup EXIT
+stage setup; bash scripts/setup-python.sh --test
 stage lint; bash scripts/lint.sh
 stage rust; bash scripts/test-rust.sh
 # libFuzzer smoke run: each fuzz target for a few seconds from the committed seed corpus (cargo-fuzz, installed if
@@ -18,9 +24,7 @@ stage extension; bash scripts/build_addon.sh
 stage blender; bash scripts/setup-blender.sh && bash scripts/test-blender.sh
 # The map performance report in its reduced form, so the report code cannot rot (the full one: see README).
 stage reports
-report_dir=$(mktemp -d)
-trap 'rm -rf "$report_dir"' EXIT
-.venv/bin/python scripts/maps_report.py --quick --out "$report_dir/maps-performance.md"
+.venv/bin/python scripts/maps_report.py --quick --out "$run_tmp/maps-performance.md"
 # The accuracy-vs-time report, reduced (the full one: bash scripts/accuracy_report.sh).
 bash scripts/accuracy_report.sh --quick
 stage done

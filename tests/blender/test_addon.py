@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import pathlib
+import platform
 import subprocess
 import sys
 import textwrap
@@ -29,7 +30,10 @@ from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 from blender_addon.ops import apply_skin  # noqa: E402
 
-ZIP = REPO / "dist" / "spectral_skin-0.1.0.zip"
+# scripts/build_addon.sh builds one zip per platform (Blender's `--split-platforms` names): this machine's.
+SYSTEM = {"Linux": "linux", "Darwin": "macos", "Windows": "windows"}.get(platform.system(), platform.system())
+MACHINE = {"x86_64": "x64", "AMD64": "x64", "aarch64": "arm64", "ARM64": "arm64"}.get(platform.machine(), platform.machine())
+ZIP = REPO / "dist" / f"spectral_skin-0.1.0-{SYSTEM}_{MACHINE}.zip"
 BLENDER_EXT = pathlib.Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"
 
 
@@ -191,7 +195,7 @@ INSTALL_SCRIPT = textwrap.dedent("""
 """)
 
 
-@pytest.mark.skipif(not ZIP.exists(), reason="no dist/spectral_skin-0.1.0.zip: run bash scripts/build_addon.sh")
+@pytest.mark.skipif(not ZIP.exists(), reason=f"no {ZIP.relative_to(REPO)}: run bash scripts/build_addon.sh")
 def test_built_zip_validates_and_installs(tmp_path):
     validate = subprocess.run([sys.executable, str(BLENDER_EXT), "validate", str(ZIP)],
                               capture_output=True, text=True)
