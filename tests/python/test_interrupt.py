@@ -10,9 +10,13 @@ import time
 import pytest
 
 CHILD = r"""
+import signal
 import sys
 import numpy as np
 import spectral_skin
+# A process started in the background of a non-interactive shell (CI runners, `cmd &`) inherits SIGINT ignored, and
+# Python then installs no KeyboardInterrupt handler: put back the one an interactive session has.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 # 1024 x 1024 exact texels: minutes of work on a small machine.
 rng = np.random.default_rng(0)
 params = (rng.random((1024, 1024, 4)) * np.array([0.5, 1.0, 0.1, 1.0])).astype(np.float32)
@@ -57,9 +61,13 @@ def test_table_resolution_is_bounded_before_allocation():
 
 
 TABLE_CHILD = r"""
+import signal
 import sys
 import numpy as np
 import spectral_skin
+# A process started in the background of a non-interactive shell (CI runners, `cmd &`) inherits SIGINT ignored, and
+# Python then installs no KeyboardInterrupt handler: put back the one an interactive session has.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 # 64 x 64 distinct texels take the lookup table; 100^3 nodes are minutes of work on a small machine.
 rng = np.random.default_rng(0)
 params = (rng.random((64, 64, 4)) * np.array([0.5, 1.0, 0.1, 1.0])).astype(np.float32)
