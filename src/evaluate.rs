@@ -9,7 +9,7 @@ pub use crate::accuracy::{Accuracy, AccuracyLevel, ProfileGrid};
 use crate::color::{
     placement_rgb_weights, rgb_luminance_weights, spectrum_to_rgb, RgbMapping, WavelengthGrid, WorkingSpace,
 };
-use crate::diffusion::{reflectance_profiles, Combination, LayerStack};
+use crate::diffusion::{clamped_reflectance_profiles, Boundaries, Combination, LayerStack};
 use crate::error::{check_range, SkinError};
 use crate::fit::blender_target::{Target, TargetInfo};
 use crate::fit::burley::{
@@ -70,6 +70,11 @@ pub struct Request {
     /// when linear.
     #[serde(default, skip_serializing_if = "RgbMapping::is_linear")]
     pub rgb_mapping: RgbMapping,
+    /// The layers' boundary conditions: the paper's (the default) or capped, which makes every profile non-negative
+    /// and the total monotone in absorption by construction ([`Boundaries`], docs/robustness.md). Absent from JSON
+    /// when the paper's.
+    #[serde(default, skip_serializing_if = "Boundaries::is_paper")]
+    pub boundaries: Boundaries,
 }
 
 impl Request {
@@ -119,6 +124,27 @@ pub struct RadialProfile {
     /// R(r) per wavelength: `spectral_per_mm2[k][i]` at wavelength k and radius i, mm^-2 (if requested).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub spectral_per_mm2: Option<Vec<Vec<f64>>>,
+    /// The deepest negative value a spectral profile had before the clamp to zero, beyond round-off: only the paper's
+    /// boundaries give one, on a thin index-mismatched epidermis the dermis does not fill (none for the presets;
+    /// docs/robustness.md). Absent when there was none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub negative_lobe: Option<SpectralLobe>,
+}
+
+impl std::fmt::Display for SpectralLobe {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let place = format!("at {} mm and {} nm", self.radius_mm, self.wavelength_nm);
+        f.write_str(&crate::diffusion::NegativeLobe::message(&place, self.relative_to_peak))
+    }
+}
+
+/// [`crate::diffusion::NegativeLobe`] of an evaluation: which wavelength, where, and how deep.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SpectralLobe {
+    pub wavelength_nm: f64,
+    pub radius_mm: f64,
+    /// The most negative value over that wavelength's largest magnitude on the profile grid.
+    pub relative_to_peak: f64,
 }
 
 /// How much work an evaluation did (so callers and tests can see that only what was asked was computed).
@@ -139,6 +165,8 @@ pub struct Evaluation {
     pub accuracy: Accuracy,
     pub model: SkinModel,
     pub combination: Combination,
+    /// The layers' boundary conditions ([`Boundaries`]).
+    pub boundaries: Boundaries,
     /// The Blender version and engine `methods` are for, and whether that version was tested.
     pub target: TargetInfo,
     /// The model's total diffuse reflectance (subsurface only): what a rendered flat slab must show.
@@ -216,7 +244,9 @@ impl Prepared {
         self.grid
             .wavelengths_nm
             .iter()
-            .map(|&w| LayerStack::new(&skin_layers(params, &self.request.model, w)))
+            .map(|&w| {
+                LayerStack::with_boundaries(&skin_layers(params, &self.request.model, w), self.request.boundaries)
+            })
             .collect()
     }
 
@@ -283,7 +313,14 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
 
     let profile = if out.profile_rgb || out.profile_spectral {
         let radii = acc.profile_grid.radii_mm();
-        let spectral = reflectance_profiles(&stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel);
+        let clamped =
+            clamped_reflectance_profiles(&stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel);
+        let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
+            wavelength_nm: prepared.grid.wavelengths_nm[l.profile],
+            radius_mm: l.radius_mm,
+            relative_to_peak: l.relative_to_peak,
+        });
+        let spectral = clamped.per_mm2;
         work.radial_profiles = spectral.len();
         let rgb = out.profile_rgb.then(|| {
             (0..radii.len())
@@ -297,6 +334,7 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
             radii_mm: radii,
             rgb_per_mm2: rgb,
             spectral_per_mm2: out.profile_spectral.then_some(spectral),
+            negative_lobe,
         })
     } else {
         None
@@ -308,6 +346,7 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
         accuracy: *acc,
         model: request.model,
         combination: request.combination,
+        boundaries: request.boundaries,
         target: request.target.info(),
         diffuse_reflectance_rgb: needs_albedo.then_some(albedo),
         default_method: DEFAULT_METHOD.name(),

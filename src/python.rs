@@ -14,7 +14,7 @@ use numpy::{
     PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::create_exception;
-use pyo3::exceptions::{PyInterruptedError, PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyInterruptedError, PyRuntimeError, PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
 use rayon::prelude::*;
@@ -22,7 +22,7 @@ use serde::Serialize;
 use serde_json::Value;
 
 use crate::color::{WavelengthPlacement, WorkingSpace, ALL_RGB_MAPPINGS, ALL_WORKING_SPACES};
-use crate::diffusion::{Combination, Layer, MultipoleTerms};
+use crate::diffusion::{Combination, Layer, MultipoleTerms, ALL_BOUNDARIES};
 use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
 use crate::fit::blender_target::{describe_targets, BlenderVersion, Engine, Target, CURRENT_RELEASE};
@@ -38,6 +38,25 @@ create_exception!(
     PyValueError,
     "Invalid input to spectral-skin. The message names the input, its allowed range and the value received."
 );
+
+create_exception!(
+    spectral_skin,
+    SpectralSkinWarning,
+    PyUserWarning,
+    "A result spectral-skin computed but changed on its way out (a negative profile lobe set to 0); the message says \
+     what and how to avoid it."
+);
+
+/// Warn (SpectralSkinWarning) about a negative lobe the clamp removed, so it is never hidden.
+fn warn_lobe(py: Python<'_>, lobe: Option<impl std::fmt::Display>) -> PyResult<()> {
+    match lobe {
+        Some(lobe) => {
+            let message = std::ffi::CString::new(lobe.to_string()).map_err(internal)?;
+            PyErr::warn(py, &py.get_type::<SpectralSkinWarning>(), &message, 1)
+        }
+        None => Ok(()),
+    }
+}
 
 impl From<SkinError> for PyErr {
     /// A SpectralSkinError. Bad texels in a parameter map also carry ``bad_texels``: {"parameter", "min", "max",
@@ -334,6 +353,7 @@ struct Knobs<'a> {
     combination: &'a str,
     working_space: &'a str,
     rgb_mapping: &'a str,
+    boundaries: &'a str,
     target: Target,
 }
 
@@ -369,6 +389,7 @@ impl Knobs<'_> {
             combination: by_name("combination", self.combination, &COMBINATIONS)?,
             working_space: by_name("working_space", self.working_space, &WORKING_SPACES)?,
             rgb_mapping: by_name("rgb_mapping", self.rgb_mapping, &ALL_RGB_MAPPINGS)?,
+            boundaries: by_name("boundaries", self.boundaries, &ALL_BOUNDARIES)?,
             target: self.target,
             ..Request::default()
         })
@@ -472,6 +493,9 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
         if let Some(spectral) = &p.spectral_per_mm2 {
             profile.set_item("spectral_per_mm2", nested_rows(py, spectral)?)?;
         }
+        if let Some(lobe) = &p.negative_lobe {
+            profile.set_item("negative_lobe", json_to_py(py, &serde_json::to_value(lobe).map_err(internal)?)?)?;
+        }
         dict.set_item("profile", profile)?;
     }
     Ok(dict)
@@ -488,7 +512,7 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles",
-        rgb_mapping = "linear"
+        rgb_mapping = "linear", boundaries = "paper"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -512,6 +536,7 @@ fn evaluate_py<'py>(
     blender: Option<&Bound<'py, PyAny>>,
     engine: &str,
     rgb_mapping: &str,
+    boundaries: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let explicit =
         [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
@@ -531,10 +556,12 @@ fn evaluate_py<'py>(
         combination,
         working_space,
         rgb_mapping,
+        boundaries,
         target: target_from(blender, engine)?,
     };
     let request = knobs.request(parse_outputs(outputs)?)?;
     let evaluation = detached(py, move || crate::evaluate(&params, &request))?;
+    warn_lobe(py, evaluation.profile.as_ref().and_then(|p| p.negative_lobe))?;
     evaluation_dict(py, &evaluation)
 }
 
@@ -548,7 +575,7 @@ fn evaluate_py<'py>(
         preset = None, spectral = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
-        combination = "directional", working_space = "Linear Rec.709", rgb_mapping = "linear"
+        combination = "directional", working_space = "Linear Rec.709", rgb_mapping = "linear", boundaries = "paper"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -570,6 +597,7 @@ fn profile_py<'py>(
     combination: &str,
     working_space: &str,
     rgb_mapping: &str,
+    boundaries: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let explicit =
         [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
@@ -589,12 +617,14 @@ fn profile_py<'py>(
         combination,
         working_space,
         rgb_mapping,
+        boundaries,
         target: Target::default(),
     };
     let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
     let request = knobs.request(outputs)?;
     let evaluation = detached(py, move || crate::evaluate(&params, &request))?;
     let p = evaluation.profile.as_ref().ok_or_else(|| internal("no profile in the evaluation"))?;
+    warn_lobe(py, p.negative_lobe)?;
     let dict = PyDict::new(py);
     dict.set_item("radii_mm", PyArray1::from_slice(py, &p.radii_mm))?;
     if let Some(rgb) = &p.rgb_per_mm2 {
@@ -674,20 +704,25 @@ fn real_vector(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<V
 
 /// Total diffuse reflectance and radial profile R(r) (mm^-2, at radii_mm) of a stack of layers under air, top to
 /// bottom, each (thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior); thickness inf for a semi-infinite
-/// last layer. Raises SpectralSkinError (a ValueError) on invalid input.
+/// last layer. boundaries: "paper" (DJ05's, the default) or "capped" (every profile non-negative and the total
+/// monotone in absorption by construction; docs/robustness.md). A negative lobe of the paper's boundaries is set to
+/// 0 and reported by a SpectralSkinWarning. Raises SpectralSkinError (a ValueError) on invalid input.
 #[pyfunction]
-#[pyo3(name = "layered_reflectance", signature = (layers, radii_mm))]
+#[pyo3(name = "layered_reflectance", signature = (layers, radii_mm, *, boundaries = "paper"))]
 fn layered_reflectance_py<'py>(
     py: Python<'py>,
     layers: &Bound<'py, PyAny>,
     radii_mm: &Bound<'py, PyAny>,
+    boundaries: &str,
 ) -> PyResult<(f64, Bound<'py, PyArray1<f64>>)> {
     reject_string(layers, &format!("layers must be a list of tuples {LAYER_FIELDS}"))?;
     let layers: Vec<Layer> =
         layers.try_iter()?.enumerate().map(|(i, item)| extract_layer(i, &item?)).collect::<PyResult<_>>()?;
     let radii = real_vector("radii_mm", radii_mm, "a 1-D array-like of radii in mm")?;
-    let (total, profile) = detached(py, move || crate::diffusion::layered_reflectance(&layers, &radii))?;
-    Ok((total, PyArray1::from_vec(py, profile)))
+    let boundaries = by_name("boundaries", boundaries, &ALL_BOUNDARIES)?;
+    let r = detached(py, move || crate::diffusion::layered_reflectance_with(&layers, &radii, boundaries))?;
+    warn_lobe(py, r.negative_lobe)?;
+    Ok((r.total, PyArray1::from_vec(py, r.profile_per_mm2)))
 }
 
 // --- maps ---------------------------------------------------------------------------------------------------------
@@ -952,7 +987,7 @@ fn read_parameter_map_py<'py>(
         method = "burley", exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
         wavelength_placement = None,
         working_space = "Linear Rec.709", table_resolution = None, table_cache = true, blender = None,
-        engine = "cycles", progress = None
+        engine = "cycles", progress = None, boundaries = "paper"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -975,6 +1010,7 @@ fn maps_py<'py>(
     blender: Option<&Bound<'py, PyAny>>,
     engine: &str,
     progress: Option<Bound<'py, PyAny>>,
+    boundaries: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let start = Instant::now();
     if let Some(callback) = progress.as_ref().filter(|c| !c.is_callable()) {
@@ -996,6 +1032,7 @@ fn maps_py<'py>(
         combination: "directional",
         working_space,
         rgb_mapping: "linear",
+        boundaries,
         target: target_from(blender, engine)?,
     };
     let method = SubsurfaceMethod::from_name(method)?;
@@ -1181,6 +1218,7 @@ fn blender_targets_py(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SpectralSkinError", m.py().get_type::<SpectralSkinError>())?;
+    m.add("SpectralSkinWarning", m.py().get_type::<SpectralSkinWarning>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(evaluate_py, m)?)?;
     m.add_function(wrap_pyfunction!(profile_py, m)?)?;

@@ -7,8 +7,8 @@ mod support;
 use std::f64::consts::PI;
 
 use spectral_skin::diffusion::{
-    layered_reflectance, raw_reflectance_profiles, reflectance_profiles, Boundaries, Combination, HankelQuadrature,
-    Layer, LayerStack, MultipoleTerms,
+    layered_reflectance, layered_reflectance_with, raw_reflectance_profiles, reflectance_profiles, Boundaries,
+    ClampedProfiles, Combination, HankelQuadrature, Layer, LayerStack, MultipoleTerms, ROUND_OFF_OF_PEAK,
 };
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::fit::SubsurfaceMethod;
@@ -374,4 +374,52 @@ fn sizes_are_bounded_before_allocation() {
     }
     let e = TableResolution { melanin: 400, melanin_blend: 400, hemoglobin: 400 }.validate().unwrap_err().to_string();
     assert!(e.contains("table resolution") && e.contains("1000000"), "{e}");
+}
+
+/// Issue 10, class 2: a clamp may only remove round-off. The paper's lobe of the reproducer is clamped but reported
+/// (radius and depth, checked against the raw profile the clamp saw); the capped stack reports none; and so does
+/// every preset at the default accuracy, whose raw profiles are >= -1e-15 of their peak (docs/robustness.md).
+#[test]
+fn a_clamped_lobe_is_reported_not_hidden() {
+    let layers = [layer(0.0134, 0.0021, 17.0, 1.39), layer(INF, 1.64, 1.17, 1.31)];
+    let radii: Vec<f64> = (0..=86).map(|i| 1e-3 * 10f64.powf(i as f64 / 20.0)).collect();
+    let paper = layered_reflectance_with(&layers, &radii, Boundaries::Paper).unwrap();
+    let lobe = paper.negative_lobe.expect("the paper's boundaries give this stack a negative lobe");
+    let stack = LayerStack::new(&layers).unwrap();
+    let q = HankelQuadrature::default();
+    let raw = raw_reflectance_profiles(&[stack], &radii, Combination::Directional, MultipoleTerms::All, &q).remove(0);
+    let (k, min) = raw.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)).map(|(k, v)| (k, *v)).unwrap();
+    let peak = raw.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert_eq!(lobe.radius_mm, radii[k]);
+    assert!((0.08..=0.2).contains(&lobe.radius_mm), "{lobe:?}");
+    assert!((lobe.relative_to_peak - min / peak).abs() < 1e-15 && lobe.relative_to_peak < -1e-4, "{lobe:?}");
+    assert!(paper.profile_per_mm2.iter().all(|&v| v >= 0.0));
+    assert!(lobe.to_string().contains("capped"), "the message names the way out: {lobe}");
+
+    let capped = layered_reflectance_with(&layers, &radii, Boundaries::Capped).unwrap();
+    assert_eq!(capped.negative_lobe, None);
+
+    let request = Request::new(Outputs { profile_spectral: true, ..Outputs::default() });
+    for preset in spectral_skin::PRESETS {
+        let ev = spectral_skin::evaluate(&preset.params, &request).unwrap();
+        assert_eq!(ev.profile.unwrap().negative_lobe, None, "{}", preset.name);
+    }
+}
+
+/// Round-off below `ROUND_OFF_OF_PEAK` of the peak is not a lobe; the deepest lobe over several profiles is the one
+/// reported, at its own radius; a profile negative everywhere asked is -1 of its peak.
+#[test]
+fn lobes_are_told_apart_from_round_off() {
+    let radii = [0.1, 1.0, 10.0];
+    let none = ClampedProfiles::from_raw(vec![vec![1.0, -0.5 * ROUND_OFF_OF_PEAK, 0.0]], &radii);
+    assert_eq!(none.negative_lobe, None);
+    assert_eq!(none.per_mm2, vec![vec![1.0, 0.0, 0.0]]);
+    let two =
+        ClampedProfiles::from_raw(vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3], vec![-1.0, -2.0, -0.5]], &radii);
+    let lobe = two.negative_lobe.unwrap();
+    assert_eq!((lobe.profile, lobe.radius_mm, lobe.relative_to_peak), (2, 1.0, -1.0));
+    let one = ClampedProfiles::from_raw(vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3]], &radii);
+    let lobe = one.negative_lobe.unwrap();
+    assert_eq!((lobe.profile, lobe.radius_mm), (1, 10.0));
+    assert!((lobe.relative_to_peak + 3e-3).abs() < 1e-15);
 }

@@ -15,11 +15,13 @@ Functions:
     read_parameter_map: parameter maps read from an EXR, PNG or TIFF file by the CLI's rules.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
-range and the value received.
+range and the value received. A result changed on its way out (a negative radial-profile lobe of the model set to 0)
+is reported by a :class:`SpectralSkinWarning`.
 """
 
 from ._core import (
     SpectralSkinError,
+    SpectralSkinWarning,
     __version__,
     blender_targets,
     evaluate,
@@ -33,6 +35,7 @@ from ._core import (
 
 __all__ = [
     "SpectralSkinError",
+    "SpectralSkinWarning",
     "__version__",
     "blender_targets",
     "evaluate",

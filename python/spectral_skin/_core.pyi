@@ -13,6 +13,7 @@ import numpy.typing as npt
 
 __all__ = [
     "SpectralSkinError",
+    "SpectralSkinWarning",
     "__version__",
     "blender_targets",
     "evaluate",
@@ -39,6 +40,7 @@ _AccuracyLevel = Literal["draft", "default", "reference"]
 _WavelengthPlacement = Literal["uniform", "cmf_adapted", "rgb_shortcut"]
 _Parameter = Literal["melanin", "melanin_blend", "hemoglobin", "oiliness"]
 _RgbMapping = Literal["linear", "non_negative"]
+_Boundaries = Literal["paper", "capped"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
 
 class SpectralSkinError(ValueError):
@@ -46,6 +48,16 @@ class SpectralSkinError(ValueError):
 
     The message names the input, its allowed range and the value received, e.g.
     ``melanin must be in [0, 0.5] (melanin fraction C_m); got 0.7``.
+    """
+
+class SpectralSkinWarning(UserWarning):
+    """A result computed but changed on its way out: a negative lobe of a radial profile set to 0.
+
+    With the paper's boundaries (``boundaries="paper"``, the default) a layer thinner than its extrapolation
+    distances, over layers that do not fill it, gives a profile that is negative at some radii: the diffusion model's
+    own lobe, not round-off (docs/robustness.md, "Negative profile lobes"). The profile returned is clamped to 0 and
+    this warning says where and how deep; ``boundaries="capped"`` gives a profile that is non-negative by
+    construction. No preset has such a lobe.
     """
 
 class _Preset(TypedDict):
@@ -77,6 +89,7 @@ def evaluate(
     blender: _BlenderVersion | None = None,
     engine: _Engine | str = "cycles",
     rgb_mapping: _RgbMapping | str = "linear",
+    boundaries: _Boundaries | str = "paper",
 ) -> dict[str, Any]:
     """Evaluate the skin model; compute only the requested outputs.
 
@@ -116,6 +129,10 @@ def evaluate(
         rgb_mapping: how the RGB profile's colour at each radius is formed (only "profile_rgb" uses it), as for
             :func:`profile`: "linear" (exact; negative in a channel where the light is outside the gamut) or
             "non_negative".
+        boundaries: the layers' boundary conditions: "paper" (DJ2005's extrapolated boundaries, the default) or
+            "capped" (each layer's extrapolation distances capped so that every radial profile is non-negative and
+            the total reflectance never rises with absorption, by construction; it moves a thin or red-lit epidermis
+            away from Monte Carlo: docs/robustness.md, "Negative profile lobes").
 
     Returns:
         The CLI's JSON as a dict. Always: "params", "color_space", "accuracy", "model" (model["dermis_thickness_mm"]
@@ -131,7 +148,9 @@ def evaluate(
         "directional_albedo_normal", "hemispherical_albedo"};
         spectrum: "wavelengths_nm" (K,), "spectral_reflectance" (K,);
         profile_rgb / profile_spectral: "profile" {"radii_mm" (N,), "rgb_per_mm2" (N, 3) and/or
-        "spectral_per_mm2" (K, N), mm^-2} (and "wavelengths_nm" (K,) with profile_spectral).
+        "spectral_per_mm2" (K, N), mm^-2, and "negative_lobe" {"wavelength_nm", "radius_mm", "relative_to_peak"}
+        when a spectral profile was negative beyond round-off before its clamp to 0, also reported by a
+        SpectralSkinWarning} (and "wavelengths_nm" (K,) with profile_spectral).
 
     Raises:
         SpectralSkinError: a parameter or knob out of range or not finite, an unknown preset, output, combination or
@@ -158,6 +177,7 @@ def profile(
     combination: _Combination | str = "directional",
     working_space: _WorkingSpace | str = "Linear Rec.709",
     rgb_mapping: _RgbMapping | str = "linear",
+    boundaries: _Boundaries | str = "paper",
 ) -> dict[str, _FloatArray]:
     """The radial reflectance profile R(r) of the skin on a log-spaced radius grid.
 
@@ -168,7 +188,8 @@ def profile(
     the radii and sizes). ``rgb_mapping="non_negative"`` moves each such colour along the line towards the grey of the same
     luminance (R = G = B = Y) until its most negative channel is 0: no value is negative, luminance and hue are kept,
     radii inside the gamut are unchanged, but the profile no longer integrates exactly to the albedo. The spectral
-    profiles (``spectral=True``) are never negative.
+    profiles (``spectral=True``) are never negative: a negative lobe of the model itself (only with
+    ``boundaries="paper"``, none for the presets) is set to 0 and reported by a :class:`SpectralSkinWarning`.
 
     Arguments:
         melanin, melanin_blend, hemoglobin, oiliness, preset: as for :func:`evaluate`.
@@ -176,6 +197,7 @@ def profile(
         accuracy, wavelength_step_nm, wavelength_placement, multipole_pairs, profile_r_min_mm, profile_r_max_mm,
             profile_count, combination, working_space: as for :func:`evaluate`.
         rgb_mapping: "linear" or "non_negative", see above.
+        boundaries: "paper" or "capped", as for :func:`evaluate`.
 
     Returns:
         {"radii_mm": (N,), "rgb_per_mm2": (N, 3)} in mm^-2, or with spectral=True
@@ -205,16 +227,23 @@ def presets() -> dict[str, _Preset]:
 def layered_reflectance(
     layers: Iterable[Sequence[float]],
     radii_mm: npt.ArrayLike,
+    *,
+    boundaries: _Boundaries | str = "paper",
 ) -> tuple[float, _FloatArray]:
     """Total diffuse reflectance and radial profile of a stack of layers under air (the diffusion solver alone).
 
-    Uses the directional combination, the whole multipole series and the default inverse-Hankel quadrature.
+    Uses the directional combination, the whole multipole series and the default inverse-Hankel quadrature. With the
+    paper's boundaries a thin layer over layers that do not fill it can give a profile that is negative at some
+    radii (the model's own lobe); it is returned clamped to 0 and reported by a :class:`SpectralSkinWarning` naming
+    the radius and the depth relative to the peak. ``boundaries="capped"`` gives a profile that is non-negative and
+    a total that is monotone in absorption by construction (docs/robustness.md, "Negative profile lobes").
 
     Arguments:
         layers: top to bottom, each (thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior): thickness in mm
             (float("inf") for a semi-infinite last layer), absorption and reduced scattering coefficients in mm^-1,
-            index of refraction 1..4.
+            index of refraction 1..2.
         radii_mm: 1-D radii in mm, finite and >= 0.
+        boundaries: "paper" (the default) or "capped".
 
     Returns:
         (total diffuse reflectance, R(r) at radii_mm in mm^-2 as a float64 array of the same length).
@@ -264,6 +293,7 @@ def maps(
     blender: _BlenderVersion | None = None,
     engine: _Engine | str = "cycles",
     progress: Callable[[int, int], bool | None] | None = None,
+    boundaries: _Boundaries | str = "paper",
 ) -> _Maps:
     """Principled BSDF texture maps (Base Color, Subsurface Radius, specular) from per-texel parameter maps.
 
@@ -311,6 +341,8 @@ def maps(
             taking the GIL for each call; a "constant" map has no rows to report). Returning False cancels: the
             rows (or table nodes) being computed are finished, the others skipped, nothing is returned and
             InterruptedError is raised. An exception raised by the callback cancels the same way and is re-raised.
+        boundaries: the layers' boundary conditions, "paper" or "capped", as for :func:`evaluate` (a cached table
+            is kept per choice).
 
     Ctrl-C (KeyboardInterrupt, or any exception a Python signal handler raises) stops the call the same way: the
     calling thread checks for signals every 0.1 s while the work runs, the rows or table nodes being computed are

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use spectral_skin::color::{RgbMapping, WavelengthPlacement};
-use spectral_skin::diffusion::{Combination, MultipoleTerms};
+use spectral_skin::diffusion::{Boundaries, Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use spectral_skin::fit::{SubsurfaceMethod, DEFAULT_METHOD};
@@ -213,6 +213,10 @@ struct AccuracyArgs {
     /// Layer combination.
     #[arg(long, value_enum, default_value_t = CombinationArg::Directional)]
     combination: CombinationArg,
+    /// The layers' boundary conditions: the paper's, or capped (every profile non-negative and the total monotone in
+    /// absorption by construction; docs/robustness.md, "Negative profile lobes").
+    #[arg(long, value_enum, default_value_t = Boundaries::Paper)]
+    boundaries: Boundaries,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -300,6 +304,7 @@ impl AccuracyArgs {
             CombinationArg::Directional => Combination::Directional,
             CombinationArg::Symmetric => Combination::Symmetric,
         };
+        r.boundaries = self.boundaries;
         r
     }
 }
@@ -364,6 +369,9 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             let mut request = Request { rgb_mapping, ..accuracy.request(outputs) };
             request.accuracy.profile_grid = ProfileGrid { r_min_mm, r_max_mm, count };
             let ev = evaluate(&params, &request)?;
+            if let Some(lobe) = ev.profile.as_ref().and_then(|p| p.negative_lobe) {
+                eprintln!("warning: {lobe}");
+            }
             print_profile_csv(&ev);
         }
         Command::Maps(args) => run_maps(args)?,

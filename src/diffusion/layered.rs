@@ -96,8 +96,11 @@ fn readable(x: f64) -> String {
     }
 }
 
-/// How a stack sets up its boundaries (docs/robustness.md, "Negative profile lobes and monotonicity").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// How a stack sets up its boundaries (docs/robustness.md, "Negative profile lobes and monotonicity"). Python's
+/// `boundaries=` and the CLI's `--boundaries` take the serde names ("paper", "capped").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "snake_case")]
 pub enum Boundaries {
     /// The default: each face's extrapolation distance is z_b = 2 A D (DJ05), whatever the thickness, and across a
     /// layer thinner than one reduced mean free path its neighbours see the index blend with weight w = b, its
@@ -114,6 +117,17 @@ pub enum Boundaries {
     /// stack, bit for bit. Not the default: it moves the presets' red and thin epidermis away from Monte Carlo
     /// (docs/robustness.md).
     Capped,
+}
+
+/// Every choice of boundaries, the default first.
+pub const ALL_BOUNDARIES: [Boundaries; 2] = [Boundaries::Paper, Boundaries::Capped];
+
+impl Boundaries {
+    /// Whether this is the default (for `skip_serializing_if`: requests with the paper's boundaries keep the JSON,
+    /// and so the table-cache keys, they had before the choice existed).
+    pub fn is_paper(&self) -> bool {
+        *self == Boundaries::Paper
+    }
 }
 
 /// A validated stack of layers under air, reduced to slabs seen from above (`Slab::flipped` sees them from below).

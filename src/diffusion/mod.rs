@@ -7,31 +7,55 @@ pub mod layered;
 pub mod multipole;
 
 pub use fft_route::{fft_reflectance_profiles, fft_reflectance_profiles_with, FftGrid, FftProfiles, PixelSampling};
-pub use hankel::{raw_reflectance_profiles, reflectance_profiles, HankelQuadrature, MAX_RADIUS_MM};
+pub use hankel::{
+    clamped_reflectance_profiles, raw_reflectance_profiles, reflectance_profiles, ClampedProfiles, HankelQuadrature,
+    NegativeLobe, MAX_RADIUS_MM, ROUND_OFF_OF_PEAK,
+};
 pub use layered::{
-    Boundaries, Combination, Layer, LayerStack, COEFFICIENT_RANGE_PER_MM, IOR_RANGE, THICKNESS_RANGE_MM,
+    Boundaries, Combination, Layer, LayerStack, ALL_BOUNDARIES, COEFFICIENT_RANGE_PER_MM, IOR_RANGE, THICKNESS_RANGE_MM,
 };
 pub use multipole::{MultipoleTerms, Slab};
 
 use crate::error::SkinError;
 
 /// Total diffuse reflectance and the radial profile (mm^-2) at `radii_mm` of a stack of layers under air, top to bottom,
-/// with the default combination, the whole multipole series and the default quadrature. This exposes the solver alone,
-/// for checks against other solvers.
+/// with the paper's boundaries, the default combination, the whole multipole series and the default quadrature. This
+/// exposes the solver alone, for checks against other solvers. [`layered_reflectance_with`] chooses the boundaries
+/// and reports a negative lobe the clamp removed.
 pub fn layered_reflectance(layers: &[Layer], radii_mm: &[f64]) -> Result<(f64, Vec<f64>), SkinError> {
+    let r = layered_reflectance_with(layers, radii_mm, Boundaries::Paper)?;
+    Ok((r.total, r.profile_per_mm2))
+}
+
+/// What [`layered_reflectance_with`] returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayeredReflectance {
+    /// Total diffuse reflectance.
+    pub total: f64,
+    /// R(r) at the radii asked for, mm^-2, clamped to zero.
+    pub profile_per_mm2: Vec<f64>,
+    /// The negative lobe the clamp removed beyond round-off (only with `Boundaries::Paper`).
+    pub negative_lobe: Option<NegativeLobe>,
+}
+
+/// [`layered_reflectance`] with the boundaries chosen, and the negative lobe the clamp removed.
+pub fn layered_reflectance_with(
+    layers: &[Layer],
+    radii_mm: &[f64],
+    boundaries: Boundaries,
+) -> Result<LayeredReflectance, SkinError> {
     validate_radii(radii_mm)?;
-    let stack = LayerStack::new(layers)?;
+    let stack = LayerStack::with_boundaries(layers, boundaries)?;
     let total = stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
-    let profile = reflectance_profiles(
+    let mut profiles = clamped_reflectance_profiles(
         std::slice::from_ref(&stack),
         radii_mm,
         Combination::Directional,
         MultipoleTerms::All,
         &HankelQuadrature::default(),
-    )
-    .pop()
-    .unwrap_or_default();
-    Ok((total, profile))
+    );
+    let profile_per_mm2 = profiles.per_mm2.pop().unwrap_or_default();
+    Ok(LayeredReflectance { total, profile_per_mm2, negative_lobe: profiles.negative_lobe })
 }
 
 /// Radii must be in [0, `MAX_RADIUS_MM`].

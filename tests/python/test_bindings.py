@@ -248,11 +248,12 @@ def test_wrong_types_are_type_errors(call):
         call()
 
 
-def test_error_class_is_exported():
+def test_error_and_warning_classes_are_exported():
     assert issubclass(SpectralSkinError, ValueError)
     assert spectral_skin.SpectralSkinError is spectral_skin._core.SpectralSkinError
+    assert issubclass(spectral_skin.SpectralSkinWarning, UserWarning)
     assert set(spectral_skin.__all__) == {
-        "SpectralSkinError", "__version__", "blender_targets", "evaluate", "layered_reflectance", "maps",
+        "SpectralSkinError", "SpectralSkinWarning", "__version__", "blender_targets", "evaluate", "layered_reflectance", "maps",
         "parameter_ranges", "presets", "profile", "read_parameter_map"
     }
 
