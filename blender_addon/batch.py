@@ -61,6 +61,20 @@ def _addon_module(name: str = "") -> Any:
     return importlib.import_module(f"{package}.{name}" if name else package)
 
 
+def _frame_values() -> Any:
+    """frame_values.py (bpy only): from the package when batch.py is part of it, else loaded from its file, so that a
+    render node needs neither the add-on registered nor ``spectral_skin``."""
+    if __package__:
+        return importlib.import_module(f"{__package__}.frame_values")
+    from importlib import util
+
+    spec = util.spec_from_file_location("spectral_skin_frame_values", os.path.join(_HERE, "frame_values.py"))
+    assert spec is not None and spec.loader is not None
+    module = util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def _ensure_registered() -> None:
     if not hasattr(bpy.types, "SPECTRAL_SKIN_OT_apply"):
         _addon_module().register()
@@ -219,6 +233,8 @@ def render_frames(blend_path: str, out_dir: str, frames: Iterable[int] | None = 
         if len(resolution) != 2 or min(int(v) for v in resolution) < 1:
             raise BatchError(f"resolution must be (width, height) >= 1; got {tuple(resolution)}")
     _open(blend_path)
+    # Animated constant materials: their per-frame values are set at each frame change (frame_values.py).
+    _frame_values().install()
     scene = bpy.context.scene
     if scene.camera is None:
         raise BatchError(f"{blend_path}: scene {scene.name!r} has no camera")
