@@ -18,10 +18,13 @@ or as a script::
 
 Apply: the scene decides which effects each material needs (blender_addon/core/scene.py: subsurface scattering
 no camera can resolve is dropped, zero oiliness writes no specular map, ...), as the operator does; the decisions
-are printed, one line each, and stored on the material. Every material's plan is computed (and its maps written) before any material changes; on an error nothing
+are printed, one line each, and stored on the material. A parameter keyframed or driven on a material's Spectral
+Skin settings follows that animation (the value given here for it is not used): a constant-parameter material gets
+its values per frame, which the render sets at each frame change (frame_values.py). Every material's plan is computed (and its maps written) before any material changes; on an error nothing
 is saved. The saved .blend refers to the textures by paths relative to itself, or packs them with ``pack=True``.
 
-Render: Cycles on the CPU (or the engine named), the .blend's own settings unless overridden; a texture file that
+Render: Cycles on the CPU (or the engine named), the .blend's own settings unless overridden; the frame-change
+handler of animated materials is installed (from frame_values.py, bpy only); a texture file that
 is neither packed nor on disk is an error before anything renders (Blender would render it magenta). Errors exit
 with status 2 and one line on stderr.
 """
