@@ -143,11 +143,13 @@ def sidecar_path(out_blend: str) -> str:
 
 
 def _write_sidecar(out_blend: str, plans: dict[str, dict[str, Any]]) -> None:
-    """Per material: the target, the decisions (``effects``) and the texture files, as JSON next to the .blend."""
+    """Per material: the target, the decisions (``effects``), the texture files and the per-frame values of an
+    animated constant material (``animation``, or null), as JSON next to the .blend."""
     import json
 
     content = {name: {"target": plan["target"], "method": plan["method"], "effects": plan["effects"],
-                      "textures": plan["textures"]} for name, plan in plans.items()}
+                      "textures": plan["textures"], "animation": plan.get("animation")}
+               for name, plan in plans.items()}
     path = sidecar_path(out_blend)
     tmp = f"{path}.{os.getpid()}.tmp"
     with open(tmp, "w", encoding="utf-8") as file:

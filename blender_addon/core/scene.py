@@ -452,7 +452,7 @@ def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str
 
     Animated parameters (``facts.animation``) take their values at the current frame. For a material without maps
     the plan also gets ``plan["animation"]``: ``{"frames": [...], "base_color": [[r, g, b], ...], "radius": [...],
-    "specular_ior_level": [...]}``, one value per frame, each computed by the core (once per distinct parameter set)
+    "specular_ior_level": [...], "units": {...}}``, one value per frame, each computed by the core (once per distinct parameter set)
     and changed by the same decisions, which are taken over every frame: the largest radius over the frames, and
     oiliness zero only if it is zero at every frame.
     """
@@ -480,7 +480,10 @@ def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str
         decided = {key: _decided_plan(s, effects, progress, plans[key]) for key, s in distinct.items()}
         frames = [decided[tuple(s.constants().items())] for s in per_frame]
         plan["animation"] = {"frames": list(animation.frames),
-                             **{name: [p[name] for p in frames] for name in ANIMATED_VALUES}}
+                             **{name: [p[name] for p in frames] for name in ANIMATED_VALUES},
+                             "units": {"base_color": f"linear RGB, {settings.working_space}",
+                                       "radius": "mm (Principled Subsurface Radius; Subsurface Scale makes it scene "
+                                       "units)", "specular_ior_level": "Principled Specular IOR Level"}}
         entry = next(e for e in effects if e["effect"] == "animation")
         entry["figures"]["evaluations"] = len(distinct)
         entry["reason"] += f" ({len(distinct)} distinct parameter sets evaluated)"

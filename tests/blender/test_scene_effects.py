@@ -1,6 +1,8 @@
 """The scene decides what is simulated (blender_addon/scene_facts.py + core/scene.py) in Blender, headless: a far
 object's material renders plain diffuse with the core's albedo, a close one keeps subsurface, zero oiliness writes
-no specular texture, overrides win and survive re-applying, and the batch path decides exactly as the operator.
+no specular texture, overrides win and survive re-applying, and the batch path decides exactly as the operator;
+thin and open objects get a subsurface method recommended; a driven parameter stores the core's values per frame and
+a keyframed haemoglobin renders the core's albedo at two frames of a headless batch render.
 
 Run: .venv-blender/5.0/bin/python -m pytest tests/blender/test_scene_effects.py -q
 """
@@ -255,7 +257,7 @@ def test_driven_haemoglobin_stores_the_cores_values_per_frame(addon):
     scene.frame_set(1)
     np.testing.assert_allclose(_principled(material).inputs["Base Color"].default_value[:3], stored["base_color"][0],
                                rtol=1e-6)
-    # Parameter maps: the animation is not applied, and the entry says why.
+    # Remove takes the stored values away with the nodes.
     assert bpy.ops.spectral_skin.remove(material="Close") == {"FINISHED"}
     assert frame_values.PROPERTY not in material
 
@@ -298,3 +300,30 @@ def test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon, tmp
         print(f"\n[animation] frame {frame} hemoglobin {value}: rendered {np.array2string(mean, precision=6)} "
               f"expected {np.array2string(expected, precision=6)} rel.err {np.array2string(rel * 100, precision=4)} %")
         np.testing.assert_allclose(mean, expected, rtol=2e-3)
+
+
+def test_batch_apply_follows_the_materials_animation(addon, tmp_path):
+    """The batch apply, given another haemoglobin, follows the material's keyframes: the operator's per-frame values,
+    also in the sidecar."""
+    from blender_addon import frame_values
+
+    materials = _scene_with_far_and_close()
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 2
+    props = materials["Close"].spectral_skin
+    for frame, value in ((1, 0.005), (2, 0.05)):
+        props.hemoglobin = value
+        props.keyframe_insert("hemoglobin", frame=frame)
+    scene.frame_set(1)
+    source = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    assert bpy.ops.spectral_skin.apply(material="Close") == {"FINISHED"}
+    operator = json.loads(bpy.data.materials["Close"][frame_values.PROPERTY])
+    plans = batch.apply_to_materials(str(source), ["Close"], SkinSettings.from_preset("caucasian", hemoglobin=0.1),
+                                     str(tmp_path / "out.blend"))
+    headless = plans["Close"]["animation"]
+    assert headless["frames"] == operator["frames"] == [1, 2]
+    for key in ("base_color", "radius"):
+        np.testing.assert_allclose(headless[key], operator[key], rtol=1e-6)
+    sidecar = json.loads(pathlib.Path(batch.sidecar_path(str(tmp_path / "out.blend"))).read_text())
+    np.testing.assert_allclose(sidecar["Close"]["animation"]["base_color"], operator["base_color"], rtol=1e-6)
