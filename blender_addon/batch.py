@@ -18,10 +18,13 @@ or as a script::
 
 Apply: the scene decides which effects each material needs (blender_addon/core/scene.py: subsurface scattering
 no camera can resolve is dropped, zero oiliness writes no specular map, ...), as the operator does; the decisions
-are printed, one line each, and stored on the material. Every material's plan is computed (and its maps written) before any material changes; on an error nothing
+are printed, one line each, and stored on the material. A parameter keyframed or driven on a material's Spectral
+Skin settings follows that animation (the value given here for it is not used): a constant-parameter material gets
+its values per frame, which the render sets at each frame change (frame_values.py). Every material's plan is computed (and its maps written) before any material changes; on an error nothing
 is saved. The saved .blend refers to the textures by paths relative to itself, or packs them with ``pack=True``.
 
-Render: Cycles on the CPU (or the engine named), the .blend's own settings unless overridden; a texture file that
+Render: Cycles on the CPU (or the engine named), the .blend's own settings unless overridden; the frame-change
+handler of animated materials is installed (from frame_values.py, bpy only); a texture file that
 is neither packed nor on disk is an error before anything renders (Blender would render it magenta). Errors exit
 with status 2 and one line on stderr.
 """
@@ -59,6 +62,20 @@ def _addon_module(name: str = "") -> Any:
             sys.path.insert(0, parent)
         package = os.path.basename(_HERE)
     return importlib.import_module(f"{package}.{name}" if name else package)
+
+
+def _frame_values() -> Any:
+    """frame_values.py (bpy only): from the package when batch.py is part of it, else loaded from its file, so that a
+    render node needs neither the add-on registered nor ``spectral_skin``."""
+    if __package__:
+        return importlib.import_module(f"{__package__}.frame_values")
+    from importlib import util
+
+    spec = util.spec_from_file_location("spectral_skin_frame_values", os.path.join(_HERE, "frame_values.py"))
+    assert spec is not None and spec.loader is not None
+    module = util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def _ensure_registered() -> None:
@@ -126,11 +143,13 @@ def sidecar_path(out_blend: str) -> str:
 
 
 def _write_sidecar(out_blend: str, plans: dict[str, dict[str, Any]]) -> None:
-    """Per material: the target, the decisions (``effects``) and the texture files, as JSON next to the .blend."""
+    """Per material: the target, the decisions (``effects``), the texture files and the per-frame values of an
+    animated constant material (``animation``, or null), as JSON next to the .blend."""
     import json
 
     content = {name: {"target": plan["target"], "method": plan["method"], "effects": plan["effects"],
-                      "textures": plan["textures"]} for name, plan in plans.items()}
+                      "textures": plan["textures"], "animation": plan.get("animation")}
+               for name, plan in plans.items()}
     path = sidecar_path(out_blend)
     tmp = f"{path}.{os.getpid()}.tmp"
     with open(tmp, "w", encoding="utf-8") as file:
@@ -219,6 +238,8 @@ def render_frames(blend_path: str, out_dir: str, frames: Iterable[int] | None = 
         if len(resolution) != 2 or min(int(v) for v in resolution) < 1:
             raise BatchError(f"resolution must be (width, height) >= 1; got {tuple(resolution)}")
     _open(blend_path)
+    # Animated constant materials: their per-frame values are set at each frame change (frame_values.py).
+    _frame_values().install()
     scene = bpy.context.scene
     if scene.camera is None:
         raise BatchError(f"{blend_path}: scene {scene.name!r} has no camera")

@@ -12,6 +12,8 @@ from typing import Any
 
 import bpy
 
+from . import frame_values
+
 TAG = "spectral_skin"
 NAME_PREFIX = "SpectralSkin"
 # Custom property of the material output: [node name, socket identifier] of the Surface link before Apply.
@@ -163,6 +165,8 @@ def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.
         output[PREVIOUS_SURFACE] = previous[0] if previous else []
         _unlink(tree, surface)
         tree.links.new(node.outputs["BSDF"], surface)
+    # An animated constant material: its values per frame, set by the frame-change handler (frame_values.py).
+    frame_values.store(material, plan)
     return node
 
 
@@ -176,6 +180,8 @@ def remove_skin(material: bpy.types.Material) -> int:
     images = [n.image for n in tagged_nodes(tree) if n.type == "TEX_IMAGE" and n.image is not None]
     outputs = [n for n in tree.nodes if n.type == "OUTPUT_MATERIAL" and PREVIOUS_SURFACE in n]
     removed = 0
+    if frame_values.PROPERTY in material:
+        del material[frame_values.PROPERTY]
     for node in tagged_nodes(tree):
         tree.nodes.remove(node)
         removed += 1

@@ -3,7 +3,10 @@
 For a material: every object of the scene that renders it, seen by the camera that renders each sampled frame (the
 scene's camera, or the camera of the timeline marker in force: Blender's camera switching), with the camera's lens,
 sensor or orthographic scale and the object's evaluated bounding box in world space at that frame. Frames: the first
-and last of the scene's range, up to :data:`FRAME_SAMPLES` evenly between, and the marker frames.
+and last of the scene's range, up to :data:`FRAME_SAMPLES` evenly between, and the marker frames. At the current
+frame, each such object's shape: the smallest dimension of its evaluated bounds and whether its evaluated mesh is
+closed. And the material's animated Spectral Skin parameters with their values at every frame of the range: an
+F-curve of the material's action is evaluated directly; a driver (which may read anything) by setting each frame.
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ from typing import Any
 
 import bpy
 
+from .core import PARAMETER_INFO, PARAMETERS
 from .core import scene as analysis
 
 FRAME_SAMPLES = 8  # frames sampled between the first and the last (each costs one scene.frame_set)
@@ -48,12 +52,81 @@ def _vector(values: Any) -> Any:
     return Vector(values)
 
 
+def _shape(obj: bpy.types.Object, depsgraph: Any, scale_length: float) -> analysis.ShapeFacts:
+    """The object's evaluated bounds' smallest dimension in mm and whether its evaluated mesh is closed: every edge
+    shared by exactly two faces (counted from the faces' loops)."""
+    import numpy as np
+
+    evaluated = obj.evaluated_get(depsgraph)
+    thickness_mm = min(evaluated.dimensions) * scale_length * analysis.MM_PER_METRE
+    mesh = evaluated.to_mesh()
+    try:
+        if mesh is None or len(mesh.polygons) == 0:
+            return analysis.ShapeFacts(obj.name, thickness_mm, None)
+        edges = np.empty(len(mesh.loops), dtype=np.int64)
+        mesh.loops.foreach_get("edge_index", edges)
+        faces_per_edge = np.bincount(edges, minlength=len(mesh.edges))
+        open_edges = int(np.count_nonzero(faces_per_edge != 2))
+    finally:
+        evaluated.to_mesh_clear()
+    return analysis.ShapeFacts(obj.name, thickness_mm, open_edges == 0, open_edges)
+
+
+def _fcurves(animation_data: Any) -> list[Any]:
+    """The F-curves of an ID's action: ``action.fcurves`` before Blender 5.0, the channel bag of the ID's action slot
+    from 4.4 on (5.0 removed ``action.fcurves``)."""
+    action = animation_data.action
+    if action is None:
+        return []
+    if hasattr(action, "fcurves"):
+        return list(action.fcurves)
+    from bpy_extras import anim_utils
+
+    bag = anim_utils.action_get_channelbag_for_slot(action, animation_data.action_slot)
+    return list(bag.fcurves) if bag is not None else []
+
+
+def gather_animation(scene: bpy.types.Scene, material: bpy.types.Material) -> analysis.AnimationFacts | None:
+    """The material's keyframed or driven Spectral Skin parameters and their values at every frame of the scene's
+    range, clamped into the parameters' ranges as Blender clamps the property; None when none is animated. Muted
+    curves and drivers are left out; NLA strips are not looked at."""
+    animation_data = material.animation_data
+    if animation_data is None:
+        return None
+    paths = {f"spectral_skin.{name}": name for name in PARAMETERS}
+    curves = {paths[c.data_path]: c for c in _fcurves(animation_data) if c.data_path in paths and not c.mute}
+    drivers = {paths[d.data_path] for d in animation_data.drivers if d.data_path in paths and not d.mute}
+    how = {name: "keyframed" for name in curves} | {name: "driven" for name in drivers}
+    if not how:
+        return None
+    frames = tuple(range(min(scene.frame_start, scene.frame_end), max(scene.frame_start, scene.frame_end) + 1))
+    values: dict[str, list[float]] = {name: [] for name in how}
+    current = scene.frame_current, scene.frame_subframe
+    try:
+        for frame in frames:
+            if drivers:
+                scene.frame_set(frame)
+            for name in how:
+                value = float(getattr(material.spectral_skin, name)) if drivers else curves[name].evaluate(frame)
+                low, high = PARAMETER_INFO[name][:2]
+                values[name].append(min(max(float(value), low), high))
+    finally:
+        if drivers:
+            scene.frame_set(current[0], subframe=current[1])
+    return analysis.AnimationFacts(parameters=how, frames=frames, values={k: tuple(v) for k, v in values.items()},
+                                   current_frame=scene.frame_current)
+
+
 def gather(scene: bpy.types.Scene, material: bpy.types.Material) -> analysis.SceneFacts:
     """The facts of ``scene`` for ``material``; the scene's current frame is restored afterwards."""
     render = scene.render
-    base = {"resolution_x": render.resolution_x, "resolution_y": render.resolution_y,
-            "resolution_percentage": render.resolution_percentage, "scale_length": scene.unit_settings.scale_length}
     objects = _objects_using(scene, material)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    scale_length = scene.unit_settings.scale_length
+    base = {"resolution_x": render.resolution_x, "resolution_y": render.resolution_y,
+            "resolution_percentage": render.resolution_percentage, "scale_length": scale_length,
+            "shapes": tuple(_shape(obj, depsgraph, scale_length) for obj in objects),
+            "animation": gather_animation(scene, material)}
     markers = _camera_markers(scene)
     if not objects:
         return analysis.SceneFacts(**base, note="no object in the scene renders the material")

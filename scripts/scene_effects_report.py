@@ -58,6 +58,58 @@ def _differences(a: np.ndarray, b: np.ndarray, albedo: np.ndarray) -> dict[str, 
     return {"mean": float(profile.mean(axis=0).max()), "profile": float(profile.max()),
             "max": float((np.abs(a - b) / albedo).max())}
 
+# The rest of the report: what the analysis decides besides dropping subsurface (no measurement of this script).
+DECISIONS_TEXT = """## Thin and open geometry: which subsurface method
+
+The analysis also recommends a subsurface method per object using the material (the decision `subsurface method`;
+figures per object: `thickness_mm`, `thickness_radii`, `closed`, `open_edges`, `recommended`, `reason`). It is a
+recommendation: the method stays the one chosen on the material, because the method is the artist's choice (it
+changes the look and the render time) and the Auto / On / Off overrides switch effects, not methods. Its check box
+(`enabled`) says whether the material's method suits every object; the reason names the objects it does not suit.
+
+- Thickness: the smallest dimension of the object's evaluated bounding box (object axes, with its scale and
+  modifiers) × the scene's unit scale, in mm, at the current frame (`scene_facts.py`). Thinner than
+  `THIN_RADII` = 3 × the largest Subsurface Radius × Scale (over the animation's frames when it is animated): a
+  random walk. Burley's profile is a half-space's; most of its energy lies within one radius, so a part one or two
+  radii thick lets light through that Burley projects back onto the near surface; at three radii the half-space
+  is a fair model. The 3 is a rule of thumb, not a measurement.
+- Closed: every edge of the evaluated mesh is shared by exactly two faces (counted from the faces' loops). An open
+  mesh (or one with edges of three or more faces) gets Burley recommended: a random walk leaves the volume through
+  the holes and loses light. Thin and open: Burley, with the advice to close the mesh and use a random walk.
+- No advice where subsurface is off (dropped or forced off), in EEVEE (every method renders as its screen-space
+  blur), or with no object using the material.
+
+Open: the bounding box sees the whole object, not its parts: a head's ears and nostrils are thin parts of a thick
+object and are not found (that needs a per-part measure, e.g. ray-cast thickness over the surface).
+
+## Animated parameters
+
+A Spectral Skin parameter (melanin, melanin blend, haemoglobin, oiliness) keyframed or driven on the material
+(decision `animation`; figures `parameters`, `first_frame`, `last_frame`, `evaluations`):
+
+- Constant-parameter material: the values at every frame of the scene's range are part of the plan
+  (`plan["animation"]`: Base Color, Subsurface Radius, Specular IOR Level per frame), each computed by the core
+  (`spectral_skin.evaluate`, once per distinct parameter set) and changed by the same decisions, which hold over
+  every frame (subsurface from the largest radius over the frames, specular dropped only if the oiliness is zero at
+  every frame). Apply stores them on the material (custom property `spectral_skin_frames`, saved with the .blend);
+  a persistent `frame_change_pre` handler (`blender_addon/frame_values.py`, bpy only) sets them on the add-on's
+  Principled BSDF at each frame change. The add-on installs it when registered; the headless renderer
+  (`batch.py render`) installs it itself, so a render node needs neither the add-on nor `spectral_skin`. Frames
+  outside the range take the nearest frame's values. An F-curve is evaluated directly; a driver (which may read
+  anything) by setting each frame of the range. Muted curves are left out; NLA strips are not read.
+- Material with parameter maps: the maps are computed once, with the values at the current frame; the decision says
+  that its animation needs per-frame maps or the live shader (`enabled` false).
+- The batch apply follows the material's animation for an animated parameter, whatever constant it was given.
+
+Acceptance (`tests/blender/test_scene_effects.py::test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames`,
+run with `-s` to print the figures): haemoglobin keyframed 0.005 at frame 1 and 0.05 at frame 2 on a Burley flat
+slab under a white world, applied through the operator, saved, and rendered at frames 1 and 2 by
+`batch.render_frames` with the add-on unregistered (512 samples, central 32 × 32 of 64 × 64 px): the rendered mean
+is the core's albedo of each frame within 0.2 % (measured: −0.005, −0.004, +0.009 % at frame 1; −0.022, +0.008,
++0.014 % at frame 2, the same in Blender 4.2.23, 5.0.1 and 5.3.0). Without the handler frame 2 renders frame 1's
+albedo (+22 %, +33 %, +9 %).
+"""
+
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -145,6 +197,7 @@ def main(argv: list[str] | None = None) -> int:
         "([blender-render-tests.md](blender-render-tests.md#what-differs-between-versions-as-the-tests-met-it)): "
         "the same threshold, found independently; 4.5 and later render the blur, which is what the table measures.",
         "",
+        DECISIONS_TEXT,
     ]
     Path(args.out).write_text("\n".join(lines))
     print(f"wrote {args.out}; chosen {chosen}")

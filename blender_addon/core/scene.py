@@ -19,6 +19,17 @@ Effects:
 - ``constant maps``: an output map whose texels all hold one value is set as a value, not written as a texture
   (exact; the override Off writes the texture all the same).
 - ``engine/version``: the target the core computed for (core/targets.py), recorded as the plan's first entry.
+- ``subsurface method``: a recommendation, never applied by itself (the method is the artist's choice on the
+  material, and the Auto/On/Off overrides switch effects, not methods): per object using the material, its thickness
+  (the smallest dimension of its evaluated bounds, mm) against :data:`THIN_RADII` times the largest radius, and
+  whether its mesh is closed (every edge shared by exactly two faces). Thinner than that and closed: a random walk
+  (Burley's disk projection assumes a half-space, wrong on ears, nostrils, fingers); open: Burley, or close the mesh
+  (a random walk leaks out through the holes). ``enabled``: the material's method suits every object.
+- ``animation``: a parameter keyframed or driven on the material's Spectral Skin settings. A constant-parameter
+  material gets its values per frame (``plan["animation"]``: computed by the core for each distinct parameter set,
+  with the same decisions), set by a frame-change handler (blender_addon/frame_values.py); a material with parameter
+  maps renders the current frame's values (``enabled`` False): its animation needs per-frame maps or the live
+  shader.
 """
 
 from __future__ import annotations
@@ -38,6 +49,12 @@ OVERRIDES = ("AUTO", "ON", "OFF")
 OVERRIDABLE = ("subsurface", "specular", "constant maps")
 
 MM_PER_METRE = 1000.0
+
+# An object thinner than this many largest scatter radii (Subsurface Radius × Scale, mm) gets a random walk
+# recommended. Burley's profile is a half-space's: light reaching the far side of a part only 1 to 2 radii thick (most
+# of the profile's energy lies within one radius) is projected onto the near surface instead; at 3 radii the
+# half-space is a fair model. A rule of thumb, not a measurement (docs/scene-effects.md, Thin and open geometry).
+THIN_RADII = 3.0
 
 
 @dataclass(frozen=True)
@@ -68,8 +85,37 @@ class View:
 
 
 @dataclass(frozen=True)
+class ShapeFacts:
+    """An object using the material, at the current frame: the smallest dimension of its evaluated bounds (object
+    axes, with its scale) in mm, and whether its evaluated mesh is closed (every edge shared by exactly two faces;
+    None: no faces, e.g. not a mesh) with the count of edges that are not."""
+
+    object_name: str
+    thickness_mm: float
+    closed: bool | None
+    open_edges: int = 0
+
+
+@dataclass(frozen=True)
+class AnimationFacts:
+    """The material's animated Spectral Skin parameters: {parameter: "keyframed" | "driven"}, their values at each
+    frame of the scene's range (ascending, consecutive) and the frame the scene is at."""
+
+    parameters: dict[str, str]
+    frames: tuple[int, ...]
+    values: dict[str, tuple[float, ...]]
+    current_frame: int
+
+    def at(self, frame: int) -> dict[str, float]:
+        """The animated parameters' values at ``frame`` (clamped into the range)."""
+        index = min(max(frame - self.frames[0], 0), len(self.frames) - 1)
+        return {name: float(values[index]) for name, values in self.values.items()}
+
+
+@dataclass(frozen=True)
 class SceneFacts:
-    """What the analysis needs of a scene for one material: render size and the views of the objects using it."""
+    """What the analysis needs of a scene for one material: render size, the views of the objects using it, their
+    shapes and the material's animated parameters."""
 
     resolution_x: int
     resolution_y: int
@@ -77,6 +123,8 @@ class SceneFacts:
     scale_length: float = 1.0  # metres per scene unit
     views: tuple[View, ...] = field(default_factory=tuple)
     note: str = ""  # why there are no views (no camera, no object), for the reason
+    shapes: tuple[ShapeFacts, ...] = field(default_factory=tuple)
+    animation: AnimationFacts | None = None
 
 
 def _dot(a: Sequence[float], b: Sequence[float]) -> float:
@@ -219,6 +267,67 @@ def _engine(plan: dict[str, Any]) -> dict[str, Any]:
                   f"{tested}", dict(target))
 
 
+def _shape_advice(shape: ShapeFacts, largest_mm: float) -> tuple[str | None, str]:
+    """The method recommended for one object (None: any) and why."""
+    radii = shape.thickness_mm / largest_mm if largest_mm > 0.0 else float("inf")
+    size = f"{shape.object_name}: {shape.thickness_mm:.3g} mm thick ({radii:.3g} × the largest radius)"
+    thin = radii < THIN_RADII
+    if shape.closed is False:
+        also = " (thin too: close the mesh, then a random walk)" if thin else ""
+        return "BURLEY", (f"{size}, open mesh ({shape.open_edges} edges not shared by two faces): a random walk leaks "
+                          f"out through the holes: Burley, or close the mesh{also}")
+    unknown = ", no faces to tell closed or open" if shape.closed is None else ", closed"
+    if thin:
+        return "RANDOM_WALK", (f"{size}{unknown}: under {THIN_RADII:g} radii, where Burley's disk projection is "
+                               "wrong: a random walk")
+    return None, f"{size}{unknown}: any method (Burley the fastest)"
+
+
+def _method(plan: dict[str, Any], settings: Any, facts: SceneFacts | None, subsurface: bool) -> dict[str, Any]:
+    """The recommended subsurface method per object (a recommendation: nothing is changed)."""
+    radius = plan["images"]["radius"] if plan.get("radius") is None else plan["radius"]
+    largest_mm = _largest(radius)
+    method = settings.method
+    figures: dict[str, Any] = {"method": method, "thin_radii": THIN_RADII, "largest_radius_mm": largest_mm,
+                               "objects": {}}
+    if not subsurface:
+        return _entry("subsurface method", True, "subsurface is off: the method does not matter", figures)
+    if plan["target"]["engine"] == "eevee":
+        return _entry("subsurface method", True, "EEVEE renders every method with its screen-space Burley-like "
+                      "blur: no method to recommend", figures)
+    if facts is None or not facts.shapes:
+        return _entry("subsurface method", True, f"{method} as chosen: no object using the material to look at",
+                      figures)
+    wrong = []
+    for shape in facts.shapes:
+        recommended, reason = _shape_advice(shape, largest_mm)
+        figures["objects"][shape.object_name] = {
+            "thickness_mm": shape.thickness_mm, "thickness_radii": shape.thickness_mm / largest_mm,
+            "closed": shape.closed, "open_edges": shape.open_edges, "recommended": recommended, "reason": reason}
+        if recommended is not None and (recommended == "BURLEY") != (method == "BURLEY"):
+            wrong.append(f"{reason} (the material uses {method})")
+    if wrong:
+        return _entry("subsurface method", False, "; ".join(wrong), figures)
+    return _entry("subsurface method", True, f"{method} suits every object: "
+                  + "; ".join(o["reason"] for o in figures["objects"].values()), figures)
+
+
+def _animation(settings: Any, facts: SceneFacts | None) -> dict[str, Any]:
+    """Whether per-frame values are part of the plan (figures completed by :func:`scene_plan`)."""
+    animation = facts.animation if facts is not None else None
+    if animation is None or not animation.parameters:
+        return _entry("animation", False, "no keyframed or driven parameter: one value each", {"parameters": {}})
+    names = ", ".join(f"{name} {how}" for name, how in sorted(animation.parameters.items()))
+    figures: dict[str, Any] = {"parameters": dict(animation.parameters), "first_frame": animation.frames[0],
+                               "last_frame": animation.frames[-1]}
+    if settings.maps:
+        return _entry("animation", False, f"{names}, but the material uses parameter maps, computed once with the "
+                      f"values of frame {animation.current_frame}: animation needs per-frame maps or the live shader",
+                      figures)
+    return _entry("animation", True, f"{names}: values per frame for frames {animation.frames[0]}-"
+                  f"{animation.frames[-1]}, set by a frame-change handler", figures)
+
+
 def decide(plan: dict[str, Any], settings: Any, facts: SceneFacts | None,
            overrides: dict[str, str] | None = None,
            threshold_px: float = SUBSURFACE_MIN_RADIUS_PX) -> list[dict[str, Any]]:
@@ -235,6 +344,9 @@ def decide(plan: dict[str, Any], settings: Any, facts: SceneFacts | None,
             entry["override"] = choice
             entry["enabled"] = choice == "ON"
             entry["reason"] = f"forced {choice.lower()} by the override (automatic: {entry['reason']})"
+    # After the overrides: the method matters only where subsurface scattering stays.
+    effects.insert(2, _method(plan, settings, facts, enabled(effects, "subsurface")))
+    effects.append(_animation(settings, facts))
     return effects
 
 
@@ -306,18 +418,16 @@ def active_camera(frame: int, scene_camera: str | None, markers: Sequence[tuple[
     return chosen[1]
 
 
-def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str] | None = None,
-               progress: Any = None) -> dict[str, Any]:
-    """The material plan for a scene: :func:`~core.plan.make_plan`, :func:`decide`, :func:`apply_decisions`; the
-    decisions are in ``plan["effects"]``. The one path of the operator and of the batch apply (textures still to be
-    written with :func:`~core.plan.write_textures`).
-
-    Where subsurface is dropped from a method other than Burley (whose Base Color is not the albedo), the albedo is
-    Burley's (the skin's total diffuse reflectance), computed by the core for that method."""
+def _decided_plan(settings: Any, effects: list[dict[str, Any]], progress: Any,
+                  plan: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The material plan of ``settings`` (``plan`` when already computed: changed in place) changed as ``effects``
+    say. Where subsurface is dropped from a method other
+    than Burley (whose Base Color is not the albedo), the albedo is Burley's (the skin's total diffuse reflectance),
+    computed by the core for that method."""
     from .plan import make_plan
 
-    plan = make_plan(settings, progress)
-    effects = decide(plan, settings, facts, overrides)
+    if plan is None:
+        plan = make_plan(settings, progress)
     albedo = None
     if not enabled(effects, "subsurface") and settings.method != "BURLEY":
         burley = make_plan(settings.replace(method="BURLEY"), progress)
@@ -327,4 +437,54 @@ def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str
             plan["images"]["albedo"] = burley["images"]["albedo"]
         plan["summary"]["albedo"] = burley["summary"]["albedo"]
     apply_decisions(plan, effects, albedo)
+    return plan
+
+
+# The plan's values that the animation sets per frame (keys of the material plan).
+ANIMATED_VALUES = ("base_color", "radius", "specular_ior_level")
+
+
+def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str] | None = None,
+               progress: Any = None) -> dict[str, Any]:
+    """The material plan for a scene: :func:`~core.plan.make_plan`, :func:`decide`, :func:`apply_decisions`; the
+    decisions are in ``plan["effects"]``. The one path of the operator and of the batch apply (textures still to be
+    written with :func:`~core.plan.write_textures`).
+
+    Animated parameters (``facts.animation``) take their values at the current frame. For a material without maps
+    the plan also gets ``plan["animation"]``: ``{"frames": [...], "base_color": [[r, g, b], ...], "radius": [...],
+    "specular_ior_level": [...], "units": {...}}``, one value per frame, each computed by the core (once per distinct parameter set)
+    and changed by the same decisions, which are taken over every frame: the largest radius over the frames, and
+    oiliness zero only if it is zero at every frame.
+    """
+    from .plan import make_plan
+
+    animation = facts.animation if facts is not None else None
+    if animation is not None and animation.parameters:
+        settings = settings.replace(**animation.at(animation.current_frame))
+    plan = make_plan(settings, progress)
+    per_frame: list[Any] = []
+    decision_plan, decision_settings = plan, settings
+    if animation is not None and animation.parameters and not settings.maps:
+        per_frame = [settings.replace(**animation.at(frame)) for frame in animation.frames]
+        distinct = {tuple(s.constants().items()): s for s in per_frame}
+        plans = {key: make_plan(s, progress) for key, s in distinct.items()}
+        import numpy as np
+
+        largest = np.max([p["radius"] for p in plans.values()], axis=0)
+        oiliness = max(s.oiliness for s in per_frame)
+        decision_plan = {**plan, "radius": [float(v) for v in largest]}
+        decision_settings = settings.replace(oiliness=oiliness)
+    effects = decide(decision_plan, decision_settings, facts, overrides)
+    plan = _decided_plan(settings, effects, progress, plan)
+    if per_frame and animation is not None:
+        decided = {key: _decided_plan(s, effects, progress, plans[key]) for key, s in distinct.items()}
+        frames = [decided[tuple(s.constants().items())] for s in per_frame]
+        plan["animation"] = {"frames": list(animation.frames),
+                             **{name: [p[name] for p in frames] for name in ANIMATED_VALUES},
+                             "units": {"base_color": f"linear RGB, {settings.working_space}",
+                                       "radius": "mm (Principled Subsurface Radius; Subsurface Scale makes it scene "
+                                       "units)", "specular_ior_level": "Principled Specular IOR Level"}}
+        entry = next(e for e in effects if e["effect"] == "animation")
+        entry["figures"]["evaluations"] = len(distinct)
+        entry["reason"] += f" ({len(distinct)} distinct parameter sets evaluated)"
     return plan

@@ -1,6 +1,8 @@
 """The scene decides what is simulated (blender_addon/scene_facts.py + core/scene.py) in Blender, headless: a far
 object's material renders plain diffuse with the core's albedo, a close one keeps subsurface, zero oiliness writes
-no specular texture, overrides win and survive re-applying, and the batch path decides exactly as the operator.
+no specular texture, overrides win and survive re-applying, and the batch path decides exactly as the operator;
+thin and open objects get a subsurface method recommended; a driven parameter stores the core's values per frame and
+a keyframed haemoglobin renders the core's albedo at two frames of a headless batch render.
 
 Run: .venv-blender/5.0/bin/python -m pytest tests/blender/test_scene_effects.py -q
 """
@@ -177,3 +179,151 @@ def test_far_render_within_the_bound_of_the_full_render(addon):
     print(f"\nedge profile |plain - full| / albedo: max {profile.max():.4f}, mean {profile.mean():.4f}")
     assert profile.max() < 0.02, profile.max()
     assert profile.mean() < 0.005, profile.mean()
+
+
+def _shape_entry(material):
+    return _effect(material, "subsurface method")
+
+
+def test_thin_and_open_geometry_get_a_method_recommended(addon):
+    """A 2 mm thick closed box (thinner than 3 radii of caucasian skin's 4.35 mm), an open quad and a 20 cm closed
+    box share the material: the thin box gets a random walk recommended, the open quad Burley (a walk leaks), and
+    the material's Burley does not suit the thin box; nothing is changed."""
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.render.resolution_x, scene.render.resolution_y = 640, 360
+    data = bpy.data.cameras.new("Camera")
+    camera = bpy.data.objects.new("Camera", data)
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)  # looks along +y
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    material = bpy.data.materials.new("Skin")
+    assign(add_box("Thin", -0.05, 0.05, 0.5, 0.502, -0.05, 0.05), material)
+    assign(add_box("Thick", -0.1, 0.1, 0.6, 0.8, -0.1, 0.1), material)
+    from blender_scenes import add_plane
+    assign(add_plane("Open", -0.05, 0.05, 0.5, 0.6, -0.2), material)
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    assert _effect(material, "subsurface")["enabled"]
+    entry = _shape_entry(material)
+    objects = entry["figures"]["objects"]
+    largest_mm = max(spectral_skin.evaluate(preset="caucasian", blender=bpy.app.version)["methods"]["burley"][
+        "subsurface_radius_mm"])
+    assert objects["Thin"]["thickness_mm"] == pytest.approx(2.0, abs=1e-4)  # float32 vertices
+    assert objects["Thin"]["thickness_radii"] == pytest.approx(2.0 / largest_mm, rel=1e-4)
+    assert objects["Thin"]["closed"] is True and objects["Thin"]["recommended"] == "RANDOM_WALK"
+    assert objects["Thick"]["thickness_mm"] == pytest.approx(200.0, rel=1e-5)
+    assert objects["Thick"]["closed"] is True and objects["Thick"]["recommended"] is None
+    assert objects["Open"]["closed"] is False and objects["Open"]["open_edges"] == 4
+    assert objects["Open"]["recommended"] == "BURLEY"
+    assert not entry["enabled"] and "Thin" in entry["reason"] and "random walk" in entry["reason"]
+    assert _principled(material).subsurface_method == "BURLEY"  # a recommendation only
+    # With a random walk the thin box is served, the open quad is not.
+    material.spectral_skin.method = "RANDOM_WALK"
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    entry = _shape_entry(material)
+    assert not entry["enabled"] and "Open" in entry["reason"] and "leaks" in entry["reason"]
+    assert "Thin" not in entry["reason"]
+
+
+def test_driven_haemoglobin_stores_the_cores_values_per_frame(addon):
+    """A driver (hemoglobin = 0.01 × frame, a simple expression Blender evaluates without Python) over frames 1-3:
+    the stored values are the core's Burley Base Color and radius of each frame's haemoglobin, and changing frame
+    sets them on the Principled BSDF."""
+    from blender_addon import frame_values
+
+    materials = _scene_with_far_and_close()
+    material = materials["Close"]
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 3
+    scene.frame_set(2)
+    driver = material.spectral_skin.driver_add("hemoglobin").driver
+    driver.type = "SCRIPTED"
+    driver.expression = "frame * 0.01"
+    assert bpy.ops.spectral_skin.apply(material="Close") == {"FINISHED"}
+    entry = _effect(material, "animation")
+    assert entry["enabled"] and entry["figures"]["parameters"] == {"hemoglobin": "driven"}
+    assert entry["figures"]["evaluations"] == 3
+    stored = json.loads(material[frame_values.PROPERTY])
+    assert stored["frames"] == [1, 2, 3]
+    props = material.spectral_skin
+    for index, frame in enumerate(stored["frames"]):
+        burley = spectral_skin.evaluate(props.melanin, props.melanin_blend, 0.01 * frame, props.oiliness,
+                                        blender=bpy.app.version)["methods"]["burley"]
+        np.testing.assert_allclose(stored["base_color"][index], burley["base_color"], rtol=1e-5)
+        np.testing.assert_allclose(stored["radius"][index], burley["subsurface_radius_mm"], rtol=1e-5)
+    scene.frame_set(3)
+    np.testing.assert_allclose(_principled(material).inputs["Base Color"].default_value[:3], stored["base_color"][2],
+                               rtol=1e-6)
+    scene.frame_set(1)
+    np.testing.assert_allclose(_principled(material).inputs["Base Color"].default_value[:3], stored["base_color"][0],
+                               rtol=1e-6)
+    # Remove takes the stored values away with the nodes.
+    assert bpy.ops.spectral_skin.remove(material="Close") == {"FINISHED"}
+    assert frame_values.PROPERTY not in material
+
+
+def test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon, tmp_path):
+    """Acceptance (issue 13): haemoglobin keyframed 0.005 at frame 1 and 0.05 at frame 2 on a Burley flat slab
+    under a white world (test_renders.py's set-up: the slab renders its Base Color, which is the core's total diffuse
+    reflectance), applied through the operator, saved, and rendered by the headless batch renderer with the add-on
+    unregistered (a render node): each frame's central mean is the core's albedo of that frame within 0.2 %."""
+    import blender_scenes
+
+    scene = blender_scenes.reset_scene()
+    scene.frame_start, scene.frame_end = 1, 2
+    blender_scenes.set_world(scene, strength=1.0)
+    slab = blender_scenes.add_slab()
+    blender_scenes.add_top_camera(scene, ortho_scale=0.1, width=64, height=64)
+    material = bpy.data.materials.new("Skin")
+    assign(slab, material)
+    props = material.spectral_skin
+    props.oiliness = 0.0  # no specular lobe (Specular IOR Level 0), as the flat-slab tests set it
+    hemoglobin = {1: 0.005, 2: 0.05}
+    for frame, value in hemoglobin.items():
+        props.hemoglobin = value
+        props.keyframe_insert("hemoglobin", frame=frame)
+    scene.frame_set(1)
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    assert _effect(material, "animation")["enabled"] and _effect(material, "subsurface")["enabled"]
+    assert not _effect(material, "specular")["enabled"]
+    melanin, melanin_blend = props.melanin, props.melanin_blend  # the file is reloaded: no bpy data after this
+    blend = tmp_path / "animated.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    addon.unregister()  # the render node: no add-on, the batch renderer installs the handler itself
+    paths = batch.render_frames(str(blend), str(tmp_path / "renders"), frames=[1, 2], samples=512)
+    for path, (frame, value) in zip(paths, hemoglobin.items(), strict=True):
+        expected = np.asarray(spectral_skin.evaluate(melanin, melanin_blend, value, 0.0,
+                                                     blender=bpy.app.version)["diffuse_reflectance_rgb"])
+        image = blender_scenes.read_exr(path)[:, :, :3].astype(np.float64)
+        mean = image[16:48, 16:48].reshape(-1, 3).mean(axis=0)
+        rel = mean / expected - 1.0
+        print(f"\n[animation] frame {frame} hemoglobin {value}: rendered {np.array2string(mean, precision=6)} "
+              f"expected {np.array2string(expected, precision=6)} rel.err {np.array2string(rel * 100, precision=4)} %")
+        np.testing.assert_allclose(mean, expected, rtol=2e-3)
+
+
+def test_batch_apply_follows_the_materials_animation(addon, tmp_path):
+    """The batch apply, given another haemoglobin, follows the material's keyframes: the operator's per-frame values,
+    also in the sidecar."""
+    from blender_addon import frame_values
+
+    materials = _scene_with_far_and_close()
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 2
+    props = materials["Close"].spectral_skin
+    for frame, value in ((1, 0.005), (2, 0.05)):
+        props.hemoglobin = value
+        props.keyframe_insert("hemoglobin", frame=frame)
+    scene.frame_set(1)
+    source = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    assert bpy.ops.spectral_skin.apply(material="Close") == {"FINISHED"}
+    operator = json.loads(bpy.data.materials["Close"][frame_values.PROPERTY])
+    plans = batch.apply_to_materials(str(source), ["Close"], SkinSettings.from_preset("caucasian", hemoglobin=0.1),
+                                     str(tmp_path / "out.blend"))
+    headless = plans["Close"]["animation"]
+    assert headless["frames"] == operator["frames"] == [1, 2]
+    for key in ("base_color", "radius"):
+        np.testing.assert_allclose(headless[key], operator[key], rtol=1e-6)
+    sidecar = json.loads(pathlib.Path(batch.sidecar_path(str(tmp_path / "out.blend"))).read_text())
+    np.testing.assert_allclose(sidecar["Close"]["animation"]["base_color"], operator["base_color"], rtol=1e-6)

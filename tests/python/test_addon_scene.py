@@ -181,3 +181,111 @@ def test_constant_maps_override_off_keeps_the_textures(tmp_path):
     settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
     plan = scene.scene_plan(settings, None, {"constant maps": "OFF"})
     assert sorted(plan["textures"]) == ["albedo", "radius"] and plan["base_color"] is None
+
+
+def _entry(effects, name):
+    return next(e for e in effects if e["effect"] == name)
+
+
+def _with(facts, **changes):
+    import dataclasses
+
+    return dataclasses.replace(facts, **changes)
+
+
+def test_thin_closed_object_gets_a_random_walk_open_one_burley():
+    plan = _constant_plan()
+    largest = max(plan["radius"])  # mm
+    settings = core.SkinSettings.from_preset("caucasian")
+    shapes = (scene.ShapeFacts("Ear", 2.9 * largest, True), scene.ShapeFacts("Head", 3.1 * largest, True),
+              scene.ShapeFacts("Scalp", 50 * largest, False, 12))
+    effects = scene.decide(plan, settings, _with(_facts(0.5), shapes=shapes))
+    entry = _entry(effects, "subsurface method")
+    objects = entry["figures"]["objects"]
+    assert objects["Ear"]["recommended"] == "RANDOM_WALK"
+    assert objects["Ear"]["thickness_radii"] == pytest.approx(2.9)
+    assert objects["Head"]["recommended"] is None  # 3.1 radii: thick enough for Burley
+    assert objects["Scalp"]["recommended"] == "BURLEY" and "leaks" in objects["Scalp"]["reason"]
+    assert "12 edges" in objects["Scalp"]["reason"]
+    # Burley does not suit the thin ear: the entry says so, and only about the ear.
+    assert entry["enabled"] is False and "Ear" in entry["reason"] and "Scalp" not in entry["reason"]
+    # A random walk suits the ear but leaks out of the open scalp.
+    walk = _entry(scene.decide(plan, settings.replace(method="RANDOM_WALK"), _with(_facts(0.5), shapes=shapes)),
+                  "subsurface method")
+    assert walk["enabled"] is False and "Scalp" in walk["reason"] and "Ear" not in walk["reason"]
+    # Thin and open: Burley, and the advice to close the mesh for a walk.
+    thin_open = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=(
+        scene.ShapeFacts("Lid", largest, False, 3),))), "subsurface method")
+    assert thin_open["enabled"] and "close the mesh, then a random walk" in thin_open["reason"]
+
+
+def test_no_method_advice_where_subsurface_is_off_or_in_eevee():
+    plan = _constant_plan()
+    shapes = (scene.ShapeFacts("Ear", 1.0, True),)
+    settings = core.SkinSettings.from_preset("caucasian")
+    far = _entry(scene.decide(plan, settings, _with(_facts(1e4), shapes=shapes)), "subsurface method")
+    assert far["enabled"] and "subsurface is off" in far["reason"]
+    eevee = core.make_plan(settings.replace(engine="eevee"))
+    entry = _entry(scene.decide(eevee, settings, _with(_facts(0.5), shapes=shapes)), "subsurface method")
+    assert entry["enabled"] and "EEVEE" in entry["reason"] and entry["figures"]["objects"] == {}
+
+
+def _animated(values: dict[str, tuple[float, ...]], current: int = 1, first: int = 1) -> scene.AnimationFacts:
+    frames = tuple(range(first, first + len(next(iter(values.values())))))
+    return scene.AnimationFacts({name: "keyframed" for name in values}, frames, values, current)
+
+
+def test_animated_constant_material_gets_the_cores_values_per_frame():
+    hemoglobin = (0.005, 0.02, 0.02, 0.05)
+    facts = _with(_facts(0.5), animation=_animated({"hemoglobin": hemoglobin}, current=3, first=10))
+    settings = core.SkinSettings.from_preset("caucasian")
+    plan = scene.scene_plan(settings, facts)
+    assert plan["animation"]["frames"] == [10, 11, 12, 13]
+    for index, value in enumerate(hemoglobin):
+        burley = spectral_skin.evaluate(settings.melanin, settings.melanin_blend, value, settings.oiliness)
+        burley = burley["methods"]["burley"]
+        np.testing.assert_allclose(plan["animation"]["base_color"][index], burley["base_color"], rtol=1e-9)
+        np.testing.assert_allclose(plan["animation"]["radius"][index], burley["subsurface_radius_mm"], rtol=1e-9)
+    # The current frame (3, before the range) takes the first frame's values.
+    np.testing.assert_allclose(plan["base_color"], plan["animation"]["base_color"][0])
+    entry = _entry(plan["effects"], "animation")
+    assert entry["enabled"] and entry["figures"]["evaluations"] == 3 and "hemoglobin keyframed" in entry["reason"]
+    assert entry["figures"]["first_frame"] == 10 and entry["figures"]["last_frame"] == 13
+
+
+def test_animated_decisions_hold_over_every_frame():
+    settings = core.SkinSettings.from_preset("caucasian")
+    radius = {v: max(spectral_skin.evaluate(settings.melanin, settings.melanin_blend, v, 0.3)["methods"]["burley"][
+        "subsurface_radius_mm"]) for v in (0.001, 0.1)}
+    big, small = max(radius, key=radius.get), min(radius, key=radius.get)
+    # A camera where the small radius is 0.2 px and the big one above 0.25 px: subsurface stays for the animation.
+    assert radius[big] / radius[small] > 0.25 / 0.2
+    depth = radius[small] / 0.2 / 0.375
+    facts = _with(_facts(depth + 0.1), animation=_animated({"hemoglobin": (small, big)}, current=1))
+    assert not scene.enabled(scene.scene_plan(settings.replace(hemoglobin=small), _with(facts, animation=None))[
+        "effects"], "subsurface")
+    plan = scene.scene_plan(settings, facts)
+    entry = _entry(plan["effects"], "subsurface")
+    assert entry["enabled"] and entry["figures"]["largest_radius_mm"] == pytest.approx(radius[big], rel=1e-9)
+    # Oiliness zero at one frame only: the specular lobe stays, with each frame's level.
+    oily = scene.scene_plan(settings, _with(_facts(0.5), animation=_animated({"oiliness": (0.0, 0.5)})))
+    assert scene.enabled(oily["effects"], "specular")
+    assert oily["animation"]["specular_ior_level"][0] == 0.0 < oily["animation"]["specular_ior_level"][1]
+    dry = scene.scene_plan(settings, _with(_facts(0.5), animation=_animated({"oiliness": (0.0, 0.0)})))
+    assert not scene.enabled(dry["effects"], "specular")
+
+
+def test_animation_with_parameter_maps_is_reported_not_applied(tmp_path):
+    maps = {"melanin": core.ParameterMap(np.linspace(0.01, 0.2, 16, dtype=np.float32).reshape(4, 4), False)}
+    settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
+    facts = _with(_facts(0.5), animation=_animated({"hemoglobin": (0.005, 0.05)}, current=2))
+    plan = scene.scene_plan(settings, facts)
+    assert "animation" not in plan
+    entry = _entry(plan["effects"], "animation")
+    assert not entry["enabled"] and "per-frame maps or the live shader" in entry["reason"]
+    # The maps are computed with the current frame's haemoglobin.
+    expected = spectral_skin.evaluate(0.01, settings.melanin_blend, 0.05, settings.oiliness)["methods"]["burley"]
+    np.testing.assert_allclose(np.asarray(plan["images"]["albedo"])[0, 0], expected["base_color"], rtol=1e-4)
+    # Without animation: an entry that says so.
+    still = _entry(scene.scene_plan(core.SkinSettings(), None)["effects"], "animation")
+    assert not still["enabled"] and "no keyframed or driven" in still["reason"]
