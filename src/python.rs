@@ -27,9 +27,14 @@ use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
 use crate::fit::blender_target::{describe_targets, BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::fit::SubsurfaceMethod;
-use crate::maps::io::{read_params, ParamImage, ParamInputs, ParamSource, Plane, MAX_TEXELS, PARAM_CHANNELS};
+use crate::maps::io::{
+    read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, MAX_TEXELS, PARAM_CHANNELS,
+};
 use crate::maps::lut::TableResolution;
-use crate::maps::pipeline::{check_planes, compute_maps_cancellable, MapSettings, SpecularOutput, StrategyChoice};
+use crate::maps::pipeline::{
+    check_planes, commit_map_files, compute_maps_cancellable, output_name, stage_map_files, MapFiles, MapSettings,
+    SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
+};
 use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
 
 create_exception!(
@@ -93,6 +98,9 @@ const WAVELENGTH_PLACEMENTS: [WavelengthPlacement; 3] =
     [WavelengthPlacement::Uniform, WavelengthPlacement::CmfAdapted, WavelengthPlacement::RgbShortcut];
 /// Names of the four parameters, in `SkinParams` order.
 const PARAM_NAMES: [&str; 4] = ["melanin", "melanin_blend", "hemoglobin", "oiliness"];
+/// The fields of `SpecularParams` that do not depend on the oiliness: what `maps` returns in "specular" when the
+/// oiliness varies (beside the per-texel "specular_ior_level").
+const SPECULAR_CONSTANTS: [&str; 3] = ["roughness", "ior", "beckmann_m"];
 /// The fields of one layer tuple, in order.
 const LAYER_FIELDS: &str = "(thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior)";
 
@@ -1131,14 +1139,10 @@ fn maps_py<'py>(
     drop(inputs);
 
     // Check, compute and interleave with the GIL released.
-    enum Specular {
-        Map(Vec<f32>),
-        Constant(crate::surface::SpecularParams),
-    }
     struct Computed {
         base_color: Vec<f32>,
         radius_mm: Vec<f32>,
-        specular: Specular,
+        specular: SpecularOutput,
         report: crate::maps::MapReport,
     }
     let hook = progress.as_ref();
@@ -1168,10 +1172,7 @@ fn maps_py<'py>(
         let write = Instant::now();
         let base_color = interleave(width, std::mem::take(&mut result.base_color));
         let radius_mm = interleave(width, std::mem::take(&mut result.radius_mm));
-        let specular = match result.specular {
-            SpecularOutput::Map { specular_ior_level, .. } => Specular::Map(specular_ior_level),
-            SpecularOutput::Constant(s) => Specular::Constant(s),
-        };
+        let specular = result.specular;
         let mut report = result.report;
         report.clamped = clamped;
         report.seconds.read = read;
@@ -1186,11 +1187,23 @@ fn maps_py<'py>(
     dict.set_item("base_color", rgb_image(py, height, width, computed.base_color)?)?;
     dict.set_item("radius_mm", rgb_image(py, height, width, computed.radius_mm)?)?;
     match computed.specular {
-        Specular::Map(map) => dict.set_item(
-            "specular",
-            PyArray::from_owned_array(py, Array2::from_shape_vec((height, width), map).map_err(internal)?),
-        )?,
-        Specular::Constant(constants) => {
+        SpecularOutput::Map { specular_ior_level, constants } => {
+            dict.set_item(
+                "specular_ior_level",
+                PyArray::from_owned_array(
+                    py,
+                    Array2::from_shape_vec((height, width), specular_ior_level).map_err(internal)?,
+                ),
+            )?;
+            // Only the constants that do not depend on the oiliness (surface::specular_from_oiliness).
+            let all = json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?;
+            let kept = PyDict::new(py);
+            for key in SPECULAR_CONSTANTS {
+                kept.set_item(key, all.get_item(key)?)?;
+            }
+            dict.set_item("specular", kept)?
+        }
+        SpecularOutput::Constant(constants) => {
             dict.set_item("specular", json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?)?
         }
     }
@@ -1203,6 +1216,99 @@ fn maps_py<'py>(
         .get_item("model")?
         .set_item("dermis_thickness_mm", report.request.model.dermis_thickness_mm)?;
     dict.set_item("report", report_dict)?;
+    Ok(dict)
+}
+
+/// One image of `write_maps`' result as row-major planes: `channels` of them (an (H, W, channels) array, or (H, W)
+/// for one channel). None when the key is absent or None.
+fn result_planes(
+    result: &Bound<'_, PyAny>,
+    key: &str,
+    channels: usize,
+) -> PyResult<Option<(usize, usize, Vec<Vec<f32>>)>> {
+    let obj = match result.get_item(key) {
+        Ok(obj) if !obj.is_none() => obj,
+        Ok(_) => return Ok(None),
+        Err(e) if e.is_instance_of::<pyo3::exceptions::PyKeyError>(result.py()) => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    let (ndim, expected) = if channels == 1 {
+        (2, "a float32 (H, W) numpy array".to_string())
+    } else {
+        (3, format!("a float32 (H, W, {channels}) numpy array"))
+    };
+    let name = format!("result[{key:?}]");
+    let array = float_array(&name, &obj, ndim, &expected)?
+        .ok_or_else(|| PyTypeError::new_err(format!("{name} must be {expected} or None; got {}", type_name(&obj))))?;
+    let shape = array.shape();
+    if channels > 1 && shape[2] != channels {
+        return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(&shape))));
+    }
+    let planes = if channels == 1 {
+        vec![array.plane(None)?]
+    } else {
+        (0..channels).map(|c| array.plane(Some(c))).collect::<PyResult<_>>()?
+    };
+    Ok(Some((shape[0], shape[1], planes)))
+}
+
+/// Write a result of `maps` as float EXRs, atomically (see the stub in `_core.pyi`).
+#[pyfunction]
+#[pyo3(name = "write_maps", signature = (result, folder, prefix = None))]
+fn write_maps_py<'py>(
+    py: Python<'py>,
+    result: &Bound<'py, PyAny>,
+    folder: std::path::PathBuf,
+    prefix: Option<&str>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(prefix) = prefix {
+        if prefix.is_empty() || prefix.contains(['/', '\\']) || prefix == "." || prefix == ".." {
+            return Err(invalid(
+                "prefix",
+                format!("must be a non-empty file name part without / or \\; got {prefix:?}"),
+            ));
+        }
+    }
+    let base_color = result_planes(result, "base_color", 3)?;
+    let radius_mm = result_planes(result, "radius_mm", 3)?;
+    let specular = result_planes(result, "specular_ior_level", 1)?;
+    let sizes: Vec<(&str, usize, usize)> =
+        [("base_color", &base_color), ("radius_mm", &radius_mm), ("specular_ior_level", &specular)]
+            .into_iter()
+            .filter_map(|(name, image)| image.as_ref().map(|(h, w, _)| (name, *h, *w)))
+            .collect();
+    let Some(&(_, height, width)) = sizes.first() else {
+        return Err(invalid("result", "holds none of base_color, radius_mm, specular_ior_level: nothing to write"));
+    };
+    if sizes.iter().any(|&(_, h, w)| (h, w) != (height, width)) {
+        let listed: Vec<String> = sizes.iter().map(|(n, h, w)| format!("{n} ({h}, {w})")).collect();
+        return Err(invalid("result", format!("the images must agree in (H, W); got {}", listed.join(", "))));
+    }
+    let rgb = |image: Option<(usize, usize, Vec<Vec<f32>>)>| -> Option<[Vec<f32>; 3]> {
+        image.and_then(|(_, _, planes)| planes.try_into().ok())
+    };
+    let (base_color, radius_mm) = (rgb(base_color), rgb(radius_mm));
+    let specular = specular.and_then(|(_, _, mut planes)| planes.pop());
+    let written = detached(py, || {
+        let files = MapFiles {
+            width,
+            height,
+            base_color: base_color.as_ref(),
+            radius_mm: radius_mm.as_ref(),
+            specular_ior_level: specular.as_deref(),
+        };
+        let staged = stage_map_files(&folder, prefix, &files, ExrOptions::default())?;
+        let written: Vec<std::path::PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
+        commit_map_files(&folder, prefix, staged)?;
+        Ok(written)
+    })?;
+    let dict = PyDict::new(py);
+    for (key, file) in [("albedo", ALBEDO_FILE), ("radius", RADIUS_FILE), ("specular", SPECULAR_FILE)] {
+        let path = folder.join(output_name(prefix, file));
+        if written.contains(&path) {
+            dict.set_item(key, path)?;
+        }
+    }
     Ok(dict)
 }
 
@@ -1228,5 +1334,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(maps_py, m)?)?;
     m.add_function(wrap_pyfunction!(blender_targets_py, m)?)?;
     m.add_function(wrap_pyfunction!(read_parameter_map_py, m)?)?;
+    m.add_function(wrap_pyfunction!(write_maps_py, m)?)?;
     Ok(())
 }

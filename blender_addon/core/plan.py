@@ -10,13 +10,15 @@
 - ``scale``: Principled Subsurface Scale, scene units per mm (``METRES_PER_MM / scale_length``), so that
   Radius × Scale is the core's radius in scene units;
 - ``ior``, ``subsurface_ior``, ``specular_ior_level`` (None when the specular texture supplies it), ``roughness``;
-- ``textures``: {"albedo" | "radius" | "specular": final absolute path} of the maps this plan writes;
+- ``textures``: {"albedo" | "radius" | "specular": final absolute path} of the maps this plan writes
+  (``<folder>/<prefix>_<kind>.exr``; ``folder`` and ``prefix`` are in the plan of a material with maps);
 - ``images``: {same keys: numpy array, row 0 at the top} still to be written by :func:`write_textures`;
 - ``summary``: what the panel shows: ``albedo`` (RGB), ``radius_mm`` (RGB), ``computed`` (a sentence),
   ``seconds``, ``warnings`` (list of sentences).
 
-Maps are written only by :func:`write_textures`, after the plan is complete: first to temporary files in the output
-folder, then renamed into place together, so a failure leaves existing files as they were.
+Maps are written only by :func:`write_textures`, after the plan is complete, by the core's writer
+(``spectral_skin.write_maps``): first to temporary files in the output folder, then renamed into place together, so a
+failure leaves existing files as they were.
 """
 
 from __future__ import annotations
@@ -30,9 +32,6 @@ from .settings import ACCURACY_LEVELS, PARAMETER_INFO, PARAMETERS, SkinSettings,
 from .targets import method_name
 
 METRES_PER_MM = 1e-3
-
-TEXTURE_CHANNELS = {"albedo": ("R", "G", "B"), "radius": ("R", "G", "B"), "specular": ("Y",)}
-
 
 def subsurface_scale(scale_length: float) -> float:
     """Principled Subsurface Scale for radii in mm: scene units per mm (scale_length is metres per scene unit)."""
@@ -155,20 +154,15 @@ def _plan_from_maps(settings: SkinSettings, progress: Any) -> dict[str, Any]:
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)
     images: dict[str, Any] = {"albedo": result["base_color"], "radius": result["radius_mm"]}
-    specular = result["specular"]
-    if isinstance(specular, dict):
-        specular_ior_level = float(specular["specular_ior_level"])
-        roughness = float(specular["roughness"])
-        ior = float(specular["ior"])
+    # Roughness and IOR always; the level is a map of its own when the oiliness varies.
+    specular: dict[str, Any] = dict(result["specular"])
+    specular_ior_level = None
+    if "specular_ior_level" in result:
+        images["specular"] = result["specular_ior_level"]
     else:
-        images["specular"] = specular
-        specular_ior_level = None
-        # Roughness and IOR do not depend on the oiliness (see spectral_skin.maps): ask for them at any valid one.
-        low = {p: PARAMETER_INFO[p][0] for p in PARAMETERS}
-        ev_specular = spectral_skin.evaluate(low["melanin"], low["melanin_blend"], low["hemoglobin"],
-                                             PARAMETER_INFO["oiliness"][1], outputs=("specular",))
-        roughness = float(ev_specular["specular"]["roughness"])
-        ior = float(ev_specular["specular"]["ior"])
+        specular_ior_level = float(specular["specular_ior_level"])
+    roughness = float(specular["roughness"])
+    ior = float(specular["ior"])
     strategy = report["strategy"]
     computed = f"{report['width']}×{report['height']} maps, strategy {strategy['name']}"
     if "tuples" in strategy:
@@ -185,6 +179,8 @@ def _plan_from_maps(settings: SkinSettings, progress: Any) -> dict[str, Any]:
         "specular_ior_level": specular_ior_level,
         "roughness": roughness,
         "target": dict(report["target"]),
+        "folder": folder,
+        "prefix": prefix,
         "textures": {kind: os.path.join(folder, f"{prefix}_{kind}.exr") for kind in images},
         "images": images,
         "summary": {
@@ -196,43 +192,23 @@ def _plan_from_maps(settings: SkinSettings, progress: Any) -> dict[str, Any]:
     }
 
 
-def write_textures(plan: dict[str, Any]) -> None:
-    """Write the plan's maps as float EXRs (scene-linear, PIZ): all to temporary files, then renamed together.
+# The plan's image keys and the keys of a ``spectral_skin.maps`` result that ``spectral_skin.write_maps`` writes.
+_RESULT_KEYS = {"albedo": "base_color", "radius": "radius_mm", "specular": "specular_ior_level"}
 
-    Raises OSError when a file cannot be written; the final paths are then untouched.
+
+def write_textures(plan: dict[str, Any]) -> None:
+    """Write the plan's maps with ``spectral_skin.write_maps`` (the core's writer: float EXRs, PIZ, staged as
+    temporary files and renamed into place together), as ``<prefix>_albedo.exr`` etc. in the plan's folder; an
+    earlier texture of this prefix that the plan no longer has is removed.
+
+    Raises spectral_skin.SpectralSkinError (naming the file) when a file cannot be written; the final paths are then
+    untouched.
     """
     if not plan["textures"]:
         return
-    import OpenImageIO as oiio  # bundled with Blender (and installed in the project's .venv)
+    import spectral_skin
 
-    temps: dict[str, str] = {}
-    try:
-        for kind, path in plan["textures"].items():
-            os.makedirs(os.path.dirname(path), exist_ok=True)
-            tmp = os.path.join(os.path.dirname(path), f".{os.path.basename(path)}.{os.getpid()}.tmp.exr")
-            temps[kind] = tmp
-            _write_exr(oiio, tmp, plan["images"][kind], TEXTURE_CHANNELS[kind])
-        for kind, tmp in temps.items():
-            os.replace(tmp, plan["textures"][kind])
-    finally:
-        for tmp in temps.values():
-            if os.path.exists(tmp):
-                os.remove(tmp)
-
-
-def _write_exr(oiio: Any, path: str, pixels: Any, channels: tuple[str, ...]) -> None:
-    import numpy as np
-
-    data = np.ascontiguousarray(np.asarray(pixels, dtype=np.float32).reshape(pixels.shape[0], pixels.shape[1], -1))
-    height, width, nchannels = data.shape
-    spec = oiio.ImageSpec(width, height, nchannels, "float")
-    spec.channelnames = channels
-    spec.attribute("compression", "piz")
-    out = oiio.ImageOutput.create(path)
-    if out is None:
-        raise OSError(f"cannot create an EXR writer for {path}: {oiio.geterror()}")
-    try:
-        if not out.open(path, spec) or not out.write_image(data):
-            raise OSError(f"cannot write {path}: {out.geterror()}")
-    finally:
-        out.close()
+    result = {_RESULT_KEYS[kind]: plan["images"][kind] for kind in plan["textures"]}
+    written = {kind: str(path) for kind, path in spectral_skin.write_maps(result, plan["folder"], plan["prefix"]).items()}
+    if written != plan["textures"]:
+        raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {plan['textures']}")

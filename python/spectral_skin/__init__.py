@@ -13,6 +13,7 @@ Functions:
     maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
     blender_targets: the Blender versions, engines and subsurface methods the mappings target.
     read_parameter_map: parameter maps read from an EXR, PNG or TIFF file by the CLI's rules.
+    write_maps: a maps() result written as EXRs, atomically, by the CLI's writer.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received. A result changed on its way out (a negative radial-profile lobe of the model set to 0)
@@ -31,6 +32,7 @@ from ._core import (
     presets,
     profile,
     read_parameter_map,
+    write_maps,
 )
 
 __all__ = [
@@ -45,4 +47,5 @@ __all__ = [
     "presets",
     "profile",
     "read_parameter_map",
+    "write_maps",
 ]

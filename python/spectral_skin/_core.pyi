@@ -5,7 +5,8 @@ except the images of :func:`maps` (float32). Every function releases the GIL whi
 """
 
 import os
-from collections.abc import Callable, Iterable, Sequence
+import pathlib
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, Literal, TypedDict
 
 import numpy as np
@@ -23,6 +24,7 @@ __all__ = [
     "presets",
     "profile",
     "read_parameter_map",
+    "write_maps",
 ]
 
 __version__: str
@@ -266,12 +268,20 @@ class _SpecularConstants(TypedDict):
     directional_albedo_normal: float
     hemispherical_albedo: float
 
-class _Maps(TypedDict):
-    """The result of :func:`maps`."""
+class _SpecularMapConstants(TypedDict):
+    """The specular inputs of Principled BSDF that do not depend on the oiliness (when the oiliness varies)."""
+
+    roughness: float
+    ior: float
+    beckmann_m: float
+
+class _Maps(TypedDict, total=False):
+    """The result of :func:`maps` (``specular_ior_level`` only when the oiliness varies)."""
 
     base_color: _Float32Array
     radius_mm: _Float32Array
-    specular: _Float32Array | _SpecularConstants
+    specular: _SpecularConstants | _SpecularMapConstants
+    specular_ior_level: _Float32Array
     report: dict[str, Any]
 
 def maps(
@@ -353,10 +363,11 @@ def maps(
         "base_color": float32 (H, W, 3), Principled Base Color for ``method``, linear RGB in ``working_space``;
         "radius_mm": float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for ``method``, mm (with
         Radius set to these values, Scale is 0.001 in a scene whose unit is the metre);
-        "specular": when oiliness varies, float32 (H, W): Principled Specular IOR Level per texel (Roughness and
-        IOR do not depend on oiliness: see ``evaluate(...)["specular"]``; Principled IOR is 1.4 everywhere); when it is one value everywhere (a float, or an array of
-        one value), a dict of the constants {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
-        "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``);
+        "specular": the specular constants, always: when the oiliness is one value everywhere (a float, or an
+        array of one value), {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
+        "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``); when it varies, the
+        ones that do not depend on it: {"roughness", "ior", "beckmann_m"} (Principled IOR is 1.4 everywhere);
+        "specular_ior_level": only when the oiliness varies, float32 (H, W): Principled Specular IOR Level per texel;
         "report": what was done: {"crate_version", "width", "height", "method", "target" ({"blender", "engine",
         "tested"}), "color_space", "strategy" ({"name":
         "constant" | "distinct_tuples" | "table" | "exact", with its figures: "tuples"; "evaluations"; or
@@ -381,6 +392,35 @@ def maps(
 
     A SpectralSkinError for NaN, infinite or out-of-range texels (clamp=False) also has an attribute
     ``bad_texels``: {"parameter", "min", "max", "nan", "infinite", "out_of_range", "first": [(x, y), ...]}.
+    """
+
+def write_maps(
+    result: Mapping[str, Any], folder: str | os.PathLike[str], prefix: str | None = None
+) -> dict[str, pathlib.Path]:
+    """Write the images of a :func:`maps` result as float EXRs, with the core's writer (that of ``spectral-skin maps``).
+
+    Each image present (and not None) becomes one file in ``folder`` (created if missing): "base_color" ->
+    ``albedo.exr`` (channels R, G, B), "radius_mm" -> ``radius.exr`` (R, G, B), "specular_ior_level" ->
+    ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc. 32-bit float, PIZ compression, row 0 at the
+    top. The files are written as temporary files in ``folder`` and renamed into place together once all are written,
+    so a failure leaves the existing files as they were. Then the files of an earlier write with the same prefix that
+    this one did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the
+    folder holds exactly this result's maps. No sidecar is written: the report is in the result.
+
+    Arguments:
+        result: a mapping with any of "base_color" (H, W, 3), "radius_mm" (H, W, 3) and "specular_ior_level" (H, W),
+            float32 or float64 numpy arrays (float64 is rounded to float32); other keys are ignored. A result of
+            :func:`maps`, or a part of one.
+        folder: the output folder.
+        prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
+
+    Returns:
+        {"albedo" | "radius" | "specular": path of the file written}, for the images written.
+
+    Raises:
+        SpectralSkinError: no image in ``result``, images whose (H, W) differ, an image of the wrong shape, a prefix
+            that is empty or holds a path separator; a file that cannot be written (the message names it).
+        TypeError: an image that is not a float32 or float64 numpy array.
     """
 
 def read_parameter_map(path: str | os.PathLike[str], name: _Parameter | str | None = None) -> dict[str, _Float32Array]:

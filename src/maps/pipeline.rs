@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::io::{
-    commit_all, read_params, stage_bytes, stage_channels_exr, ExrOptions, ParamImage, ParamInputs, Plane,
+    commit_all, read_params, stage_bytes, stage_channels_exr, ExrOptions, ParamImage, ParamInputs, Plane, Staged,
     PARAM_CHANNELS, PARAM_RANGES,
 };
 use super::lut::{measure_error_cancellable, MaterialTable, TableError, TableResolution, TexelMaterial};
@@ -459,27 +459,19 @@ pub fn run_maps_cancellable(
     if cancel.load(Ordering::Relaxed) {
         return Err(cancelled());
     }
-    std::fs::create_dir_all(out_dir)
-        .map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
-
     let write_start = Instant::now();
-    let (w, h) = (result.width, result.height);
-    // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
-    // in parallel, so overlapping the files keeps both cores busy (measured: 2.4 s -> see docs/maps-performance.md).
-    type Channels<'a> = Vec<(&'static str, &'a [f32])>;
-    let mut jobs: Vec<(PathBuf, Channels)> =
-        vec![(out_dir.join(ALBEDO_FILE), rgb(&result.base_color)), (out_dir.join(RADIUS_FILE), rgb(&result.radius_mm))];
-    if let SpecularOutput::Map { specular_ior_level, .. } = &result.specular {
-        jobs.push((out_dir.join(SPECULAR_FILE), vec![("Y", specular_ior_level.as_slice())]));
-    }
-    let mut staged = std::thread::scope(|scope| {
-        let handles: Vec<_> =
-            jobs.iter().map(|(path, c)| scope.spawn(move || stage_channels_exr(path, w, h, c, exr))).collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|_| Err(SkinError::invalid("output", "an EXR writer panicked"))))
-            .collect::<Result<Vec<_>, SkinError>>()
-    })?;
+    let specular_ior_level = match &result.specular {
+        SpecularOutput::Map { specular_ior_level, .. } => Some(specular_ior_level.as_slice()),
+        SpecularOutput::Constant(_) => None,
+    };
+    let files = MapFiles {
+        width: result.width,
+        height: result.height,
+        base_color: Some(&result.base_color),
+        radius_mm: Some(&result.radius_mm),
+        specular_ior_level,
+    };
+    let mut staged = stage_map_files(out_dir, None, &files, exr)?;
     result.report.clamped = clamped;
     let mut report = result.report.clone();
     report.seconds.read = read;
@@ -492,28 +484,87 @@ pub fn run_maps_cancellable(
         drop(staged);
         return Err(cancelled());
     }
-    commit_all(staged)?;
-    remove_stale_outputs(out_dir, &result.specular)?;
+    commit_map_files(out_dir, None, staged)?;
     Ok(report)
 }
 
-/// Remove an output of an earlier run that this run did not write (today only `specular.exr`, absent when the
-/// oiliness is constant), so the folder holds exactly the files the new sidecar lists. Runs after the new files are
-/// in place: if it fails, the sidecar (which lists the current files) is still right, and the error says which file
-/// is stale.
-fn remove_stale_outputs(out_dir: &Path, specular: &SpecularOutput) -> Result<(), SkinError> {
-    if matches!(specular, SpecularOutput::Map { .. }) {
-        return Ok(());
+/// The maps one write puts in files: each present one becomes its EXR (`albedo.exr` RGB, `radius.exr` RGB,
+/// `specular.exr` Y), row-major planes of `width * height` values.
+pub struct MapFiles<'a> {
+    pub width: usize,
+    pub height: usize,
+    pub base_color: Option<&'a [Vec<f32>; 3]>,
+    pub radius_mm: Option<&'a [Vec<f32>; 3]>,
+    pub specular_ior_level: Option<&'a [f32]>,
+}
+
+/// The name of output `file` (one of the `*_FILE` names) with `prefix`: `<prefix>_albedo.exr`; without, `albedo.exr`.
+pub fn output_name(prefix: Option<&str>, file: &str) -> String {
+    match prefix {
+        Some(prefix) => format!("{prefix}_{file}"),
+        None => file.to_string(),
     }
-    let stale = out_dir.join(SPECULAR_FILE);
-    match std::fs::remove_file(&stale) {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-        Err(e) => Err(SkinError::io(
-            &stale,
-            format!("cannot remove the previous run's output (not written by this run): {e}"),
-        )),
+}
+
+/// Create `out_dir` and stage the EXRs of `files` there as temporary files (see [`commit_map_files`]); dropping the
+/// result deletes them. The one writer of map files: the CLI's `maps` and Python's `write_maps`.
+pub fn stage_map_files(
+    out_dir: &Path,
+    prefix: Option<&str>,
+    files: &MapFiles,
+    exr: ExrOptions,
+) -> Result<Vec<Staged>, SkinError> {
+    std::fs::create_dir_all(out_dir)
+        .map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
+    let (w, h) = (files.width, files.height);
+    let path = |file: &str| out_dir.join(output_name(prefix, file));
+    // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
+    // in parallel, so overlapping the files keeps both cores busy (measured: 2.4 s -> see docs/maps-performance.md).
+    type Channels<'a> = Vec<(&'static str, &'a [f32])>;
+    let mut jobs: Vec<(PathBuf, Channels)> = Vec::new();
+    if let Some(base_color) = files.base_color {
+        jobs.push((path(ALBEDO_FILE), rgb(base_color)));
     }
+    if let Some(radius_mm) = files.radius_mm {
+        jobs.push((path(RADIUS_FILE), rgb(radius_mm)));
+    }
+    if let Some(specular_ior_level) = files.specular_ior_level {
+        jobs.push((path(SPECULAR_FILE), vec![("Y", specular_ior_level)]));
+    }
+    std::thread::scope(|scope| {
+        let handles: Vec<_> =
+            jobs.iter().map(|(path, c)| scope.spawn(move || stage_channels_exr(path, w, h, c, exr))).collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|_| Err(SkinError::invalid("output", "an EXR writer panicked"))))
+            .collect::<Result<Vec<_>, SkinError>>()
+    })
+}
+
+/// Rename the `staged` outputs into place together, then remove the outputs with `prefix` that an earlier run wrote
+/// and this one did not (`specular.exr` when the oiliness is now constant, a texture a front dropped, a sidecar), so
+/// the folder holds exactly this run's files. The removal runs after the new files are in place: if it fails, the
+/// new files (and a sidecar listing them) are right, and the error says which file is stale.
+pub fn commit_map_files(out_dir: &Path, prefix: Option<&str>, staged: Vec<Staged>) -> Result<(), SkinError> {
+    let written: Vec<PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
+    commit_all(staged)?;
+    for file in [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE, SIDECAR_FILE] {
+        let stale = out_dir.join(output_name(prefix, file));
+        if written.contains(&stale) {
+            continue;
+        }
+        match std::fs::remove_file(&stale) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => {
+                return Err(SkinError::io(
+                    &stale,
+                    format!("cannot remove the previous run's output (not written by this run): {e}"),
+                ))
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The sidecar: what each file holds (channels, meaning, units, colour space), the inputs, and the report.

@@ -289,3 +289,26 @@ def test_animation_with_parameter_maps_is_reported_not_applied(tmp_path):
     # Without animation: an entry that says so.
     still = _entry(scene.scene_plan(core.SkinSettings(), None)["effects"], "animation")
     assert not still["enabled"] and "no keyframed or driven" in still["reason"]
+
+
+def test_plan_textures_written_by_the_core_and_specular_constants_from_maps(tmp_path):
+    """The add-on writes its textures with spectral_skin.write_maps (no writer of its own) and takes Roughness and
+    IOR from maps() (no second evaluate): the files hold the plan's images, a texture the plan drops is removed."""
+    melanin = np.linspace(0.01, 0.4, 16, dtype=np.float32).reshape(4, 4)
+    oiliness = np.linspace(0.1, 0.9, 16, dtype=np.float32).reshape(4, 4)
+    maps = {"melanin": core.ParameterMap(melanin, False), "oiliness": core.ParameterMap(oiliness, False)}
+    settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path), file_prefix="Skin")
+    plan = scene.scene_plan(settings, None)
+    assert sorted(plan["textures"]) == ["albedo", "radius", "specular"] and plan["specular_ior_level"] is None
+    expected = spectral_skin.evaluate(preset="caucasian", outputs=("specular",))["specular"]
+    assert plan["roughness"] == pytest.approx(expected["roughness"], rel=1e-12)
+    assert plan["ior"] == pytest.approx(expected["ior"], rel=1e-12)
+    core.write_textures(plan)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["Skin_albedo.exr", "Skin_radius.exr", "Skin_specular.exr"]
+    level = spectral_skin.read_parameter_map(tmp_path / "Skin_specular.exr", "oiliness")["oiliness"]
+    np.testing.assert_array_equal(level, plan["images"]["specular"])
+    np.testing.assert_allclose(level, oiliness / 2, rtol=1e-6)  # Specular IOR Level = oiliness / 2
+    # Specular forced off: no specular texture, and the previous one is gone.
+    off = scene.scene_plan(settings, None, {"specular": "OFF"})
+    core.write_textures(off)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["Skin_albedo.exr", "Skin_radius.exr"]

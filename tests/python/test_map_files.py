@@ -1,5 +1,6 @@
 """The EXRs and sidecar that `spectral-skin maps` writes, opened with OpenImageIO (an independent EXR reader) and
-compared with `spectral_skin.evaluate` at sample texels."""
+compared with `spectral_skin.evaluate` at sample texels; the same writer from Python (`spectral_skin.write_maps`),
+read back with OpenImageIO and compared with the arrays it was given."""
 
 from __future__ import annotations
 
@@ -73,3 +74,70 @@ def test_texels_match_direct_evaluation(maps_dir: Path) -> None:
         burley = ev["methods"]["burley"]
         np.testing.assert_allclose(albedo[y, x], burley["base_color"], rtol=5e-3)
         np.testing.assert_allclose(radius[y, x], burley["subsurface_radius_mm"], rtol=1e-2)
+
+
+# --- spectral_skin.write_maps: the core's writer from Python ----------------------------------------------------------
+
+
+def _result(oiliness_varies: bool = True) -> dict:
+    rng = np.random.default_rng(11)
+    params = np.stack([rng.uniform(0.0, 0.5, (5, 7)), rng.uniform(0.0, 1.0, (5, 7)), rng.uniform(0.0, 0.1, (5, 7)),
+                       rng.uniform(0.0, 1.0, (5, 7)) if oiliness_varies else np.full((5, 7), 0.3)],
+                      axis=-1).astype(np.float32)
+    return dict(spectral_skin.maps(params, exact=True))
+
+
+def test_write_maps_writes_what_it_was_given(tmp_path: Path) -> None:
+    result = _result()
+    written = spectral_skin.write_maps(result, tmp_path / "out", "scene_Skin")
+    out = tmp_path / "out"
+    assert {k: str(v) for k, v in written.items()} == {
+        "albedo": str(out / "scene_Skin_albedo.exr"), "radius": str(out / "scene_Skin_radius.exr"),
+        "specular": str(out / "scene_Skin_specular.exr")}
+    # Exactly the three maps: no sidecar, no temporaries left.
+    assert sorted(p.name for p in out.iterdir()) == ["scene_Skin_albedo.exr", "scene_Skin_radius.exr",
+                                                     "scene_Skin_specular.exr"]
+    for name, key, channels in (("albedo", "base_color", ("R", "G", "B")), ("radius", "radius_mm", ("R", "G", "B")),
+                                ("specular", "specular_ior_level", ("Y",))):
+        names, pixels = read(out / f"scene_Skin_{name}.exr")
+        assert names == channels, name
+        # Float EXR, lossless: bit for bit what maps() returned, row 0 at the top.
+        np.testing.assert_array_equal(pixels.reshape(result[key].shape), result[key], err_msg=name)
+    # float64 input is rounded to float32, as maps() does with its inputs.
+    spectral_skin.write_maps({"radius_mm": result["radius_mm"].astype(np.float64)}, tmp_path / "f64")
+    np.testing.assert_array_equal(read(tmp_path / "f64" / "radius.exr")[1], result["radius_mm"])
+
+
+def test_write_maps_removes_outputs_it_no_longer_writes(tmp_path: Path) -> None:
+    spectral_skin.write_maps(_result(), tmp_path, "Skin")
+    spectral_skin.write_maps(_result(), tmp_path, "Other")
+    constant = _result(oiliness_varies=False)
+    assert "specular_ior_level" not in constant
+    written = spectral_skin.write_maps({"base_color": constant["base_color"], "radius_mm": None}, tmp_path, "Skin")
+    assert sorted(written) == ["albedo"]
+    # This prefix's radius and specular maps are gone; another prefix's files are untouched.
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["Other_albedo.exr", "Other_radius.exr",
+                                                          "Other_specular.exr", "Skin_albedo.exr"]
+
+
+def test_write_maps_failure_leaves_existing_files(tmp_path: Path) -> None:
+    result = _result()
+    spectral_skin.write_maps(result, tmp_path)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    other = _result(oiliness_varies=False)
+    bad_shape = {"base_color": other["base_color"], "radius_mm": other["radius_mm"][:4]}
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"radius_mm \(4, 7\)"):
+        spectral_skin.write_maps(bad_shape, tmp_path)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="nothing to write"):
+        spectral_skin.write_maps({"specular": other["specular"]}, tmp_path)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="prefix"):
+        spectral_skin.write_maps(other, tmp_path, "../x")
+    with pytest.raises(TypeError, match="base_color"):
+        spectral_skin.write_maps({"base_color": other["base_color"].astype(np.float16)}, tmp_path)
+    # A folder that cannot be created (a file is in the way): an error naming it, nothing written anywhere.
+    blocker = tmp_path / "blocker"
+    blocker.write_bytes(b"")
+    with pytest.raises(spectral_skin.SpectralSkinError, match="blocker"):
+        spectral_skin.write_maps(other, blocker / "sub")
+    after = {p.name: p.read_bytes() for p in tmp_path.iterdir() if p.name != "blocker"}
+    assert after == before

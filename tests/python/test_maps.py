@@ -50,7 +50,7 @@ def test_exact_map_equals_evaluate_per_texel(method):
     result = spectral_skin.maps(params, method=method, exact=True)
     assert_image(result["base_color"], 6, 7)
     assert_image(result["radius_mm"], 6, 7)
-    assert_image(result["specular"], 6, 7, channels=1)
+    assert_image(result["specular_ior_level"], 6, 7, channels=1)
     report = result["report"]
     assert report["strategy"] == {"name": "exact", "evaluations": 42}
     assert (report["width"], report["height"]) == (7, 6)
@@ -69,12 +69,17 @@ def test_specular_map_follows_oiliness():
     params = random_params(5, 4, seed=2)
     params[0, 0, 3] = 0.0
     params[4, 3, 3] = 1.0
-    specular = spectral_skin.maps(params)["specular"]
+    result = spectral_skin.maps(params)
+    specular = result["specular_ior_level"]
     assert_image(specular, 5, 4, channels=1)
     oil = params[..., 3]
     for y, x in [(0, 0), (4, 3), (2, 1)]:
         expected = spectral_skin.evaluate(0.1, 0.5, 0.01, float(oil[y, x]), outputs=("specular",))["specular"]
         assert specular[y, x] == pytest.approx(expected["specular_ior_level"], rel=1e-6, abs=0)
+        # The constants beside the map: those of every texel (they do not depend on the oiliness).
+        assert set(result["specular"]) == {"roughness", "ior", "beckmann_m"}
+        for key, value in result["specular"].items():
+            assert value == pytest.approx(expected[key], rel=1e-12), key
     assert specular[0, 0] == 0.0
 
 
@@ -123,7 +128,7 @@ def test_constant_parameters():
     for image, expected in [(result["base_color"], color), (result["radius_mm"], radius)]:
         assert_image(image, 3, 4)
         np.testing.assert_allclose(image, np.broadcast_to(expected, (3, 4, 3)), rtol=1e-6)
-    assert_image(result["specular"], 3, 4, channels=1)
+    assert_image(result["specular_ior_level"], 3, 4, channels=1)
 
 
 def test_few_distinct_values():
@@ -149,7 +154,7 @@ def test_constant_oiliness_gives_specular_constants():
     params = random_params(4, 4, seed=5)
     result = spectral_skin.maps(params, oiliness=0.3)
     specular = result["specular"]
-    assert isinstance(specular, dict)
+    assert isinstance(specular, dict) and "specular_ior_level" not in result
     expected = spectral_skin.evaluate(preset="caucasian", outputs=("specular",))["specular"]  # oiliness 0.3
     assert set(specular) == set(expected)
     for key, value in expected.items():
@@ -172,7 +177,7 @@ def test_keywords_override_params_and_accept_float64_and_any_layout():
     planes["hemoglobin"] = np.ascontiguousarray(params[..., 2].T).T
     separate = spectral_skin.maps(**planes, exact=True)
     np.testing.assert_array_equal(separate["base_color"], reference["base_color"])
-    np.testing.assert_array_equal(separate["specular"], reference["specular"])
+    np.testing.assert_array_equal(separate["specular_ior_level"], reference["specular_ior_level"])
     # A keyword replaces its channel of params.
     other = random_params(8, 8, seed=7)[..., 0]
     override = spectral_skin.maps(params, melanin=other, exact=True)
