@@ -254,7 +254,7 @@ def test_error_and_warning_classes_are_exported():
     assert issubclass(spectral_skin.SpectralSkinWarning, UserWarning)
     assert set(spectral_skin.__all__) == {
         "SpectralSkinError", "SpectralSkinWarning", "__version__", "blender_targets", "evaluate", "layered_reflectance", "maps",
-        "parameter_ranges", "presets", "profile", "read_parameter_map"
+        "parameter_ranges", "presets", "profile", "read_parameter_map", "write_maps"
     }
 
 

@@ -141,3 +141,8 @@ def test_write_maps_failure_leaves_existing_files(tmp_path: Path) -> None:
         spectral_skin.write_maps(other, blocker / "sub")
     after = {p.name: p.read_bytes() for p in tmp_path.iterdir() if p.name != "blocker"}
     assert after == before
+
+
+def test_write_maps_releases_the_gil(tmp_path: Path, assert_releases_gil) -> None:
+    result = _result()
+    assert_releases_gil(lambda: spectral_skin.write_maps(result, tmp_path))
