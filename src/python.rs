@@ -1438,13 +1438,16 @@ fn maps_py<'py>(
     Ok(dict)
 }
 
+/// An image of `write_maps`' result: its size and its channels as row-major planes.
+struct ResultImage {
+    height: usize,
+    width: usize,
+    planes: Vec<Vec<f32>>,
+}
+
 /// One image of `write_maps`' result as row-major planes: `channels` of them (an (H, W, channels) array, or (H, W)
 /// for one channel). None when the key is absent or None.
-fn result_planes(
-    result: &Bound<'_, PyAny>,
-    key: &str,
-    channels: usize,
-) -> PyResult<Option<(usize, usize, Vec<Vec<f32>>)>> {
+fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyResult<Option<ResultImage>> {
     let obj = match result.get_item(key) {
         Ok(obj) if !obj.is_none() => obj,
         Ok(_) => return Ok(None),
@@ -1468,7 +1471,7 @@ fn result_planes(
     } else {
         (0..channels).map(|c| array.plane(Some(c))).collect::<PyResult<_>>()?
     };
-    Ok(Some((shape[0], shape[1], planes)))
+    Ok(Some(ResultImage { height: shape[0], width: shape[1], planes }))
 }
 
 /// Write the images of a :func:`maps` result as float EXRs, with the core's writer (that of ``spectral-skin maps``).
@@ -1517,7 +1520,7 @@ fn write_maps_py<'py>(
     let sizes: Vec<(&str, usize, usize)> =
         [("base_color", &base_color), ("radius_mm", &radius_mm), ("specular_ior_level", &specular)]
             .into_iter()
-            .filter_map(|(name, image)| image.as_ref().map(|(h, w, _)| (name, *h, *w)))
+            .filter_map(|(name, image)| image.as_ref().map(|i| (name, i.height, i.width)))
             .collect();
     let Some(&(_, height, width)) = sizes.first() else {
         return Err(invalid("result", "holds none of base_color, radius_mm, specular_ior_level: nothing to write"));
@@ -1526,11 +1529,9 @@ fn write_maps_py<'py>(
         let listed: Vec<String> = sizes.iter().map(|(n, h, w)| format!("{n} ({h}, {w})")).collect();
         return Err(invalid("result", format!("the images must agree in (H, W); got {}", listed.join(", "))));
     }
-    let rgb = |image: Option<(usize, usize, Vec<Vec<f32>>)>| -> Option<[Vec<f32>; 3]> {
-        image.and_then(|(_, _, planes)| planes.try_into().ok())
-    };
+    let rgb = |image: Option<ResultImage>| -> Option<[Vec<f32>; 3]> { image.and_then(|i| i.planes.try_into().ok()) };
     let (base_color, radius_mm) = (rgb(base_color), rgb(radius_mm));
-    let specular = specular.and_then(|(_, _, mut planes)| planes.pop());
+    let specular = specular.and_then(|mut i| i.planes.pop());
     let written = detached(py, || {
         let files = MapFiles {
             width,
