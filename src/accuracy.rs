@@ -131,6 +131,7 @@ impl Accuracy {
 
 /// Named accuracy levels, each a point on the error-time fronts of docs/accuracy-vs-time.md.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum AccuracyLevel {
     /// For interactive previews: 1.5-2x faster than `default`, albedo within 0.1 % and radius within 1 %.

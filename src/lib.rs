@@ -24,3 +24,33 @@ pub use accuracy::{Accuracy, AccuracyLevel};
 pub use error::SkinError;
 pub use evaluate::{evaluate, Evaluation, Outputs, Request};
 pub use skin::{SkinModel, SkinParams, PRESETS};
+
+/// One spelling of every value in every front: the CLI's value names (clap) are the serde names Python takes and
+/// JSON writes.
+#[cfg(all(test, feature = "cli"))]
+mod one_spelling {
+    use clap::ValueEnum;
+    use serde::Serialize;
+
+    fn check<T: ValueEnum + Serialize>(all: &[T]) {
+        let clap_names: Vec<String> =
+            T::value_variants().iter().map(|v| v.to_possible_value().unwrap().get_name().to_string()).collect();
+        let serde_names: Vec<String> =
+            all.iter().map(|v| serde_json::to_value(v).unwrap().as_str().unwrap().to_string()).collect();
+        let mut sorted = (clap_names.clone(), serde_names.clone());
+        sorted.0.sort();
+        sorted.1.sort();
+        assert_eq!(sorted.0, sorted.1, "clap {clap_names:?} vs serde {serde_names:?}");
+    }
+
+    #[test]
+    fn cli_values_are_the_serde_names() {
+        check(&crate::accuracy::ALL_ACCURACY_LEVELS);
+        check(&crate::color::ALL_WAVELENGTH_PLACEMENTS);
+        check(&crate::color::ALL_RGB_MAPPINGS);
+        check(&crate::diffusion::ALL_COMBINATIONS);
+        check(&crate::diffusion::ALL_BOUNDARIES);
+        check(&crate::fit::SubsurfaceMethod::ALL);
+        check(&crate::fit::blender_target::Engine::ALL);
+    }
+}

@@ -21,8 +21,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::color::{WavelengthPlacement, WorkingSpace, ALL_RGB_MAPPINGS, ALL_WORKING_SPACES};
-use crate::diffusion::{Combination, Layer, MultipoleTerms, ALL_BOUNDARIES};
+use crate::color::{ALL_RGB_MAPPINGS, ALL_WAVELENGTH_PLACEMENTS, ALL_WORKING_SPACES};
+use crate::diffusion::{Layer, MultipoleTerms, ALL_BOUNDARIES, ALL_COMBINATIONS};
 use crate::error::SkinError;
 use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
 use crate::fit::blender_target::{describe_targets, BlenderVersion, Engine, Target, CURRENT_RELEASE};
@@ -91,13 +91,6 @@ impl From<SkinError> for PyErr {
 
 /// The Outputs the material path needs: the default of `evaluate(outputs=...)`.
 const MATERIAL_OUTPUTS: [&str; 3] = ["albedo", "radius", "specular"];
-/// The combinations and working spaces accepted by name (their names are the core's serde names).
-const COMBINATIONS: [Combination; 2] = [Combination::Directional, Combination::Symmetric];
-const WORKING_SPACES: [WorkingSpace; 3] = ALL_WORKING_SPACES;
-const WAVELENGTH_PLACEMENTS: [WavelengthPlacement; 3] =
-    [WavelengthPlacement::Uniform, WavelengthPlacement::CmfAdapted, WavelengthPlacement::RgbShortcut];
-/// Names of the four parameters, in `SkinParams` order.
-const PARAM_NAMES: [&str; 4] = ["melanin", "melanin_blend", "hemoglobin", "oiliness"];
 /// The fields of `SpecularParams` that do not depend on the oiliness: what `maps` returns in "specular" when the
 /// oiliness varies (beside the per-texel "specular_ior_level").
 const SPECULAR_CONSTANTS: [&str; 3] = ["roughness", "ior", "beckmann_m"];
@@ -305,7 +298,7 @@ fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) -> PyResult
     let base = preset.map(SkinParams::preset).transpose()?;
     let from_preset = base.map(|p| [p.melanin, p.melanin_blend, p.hemoglobin, p.oiliness]);
     let values: [Option<f64>; 4] = [0, 1, 2, 3].map(|i| explicit[i].or(from_preset.map(|p| p[i])));
-    let missing: Vec<&str> = (0..4).filter(|&i| values[i].is_none()).map(|i| PARAM_NAMES[i]).collect();
+    let missing: Vec<&str> = (0..4).filter(|&i| values[i].is_none()).map(|i| PARAM_CHANNELS[i]).collect();
     if !missing.is_empty() {
         let presets: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
         return Err(invalid(
@@ -313,7 +306,7 @@ fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) -> PyResult
             format!(
                 "give preset= (one of {}) or all of {}; missing: {}",
                 presets.join(", "),
-                PARAM_NAMES.join(", "),
+                PARAM_CHANNELS.join(", "),
                 missing.join(", ")
             ),
         ));
@@ -380,7 +373,7 @@ impl Knobs<'_> {
         let accuracy = Accuracy {
             wavelength_step_nm: self.wavelength_step_nm.map_or(level.wavelength_step_nm, |r| r.0),
             wavelength_placement: match self.wavelength_placement {
-                Some(name) => by_name("wavelength_placement", name, &WAVELENGTH_PLACEMENTS)?,
+                Some(name) => by_name("wavelength_placement", name, &ALL_WAVELENGTH_PLACEMENTS)?,
                 None => level.wavelength_placement,
             },
             multipole_terms,
@@ -394,8 +387,8 @@ impl Knobs<'_> {
         Ok(Request {
             outputs,
             accuracy,
-            combination: by_name("combination", self.combination, &COMBINATIONS)?,
-            working_space: by_name("working_space", self.working_space, &WORKING_SPACES)?,
+            combination: by_name("combination", self.combination, &ALL_COMBINATIONS)?,
+            working_space: by_name("working_space", self.working_space, &ALL_WORKING_SPACES)?,
             rgb_mapping: by_name("rgb_mapping", self.rgb_mapping, &ALL_RGB_MAPPINGS)?,
             boundaries: by_name("boundaries", self.boundaries, &ALL_BOUNDARIES)?,
             target: self.target,
@@ -748,7 +741,7 @@ fn presets_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     for p in PRESETS {
         let d = PyDict::new(py);
         let q = p.params;
-        for (name, value) in PARAM_NAMES.iter().zip([q.melanin, q.melanin_blend, q.hemoglobin, q.oiliness]) {
+        for (name, value) in PARAM_CHANNELS.iter().zip([q.melanin, q.melanin_blend, q.hemoglobin, q.oiliness]) {
             d.set_item(name, value)?;
         }
         d.set_item("description", p.description)?;

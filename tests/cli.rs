@@ -150,7 +150,7 @@ fn eval_and_maps_take_a_target() {
     assert_eq!(methods, ["burley", "random_walk", "random_walk_legacy", "random_walk_skin"]);
     let default = eval_json("caucasian");
     assert_eq!(default["target"], serde_json::json!({"blender": "5.3", "engine": "cycles", "tested": true}));
-    let out = run(&["eval", "--preset", "asian", "--blender", "5.9", "--method", "random-walk-legacy"]);
+    let out = run(&["eval", "--preset", "asian", "--blender", "5.9", "--method", "random_walk_legacy"]);
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("untested") && text.contains("random_walk_legacy") && !text.contains("burley"), "{text}");
@@ -159,7 +159,7 @@ fn eval_and_maps_take_a_target() {
         (vec!["eval", "--preset", "asian", "--blender", "five"], "MAJOR.MINOR"),
         (vec!["eval", "--preset", "asian", "--engine", "workbench"], "eevee"),
         (
-            vec!["eval", "--preset", "asian", "--blender", "5.0", "--method", "random-walk-legacy"],
+            vec!["eval", "--preset", "asian", "--blender", "5.0", "--method", "random_walk_legacy"],
             "not offered by Blender 5.0",
         ),
     ] {
@@ -183,7 +183,7 @@ fn eval_and_maps_take_a_target() {
         "--out",
         out_dir.to_str().unwrap(),
         "--method",
-        "random-walk-legacy",
+        "random_walk_legacy",
         "--blender",
         "5.0",
     ]);
@@ -358,7 +358,7 @@ fn interrupt_maps(args: &[&str]) {
 }
 
 /// `profile --rgb-mapping`: the help says the linear RGB profile can be negative; the default (linear) has negative
-/// values in the african tail; `non-negative` has none and the same rows where the linear ones are all >= 0.
+/// values in the african tail; `non_negative` has none and the same rows where the linear ones are all >= 0.
 #[test]
 fn profile_rgb_mapping() {
     let help = String::from_utf8(run(&["profile", "--help"]).stdout).unwrap();
@@ -369,7 +369,7 @@ fn profile_rgb_mapping() {
         let text = String::from_utf8(out.stdout).unwrap();
         text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect()
     };
-    let (linear, mapped) = (rows(&[]), rows(&["--rgb-mapping", "non-negative"]));
+    let (linear, mapped) = (rows(&[]), rows(&["--rgb-mapping", "non_negative"]));
     assert!(linear.iter().any(|r| r[1..].iter().any(|&v| v < 0.0)), "the linear tail is out of gamut");
     assert!(mapped.iter().all(|r| r[1..].iter().all(|&v| v >= 0.0)));
     for (l, m) in linear.iter().zip(&mapped) {
@@ -379,5 +379,5 @@ fn profile_rgb_mapping() {
     }
     let bad = run(&["profile", "--preset", "african", "--rgb-mapping", "clip"]);
     assert_eq!(bad.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&bad.stderr).contains("non-negative"));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("non_negative"));
 }

@@ -65,7 +65,7 @@ enum Command {
         #[arg(long)]
         spectral: bool,
         /// How each radius's R, G, B are formed: linear (the exact colour; a channel is negative where the light is
-        /// outside the gamut) or non-negative (such a colour moved towards the grey of the same luminance until no
+        /// outside the gamut) or non_negative (such a colour moved towards the grey of the same luminance until no
         /// channel is negative; luminance and hue kept, radii inside the gamut unchanged).
         #[arg(long, value_enum, default_value_t = RgbMapping::Linear)]
         rgb_mapping: RgbMapping,
@@ -97,8 +97,8 @@ enum Command {
         #[arg(long, default_value_t = 512)]
         size: usize,
         /// Which map: the face-like test card, a 16-tuple mask, or one value everywhere.
-        #[arg(long, value_enum, default_value_t = KindArg::Face)]
-        kind: KindArg,
+        #[arg(long, value_enum, default_value_t = ExampleKind::Face)]
+        kind: ExampleKind,
     },
 }
 
@@ -164,13 +164,6 @@ struct MapsArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum KindArg {
-    Face,
-    Mask,
-    Uniform,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
 enum CompressionArg {
     Zip,
     Piz,
@@ -199,44 +192,24 @@ struct SkinArgs {
 #[derive(Args)]
 struct AccuracyArgs {
     /// Named accuracy level (docs/accuracy-vs-time.md); the flags below override its settings.
-    #[arg(long, value_enum, default_value_t = LevelArg::Default)]
-    accuracy: LevelArg,
-    /// Wavelength step, nm (380-780 nm); with cmf-adapted placement it sets the count [default: the level's].
+    #[arg(long, value_enum, default_value_t = AccuracyLevel::Default)]
+    accuracy: AccuracyLevel,
+    /// Wavelength step, nm (380-780 nm); with cmf_adapted placement it sets the count [default: the level's].
     #[arg(long)]
     wavelength_step_nm: Option<f64>,
-    /// Where the wavelengths lie [default: the level's, cmf-adapted at the default level].
+    /// Where the wavelengths lie [default: the level's, cmf_adapted at the default level].
     #[arg(long, value_enum)]
-    wavelength_placement: Option<PlacementArg>,
+    wavelength_placement: Option<WavelengthPlacement>,
     /// Image-source pairs of the multipole (default: the whole series in closed form).
     #[arg(long)]
     multipole_pairs: Option<u32>,
     /// Layer combination.
-    #[arg(long, value_enum, default_value_t = CombinationArg::Directional)]
-    combination: CombinationArg,
+    #[arg(long, value_enum, default_value_t = Combination::Directional)]
+    combination: Combination,
     /// The layers' boundary conditions: the paper's, or capped (every profile non-negative and the total monotone in
     /// absorption by construction; docs/robustness.md, "Negative profile lobes").
     #[arg(long, value_enum, default_value_t = Boundaries::Paper)]
     boundaries: Boundaries,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum PlacementArg {
-    Uniform,
-    CmfAdapted,
-    RgbShortcut,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum LevelArg {
-    Draft,
-    Default,
-    Reference,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum CombinationArg {
-    Directional,
-    Symmetric,
 }
 
 impl SkinArgs {
@@ -281,29 +254,17 @@ impl TargetArgs {
 impl AccuracyArgs {
     fn request(&self, outputs: Outputs) -> Request {
         let mut r = Request::new(outputs);
-        r.accuracy = match self.accuracy {
-            LevelArg::Draft => AccuracyLevel::Draft,
-            LevelArg::Default => AccuracyLevel::Default,
-            LevelArg::Reference => AccuracyLevel::Reference,
-        }
-        .accuracy();
+        r.accuracy = self.accuracy.accuracy();
         if let Some(step) = self.wavelength_step_nm {
             r.accuracy.wavelength_step_nm = step;
         }
         if let Some(placement) = self.wavelength_placement {
-            r.accuracy.wavelength_placement = match placement {
-                PlacementArg::Uniform => WavelengthPlacement::Uniform,
-                PlacementArg::CmfAdapted => WavelengthPlacement::CmfAdapted,
-                PlacementArg::RgbShortcut => WavelengthPlacement::RgbShortcut,
-            };
+            r.accuracy.wavelength_placement = placement;
         }
         if let Some(n) = self.multipole_pairs {
             r.accuracy.multipole_terms = MultipoleTerms::Pairs(n);
         }
-        r.combination = match self.combination {
-            CombinationArg::Directional => Combination::Directional,
-            CombinationArg::Symmetric => Combination::Symmetric,
-        };
+        r.combination = self.combination;
         r.boundaries = self.boundaries;
         r
     }
@@ -376,11 +337,6 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         }
         Command::Maps(args) => run_maps(args)?,
         Command::Example { out, size, kind } => {
-            let kind = match kind {
-                KindArg::Face => ExampleKind::Face,
-                KindArg::Mask => ExampleKind::Mask,
-                KindArg::Uniform => ExampleKind::Uniform,
-            };
             write_example_params(&out, kind, size)?;
             println!("wrote {} ({size}x{size}, channels melanin, melanin_blend, hemoglobin, oiliness)", out.display());
         }

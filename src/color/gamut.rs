@@ -10,10 +10,9 @@
 use serde::{Deserialize, Serialize};
 
 /// How each radius's colour of an RGB radial profile is formed (`Request::rgb_mapping`; Python's `rgb_mapping=`
-/// takes the serde names "linear" and "non_negative", the CLI's `--rgb-mapping` the names "linear" and
-/// "non-negative").
+/// and the CLI's `--rgb-mapping` take the same names, "linear" and "non_negative").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum RgbMapping {
     /// The spectrum's XYZ mapped linearly into the working space: the exact colour, additive and integrating to the

@@ -7,7 +7,7 @@ pub mod spectrum;
 
 pub use gamut::{RgbMapping, ALL_RGB_MAPPINGS};
 pub use rgb::{WorkingSpace, ALL_WORKING_SPACES};
-pub use spectrum::{spectrum_to_xyz, WavelengthGrid, WavelengthPlacement};
+pub use spectrum::{spectrum_to_xyz, WavelengthGrid, WavelengthPlacement, ALL_WAVELENGTH_PLACEMENTS};
 
 /// Weights turning a spectrum sampled on `grid` into linear RGB in `space`: rgb[c] = sum_k w[k][c] R(lambda_k).
 pub fn spectral_rgb_weights(grid: &WavelengthGrid, space: WorkingSpace) -> Vec<[f64; 3]> {

@@ -9,6 +9,7 @@ pub const VISIBLE_RANGE_NM: (f64, f64) = (380.0, 780.0);
 
 /// Where the spectral computation places its wavelengths (the number is set by the step, see [`WavelengthGrid::new`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum WavelengthPlacement {
     /// Every `step` nm from 380 to 780 nm.
@@ -22,6 +23,10 @@ pub enum WavelengthPlacement {
     /// 700, 546.1 and 435.8 nm, with no colour integration.
     RgbShortcut,
 }
+
+/// Every placement, in the order the docs list them.
+pub const ALL_WAVELENGTH_PLACEMENTS: [WavelengthPlacement; 3] =
+    [WavelengthPlacement::Uniform, WavelengthPlacement::CmfAdapted, WavelengthPlacement::RgbShortcut];
 
 /// The CIE 1931 RGB primaries, nm (CIE 1931; Wyszecki & Stiles, Color Science, 2nd ed., table 3.3.3): B, G, R.
 pub const CIE_RGB_PRIMARIES_NM: [f64; 3] = [435.8, 546.1, 700.0];

@@ -27,6 +27,7 @@ pub struct Layer {
 
 /// Which transport through the top layer the combination uses (docs/model.md, section Adding layers).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum Combination {
     /// R-, T- computed with the layer's boundaries swapped: light returning from below sees the layer from below.
@@ -99,7 +100,7 @@ fn readable(x: f64) -> String {
 /// How a stack sets up its boundaries (docs/robustness.md, "Negative profile lobes and monotonicity"). Python's
 /// `boundaries=` and the CLI's `--boundaries` take the serde names ("paper", "capped").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum Boundaries {
     /// The default: each face's extrapolation distance is z_b = 2 A D (DJ05), whatever the thickness, and across a
@@ -118,6 +119,9 @@ pub enum Boundaries {
     /// (docs/robustness.md).
     Capped,
 }
+
+/// Every combination, the default first.
+pub const ALL_COMBINATIONS: [Combination; 2] = [Combination::Directional, Combination::Symmetric];
 
 /// Every choice of boundaries, the default first.
 pub const ALL_BOUNDARIES: [Boundaries; 2] = [Boundaries::Paper, Boundaries::Capped];

@@ -12,7 +12,8 @@ pub use hankel::{
     NegativeLobe, MAX_RADIUS_MM, ROUND_OFF_OF_PEAK,
 };
 pub use layered::{
-    Boundaries, Combination, Layer, LayerStack, ALL_BOUNDARIES, COEFFICIENT_RANGE_PER_MM, IOR_RANGE, THICKNESS_RANGE_MM,
+    Boundaries, Combination, Layer, LayerStack, ALL_BOUNDARIES, ALL_COMBINATIONS, COEFFICIENT_RANGE_PER_MM, IOR_RANGE,
+    THICKNESS_RANGE_MM,
 };
 pub use multipole::{MultipoleTerms, Slab};
 

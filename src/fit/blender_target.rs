@@ -111,7 +111,7 @@ impl<'de> Deserialize<'de> for BlenderVersion {
 
 /// Blender's render engines that render subsurface scattering.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum Engine {
     #[default]

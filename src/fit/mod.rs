@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 /// The Principled BSDF's subsurface methods that spectral-skin maps to (which a Blender version offers, and how it
 /// renders them: `blender_target::VERSION_TABLE`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum SubsurfaceMethod {
     /// Christensen-Burley: Base Color is rendered exactly as the total diffuse reflectance.

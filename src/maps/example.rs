@@ -68,6 +68,7 @@ pub fn face_params(size: usize) -> ParamImage {
 
 /// Which example map.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 pub enum ExampleKind {
     /// The face-like test card: distinct values nearly everywhere (the table strategy).
     Face,
