@@ -114,7 +114,7 @@ impl ParamImage {
     }
 }
 
-/// Output encoding. The default is float (32-bit) samples with ZIP compression.
+/// Output encoding. The default is float (32-bit) samples with PIZ compression.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct ExrOptions {
     /// Write 16-bit half floats instead of 32-bit floats (values rounded to nearest; above 65504 become infinite).
@@ -123,8 +123,9 @@ pub struct ExrOptions {
     pub compression: Compression,
 }
 
-/// Lossless EXR compression of written files. PIZ is the default: on a 4096² float map it wrote in 60 % of ZIP's
-/// time (2.9 s against 4.9 s for the three outputs, 2 cores) at about the same size (148 MB against 142 MB).
+/// Lossless EXR compression of written files. PIZ is the default: faster than ZIP at about the same size. On maps that
+/// hardly compress (noise) its Huffman coder is most of a run's CPU time, and `None` or half floats are the faster
+/// choices (figures: docs/maps-performance.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Compression {

@@ -465,7 +465,7 @@ pub fn run_maps_cancellable(
     let write_start = Instant::now();
     let (w, h) = (result.width, result.height);
     // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
-    // in parallel, so overlapping the files keeps both cores busy (measured: 2.4 s -> see docs/maps-performance.md).
+    // in parallel, so overlapping the files keeps both cores busy (figures: docs/maps-performance.md).
     type Channels<'a> = Vec<(&'static str, &'a [f32])>;
     let mut jobs: Vec<(PathBuf, Channels)> =
         vec![(out_dir.join(ALBEDO_FILE), rgb(&result.base_color)), (out_dir.join(RADIUS_FILE), rgb(&result.radius_mm))];
