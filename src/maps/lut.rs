@@ -122,7 +122,7 @@ fn warp(value: f64, max: f64) -> f64 {
 /// libm call, which perf showed taking a quarter of a 4096² table run's CPU time (docs/maps-performance.md).
 #[inline]
 fn cbrt_unit(x: f64) -> f64 {
-    if !(x >= f64::MIN_POSITIVE) {
+    if x.is_nan() || x < f64::MIN_POSITIVE {
         return x.cbrt(); // zero, subnormals, NaN
     }
     let mut y = f64::from_bits(x.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
