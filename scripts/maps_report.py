@@ -15,6 +15,7 @@ import gc
 import json
 import os
 import statistics
+import struct
 import subprocess
 import sys
 import tempfile
@@ -44,18 +45,59 @@ def copy_bandwidth_gb_per_s(megabytes: int = 256, repeats: int = 7) -> float:
 GNU_TIME = Path("/usr/bin/time")
 
 
-def run(args: list[str], env: dict[str, str]) -> tuple[float, float]:
-    """Wall seconds and peak resident memory (MiB; NaN without GNU time) of one CLI run. The peak comes from GNU
-    time's %M: a child forked from this Python process would count the parent's pages until it execs."""
-    with tempfile.NamedTemporaryFile("r") as peak_file:
-        wrapper = [str(GNU_TIME), "-f", "%M", "-o", peak_file.name] if GNU_TIME.exists() else []
+def run(args: list[str], env: dict[str, str]) -> tuple[float, float, float]:
+    """Wall seconds, peak resident memory (MiB) and CPU seconds (user + system) of one CLI run; the last two are NaN
+    without GNU time. The peak comes from GNU time's %M: a child forked from this Python process would count the
+    parent's pages until it execs."""
+    with tempfile.NamedTemporaryFile("r") as stats_file:
+        wrapper = [str(GNU_TIME), "-f", "%M %U %S", "-o", stats_file.name] if GNU_TIME.exists() else []
         t = time.perf_counter()
         proc = subprocess.run([*wrapper, str(CLI), *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
         wall = time.perf_counter() - t
         if proc.returncode != 0:
             raise SystemExit(f"spectral-skin {' '.join(args)} failed: {proc.stderr.decode()}")
-        text = peak_file.read().strip()
-    return wall, (int(text.splitlines()[-1]) / 1024 if text else float("nan"))
+        text = stats_file.read().strip()
+    if not text:
+        return wall, float("nan"), float("nan")
+    peak_kib, user, system = text.splitlines()[-1].split()
+    return wall, int(peak_kib) / 1024, float(user) + float(system)
+
+
+def write_noise_params(path: Path, size: int, seed: int = 1) -> None:
+    """A parameter map whose four parameters vary everywhere (uniform noise over each allowed range), written as an
+    uncompressed scan-line EXR by hand (OpenEXR file layout: header attributes, offset table, one chunk per line of
+    `y, size, channels in name order`), so the report needs nothing beyond numpy to make it."""
+    rng = np.random.default_rng(seed)
+    ranges = {"hemoglobin": 0.1, "melanin": 0.5, "melanin_blend": 1.0, "oiliness": 1.0}  # skin::params, name order
+
+    def attribute(name: str, kind: str, value: bytes) -> bytes:
+        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(value)) + value
+
+    channels = b"".join(n.encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for n in ranges) + b"\0"  # 2: FLOAT
+    window = struct.pack("<iiii", 0, 0, size - 1, size - 1)
+    header = b"".join(
+        [
+            b"\x76\x2f\x31\x01" + struct.pack("<i", 2),
+            attribute("channels", "chlist", channels),
+            attribute("compression", "compression", b"\0"),
+            attribute("dataWindow", "box2i", window),
+            attribute("displayWindow", "box2i", window),
+            attribute("lineOrder", "lineOrder", b"\0"),
+            attribute("pixelAspectRatio", "float", struct.pack("<f", 1.0)),
+            attribute("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0)),
+            attribute("screenWindowWidth", "float", struct.pack("<f", 1.0)),
+            b"\0",
+        ]
+    )
+    line_bytes = 4 * size * len(ranges)
+    offsets = np.arange(size, dtype="<u8") * (8 + line_bytes) + len(header) + 8 * size
+    rows = np.empty((size, 2 + size * len(ranges)), dtype="<f4")
+    rows.view("<i4")[:, 0] = np.arange(size)
+    rows.view("<i4")[:, 1] = line_bytes
+    for k, top in enumerate(ranges.values()):
+        rows[:, 2 + k * size : 2 + (k + 1) * size] = rng.uniform(0.0, top, (size, size))
+    with path.open("wb") as f:
+        f.write(header + offsets.tobytes() + rows.tobytes())
 
 
 def main() -> None:
@@ -70,6 +112,7 @@ def main() -> None:
     if not CLI.exists():
         raise SystemExit(f"{CLI} is missing: run cargo build --release first")
 
+    load_before = os.getloadavg()[0]
     bandwidth = copy_bandwidth_gb_per_s(64 if opts.quick else 256)
     gc.collect()  # children are forked from this process: keep it small so their peak memory is their own
     rows = []
@@ -78,51 +121,107 @@ def main() -> None:
         env = dict(os.environ, SPECTRAL_SKIN_CACHE_DIR=str(tmp / "cache"))
         # Cold table: built and checked against direct evaluation at many points (64² texels, more than the
         # distinct-tuple limit, so the table strategy is used).
-        subprocess.run([str(CLI), "example", "--out", str(tmp / "cold.exr"), "--size", "64"], check=True, capture_output=True, env=env)
-        run(["maps", "--params", str(tmp / "cold.exr"), "--out", str(tmp / "cold"), "--table-check", str(check_samples)], env)
+        subprocess.run(
+            [str(CLI), "example", "--out", str(tmp / "cold.exr"), "--size", "64"],
+            check=True,
+            capture_output=True,
+            env=env,
+        )
+        run(
+            [
+                "maps",
+                "--params",
+                str(tmp / "cold.exr"),
+                "--out",
+                str(tmp / "cold"),
+                "--table-check",
+                str(check_samples),
+            ],
+            env,
+        )
         cold = json.loads((tmp / "cold" / "skin_maps.json").read_text())["report"]["strategy"]
 
         for size in sorted(set(sizes) | {exact_size}):
             inputs = {}
             for kind in ("uniform", "mask", "face"):
                 path = tmp / f"{kind}-{size}.exr"
-                subprocess.run([str(CLI), "example", "--kind", kind, "--size", str(size), "--out", str(path)], check=True, capture_output=True)
+                subprocess.run(
+                    [str(CLI), "example", "--kind", kind, "--size", str(size), "--out", str(path)],
+                    check=True,
+                    capture_output=True,
+                )
                 inputs[kind] = path
-            cases = [("constant", "uniform", []), ("distinct tuples", "mask", []), ("table (cached)", "face", [])]
+            inputs["noise"] = tmp / f"noise-{size}.exr"
+            write_noise_params(inputs["noise"], size)
+            # (row name, input, options, environment): the default encoding (PIZ, float) first, then the choices that
+            # trade file size or precision for time on the map that compresses worst.
+            cases = [
+                ("constant", "uniform", [], env),
+                ("distinct tuples", "mask", [], env),
+                ("table (cached)", "face", [], env),
+                ("table (cached)", "face", ["--half"], env),
+                ("table (cached)", "noise", [], env),
+                ("table (cached)", "noise", ["--half"], env),
+                ("table (cached)", "noise", ["--compression", "none"], env),
+            ]
             if size not in sizes:
                 cases = []
+            if size == max(sizes):
+                # Cold: an empty cache folder, so the table is built and checked as on a first run.
+                cases.append(
+                    ("table (built)", "noise", [], dict(env, SPECTRAL_SKIN_CACHE_DIR=str(tmp / f"cold-{size}")))
+                )
             if size == exact_size:
-                cases.append(("exact", "face", ["--exact"]))
-            for name, kind, extra in cases:
+                cases.append(("exact", "face", ["--exact"], env))
+            for name, kind, extra, case_env in cases:
                 out = tmp / f"out-{size}-{kind}"
-                results = [run(["maps", "--params", str(inputs[kind]), "--out", str(out), *extra], env) for _ in range(repeats if name != "exact" else 1)]
+                once = name in ("exact", "table (built)")
+                results = [
+                    run(["maps", "--params", str(inputs[kind]), "--out", str(out), *extra], case_env)
+                    for _ in range(1 if once else repeats)
+                ]
                 wall = statistics.median(r[0] for r in results)
                 peak = max(r[1] for r in results)
-                report = json.loads((out / "skin_maps.json").read_text())["report"]
+                cpu = statistics.median(r[2] for r in results)
+                sidecar = json.loads((out / "skin_maps.json").read_text())
+                report = sidecar["report"]
                 texels = size * size
-                out_channels = 6 + (1 if (out / "specular.exr").exists() else 0) * 3
-                moved = texels * 4 * (4 + out_channels)  # f32 planes read and written
+                out_channels = 6 + (1 if (out / "specular.exr").exists() else 0)
+                out_bytes = 2 if sidecar["encoding"]["half"] else 4
+                moved = texels * (4 * 4 + out_bytes * out_channels)  # f32 input planes read, output planes written
                 floor = moved / (bandwidth * 1e9)
-                rows.append((size, name, wall, peak, report["seconds"], floor, report["strategy"]))
-                print(f"{size:>5} {name:<16} {wall:7.2f} s  {peak:7.0f} MiB  floor {floor:.3f} s  ratio {wall / floor:6.0f}", file=sys.stderr)
+                megabytes = sum(f.stat().st_size for f in out.glob("*.exr")) / 1e6
+                encoding = f"{sidecar['encoding']['compression'].upper()}, {'half' if sidecar['encoding']['half'] else 'float'}"
+                rows.append((size, kind, name, encoding, wall, cpu, peak, report["seconds"], megabytes, floor))
+                print(
+                    f"{size:>5} {kind:<8} {name:<16} {encoding:<12} {wall:7.2f} s  cpu {cpu:6.2f} s  {peak:5.0f} MiB  {megabytes:6.1f} MB  ratio {wall / floor:6.0f}",
+                    file=sys.stderr,
+                )
+    load_after = os.getloadavg()[0]
 
     lines = [
         "# Map pipeline performance",
         "",
         f"Regenerate: `.venv/bin/python scripts/maps_report.py` (after `cargo build --release`). Generated {time.strftime('%Y-%m-%d')} "
-        f"on {os.cpu_count()} cores; medians of {repeats} runs of `spectral-skin maps` (PIZ, float) on the built-in examples "
-        "(`spectral-skin example --kind uniform|mask|face`), wall time and peak resident memory of the whole process.",
+        f"on {os.cpu_count()} cores, load average {load_before:.1f} before and {load_after:.1f} after (other jobs share the "
+        f"machine: CPU seconds, user + system, are steadier than wall times); medians of {repeats} runs of `spectral-skin "
+        "maps` on the built-in examples (`spectral-skin example --kind uniform|mask|face`) and on a noise map (all four "
+        "parameters uniform random over their ranges, written by this script: nothing to compress, no two texels alike), "
+        "wall time, CPU time and peak resident memory of the whole process, total size of the written EXRs.",
         "",
         f"Memory-bandwidth floor: the input (4 float planes) read once and the outputs (Base Color and Radius, 3 planes each, "
-        f"plus the specular plane when oiliness varies) written once at the measured copy bandwidth, **{bandwidth:.1f} GB/s** "
-        "(numpy copy, read + write). The ratio says how far from that floor the pipeline runs (EXR decoding, compression "
-        "and the model itself are on top).",
+        f"plus the specular plane when oiliness varies; 4 bytes a sample, 2 in half) written once at the measured copy "
+        f"bandwidth, **{bandwidth:.1f} GB/s** (numpy copy, read + write). The ratio says how far from that floor the "
+        "pipeline runs (EXR decoding, compression and the model itself are on top).",
         "",
-        "| size | strategy | wall (s) | peak memory (MiB) | read / compute / write (s) | floor (s) | wall / floor |",
-        "|---|---|---|---|---|---|---|",
+        "| size | input | strategy | encoding | wall (s) | CPU (s) | peak memory (MiB) | read / compute / write (s) | EXRs (MB) | floor (s) | wall / floor |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for size, name, wall, peak, sec, floor, _ in rows:
-        lines.append(f"| {size}² | {name} | {wall:.2f} | {peak:.0f} | {sec['read']:.2f} / {sec['compute']:.2f} / {sec['write']:.2f} | {floor:.3f} | {wall / floor:.0f} |")
+    for size, kind, name, encoding, wall, cpu, peak, sec, megabytes, floor in rows:
+        lines.append(
+            f"| {size}² | {kind} | {name} | {encoding} | {wall:.2f} | {cpu:.2f} | {peak:.0f} | {sec['read']:.2f} / "
+            f"{sec['compute']:.2f} / {sec['write']:.2f} | {megabytes:.1f} | {floor:.3f} | {wall / floor:.0f} |"
+        )
     err = cold.get("measured_error") or {}
     res = cold["resolution"]
     lines += [
@@ -138,6 +237,12 @@ def main() -> None:
         f"in albedo, **{100 * err.get('max_radius_relative', float('nan')):.3f} %** in radius, "
         f"{100 * err.get('max_base_color_relative', float('nan')):.3f} % in the method's Base Color "
         "(bounds: 0.5 % and 1 %).",
+        "",
+        "Half floats (`--half`) round each sample to the nearest of 11 significant bits: a relative error of at most "
+        f"2^-11 = {100 * 2.0**-11:.3f} % for values in half's normal range (6.1e-5 to 65504, where Base Color and Radius lie: "
+        "reflectances of a few per cent and more, radii of tenths of a millimetre and more), "
+        f"{err.get('max_albedo_relative', float('nan')) / 2.0**-11:.0f} times below the table's own albedo error above; "
+        "a Specular IOR Level below 6.1e-5 (oiliness near zero) is kept to within 3e-8.",
         "",
         f"Exact mode evaluates every texel directly, as the table's cold build evaluates every node: it is run at "
         f"{exact_size}² only ({exact_size * exact_size} evaluations); time scales with the texel count.",

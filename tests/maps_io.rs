@@ -1,4 +1,4 @@
-//! Parameter-map reading and atomic EXR/bytes writing (src/maps/io.rs).
+//! Parameter-map reading and atomic EXR/bytes writing (src/maps/io/).
 
 use std::path::Path;
 

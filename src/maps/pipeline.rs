@@ -519,7 +519,7 @@ pub fn stage_map_files(
     let (w, h) = (files.width, files.height);
     let path = |file: &str| out_dir.join(output_name(prefix, file));
     // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
-    // in parallel, so overlapping the files keeps both cores busy (measured: 2.4 s -> see docs/maps-performance.md).
+    // in parallel, so overlapping the files keeps both cores busy (figures: docs/maps-performance.md).
     type Channels<'a> = Vec<(&'static str, &'a [f32])>;
     let mut jobs: Vec<(PathBuf, Channels)> = Vec::new();
     if let Some(base_color) = files.base_color {
