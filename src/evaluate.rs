@@ -15,10 +15,10 @@ use crate::fit::blender_target::{Target, TargetInfo};
 use crate::fit::burley::{
     fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM,
 };
+use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams};
 pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
-use crate::surface::{specular_from_oiliness, SpecularParams};
 
 /// Which outputs to compute. Each costs only what it needs: albedo is one transform value per wavelength, the radius
 /// a few dozen, a radial profile an inverse transform per wavelength.

@@ -2,7 +2,8 @@
 //!
 //! Four physiological parameters per texel ([`SkinParams`]) give two layers' spectral optics ([`skin`]), whose
 //! multipole diffusion profiles are combined in the Hankel domain ([`diffusion`]), turned into colour ([`color`]) and
-//! into the inputs of Blender's Principled BSDF ([`fit`], [`surface`]). [`evaluate`] computes only what a
+//! into the inputs of Blender's Principled BSDF ([`fit`], with the oil layer's microfacet maths in [`surface`] and
+//! the half-space transport the random-walk fits rely on in [`transport`]). [`evaluate`] computes only what a
 //! [`Request`] asks for.
 
 pub mod accuracy;
@@ -16,6 +17,7 @@ mod numeric;
 pub mod skin;
 pub mod surface;
 mod table;
+pub mod transport;
 
 #[cfg(feature = "python")]
 mod python;

@@ -10,12 +10,22 @@ pub fn safe_div(a: f64, b: f64, fallback: f64) -> f64 {
     }
 }
 
-/// `max(x, 0)`, mapping NaN to 0.
+/// `max(x, 0)`, mapping NaN and -0.0 to 0.
 pub fn clamp_zero(x: f64) -> f64 {
     if x > 0.0 {
         x
     } else {
         0.0
+    }
+}
+
+/// `x` clamped to [lo, hi], NaN mapped to `lo` (and -infinity to `lo`, +infinity to `hi`). Unlike [`clamp_zero`]
+/// it keeps the sign of `x == lo` (-0.0 stays -0.0 for lo = 0).
+pub fn clamp_nan_to_low(x: f64, lo: f64, hi: f64) -> f64 {
+    if x >= lo {
+        x.min(hi)
+    } else {
+        lo
     }
 }
 
@@ -30,6 +40,18 @@ pub fn expm1_ratio(a: f64, b: f64, q: f64) -> f64 {
     }
 }
 
+/// `(P_n(z), P_n'(z))`: Legendre polynomial of degree n and its derivative, by the three-term recurrence
+/// (Abramowitz & Stegun 8.5.3, 8.5.4); |z| < 1.
+fn legendre_and_derivative(n: usize, z: f64) -> (f64, f64) {
+    let (mut p0, mut p1) = (1.0, 0.0);
+    for j in 0..n {
+        let p2 = p1;
+        p1 = p0;
+        p0 = ((2 * j + 1) as f64 * z * p1 - j as f64 * p2) / (j + 1) as f64;
+    }
+    (p0, n as f64 * (z * p0 - p1) / (z * z - 1.0))
+}
+
 /// Gauss-Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
 pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     let mut x = vec![0.0; n];
@@ -37,25 +59,11 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     for i in 0..n {
         let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
         for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, 0.0);
-            for j in 0..n {
-                let p2 = p1;
-                p1 = p0;
-                p0 = ((2 * j + 1) as f64 * z * p1 - j as f64 * p2) / (j + 1) as f64;
-            }
-            let dp = n as f64 * (z * p0 - p1) / (z * z - 1.0);
-            let dz = p0 / dp;
+            let (p, dp) = legendre_and_derivative(n, z);
+            let dz = p / dp;
             z -= dz;
             if dz.abs() < 1e-15 {
-                let dp = {
-                    let (mut p0, mut p1) = (1.0, 0.0);
-                    for j in 0..n {
-                        let p2 = p1;
-                        p1 = p0;
-                        p0 = ((2 * j + 1) as f64 * z * p1 - j as f64 * p2) / (j + 1) as f64;
-                    }
-                    n as f64 * (z * p0 - p1) / (z * z - 1.0)
-                };
+                let (_, dp) = legendre_and_derivative(n, z);
                 x[i] = -z;
                 w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
                 break;
@@ -63,6 +71,119 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
         }
     }
     (x, w)
+}
+
+/// Composite Gauss-Legendre rule: the `order`-point rule on each panel between consecutive `breaks` (nodes
+/// `a + h (x_i + 1)`, weights `h w_i`, with `h` half the panel's width), panel after panel.
+pub fn composite_gauss_legendre(breaks: &[f64], order: usize) -> (Vec<f64>, Vec<f64>) {
+    let (x, w) = gauss_legendre(order);
+    let mut nodes = Vec::with_capacity(order * breaks.len());
+    let mut weights = Vec::with_capacity(order * breaks.len());
+    for panel in breaks.windows(2) {
+        let half = 0.5 * (panel[1] - panel[0]);
+        for (xi, wi) in x.iter().zip(&w) {
+            nodes.push(panel[0] + half * (xi + 1.0));
+            weights.push(half * wi);
+        }
+    }
+    (nodes, weights)
+}
+
+/// A bracket after [`bisect`]: `lo` below the switch point, `hi` at or above it, and the last midpoint tested.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bisection {
+    pub lo: f64,
+    pub hi: f64,
+    pub last_midpoint: f64,
+}
+
+/// `steps` halvings of [lo, hi] towards the point where `at_or_above(x)` switches from false to true: each step
+/// tests `mid = (lo + hi) / 2` and moves `hi` there if it holds, `lo` otherwise. With no steps, `last_midpoint` is
+/// the midpoint of the bracket given.
+pub fn bisect(lo: f64, hi: f64, steps: usize, mut at_or_above: impl FnMut(f64) -> bool) -> Bisection {
+    let (mut lo, mut hi) = (lo, hi);
+    let mut mid = 0.5 * (lo + hi);
+    for _ in 0..steps {
+        mid = 0.5 * (lo + hi);
+        if at_or_above(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Bisection { lo, hi, last_midpoint: mid }
+}
+
+/// Root of `f` in a bracket by the Illinois variant of regula falsi (Dowell & Jarratt 1971, BIT 11, 168): the
+/// secant through the bracket's ends, halving the value kept at an end that stays twice in a row (superlinear,
+/// order ~1.44). `(lo, f_lo)` and `(hi, f_hi)` are the bracket with `f` already evaluated, of opposite signs.
+/// Stops after `max_steps`, on an exact zero, when the ends' values are equal or when the bracket is within one
+/// ulp-scale of `hi` (`hi - lo <= EPSILON hi`). Returns the last secant point (`lo` if no step was taken).
+pub fn illinois(
+    (mut lo, mut f_lo): (f64, f64),
+    (mut hi, mut f_hi): (f64, f64),
+    max_steps: usize,
+    mut f: impl FnMut(f64) -> f64,
+) -> f64 {
+    let mut x = lo;
+    let mut side = 0;
+    for _ in 0..max_steps {
+        if f_hi == f_lo || hi - lo <= f64::EPSILON * hi {
+            break;
+        }
+        x = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let fx = f(x);
+        if fx == 0.0 {
+            break;
+        }
+        if (fx < 0.0) == (f_lo < 0.0) {
+            lo = x;
+            f_lo = fx;
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        } else {
+            hi = x;
+            f_hi = fx;
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    x
+}
+
+/// Minimiser of a unimodal `f` on [a, b] by golden-section search (Kiefer 1953), until the bracket is narrower than
+/// `tolerance`; returns the final bracket (a, b).
+pub fn golden_section_min(a: f64, b: f64, tolerance: f64, mut f: impl FnMut(f64) -> f64) -> (f64, f64) {
+    let (mut a, mut b) = (a, b);
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut e) = (b - phi * (b - a), a + phi * (b - a));
+    let (mut fc, mut fe) = (f(c), f(e));
+    while b - a > tolerance {
+        if fc < fe {
+            b = e;
+            e = c;
+            fe = fc;
+            c = b - phi * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = e;
+            fc = fe;
+            e = a + phi * (b - a);
+            fe = f(e);
+        }
+    }
+    (a, b)
+}
+
+/// `|a - b| / |b|`: the relative error of `a` against the reference `b`, for the tests' tolerances.
+#[cfg(test)]
+pub fn relative_error(a: f64, b: f64) -> f64 {
+    ((a - b) / b).abs()
 }
 
 /// `table[n][j] = P_n(x_j)`, Legendre polynomials of degree n < `order` at the points `x` (three-term recurrence).
@@ -150,6 +271,64 @@ mod tests {
         let j = spherical_bessel_j(12, 1e-3);
         let double_factorial_21: f64 = (1..=21).step_by(2).map(|k| k as f64).product();
         assert!((j[10] / (1e-30 / double_factorial_21) - 1.0).abs() < 1e-6, "{}", j[10]);
+    }
+
+    /// int_0^2 x^7 dx = 32 on three unequal panels with 4 nodes each (exact for degree <= 7), and the rule's length.
+    #[test]
+    fn composite_rule_integrates_polynomials() {
+        let (x, w) = composite_gauss_legendre(&[0.0, 0.1, 1.3, 2.0], 4);
+        assert_eq!((x.len(), w.len()), (12, 12));
+        assert!(x.windows(2).all(|p| p[1] > p[0]) && x[0] > 0.0 && x[11] < 2.0);
+        let integral: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(7)).sum();
+        assert!((integral - 32.0).abs() < 1e-12, "{integral}");
+    }
+
+    #[test]
+    fn nan_safe_clamps() {
+        assert_eq!(clamp_nan_to_low(f64::NAN, 0.2, 0.9), 0.2);
+        assert_eq!(clamp_nan_to_low(f64::NEG_INFINITY, 0.2, 0.9), 0.2);
+        assert_eq!(clamp_nan_to_low(f64::INFINITY, 0.2, 0.9), 0.9);
+        assert_eq!(clamp_nan_to_low(0.5, 0.2, 0.9), 0.5);
+        assert!(clamp_nan_to_low(-0.0, 0.0, 1.0).is_sign_negative());
+        assert_eq!(clamp_zero(f64::NAN), 0.0);
+        assert!(clamp_zero(-0.0).is_sign_positive());
+        assert_eq!(clamp_zero(-3.0), 0.0);
+        assert_eq!(clamp_zero(f64::INFINITY), f64::INFINITY);
+    }
+
+    /// sqrt(2) as the switch point of x^2 >= 2 on [1, 2]: 52 halvings leave a bracket of 2^-52 around it.
+    #[test]
+    fn bisect_finds_sqrt_two() {
+        let b = bisect(1.0, 2.0, 52, |x| x * x >= 2.0);
+        assert!(b.lo < std::f64::consts::SQRT_2 && b.hi >= std::f64::consts::SQRT_2, "{b:?}");
+        assert!(b.hi - b.lo <= 2f64.powi(-52));
+        assert!(b.last_midpoint == b.lo || b.last_midpoint == b.hi);
+        assert_eq!(bisect(1.0, 2.0, 0, |_| true).last_midpoint, 1.5);
+        assert_eq!(bisect(0.0, 1.0, 1, |_| true), Bisection { lo: 0.0, hi: 0.5, last_midpoint: 0.5 });
+    }
+
+    /// The root of cos x = x (the Dottie number 0.7390851332151607) and the cube root of 3, to rounding.
+    #[test]
+    fn illinois_finds_known_roots() {
+        let g = |x: f64| x.cos() - x;
+        let root = illinois((0.0, g(0.0)), (1.0, g(1.0)), 100, g);
+        assert!((root - 0.739_085_133_215_160_7).abs() < 1e-15, "{root}");
+        let h = |x: f64| x * x * x - 3.0;
+        let root = illinois((1.0, h(1.0)), (2.0, h(2.0)), 100, h);
+        assert!((root - 3f64.cbrt()).abs() < 1e-15, "{root}");
+        assert_eq!(illinois((1.0, -1.0), (2.0, -1.0), 100, h), 1.0);
+    }
+
+    /// The minimum of (x - 0.3)^2 + 1 on [-1, 2] and of x - ln x (at x = 1) on [0.1, 5]. A minimum is located only to
+    /// ~sqrt(EPSILON) relative (1.5e-8 here): closer in, f differs from f(x*) by less than its rounding.
+    #[test]
+    fn golden_section_finds_known_minima() {
+        let (a, b) = golden_section_min(-1.0, 2.0, 1e-9, |x| (x - 0.3) * (x - 0.3) + 1.0);
+        assert!(b - a <= 1e-9 && (0.5 * (a + b) - 0.3).abs() < 5e-8, "{a} {b}");
+        let (a, b) = golden_section_min(0.1, 5.0, 1e-9, |x| x - x.ln());
+        assert!((0.5 * (a + b) - 1.0).abs() < 5e-8, "{a} {b}");
+        let (a, b) = golden_section_min(0.0, 3.0, 1e-6, |x| (x - 2.0).abs());
+        assert!(b - a <= 1e-6 && a <= 2.0 && b >= 2.0, "{a} {b}");
     }
 
     #[test]

@@ -1,23 +1,20 @@
-//! DJ2006's oily surface layer (docs/model.md, Oil layer) and its mapping to the Principled BSDF's specular inputs.
+//! DJ2006's oily surface layer (docs/model.md, Oil layer): its microfacet maths and albedos. The mapping to the
+//! Principled BSDF's specular inputs is `fit::principled_specular`.
 //!
 //! DJ2006's surface term is a Torrance-Sparrow lobe scaled by the oiliness rho_s:
 //! `f_r = rho_s D G F / (4 cos_i cos_o)`, Beckmann `D` with m = 0.35, the V-cavity `G`, and the exact unpolarised
 //! dielectric Fresnel term at eta = 1.4 (pbrt-v2 `Microfacet`, as DAM and YW use it). Its directional albedo
 //! `rho_dr(theta_i)` (DJ2006 eq. 2) is the light the surface takes before the rest enters the skin: the BSSRDF carries
 //! `(1 - rho_dr(omega_i)) (1 - rho_dr(omega_o))`.
-//!
-//! Principled BSDF (Cycles 5.0, `src/kernel/svm/closure.h`; docs/blender-principled.md) renders the specular layer as
-//! single-scatter GGX with `alpha = Roughness^2`, the height-correlated Smith `G2 = 1 / (1 + Lambda_i + Lambda_o)`
-//! and the real dielectric Fresnel curve at `eta = ior_from_F0(F0(IOR) * 2 * Specular IOR Level)`
-//! (`bsdf_microfacet.h`, `FresnelGeneralizedSchlick` with a negative exponent). It then scales the layers below it,
-//! subsurface included, by `1 - E_spec(view)`, the lobe's directional albedo in the view direction only.
 
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::sync::OnceLock;
 
-use serde::Serialize;
+use crate::numeric::{clamp_nan_to_low, composite_gauss_legendre, gauss_legendre};
 
-use crate::numeric::gauss_legendre;
+/// The old home of the Principled mapping, kept for the map pipeline and the bindings until they import it from
+/// `fit::principled_specular`.
+pub use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams};
 
 /// Beckmann roughness m of the oil layer: "values for sigma in the range 0.2 - 0.4 give good results for skin, and we
 /// use sigma = 0.35" (DJ2006; DAM `Beckmann(0.35f)`; docs/model.md, Parameters and Oil layer).
@@ -25,16 +22,12 @@ pub const BECKMANN_ROUGHNESS_M: f64 = 0.35;
 /// Index of refraction of the skin surface, "a constant index of refraction of 1.4 throughout the skin" (DJ2006;
 /// DAM `FresnelDielectric(1., 1.4f)`; docs/model.md, Oil layer).
 pub const SKIN_SURFACE_IOR: f64 = 1.4;
-/// Principled BSDF's Specular IOR Level that leaves F0(IOR) unchanged (closure.h: `if (specular_ior_level != 0.5f)`).
-pub const PRINCIPLED_NEUTRAL_SPECULAR_IOR_LEVEL: f64 = 0.5;
-/// Cycles' `ior_from_F0` clamps F0 to at most 0.99 (`kernel/closure/bsdf_util.h`).
-const CYCLES_MAX_F0: f64 = 0.99;
 
 /// Smallest incidence cosine evaluated; below it the value at this cosine is returned (the limit is finite).
 const MIN_COS_THETA_I: f64 = 1e-6;
 /// Albedo quadrature over half-vectors (see [`torrance_sparrow_directional_albedo`]): panels in theta_h (per
 /// region), Gauss-Legendre order per panel, and Gauss-Legendre order in phi (per piece between kinks of G).
-const ALBEDO_THETA_PANELS: usize = 64;
+pub(crate) const ALBEDO_THETA_PANELS: usize = 64;
 const ALBEDO_THETA_ORDER: usize = 8;
 const ALBEDO_PHI_ORDER: usize = 16;
 /// Gauss-Legendre order in mu for hemispherical (cosine-weighted) averages of a directional albedo, over panels
@@ -43,24 +36,14 @@ const HEMISPHERE_MU_BREAKS: [f64; 5] = [0.0, 0.1, 0.3, 0.6, 1.0];
 const HEMISPHERE_MU_ORDER: usize = 12;
 
 /// `x` clamped to [0, 1], NaN mapped to 0.
-fn clamp_unit(x: f64) -> f64 {
-    if x >= 0.0 {
-        x.min(1.0)
-    } else {
-        0.0
-    }
+pub(crate) fn clamp_unit_or_zero(x: f64) -> f64 {
+    clamp_nan_to_low(x, 0.0, 1.0)
 }
 
 /// `F0(eta) = ((eta - 1) / (eta + 1))^2`: normal-incidence Fresnel reflectance, dimensionless (Cycles `F0_from_ior`).
 pub fn f0_from_ior(eta: f64) -> f64 {
     let r = (eta - 1.0) / (eta + 1.0);
     r * r
-}
-
-/// `eta(F0) = (1 + sqrt F0) / (1 - sqrt F0)`, F0 clamped to [0, 0.99] (Cycles `ior_from_F0`).
-pub fn ior_from_f0(f0: f64) -> f64 {
-    let s = clamp_unit(f0).min(CYCLES_MAX_F0).sqrt();
-    (1.0 + s) / (1.0 - s)
 }
 
 /// `F_r(cos theta_i; eta)`: exact unpolarised Fresnel reflectance of a dielectric interface with relative index
@@ -72,7 +55,7 @@ pub fn fresnel_dielectric(cos_theta_i: f64, eta: f64) -> f64 {
     if !(eta > 0.0 && eta.is_finite()) {
         return 1.0;
     }
-    let c = clamp_unit(cos_theta_i.abs());
+    let c = clamp_unit_or_zero(cos_theta_i.abs());
     let g2 = eta * eta - 1.0 + c * c;
     if g2 <= 0.0 {
         return 1.0;
@@ -116,28 +99,11 @@ pub fn torrance_sparrow_f_r(omega_i: [f64; 3], omega_o: [f64; 3], oiliness: f64)
     let len = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
     let cos_h = h[2] / len;
     let o_dot_h = (omega_o[0] * h[0] + omega_o[1] * h[1] + cos_o * h[2]) / len;
-    clamp_unit(oiliness)
+    clamp_unit_or_zero(oiliness)
         * beckmann_d(cos_h, BECKMANN_ROUGHNESS_M)
         * v_cavity_g(cos_h, cos_i, cos_o, o_dot_h)
         * fresnel_dielectric(o_dot_h, SKIN_SURFACE_IOR)
         / (4.0 * cos_i * cos_o)
-}
-
-/// `Lambda(theta)` of GGX for Smith shadowing: `(sqrt(1 + alpha^2 tan^2 theta) - 1) / 2` (Heitz 2014 eq. 72, as
-/// Cycles `bsdf_lambda<GGX>`).
-fn ggx_lambda(cos_theta: f64, alpha: f64) -> f64 {
-    let c2 = cos_theta * cos_theta;
-    let tan2 = ((1.0 - c2) / c2).max(0.0);
-    0.5 * ((1.0 + alpha * alpha * tan2).sqrt() - 1.0)
-}
-
-/// `D(theta_h) = alpha^2 / (pi (1 + (alpha^2 - 1) cos^2 theta_h)^2)`: GGX distribution, sr^-1 (Walter et al. 2007;
-/// Cycles `bsdf_D<GGX>`).
-fn ggx_d(cos_theta_h: f64, alpha: f64) -> f64 {
-    let c2 = (cos_theta_h * cos_theta_h).min(1.0);
-    let alpha2 = alpha * alpha;
-    let den = 1.0 - c2 + alpha2 * c2;
-    alpha2 / (PI * den * den)
 }
 
 /// Gauss-Legendre rules of the albedo quadrature (theta_h, phi on [-1, 1]) and the hemispherical average (on [0, 1]).
@@ -149,23 +115,16 @@ struct Rules {
 
 fn rules() -> &'static Rules {
     static RULES: OnceLock<Rules> = OnceLock::new();
-    RULES.get_or_init(|| {
-        let (x, w) = gauss_legendre(HEMISPHERE_MU_ORDER);
-        let mut mu = (Vec::new(), Vec::new());
-        for panel in HEMISPHERE_MU_BREAKS.windows(2) {
-            let half = 0.5 * (panel[1] - panel[0]);
-            for (xi, wi) in x.iter().zip(&w) {
-                mu.0.push(panel[0] + half * (xi + 1.0));
-                mu.1.push(half * wi);
-            }
-        }
-        Rules { theta: gauss_legendre(ALBEDO_THETA_ORDER), phi: gauss_legendre(ALBEDO_PHI_ORDER), mu }
+    RULES.get_or_init(|| Rules {
+        theta: gauss_legendre(ALBEDO_THETA_ORDER),
+        phi: gauss_legendre(ALBEDO_PHI_ORDER),
+        mu: composite_gauss_legendre(&HEMISPHERE_MU_BREAKS, HEMISPHERE_MU_ORDER),
     })
 }
 
 /// A microfacet reflection lobe `D G F / (4 cos_i cos_o)`: its D, its `G F`, and the values of i.h at which `G F`
 /// has kinks in phi.
-trait Lobe {
+pub(crate) trait Lobe {
     /// `D(theta_h)`, sr^-1, normalised so that `int D cos_h d omega_h = 1`.
     fn d(&self, cos_h: f64) -> f64;
     /// `G F` at (cos_h, cos_i, cos_o, i.h).
@@ -194,24 +153,6 @@ impl Lobe for TorranceSparrowLobe {
     }
 }
 
-/// Principled BSDF's lobe: height-correlated Smith G2 for GGX times Fresnel at `eta` (smooth: no kinks).
-struct GgxSmithLobe {
-    alpha: f64,
-    eta: f64,
-}
-
-impl Lobe for GgxSmithLobe {
-    fn d(&self, cos_h: f64) -> f64 {
-        ggx_d(cos_h, self.alpha)
-    }
-    fn g_times_f(&self, _cos_h: f64, cos_i: f64, cos_o: f64, i_dot_h: f64) -> f64 {
-        fresnel_dielectric(i_dot_h, self.eta) / (1.0 + ggx_lambda(cos_i, self.alpha) + ggx_lambda(cos_o, self.alpha))
-    }
-    fn kinks(&self, _cos_h: f64, _cos_i: f64) -> [f64; 3] {
-        [f64::NAN; 3]
-    }
-}
-
 /// Directional albedo `int f cos_o d omega_o` of a microfacet reflection lobe `D G F / (4 cos_i cos_o)`, computed in
 /// half-vector form: with `cos_o d omega_o = 4 (i.h) cos_o d omega_h` it is
 /// `int D(theta_h) sin theta_h dtheta_h int dphi G F (i.h) / cos_i`.
@@ -220,11 +161,11 @@ impl Lobe for GgxSmithLobe {
 /// theta_h is split there: the full-ring part by composite Gauss-Legendre, the partial part in
 /// `theta_h = theta_0 + (theta_1 - theta_0)(1 - cos t) / 2` (which smooths the square-root ends of the phi range);
 /// phi by Gauss-Legendre over its exact range (symmetric about phi = 0), split at the lobe's kinks.
-fn microfacet_albedo(cos_theta_i: f64, panels: usize, lobe: &impl Lobe) -> f64 {
+pub(crate) fn microfacet_albedo(cos_theta_i: f64, panels: usize, lobe: &impl Lobe) -> f64 {
     let rules = rules();
     let (xt, wt) = (&rules.theta.0, &rules.theta.1);
     let (xp, wp) = (&rules.phi.0, &rules.phi.1);
-    let cos_i = clamp_unit(cos_theta_i).max(MIN_COS_THETA_I);
+    let cos_i = clamp_unit_or_zero(cos_theta_i).max(MIN_COS_THETA_I);
     let sin_i = (1.0 - cos_i * cos_i).sqrt();
     let theta_i = cos_i.acos();
     let theta_full = 0.5 * (FRAC_PI_2 - theta_i);
@@ -319,21 +260,21 @@ fn torrance_sparrow_unit_albedo(cos_theta_i: f64, panels: usize) -> f64 {
 /// substitution that smooths its square-root ends); in phi, 16 Gauss-Legendre nodes per piece over the exact range
 /// where the mirror direction is above the horizon, split where the V-cavity G switches branch. Accuracy: 5e-7
 /// relative at normal incidence (where a G kink falls across theta_h = 30 deg), ~2e-8 elsewhere (tests: a 4x finer
-/// rule, and a direct integration over omega_o). About 1 ms a call; [`specular_from_oiliness`] caches the
-/// rho_s = 1 values (rho_dr is linear in rho_s). Oiliness is clamped to [0, 1] (NaN to 0); cos_theta_i to
-/// [1e-6, 1] (NaN and cos <= 0 to 1e-6: the grazing limit, 0.441 rho_s).
+/// rule, and a direct integration over omega_o). About 1 ms a call; the Principled mapping
+/// (`fit::principled_specular`) uses the rho_s = 1 values, cached (rho_dr is linear in rho_s). Oiliness is clamped
+/// to [0, 1] (NaN to 0); cos_theta_i to [1e-6, 1] (NaN and cos <= 0 to 1e-6: the grazing limit, 0.441 rho_s).
 pub fn torrance_sparrow_directional_albedo(cos_theta_i: f64, oiliness: f64) -> f64 {
-    clamp_unit(oiliness) * torrance_sparrow_unit_albedo(cos_theta_i, ALBEDO_THETA_PANELS)
+    clamp_unit_or_zero(oiliness) * torrance_sparrow_unit_albedo(cos_theta_i, ALBEDO_THETA_PANELS)
 }
 
 /// `2 int_0^1 f(mu) mu dmu`: cosine-weighted (diffuse-light) average of a directional albedo.
-fn hemispherical_average(f: impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn hemispherical_average(f: impl Fn(f64) -> f64) -> f64 {
     let (mu, w) = &rules().mu;
     mu.iter().zip(w).map(|(&m, &wm)| 2.0 * wm * m * f(m)).sum()
 }
 
 /// `rho_dr(0) / rho_s` and `rho_hemi / rho_s` of DJ2006's lobe, computed once (rho_dr is linear in rho_s).
-fn torrance_sparrow_unit_albedos() -> (f64, f64) {
+pub(crate) fn torrance_sparrow_unit_albedos() -> (f64, f64) {
     static ALBEDOS: OnceLock<(f64, f64)> = OnceLock::new();
     *ALBEDOS.get_or_init(|| {
         (
@@ -343,117 +284,10 @@ fn torrance_sparrow_unit_albedos() -> (f64, f64) {
     })
 }
 
-/// `eta` of Principled BSDF's specular lobe for IOR and Specular IOR Level: `f0 = F0(IOR)`, and when level != 0.5,
-/// `f0 *= 2 level`, `eta = ior_from_F0(f0)` (Cycles 5.0 `svm/closure.h` L411-420). Level 0 gives eta = 1, which
-/// switches the specular closure off (`eta != 1.0f`). Level is clamped to >= 0 (NaN to 0); IOR >= 1 assumed.
-pub fn principled_specular_eta(ior: f64, specular_ior_level: f64) -> f64 {
-    let level = if specular_ior_level >= 0.0 { specular_ior_level } else { 0.0 };
-    if level == PRINCIPLED_NEUTRAL_SPECULAR_IOR_LEVEL {
-        return ior;
-    }
-    ior_from_f0(f0_from_ior(ior) * 2.0 * level)
-}
-
-/// Specular inputs of Blender's Principled BSDF that stand in for DJ2006's oily surface, with the DJ2006 albedos.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SpecularParams {
-    /// DJ2006's rho_s, clamped to [0, 1].
-    pub oiliness: f64,
-    /// Principled "Specular IOR Level": 0.5 rho_s (0 switches Cycles' specular closure off).
-    pub specular_ior_level: f64,
-    /// Principled "Roughness": sqrt(m), so that GGX alpha = Roughness^2 = m.
-    pub roughness: f64,
-    /// Principled "IOR": 1.4.
-    pub ior: f64,
-    /// DJ2006's Beckmann m (0.35), for reference.
-    pub beckmann_m: f64,
-    /// DJ2006 `rho_dr` at normal incidence, dimensionless.
-    pub directional_albedo_normal: f64,
-    /// DJ2006 `2 int rho_dr(mu) mu dmu`: the fraction of diffuse light the oil layer reflects, dimensionless.
-    pub hemispherical_albedo: f64,
-}
-
-/// Principled BSDF specular inputs for oiliness rho_s (DJ2006 Torrance-Sparrow, m = 0.35, eta = 1.4).
-///
-/// Mapping:
-/// - IOR = 1.4 and **Specular IOR Level = 0.5 rho_s**, so the lobe's normal-incidence reflectance is
-///   `F0' = rho_s F0(1.4)`, exactly DJ2006's `rho_s F(0; 1.4)`; rho_s = 0 gives level 0, which Cycles turns into
-///   eta = 1 and no specular closure at all (as DJ2006's lobe vanishes).
-/// - **Roughness = sqrt(m)**, so GGX alpha = Roughness^2 = m = 0.35. GGX and Beckmann then have the same peak
-///   `D(0) = 1 / (pi m^2)`; with F0' above, the highlight's peak radiance at normal incidence matches DJ2006's.
-///   Other matches of D shape were considered: least-squares fits of D cos_h give alpha = 0.92 m (L2) and
-///   0.87 m (L1); equal half-maximum width gives alpha = 1.26 m (GGX's core is narrower and its tail longer:
-///   half-width at half-maximum 13.9 deg vs Beckmann's 18.4 deg at alpha = m). alpha = m sits between them.
-/// - Energy is only approximately matched. Principled's lobe reflects 0.87 - 0.855x DJ2006's rho_dr at normal
-///   incidence, mostly because of GGX's long tail (at alpha = 0.35, 11% of the projected microfacet area is steeper
-///   than 45 deg and mirrors normally incident light below the horizon; 0.03% for Beckmann m = 0.35), the rest from
-///   Smith's G. Its hemispherical albedo is 1.50 / 1.05 / 0.89 / 0.71 x DJ2006's at rho_s = 0.1 / 0.3 / 0.5 / 1
-///   (the lowered eta puts relatively more of F at grazing angles). Matching the hemispherical albedo instead
-///   (levels 0.028 / 0.140 / 0.299 / 0.807) would scale the highlight peak by 0.55 / 0.94 / 1.20 / 1.61 and need a
-///   root find per texel; the presets use rho_s = 0.3, where the linear map is within 5% in hemispherical albedo.
-///   See [`principled_specular_directional_albedo`] for Principled's own albedo.
-///
-/// The albedos reported are DJ2006's (for the energy split `(1 - rho_dr)`). Note that Cycles itself scales the
-/// subsurface layer by `1 - E_spec(view)` of its own lobe, on the view side only; DJ2006's light-side factor is not
-/// applied by Cycles. Oiliness is clamped to [0, 1], NaN to 0.
-pub fn specular_from_oiliness(oiliness: f64) -> SpecularParams {
-    let rho_s = clamp_unit(oiliness);
-    let (normal, hemispherical) = torrance_sparrow_unit_albedos();
-    SpecularParams {
-        oiliness: rho_s,
-        specular_ior_level: PRINCIPLED_NEUTRAL_SPECULAR_IOR_LEVEL * rho_s,
-        roughness: BECKMANN_ROUGHNESS_M.sqrt(),
-        ior: SKIN_SURFACE_IOR,
-        beckmann_m: BECKMANN_ROUGHNESS_M,
-        directional_albedo_normal: rho_s * normal,
-        hemispherical_albedo: rho_s * hemispherical,
-    }
-}
-
-/// `E_spec(theta_i)`: directional albedo of Principled BSDF's specular lobe for these inputs, dimensionless:
-/// single-scatter GGX, alpha = Roughness^2, Smith `G2 = 1 / (1 + Lambda_i + Lambda_o)`, dielectric Fresnel at
-/// [`principled_specular_eta`] (Cycles 5.0 `bsdf_microfacet.h`). Same quadrature as
-/// [`torrance_sparrow_directional_albedo`] (exact to rounding here: the lobe has no kinks). Cycles' default
-/// Multiscatter GGX adds a Kulla-Conty compensation, `1 + F_ms (1 - E) / E`, which is under 1% here (estimated:
-/// E ~ 0.95 at alpha = 0.35 and F_ms ~ the lobe's average Fresnel, below 0.1). Level 0 gives 0 (no specular closure).
-pub fn principled_specular_directional_albedo(cos_theta_i: f64, specular: &SpecularParams) -> f64 {
-    let eta = principled_specular_eta(specular.ior, specular.specular_ior_level);
-    let alpha = specular.roughness * specular.roughness;
-    if !(eta != 1.0 && alpha > 0.0) {
-        return 0.0;
-    }
-    microfacet_albedo(cos_theta_i, ALBEDO_THETA_PANELS, &GgxSmithLobe { alpha, eta })
-}
-
-/// `f_spec(omega_i, omega_o) = F(i.h; eta) D_GGX(h) G2 / (4 cos_i cos_o)`: Principled BSDF's single-scatter
-/// specular BRDF for these inputs, sr^-1, local frame (z = normal) (Cycles 5.0 `bsdf_microfacet_eval<GGX>`).
-/// 0 unless both directions are above the surface, or when level 0 switches the closure off.
-pub fn principled_specular_f_r(omega_i: [f64; 3], omega_o: [f64; 3], specular: &SpecularParams) -> f64 {
-    let (cos_i, cos_o) = (omega_i[2], omega_o[2]);
-    let eta = principled_specular_eta(specular.ior, specular.specular_ior_level);
-    let alpha = specular.roughness * specular.roughness;
-    if !(cos_i > 0.0 && cos_o > 0.0 && eta != 1.0 && alpha > 0.0) {
-        return 0.0;
-    }
-    let h = [omega_i[0] + omega_o[0], omega_i[1] + omega_o[1], cos_i + cos_o];
-    let len = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
-    let i_dot_h = (omega_i[0] * h[0] + omega_i[1] * h[1] + cos_i * h[2]) / len;
-    let lobe = GgxSmithLobe { alpha, eta };
-    lobe.d(h[2] / len) * lobe.g_times_f(h[2] / len, cos_i, cos_o, i_dot_h) / (4.0 * cos_i * cos_o)
-}
-
-/// Cosine-weighted average of [`principled_specular_directional_albedo`] over incidence, dimensionless.
-pub fn principled_specular_hemispherical_albedo(specular: &SpecularParams) -> f64 {
-    hemispherical_average(|mu| principled_specular_directional_albedo(mu, specular))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn rel(a: f64, b: f64) -> f64 {
-        ((a - b) / b).abs()
-    }
+    use crate::numeric::relative_error as rel;
 
     #[test]
     fn fresnel_limits() {
@@ -581,65 +415,5 @@ mod tests {
         let rho = torrance_sparrow_directional_albedo(1.0, 1.0);
         assert!(rho > 0.5 * f0 && rho < 1.2 * f0, "rho_dr(0) = {rho}, F0 = {f0}");
         assert!((rho / f0 - 0.995).abs() < 0.01, "rho_dr(0) / F0 = {}", rho / f0);
-    }
-
-    #[test]
-    fn mapping_inputs() {
-        let zero = specular_from_oiliness(0.0);
-        assert_eq!(zero.specular_ior_level, 0.0);
-        assert_eq!(principled_specular_eta(zero.ior, zero.specular_ior_level), 1.0);
-        assert_eq!(principled_specular_directional_albedo(1.0, &zero), 0.0);
-        assert_eq!((zero.directional_albedo_normal, zero.hemispherical_albedo), (0.0, 0.0));
-        let p = specular_from_oiliness(0.3);
-        assert!((p.specular_ior_level - 0.15).abs() < 1e-15);
-        assert!((p.roughness * p.roughness - BECKMANN_ROUGHNESS_M).abs() < 1e-15);
-        assert_eq!((p.ior, p.beckmann_m), (1.4, 0.35));
-        // F0 of the Principled lobe equals rho_s F0(1.4).
-        let eta = principled_specular_eta(p.ior, p.specular_ior_level);
-        assert!((f0_from_ior(eta) - 0.3 * f0_from_ior(1.4)).abs() < 1e-15);
-        assert_eq!(principled_specular_eta(1.4, 0.5), 1.4);
-        assert!((p.hemispherical_albedo - 0.3 * torrance_sparrow_unit_albedos().1).abs() < 1e-15);
-        assert!(p.hemispherical_albedo > p.directional_albedo_normal);
-        for x in [f64::NAN, -1.0, f64::INFINITY] {
-            let q = specular_from_oiliness(x);
-            assert!(q.specular_ior_level.is_finite() && q.hemispherical_albedo.is_finite());
-        }
-        assert_eq!(specular_from_oiliness(f64::NAN).oiliness, 0.0);
-        assert_eq!(specular_from_oiliness(7.0).oiliness, 1.0);
-    }
-
-    /// The mapping's premise: at normal incidence and mirror reflection the two BRDFs are equal,
-    /// rho_s F0(1.4) / (4 pi m^2), since F(eta') = rho_s F0, D_GGX(0) = D_Beckmann(0) and G = 1 for both.
-    #[test]
-    fn highlight_peak_matches_at_normal_incidence() {
-        let up = [0.0, 0.0, 1.0];
-        for rho_s in [0.1, 0.3, 1.0] {
-            let p = specular_from_oiliness(rho_s);
-            let dj = torrance_sparrow_f_r(up, up, rho_s);
-            let principled = principled_specular_f_r(up, up, &p);
-            let want = rho_s * f0_from_ior(1.4) / (4.0 * PI * BECKMANN_ROUGHNESS_M * BECKMANN_ROUGHNESS_M);
-            assert!(rel(dj, want) < 1e-12 && rel(principled, want) < 1e-12, "{dj} {principled} {want}");
-        }
-        // Off the peak GGX's narrower core falls faster: at theta_h = 10 deg it is 0.82x Beckmann's.
-        let (s, c) = 20f64.to_radians().sin_cos();
-        let p = specular_from_oiliness(0.3);
-        let ratio = principled_specular_f_r(up, [s, 0.0, c], &p) / torrance_sparrow_f_r(up, [s, 0.0, c], 0.3);
-        assert!((ratio - 0.82).abs() < 0.01, "{ratio}");
-        assert_eq!(principled_specular_f_r(up, up, &specular_from_oiliness(0.0)), 0.0);
-    }
-
-    /// The energy of Principled's lobe against DJ2006's at the preset oiliness 0.3: within 5% (hemispherical) and
-    /// 0.86x at normal incidence, as documented on specular_from_oiliness.
-    #[test]
-    fn principled_lobe_energy_near_dj2006_at_presets() {
-        let p = specular_from_oiliness(0.3);
-        let hemi = principled_specular_hemispherical_albedo(&p);
-        assert!(rel(hemi, p.hemispherical_albedo) < 0.05, "{hemi} vs {}", p.hemispherical_albedo);
-        let normal = principled_specular_directional_albedo(1.0, &p);
-        assert!(
-            (normal / p.directional_albedo_normal - 0.865).abs() < 0.01,
-            "{normal} vs {}",
-            p.directional_albedo_normal
-        );
     }
 }

@@ -6,11 +6,11 @@ use std::f64::consts::PI;
 
 use spectral_skin::fit::blender_target::{eevee_burley, BlenderVersion, Engine, Target, VERSION_TABLE};
 use spectral_skin::fit::random_walk::{
-    base_color_for, flat_albedo, half_space_hemispherical_albedo, van_de_hulst_single_scatter_albedo, width_factor,
-    RandomWalkModel,
+    base_color_for, flat_albedo, van_de_hulst_single_scatter_albedo, width_factor, RandomWalkModel,
 };
 use spectral_skin::fit::random_walk_skin::skin_width_factor;
 use spectral_skin::fit::SubsurfaceMethod;
+use spectral_skin::transport::half_space::half_space_hemispherical_albedo;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
 fn target(blender: &str, engine: &str) -> Target {

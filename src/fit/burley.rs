@@ -13,6 +13,8 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
+use crate::numeric::golden_section_min;
+
 /// Hankel transform of the normalised Burley profile: B~(s; d) = (1/4) [1/sqrt(1+(s d)^2) + 3/sqrt(1+(3 s d)^2)]
 /// (from FT{e^(-r/a)/r} = 2 pi / sqrt(s^2 + 1/a^2)). The 16 d truncation of Cycles (0.4 % of the energy) is ignored.
 pub fn burley_transform(s_per_mm: f64, d_mm: f64) -> f64 {
@@ -84,25 +86,8 @@ pub fn fit_burley(s: &[f64], normalized: &[f64]) -> BurleyFit {
         (0..=SCAN)
             .map(|k| (k, misfit(ln_d(k as f64).exp())))
             .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
-    let (mut a, mut b) = (ln_d(best.0 as f64 - 1.0), ln_d(best.0 as f64 + 1.0));
-    let phi = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut c, mut e) = (b - phi * (b - a), a + phi * (b - a));
-    let (mut fc, mut fe) = (misfit(c.exp()), misfit(e.exp()));
-    while b - a > 1e-7 {
-        if fc < fe {
-            b = e;
-            e = c;
-            fe = fc;
-            c = b - phi * (b - a);
-            fc = misfit(c.exp());
-        } else {
-            a = c;
-            c = e;
-            fc = fe;
-            e = a + phi * (b - a);
-            fe = misfit(e.exp());
-        }
-    }
+    let (a, b) =
+        golden_section_min(ln_d(best.0 as f64 - 1.0), ln_d(best.0 as f64 + 1.0), 1e-7, |log_d| misfit(log_d.exp()));
     let d_mm = (0.5 * (a + b)).exp();
     BurleyFit { d_mm, radius_mm: 4.0 * PI * d_mm, edge_residual: edge_misfit(s, normalized, d_mm) }
 }

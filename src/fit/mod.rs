@@ -1,7 +1,9 @@
-//! Blender-facing fits: the Subsurface Radius and Base Color per Cycles subsurface method (docs/blender-targets.md).
+//! Blender-facing fits: the Subsurface Radius and Base Color per Cycles subsurface method (docs/blender-targets.md),
+//! and the Principled specular inputs for the oil layer (`principled_specular`).
 
 pub mod blender_target;
 pub mod burley;
+pub mod principled_specular;
 pub mod random_walk;
 pub mod random_walk_skin;
 pub mod walk_width;

@@ -26,7 +26,8 @@ use super::walk_width::{measured_k, MeasuredWalk};
 
 use serde::Serialize;
 
-use crate::numeric::gauss_legendre;
+use crate::numeric::{bisect, clamp_nan_to_low, illinois};
+use crate::transport::half_space::h_normal_incidence;
 
 /// Upper clamp of the single-scattering albedo in `subsurface_random_walk_remap` ("because of numerical precision").
 pub const CYCLES_MAX_SINGLE_SCATTER_ALBEDO: f64 = 0.999999;
@@ -91,25 +92,8 @@ const BURLEY_S_CONST: f64 = 1.9;
 const BURLEY_S_QUADRATIC: f64 = 3.5;
 const BURLEY_S_CENTRE: f64 = 0.8;
 
-/// Panel ends of the composite Gauss-Legendre rule on mu in [0, 1] for H, graded towards 0 where H has a mu ln mu term.
-const H_PANEL_BREAKS: [f64; 15] = [0.0, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 5e-3, 0.02, 0.06, 0.13, 0.25, 0.4, 0.6, 0.8, 1.0];
-/// Gauss-Legendre order per panel of that rule (14 panels x 12 = 168 nodes; H to ~1e-12, see the tests).
-const H_PANEL_ORDER: usize = 12;
-/// Iteration stops when no node's H changes by more than this (absolute).
-const H_TOLERANCE: f64 = 1e-13;
-/// Iteration cap; with the geometric-mean update the iteration takes about 40 sweeps for any a in (0, 1].
-const H_MAX_ITERATIONS: usize = 10_000;
 /// Bisection steps on the Base Color (2^-60 of the bracket: below f64 resolution).
 const BISECTION_STEPS: usize = 60;
-
-/// `x` clamped to [lo, hi], with NaN mapped to `lo`.
-fn clamp_or_low(x: f64, lo: f64, hi: f64) -> f64 {
-    if x >= lo {
-        x.min(hi)
-    } else {
-        lo
-    }
-}
 
 /// `sum_k c_k g^k` (Horner).
 fn polynomial(c: &[f64], g: f64) -> f64 {
@@ -123,8 +107,8 @@ fn polynomial(c: &[f64], g: f64) -> f64 {
 /// [0, 0.999999]. A is clamped to [0, 1] as Cycles clamps Base Color; g to [0, 0.9] as Cycles 5.0 clamps Subsurface
 /// Anisotropy; NaN counts as 0. Cycles evaluates this in f32; here it is f64 (differences ~1e-7).
 pub fn cycles_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f64 {
-    let albedo = clamp_or_low(base_color, 0.0, 1.0);
-    let g = clamp_or_low(anisotropy, 0.0, CYCLES_MAX_ANISOTROPY);
+    let albedo = clamp_nan_to_low(base_color, 0.0, 1.0);
+    let g = clamp_nan_to_low(anisotropy, 0.0, CYCLES_MAX_ANISOTROPY);
     let a = polynomial(&FIT_A, g);
     let b = FIT_B_CONST + FIT_B_FACTOR * polynomial(&FIT_B_EXP, g).exp();
     let c = polynomial(&FIT_C, g);
@@ -133,7 +117,7 @@ pub fn cycles_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f64 {
     let f = polynomial(&FIT_F, g);
     let blend = albedo.powf(FIT_BLEND_EXPONENT);
     let alpha = (1.0 - blend) * a * (b * albedo).atan().powf(c) + blend * d * (e * albedo).atan().powf(f);
-    clamp_or_low(alpha, 0.0, CYCLES_MAX_SINGLE_SCATTER_ALBEDO)
+    clamp_nan_to_low(alpha, 0.0, CYCLES_MAX_SINGLE_SCATTER_ALBEDO)
 }
 
 /// `alpha(A, g)` of Cycles' Van de Hulst mapping (Blender 5.2 and later, `RANDOM_WALK`): with `s` of d'Eon's
@@ -141,7 +125,7 @@ pub fn cycles_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f64 {
 /// min-alpha rule, dimensionless. A is clamped to [0, 1]; g to [-0.99, 0.99] as `bssrdf_setup` clamps it for
 /// `RANDOM_WALK` in that commit; NaN counts as 0. alpha(0) = 0 and alpha rises to the clamp near A = 1.
 pub fn van_de_hulst_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f64 {
-    let a = clamp_or_low(base_color, 0.0, 1.0);
+    let a = clamp_nan_to_low(base_color, 0.0, 1.0);
     let g = if anisotropy.is_nan() {
         0.0
     } else {
@@ -151,7 +135,7 @@ pub fn van_de_hulst_single_scatter_albedo(base_color: f64, anisotropy: f64) -> f
     let s = VAN_DE_HULST_OFFSET + VAN_DE_HULST_LINEAR * a - (r0 + r1 * a + r2 * a * a).sqrt();
     let s2 = s * s;
     // Cycles' safe_divide: 1 - g s^2 > 0 here, since |g| < 1 and s^2 <= 1 on [0, 1].
-    clamp_or_low((1.0 - s2) / (1.0 - g * s2), 0.0, CYCLES_MAX_SINGLE_SCATTER_ALBEDO)
+    clamp_nan_to_low((1.0 - s2) / (1.0 - g * s2), 0.0, CYCLES_MAX_SINGLE_SCATTER_ALBEDO)
 }
 
 /// Largest |Subsurface Anisotropy| Cycles' `RANDOM_WALK` accepts from 5.2 on (`bssrdf_setup`, `bssrdf.h`,
@@ -186,131 +170,6 @@ impl RandomWalkModel {
     }
 }
 
-/// Composite Gauss-Legendre rule: `order` nodes on each panel between consecutive `breaks`.
-fn composite_gauss_legendre(breaks: &[f64], order: usize) -> (Vec<f64>, Vec<f64>) {
-    let (x, w) = gauss_legendre(order);
-    let mut nodes = Vec::with_capacity(order * breaks.len());
-    let mut weights = Vec::with_capacity(order * breaks.len());
-    for panel in breaks.windows(2) {
-        let half = 0.5 * (panel[1] - panel[0]);
-        for (xi, wi) in x.iter().zip(&w) {
-            nodes.push(panel[0] + half * (xi + 1.0));
-            weights.push(half * wi);
-        }
-    }
-    (nodes, weights)
-}
-
-/// Gauss-Legendre nodes and weights on [0, 1] for the H-function, built once.
-fn h_quadrature() -> &'static (Vec<f64>, Vec<f64>) {
-    static RULE: OnceLock<(Vec<f64>, Vec<f64>)> = OnceLock::new();
-    RULE.get_or_init(|| composite_gauss_legendre(&H_PANEL_BREAKS, H_PANEL_ORDER))
-}
-
-/// `1/H(mu) = sqrt(1 - a) + (a/2) sum_j w_j mu_j H_j / (mu + mu_j)`: the right side of the H equation on the nodes.
-fn h_from_nodes(mu: f64, albedo: f64, nodes: &[f64], weights: &[f64], h: &[f64]) -> f64 {
-    let sum: f64 = nodes.iter().zip(weights).zip(h).map(|((&mj, &wj), &hj)| wj * mj * hj / (mu + mj)).sum();
-    1.0 / ((1.0 - albedo).sqrt() + 0.5 * albedo * sum)
-}
-
-/// H on the quadrature nodes for single-scattering albedo `albedo` in [0, 1], by iterating the sqrt(1 - a) form.
-fn h_on_nodes(albedo: f64) -> Vec<f64> {
-    let (nodes, weights) = h_quadrature();
-    let mut h = vec![1.0; nodes.len()];
-    let mut next = vec![0.0; nodes.len()];
-    for _ in 0..H_MAX_ITERATIONS {
-        let mut change: f64 = 0.0;
-        for (i, &mu) in nodes.iter().enumerate() {
-            // Geometric mean of H and its update: plain iteration maps c H to H / c, which oscillates at a = 1.
-            next[i] = (h[i] * h_from_nodes(mu, albedo, nodes, weights, &h)).sqrt();
-            change = change.max((next[i] - h[i]).abs());
-        }
-        std::mem::swap(&mut h, &mut next);
-        if change < H_TOLERANCE {
-            break;
-        }
-    }
-    h
-}
-
-/// `H(mu; a)`: Chandrasekhar's H-function for isotropic scattering with single-scattering albedo a, dimensionless
-/// (Chandrasekhar 1950, ch. V).
-///
-/// Solves `1/H(mu) = sqrt(1 - a) + (a/2) int_0^1 mu' H(mu') / (mu + mu') dmu'` (the form that converges fast up to
-/// a = 1) by fixed-point iteration, with a geometric-mean update, on 168 Gauss-Legendre nodes in panels graded
-/// towards mu = 0, then evaluates it at `mu` by the same equation (Nystrom interpolation). Accuracy: 1e-12 relative
-/// or better against Chandrasekhar's integral representation for mu in [0, 1], a in [0.2, 1], and the moment
-/// identity `int H = 2 (1 - sqrt(1 - a)) / a` to 1e-10 (tests); H(1; 1) = 2.9078105291. About 40 sweeps of
-/// 168^2 terms (~1 ms); the flat-slab model uses a faster route for mu = 1. Inputs are clamped: mu to [0, 1],
-/// a to [0, 1]; NaN counts as 0 (H(mu; 0) = 1, H(0; a) = 1).
-pub fn chandrasekhar_h(mu: f64, albedo: f64) -> f64 {
-    let mu = clamp_or_low(mu, 0.0, 1.0);
-    let albedo = clamp_or_low(albedo, 0.0, 1.0);
-    if albedo == 0.0 {
-        return 1.0;
-    }
-    let (nodes, weights) = h_quadrature();
-    let h = h_on_nodes(albedo);
-    h_from_nodes(mu, albedo, nodes, weights, &h)
-}
-
-/// Panel ends in theta of the rule for [`h_normal_incidence`], graded towards 0, where the integrand's log peaks
-/// (width sqrt(3 (1 - a)), 1.7e-3 at a = 0.999999; a log singularity at a = 1).
-#[rustfmt::skip]
-const H1_PANEL_BREAKS: [f64; 16] = [
-    0.0, 1e-9, 1e-7, 1e-6, 6.25e-6, 2.5e-5, 1e-4, 4e-4, 1.6e-3, 6.4e-3, 0.0256, 0.1024, 0.4, 0.8, 1.2,
-    std::f64::consts::FRAC_PI_2,
-];
-/// Gauss-Legendre order per panel of that rule (15 x 12 = 180 nodes).
-const H1_PANEL_ORDER: usize = 12;
-/// Below this theta, 1 - theta cot theta is taken from its series (the direct form cancels).
-const THETA_COT_SERIES_BELOW: f64 = 1e-2;
-
-/// `1 - theta cot theta`, accurate for small theta (series theta^2/3 + theta^4/45 + 2 theta^6/945 below 1e-2).
-fn one_minus_theta_cot(theta: f64) -> f64 {
-    if theta < THETA_COT_SERIES_BELOW {
-        let t2 = theta * theta;
-        t2 / 3.0 + t2 * t2 / 45.0 + 2.0 * t2 * t2 * t2 / 945.0
-    } else {
-        1.0 - theta / theta.tan()
-    }
-}
-
-/// `H(1; a)` from Chandrasekhar's integral representation at mu = 1, dimensionless:
-/// `ln H(1) = -(1/pi) int_0^{pi/2} ln(1 - a theta cot theta) dtheta` (Chandrasekhar 1950, ch. V, with the
-/// characteristic function a/2 and t = tan theta; evaluated this way by Kawabata & Limaye, Astrophys. Space Sci.
-/// 332, 365, 2011). A single quadrature of 180 nodes instead of the iteration of
-/// [`chandrasekhar_h`] (about 1000 times faster); the two agree to 1e-10 (tests). `a` must be in [0, 1].
-fn h_normal_incidence(albedo: f64) -> f64 {
-    static RULE: OnceLock<(Vec<f64>, Vec<f64>)> = OnceLock::new();
-    let (nodes, weights) = RULE.get_or_init(|| composite_gauss_legendre(&H1_PANEL_BREAKS, H1_PANEL_ORDER));
-    let integral: f64 = nodes
-        .iter()
-        .zip(weights)
-        .map(|(&theta, &w)| w * ((1.0 - albedo) + albedo * one_minus_theta_cot(theta)).ln())
-        .sum();
-    (-integral / std::f64::consts::PI).exp()
-}
-
-/// `R(mu0; a) = 1 - H(mu0; a) sqrt(1 - a)`: directional albedo of an index-matched, isotropically scattering
-/// half-space lit from direction cosine mu0, dimensionless (Chandrasekhar 1950, ch. V).
-pub fn half_space_directional_albedo(mu0: f64, albedo: f64) -> f64 {
-    let albedo = clamp_or_low(albedo, 0.0, 1.0);
-    1.0 - chandrasekhar_h(mu0, albedo) * (1.0 - albedo).sqrt()
-}
-
-/// `R_hemi(a) = 2 int_0^1 R(mu; a) mu dmu`: the half-space's albedo under uniform (diffuse) light, dimensionless.
-pub fn half_space_hemispherical_albedo(albedo: f64) -> f64 {
-    let albedo = clamp_or_low(albedo, 0.0, 1.0);
-    if albedo == 0.0 {
-        return 0.0;
-    }
-    let (nodes, weights) = h_quadrature();
-    let h = h_on_nodes(albedo);
-    let first_moment: f64 = nodes.iter().zip(weights).zip(&h).map(|((&mu, &w), &hj)| w * mu * hj).sum();
-    1.0 - 2.0 * first_moment * (1.0 - albedo).sqrt()
-}
-
 /// Flat-slab value Cycles RW renders for Base Color A at g = 0, viewed straight down under a uniform white world,
 /// dimensionless (docs/blender-principled.md, Flat slab under a white world).
 ///
@@ -334,7 +193,7 @@ pub fn flat_albedo(model: RandomWalkModel, base_color: f64) -> f64 {
 
 /// The flat-slab value of a walk with single-scattering albedo `alpha` (before the min-alpha rule), dimensionless.
 pub fn flat_albedo_of_single_scatter(alpha: f64) -> f64 {
-    let alpha = clamp_or_low(alpha, 0.0, 1.0);
+    let alpha = clamp_nan_to_low(alpha, 0.0, 1.0);
     let walked = alpha.max(CYCLES_MIN_SINGLE_SCATTER_ALBEDO);
     let throughput = alpha / walked;
     throughput * (1.0 - h_normal_incidence(walked) * (1.0 - walked).sqrt())
@@ -377,16 +236,7 @@ impl ResponseTable {
 
 /// `A_sat` of `model`: the smallest Base Color at which its alpha reaches 0.999999, by bisection.
 fn saturation_of(model: RandomWalkModel) -> f64 {
-    let (mut lo, mut hi) = (0.5, 1.0);
-    for _ in 0..BISECTION_STEPS {
-        let mid = 0.5 * (lo + hi);
-        if model.single_scatter_albedo(mid) >= CYCLES_MAX_SINGLE_SCATTER_ALBEDO {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    hi
+    bisect(0.5, 1.0, BISECTION_STEPS, |mid| model.single_scatter_albedo(mid) >= CYCLES_MAX_SINGLE_SCATTER_ALBEDO).hi
 }
 
 /// The response table of `model`, computed once per model.
@@ -443,36 +293,8 @@ pub(crate) fn invert_response(
     // falsi (superlinear on this smooth, monotonic response; a handful of evaluations instead of ~50 bisections).
     let nodes = &table.nodes;
     let k = nodes.partition_point(|&(_, r)| r < target).clamp(1, nodes.len() - 1);
-    let ((mut lo, mut f_lo), (mut hi, mut f_hi)) = (nodes[k - 1], nodes[k]);
-    f_lo -= target;
-    f_hi -= target;
-    let mut base_color = lo;
-    let mut side = 0;
-    for _ in 0..BISECTION_STEPS {
-        if f_hi == f_lo || hi - lo <= f64::EPSILON * hi {
-            break;
-        }
-        base_color = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
-        let f = response(base_color) - target;
-        if f == 0.0 {
-            break;
-        }
-        if (f < 0.0) == (f_lo < 0.0) {
-            lo = base_color;
-            f_lo = f;
-            if side == -1 {
-                f_hi *= 0.5;
-            }
-            side = -1;
-        } else {
-            hi = base_color;
-            f_hi = f;
-            if side == 1 {
-                f_lo *= 0.5;
-            }
-            side = 1;
-        }
-    }
+    let ((lo, r_lo), (hi, r_hi)) = (nodes[k - 1], nodes[k]);
+    let base_color = illinois((lo, r_lo - target), (hi, r_hi - target), BISECTION_STEPS, |a| response(a) - target);
     RandomWalkColor { base_color, achieved_albedo: response(base_color), saturated: false }
 }
 
@@ -480,7 +302,7 @@ pub(crate) fn invert_response(
 /// `src/kernel/closure/bssrdf.h`, `blender/cycles` 695bae346ba1: dead code in Cycles, used by EEVEE's
 /// `burley_setup`). A is clamped to [0, 1], NaN counts as 0.
 pub fn christensen_burley_s(albedo: f64) -> f64 {
-    let a = clamp_or_low(albedo, 0.0, 1.0);
+    let a = clamp_nan_to_low(albedo, 0.0, 1.0);
     BURLEY_S_CONST - a + BURLEY_S_QUADRATIC * (a - BURLEY_S_CENTRE) * (a - BURLEY_S_CENTRE)
 }
 
@@ -499,45 +321,8 @@ pub fn width_factor(model: RandomWalkModel, base_color: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn rel(a: f64, b: f64) -> f64 {
-        ((a - b) / b).abs()
-    }
-
-    /// `H(mu; a)` from Chandrasekhar's integral representation (1950, ch. V; Kawabata & Limaye 2011):
-    /// `ln H(mu) = -(mu/pi) int_0^{pi/2} ln(1 - a theta cot theta) / (cos^2 theta + mu^2 sin^2 theta) dtheta`,
-    /// by composite Gauss-Legendre with panels graded towards theta = 0 (log singularity at a = 1).
-    fn h_integral_formula(mu: f64, albedo: f64) -> f64 {
-        let (x, w) = gauss_legendre(20);
-        let half_pi = std::f64::consts::FRAC_PI_2;
-        // Panels graded geometrically towards theta = 0 (log peak) and towards pi/2 (peak of width mu).
-        let mut breaks = vec![0.0];
-        let mut t = 1e-12;
-        while t < 0.1 {
-            breaks.push(t);
-            t *= 4.0;
-        }
-        for k in 0..40 {
-            breaks.push(0.1 + (half_pi - 0.2) * k as f64 / 40.0);
-        }
-        let mut t = 0.1;
-        while t > 1e-9 {
-            breaks.push(half_pi - t);
-            t /= 4.0;
-        }
-        breaks.push(half_pi);
-        let mut integral = 0.0;
-        for p in breaks.windows(2) {
-            let half = 0.5 * (p[1] - p[0]);
-            for (xi, wi) in x.iter().zip(&w) {
-                let th: f64 = p[0] + half * (xi + 1.0);
-                let (s, c) = th.sin_cos();
-                let t = (1.0 - albedo) + albedo * one_minus_theta_cot(th);
-                integral += half * wi * t.ln() / (c * c + mu * mu * s * s);
-            }
-        }
-        (-mu / std::f64::consts::PI * integral).exp()
-    }
+    use crate::numeric::relative_error as rel;
+    use crate::transport::half_space::{chandrasekhar_h, half_space_hemispherical_albedo};
 
     /// Wrenninge et al.'s coefficients at g = 0 as read in Cycles 5.0 (docs/blender-principled.md, Random walk in
     /// Cycles 5.0: a..f = 1.82605, 5.11247, ...).
@@ -574,54 +359,6 @@ mod tests {
         for g in [0.0, 0.3, 0.6, 0.9] {
             let alpha = cycles_single_scatter_albedo(0.5, g);
             assert!(alpha > 0.0 && alpha < 1.0, "g = {g}: {alpha}");
-        }
-    }
-
-    /// Chandrasekhar's (1950) table for a conservative (a = 1) isotropic atmosphere: H(1) = 2.90781,
-    /// H(0.5) = 2.01278; and H(0) = 1 for every a.
-    #[test]
-    fn h_function_conservative_value() {
-        let h1 = chandrasekhar_h(1.0, 1.0);
-        assert!((h1 - 2.90781).abs() < 1e-5, "H(1; 1) = {h1}");
-        let h_half = chandrasekhar_h(0.5, 1.0);
-        assert!((h_half - 2.01278).abs() < 1e-5, "H(0.5; 1) = {h_half}");
-        assert!((chandrasekhar_h(0.0, 0.9) - 1.0).abs() < 1e-12);
-        assert_eq!(chandrasekhar_h(0.5, 0.0), 1.0);
-    }
-
-    /// Independent check: Chandrasekhar's integral representation of H, at several albedos and angles.
-    #[test]
-    fn h_function_matches_integral_formula() {
-        for a in [0.2, 0.5, 0.9, 0.99, 0.999999, 1.0] {
-            for mu in [0.0, 1e-4, 0.01, 0.1, 0.3, 0.5, 0.8, 1.0] {
-                let h = chandrasekhar_h(mu, a);
-                let reference = h_integral_formula(mu, a);
-                assert!(rel(h, reference) < 1e-12, "H({mu}; {a}) = {h}, integral formula {reference}");
-            }
-        }
-    }
-
-    /// The fast normal-incidence quadrature used by the flat-slab model agrees with the iterated H, for
-    /// a = 1 - 10^(-k/4), k = 1..24 (0.44 .. 0.999999), and a = 0.05, 1.
-    #[test]
-    fn h_normal_incidence_matches_iteration() {
-        for a in (1..=24).map(|k| 1.0 - 10f64.powf(-k as f64 / 4.0)).chain([0.05, 1.0]) {
-            let fast = h_normal_incidence(a);
-            let iterated = chandrasekhar_h(1.0, a);
-            assert!(rel(fast, iterated) < 1e-10, "a = {a}: {fast} vs {iterated}");
-        }
-    }
-
-    /// Zeroth moment identity `int_0^1 H dmu = 2 (1 - sqrt(1 - a)) / a` (Chandrasekhar 1950, ch. V).
-    #[test]
-    fn h_function_zeroth_moment() {
-        let (nodes, weights) = h_quadrature();
-        for a in [0.1, 0.5, 0.9, 0.999999, 1.0] {
-            let h = h_on_nodes(a);
-            let m0: f64 = weights.iter().zip(&h).map(|(w, h)| w * h).sum();
-            let want = 2.0 * (1.0 - (1.0 - a).sqrt()) / a;
-            assert!(rel(m0, want) < 1e-10, "a = {a}: {m0} vs {want}");
-            assert_eq!(nodes.len(), h.len());
         }
     }
 

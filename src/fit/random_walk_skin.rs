@@ -12,6 +12,7 @@
 
 use super::random_walk::{invert_response, RandomWalkColor, ResponseTable};
 use super::walk_width::{measured_k, MeasuredWalk};
+use crate::numeric::{bisect, clamp_nan_to_low};
 
 /// The Subsurface IOR this mapping assumes (Principled BSDF's default for the socket); the material must use it.
 pub const SKIN_SUBSURFACE_IOR: f64 = 1.4;
@@ -61,7 +62,7 @@ const DIPOLE_BISECTION_STEPS: usize = 12;
 /// `A_F` of the dipole: `(4/3)(1 + F_dr)/(1 - F_dr)` with Jensen's `F_dr` fit at relative IOR `eta` (clamped to
 /// Cycles' [1.01, 3.8]).
 fn dipole_a_f(eta: f64) -> f64 {
-    let eta = if eta.is_nan() { 1.01 } else { eta.clamp(1.01, 3.8) };
+    let eta = clamp_nan_to_low(eta, 1.01, 3.8);
     let inv = 1.0 / eta;
     let f_dr = inv * (-1.440 * inv + 0.710) + 0.668 + 0.0636 * eta;
     (4.0 / 3.0) * (1.0 + f_dr) / (1.0 - f_dr)
@@ -83,16 +84,8 @@ pub fn skin_dipole_alpha_prime(rd: f64, eta: f64) -> f64 {
         return DIPOLE_ALPHA_MAX;
     }
     let a_f = dipole_a_f(eta);
-    let (mut x0, mut x1, mut mid) = (0.0, 1.0, 0.5);
-    for _ in 0..DIPOLE_BISECTION_STEPS {
-        mid = 0.5 * (x0 + x1);
-        if dipole_rd(mid, a_f) < rd {
-            x0 = mid;
-        } else {
-            x1 = mid;
-        }
-    }
-    mid
+    // Cycles keeps the upper end where Rd(mid) >= rd (neither side is NaN here) and returns the last midpoint.
+    bisect(0.0, 1.0, DIPOLE_BISECTION_STEPS, |mid| dipole_rd(mid, a_f) >= rd).last_midpoint
 }
 
 /// `sqrt(3 (1 - alpha'))`: the factor Cycles multiplies a Skin Radius by to get the walk's transport mean free path,
