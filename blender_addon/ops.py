@@ -24,8 +24,8 @@ ERRORS = (spectral_skin.SpectralSkinError, ValueError, OSError)
 def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
     """Compute everything, write the maps, and only then edit ``material``; returns the plan.
 
-    Raises spectral_skin.SpectralSkinError / ValueError for bad settings or a map that cannot be written (the core's
-    writer names the file); the material and existing files are then unchanged. The plan is computed in the scene's working space
+    Raises spectral_skin.SpectralSkinError / ValueError for bad settings, spectral_skin.SpectralSkinIOError (an OSError)
+    for a map that cannot be written (the core's writer names the file); the material and existing files are then unchanged. The plan is computed in the scene's working space
     (:func:`scene_working_space`) and for the running Blender and the scene's engine (:func:`scene_target`), whatever
     ``settings`` says. The scene decides which effects are simulated (:mod:`scene_facts`, ``plan["effects"]``).
     """

@@ -222,7 +222,7 @@ def texture_folder(props: SpectralSkinSettings) -> str:
 
 def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene) -> SkinSettings:
     """The portable settings of a material's properties (raises ValueError for unusable images or folders,
-    spectral_skin.SpectralSkinError for files the core cannot read)."""
+    spectral_skin.SpectralSkinIOError, an OSError, for files the core cannot read)."""
     props = material.spectral_skin
     maps = material_maps(material)
     output_dir = texture_folder(props) if maps else ""

@@ -1,5 +1,10 @@
 //! Guarded numerics shared by the physics modules.
 
+/// The message of a caught panic's payload (a `&str` or `String` panic), or `None` for another payload.
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> Option<String> {
+    payload.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| payload.downcast_ref::<String>().cloned())
+}
+
 /// `a / b`, or `fallback` when `b` is zero or the quotient is not finite.
 pub fn safe_div(a: f64, b: f64, fallback: f64) -> f64 {
     let q = a / b;
@@ -337,5 +342,15 @@ mod tests {
         let integral: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(14)).sum();
         assert!((integral - 2.0 / 15.0).abs() < 1e-14);
         assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn panic_messages_are_read_from_both_payload_kinds() {
+        let text = std::panic::catch_unwind(|| panic!("plain")).unwrap_err();
+        let formatted = std::panic::catch_unwind(|| panic!("formatted {}", 7)).unwrap_err();
+        let other = std::panic::catch_unwind(|| std::panic::panic_any(7u8)).unwrap_err();
+        assert_eq!(panic_message(text.as_ref()).as_deref(), Some("plain"));
+        assert_eq!(panic_message(formatted.as_ref()).as_deref(), Some("formatted 7"));
+        assert_eq!(panic_message(other.as_ref()), None);
     }
 }

@@ -14,7 +14,7 @@ use numpy::{
     PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::create_exception;
-use pyo3::exceptions::{PyInterruptedError, PyRuntimeError, PyTypeError, PyUserWarning, PyValueError};
+use pyo3::exceptions::{PyInterruptedError, PyOSError, PyRuntimeError, PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
 use rayon::prelude::*;
@@ -52,6 +52,14 @@ create_exception!(
      what and how to avoid it."
 );
 
+create_exception!(
+    spectral_skin,
+    SpectralSkinIOError,
+    PyOSError,
+    "A file spectral-skin could not read or write (missing, unreadable, corrupt, or a folder it cannot write to). \
+     An OSError whose message names the file and says what went wrong."
+);
+
 /// Warn (SpectralSkinWarning) about a negative lobe the clamp removed, so it is never hidden.
 fn warn_lobe(py: Python<'_>, lobe: Option<impl std::fmt::Display>) -> PyResult<()> {
     match lobe {
@@ -64,9 +72,13 @@ fn warn_lobe(py: Python<'_>, lobe: Option<impl std::fmt::Display>) -> PyResult<(
 }
 
 impl From<SkinError> for PyErr {
-    /// A SpectralSkinError. Bad texels in a parameter map also carry ``bad_texels``: {"parameter", "min", "max",
+    /// A SpectralSkinIOError (an OSError) for a file that cannot be read or written, else a SpectralSkinError. Bad texels in a parameter map also carry ``bad_texels``: {"parameter", "min", "max",
     /// "nan", "infinite", "out_of_range", "first"}, so a front can word its own advice (the add-on's checkbox).
     fn from(e: SkinError) -> PyErr {
+        // No `filename` attribute: with one and no errno, OSError's str() turns into "[Errno None] None: path".
+        if let SkinError::Io { .. } = &e {
+            return SpectralSkinIOError::new_err(e.to_string());
+        }
         let err = SpectralSkinError::new_err(e.with_clamp_advice("pass clamp=True"));
         if let SkinError::BadTexels { parameter, min, max, nan, infinite, out_of_range, first } = e {
             Python::attach(|py| {
@@ -157,11 +169,7 @@ fn detached_interruptible<T: Send>(
 
 /// A panic (a bug: the core validates its input) as a RuntimeError instead of a PanicException.
 fn panic_error(payload: Box<dyn std::any::Any + Send>) -> PyErr {
-    let message = payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "unknown panic".to_string());
+    let message = crate::numeric::panic_message(payload.as_ref()).unwrap_or_else(|| "unknown panic".to_string());
     PyRuntimeError::new_err(format!("spectral-skin internal error (please report it): {message}"))
 }
 
@@ -1407,7 +1415,7 @@ fn maps_py<'py>(
                     Array2::from_shape_vec((height, width), specular_ior_level).map_err(internal)?,
                 ),
             )?;
-            // Only the constants that do not depend on the oiliness (surface::specular_from_oiliness).
+            // Only the constants that do not depend on the oiliness (fit::principled_specular::specular_from_oiliness).
             let all = json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?;
             let kept = PyDict::new(py);
             for key in SPECULAR_CONSTANTS {
@@ -1568,6 +1576,7 @@ fn blender_targets_py(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SpectralSkinError", m.py().get_type::<SpectralSkinError>())?;
     m.add("SpectralSkinWarning", m.py().get_type::<SpectralSkinWarning>())?;
+    m.add("SpectralSkinIOError", m.py().get_type::<SpectralSkinIOError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(evaluate_py, m)?)?;
     m.add_function(wrap_pyfunction!(profile_py, m)?)?;

@@ -12,10 +12,6 @@ use std::sync::OnceLock;
 
 use crate::numeric::{clamp_nan_to_low, composite_gauss_legendre, gauss_legendre};
 
-/// The old home of the Principled mapping, kept for the map pipeline and the bindings until they import it from
-/// `fit::principled_specular`.
-pub use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams};
-
 /// Beckmann roughness m of the oil layer: "values for sigma in the range 0.2 - 0.4 give good results for skin, and we
 /// use sigma = 0.35" (DJ2006; DAM `Beckmann(0.35f)`; docs/model.md, Parameters and Oil layer).
 pub const BECKMANN_ROUGHNESS_M: f64 = 0.35;

@@ -201,7 +201,7 @@ def write_textures(plan: dict[str, Any]) -> None:
     temporary files and renamed into place together), as ``<prefix>_albedo.exr`` etc. in the plan's folder; an
     earlier texture of this prefix that the plan no longer has is removed.
 
-    Raises spectral_skin.SpectralSkinError (naming the file) when a file cannot be written; the final paths are then
+    Raises spectral_skin.SpectralSkinIOError (an OSError naming the file) when a file cannot be written; the final paths are then
     untouched.
     """
     if not plan["textures"]:

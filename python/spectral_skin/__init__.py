@@ -16,12 +16,14 @@ Functions:
     write_maps: a maps() result written as EXRs, atomically, by the CLI's writer.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
-range and the value received. A result changed on its way out (a negative radial-profile lobe of the model set to 0)
+range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
+:class:`OSError` whose message names the file. A result changed on its way out (a negative radial-profile lobe of the model set to 0)
 is reported by a :class:`SpectralSkinWarning`.
 """
 
 from ._core import (
     SpectralSkinError,
+    SpectralSkinIOError,
     SpectralSkinWarning,
     __version__,
     blender_targets,
@@ -37,6 +39,7 @@ from ._core import (
 
 __all__ = [
     "SpectralSkinError",
+    "SpectralSkinIOError",
     "SpectralSkinWarning",
     "__version__",
     "blender_targets",

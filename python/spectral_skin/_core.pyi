@@ -16,6 +16,7 @@ import numpy.typing as npt
 
 __all__ = [
     "SpectralSkinError",
+    "SpectralSkinIOError",
     "SpectralSkinWarning",
     "__version__",
     "blender_targets",
@@ -53,6 +54,9 @@ class SpectralSkinError(ValueError):
     The message names the input, its allowed range and the value received, e.g.
     ``melanin must be in [0, 0.5] (melanin fraction C_m); got 0.7``.
     """
+
+class SpectralSkinIOError(OSError):
+    """A file spectral-skin could not read or write; the message names it and says what went wrong."""
 
 class SpectralSkinWarning(UserWarning):
     """A result computed but changed on its way out: a negative lobe of a radial profile set to 0.

@@ -19,9 +19,9 @@ use super::lut::{measure_error_cancellable, MaterialTable, TableError, TableReso
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
 use crate::fit::blender_target::TargetInfo;
+use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams};
 use crate::fit::SubsurfaceMethod;
 use crate::skin::SkinParams;
-use crate::surface::{specular_from_oiliness, SpecularParams};
 
 /// At most this many distinct (C_m, beta_m, C_h) tuples are evaluated one by one; more use the table.
 pub const MAX_DISTINCT_TUPLES: usize = 2048;
@@ -110,7 +110,7 @@ pub struct BadTexels {
 pub enum SpecularOutput {
     Constant(SpecularParams),
     /// Principled Specular IOR Level per texel. Roughness and IOR do not depend on oiliness in the surface mapping
-    /// (`surface::specular_from_oiliness`): they are the constants in `roughness_and_ior`.
+    /// (`fit::principled_specular::specular_from_oiliness`): they are the constants in `roughness_and_ior`.
     Map {
         specular_ior_level: Vec<f32>,
         constants: SpecularParams,

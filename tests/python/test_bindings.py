@@ -252,8 +252,9 @@ def test_error_and_warning_classes_are_exported():
     assert issubclass(SpectralSkinError, ValueError)
     assert spectral_skin.SpectralSkinError is spectral_skin._core.SpectralSkinError
     assert issubclass(spectral_skin.SpectralSkinWarning, UserWarning)
+    assert issubclass(spectral_skin.SpectralSkinIOError, OSError)
     assert set(spectral_skin.__all__) == {
-        "SpectralSkinError", "SpectralSkinWarning", "__version__", "blender_targets", "evaluate", "layered_reflectance", "maps",
+        "SpectralSkinError", "SpectralSkinIOError", "SpectralSkinWarning", "__version__", "blender_targets", "evaluate", "layered_reflectance", "maps",
         "parameter_ranges", "presets", "profile", "read_parameter_map", "write_maps"
     }
 

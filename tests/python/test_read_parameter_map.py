@@ -77,8 +77,9 @@ def test_errors_name_the_file_and_channels(tmp_path: Path) -> None:
         spectral_skin.read_parameter_map(rgb)
     with pytest.raises(SpectralSkinError, match=r"melanin map.*rgb\.exr.*channel named melanin.*found channels"):
         spectral_skin.read_parameter_map(rgb, "melanin")
-    with pytest.raises(SpectralSkinError, match=r"missing\.exr"):
+    with pytest.raises(OSError, match=r"missing\.exr") as info:  # an I/O failure, not bad input
         spectral_skin.read_parameter_map(tmp_path / "missing.exr", "melanin")
+    assert isinstance(info.value, spectral_skin.SpectralSkinIOError) and not isinstance(info.value, ValueError)
     with pytest.raises(SpectralSkinError, match=r'name.*melanin, melanin_blend.*"blood"'):
         spectral_skin.read_parameter_map(rgb, "blood")
 

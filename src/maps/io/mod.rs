@@ -151,11 +151,7 @@ impl Compression {
 /// Run a decoder, turning a panic inside a third-party decoder (on a corrupt file) into an error message.
 fn guard<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     catch_unwind(AssertUnwindSafe(f)).map_err(|payload| {
-        let text = payload
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| payload.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "decoder panicked".to_string());
+        let text = crate::numeric::panic_message(payload.as_ref()).unwrap_or_else(|| "decoder panicked".to_string());
         format!("corrupt file: {text}")
     })
 }
