@@ -9,7 +9,11 @@ import time
 
 import pytest
 
-CHILD = r"""
+
+def child_script(side: int, call: str) -> str:
+    """A child that builds a random side x side parameter map, prints "started", runs ``call`` on it and exits 3 on
+    KeyboardInterrupt."""
+    return f"""
 import signal
 import sys
 import numpy as np
@@ -17,12 +21,11 @@ import spectral_skin
 # A process started in the background of a non-interactive shell (CI runners, `cmd &`) inherits SIGINT ignored, and
 # Python then installs no KeyboardInterrupt handler: put back the one an interactive session has.
 signal.signal(signal.SIGINT, signal.default_int_handler)
-# 1024 x 1024 exact texels: minutes of work on a small machine.
 rng = np.random.default_rng(0)
-params = (rng.random((1024, 1024, 4)) * np.array([0.5, 1.0, 0.1, 1.0])).astype(np.float32)
+params = (rng.random(({side}, {side}, 4)) * np.array([0.5, 1.0, 0.1, 1.0])).astype(np.float32)
 print("started", flush=True)
 try:
-    spectral_skin.maps(params, exact=True, table_cache=False)
+    {call}
 except KeyboardInterrupt:
     print("interrupted", flush=True)
     sys.exit(3)
@@ -30,12 +33,13 @@ print("finished", flush=True)
 """
 
 
-@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
-def test_ctrl_c_stops_a_long_maps_call():
-    child = subprocess.Popen([sys.executable, "-c", CHILD], stdout=subprocess.PIPE, text=True)
+def interrupt_child(script: str, env: dict[str, str] | None = None) -> tuple[int, str, float]:
+    """Run ``script`` in a child Python, send SIGINT 1.5 s after it printed "started" (well inside its call: the
+    array is built before) and return its exit code, its output and the seconds it took to stop."""
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True, env=env)
     try:
-        assert child.stdout.readline().strip() == "started"
-        time.sleep(1.5)  # well inside the call (the array is built before "started")
+        assert child.stdout is not None and child.stdout.readline().strip() == "started"
+        time.sleep(1.5)
         sent = time.monotonic()
         child.send_signal(signal.SIGINT)
         out, _ = child.communicate(timeout=60)
@@ -44,7 +48,17 @@ def test_ctrl_c_stops_a_long_maps_call():
         if child.poll() is None:
             child.kill()
             child.wait()
-    assert child.returncode == 3, (child.returncode, out)
+    return child.returncode, out, elapsed
+
+
+# 1024 x 1024 exact texels: minutes of work on a small machine.
+CHILD = child_script(1024, "spectral_skin.maps(params, exact=True, table_cache=False)")
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+def test_ctrl_c_stops_a_long_maps_call():
+    returncode, out, elapsed = interrupt_child(CHILD)
+    assert returncode == 3, (returncode, out)
     assert "interrupted" in out
     assert elapsed < 5.0, f"the call took {elapsed:.1f} s to stop after SIGINT"
 
@@ -60,43 +74,15 @@ def test_table_resolution_is_bounded_before_allocation():
     assert time.monotonic() - start < 5.0
 
 
-TABLE_CHILD = r"""
-import signal
-import sys
-import numpy as np
-import spectral_skin
-# A process started in the background of a non-interactive shell (CI runners, `cmd &`) inherits SIGINT ignored, and
-# Python then installs no KeyboardInterrupt handler: put back the one an interactive session has.
-signal.signal(signal.SIGINT, signal.default_int_handler)
-# 64 x 64 distinct texels take the lookup table; 100^3 nodes are minutes of work on a small machine.
-rng = np.random.default_rng(0)
-params = (rng.random((64, 64, 4)) * np.array([0.5, 1.0, 0.1, 1.0])).astype(np.float32)
-print("started", flush=True)
-try:
-    spectral_skin.maps(params, table_resolution=(100, 100, 100))
-except KeyboardInterrupt:
-    print("interrupted", flush=True)
-    sys.exit(3)
-print("finished", flush=True)
-"""
+# 64 x 64 distinct texels take the lookup table; 100^3 nodes are minutes of work on a small machine (nothing before
+# the build takes 1.5 s for 4096 texels).
+TABLE_CHILD = child_script(64, "spectral_skin.maps(params, table_resolution=(100, 100, 100))")
 
 
 @pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
 def test_ctrl_c_stops_a_table_build(tmp_path):
-    env = dict(os.environ, SPECTRAL_SKIN_CACHE_DIR=str(tmp_path))
-    child = subprocess.Popen([sys.executable, "-c", TABLE_CHILD], stdout=subprocess.PIPE, text=True, env=env)
-    try:
-        assert child.stdout.readline().strip() == "started"
-        time.sleep(1.5)  # inside the build (nothing before it takes this long for 4096 texels)
-        sent = time.monotonic()
-        child.send_signal(signal.SIGINT)
-        out, _ = child.communicate(timeout=60)
-        elapsed = time.monotonic() - sent
-    finally:
-        if child.poll() is None:
-            child.kill()
-            child.wait()
-    assert child.returncode == 3, (child.returncode, out)
+    returncode, out, elapsed = interrupt_child(TABLE_CHILD, dict(os.environ, SPECTRAL_SKIN_CACHE_DIR=str(tmp_path)))
+    assert returncode == 3, (returncode, out)
     assert elapsed < 5.0, f"the table build took {elapsed:.1f} s to stop after SIGINT"
     assert list(tmp_path.iterdir()) == [], "a table stopped part-way was cached"
 
