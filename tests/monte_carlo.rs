@@ -353,15 +353,7 @@ fn log_slope(centres: &[f64], values: &[f64], lo: f64, hi: f64) -> f64 {
 /// 8 log-spaced bins per decade from 0.02 to 20 transport mean free paths `mfp_mm`; the profile is
 /// compared bin by bin between `lo_mfp` and `hi_mfp` mfp. `MC_DUMP=1` prints every bin.
 fn compare(name: &str, layers: &[Layer], photons: u64, seed: u64, mfp_mm: f64, lo_mfp: f64, hi_mfp: f64) -> Comparison {
-    let mc_layers: Vec<McLayer> = layers
-        .iter()
-        .map(|l| McLayer {
-            thickness_mm: l.thickness_mm,
-            sigma_a_per_mm: l.sigma_a_per_mm,
-            sigma_s_per_mm: l.sigma_s_reduced_per_mm, // isotropic scattering: sigma_s = sigma_s'
-            ior: l.ior,
-        })
-        .collect();
+    let mc_layers = McLayer::isotropic_stack(layers);
     let edges = log_edges(0.02 * mfp_mm, 20.0 * mfp_mm, 24, true);
     let nbins = edges.len() - 1;
     let start = std::time::Instant::now();

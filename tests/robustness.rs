@@ -191,13 +191,6 @@ fn capped_boundaries_are_the_paper_slab_where_consistent() {
 /// filling the lobe) further away, and a thin epidermis much further. `--nocapture` prints the table.
 #[test]
 fn boundaries_against_monte_carlo() {
-    let total_with = |layers: &[Layer], b: Boundaries| {
-        LayerStack::with_boundaries(layers, b).unwrap().reflectance_hat(
-            0.0,
-            Combination::Directional,
-            MultipoleTerms::All,
-        )
-    };
     let mut cases: Vec<(String, Vec<Layer>)> = vec![
         ("issue 10 reproducer".into(), vec![layer(0.0134, 0.0021, 17.0, 1.39), layer(INF, 1.64, 1.17, 1.31)]),
         ("0.1 mm slab alone, 0.01 / 10 per mm, n 1.4".into(), vec![layer(0.1, 0.01, 10.0, 1.4)]),
@@ -210,15 +203,7 @@ fn boundaries_against_monte_carlo() {
     println!("| stack | Monte Carlo (2e5 photons) | paper | capped |\n|---|---|---|---|");
     let mut error = Vec::new();
     for (k, (name, layers)) in cases.iter().enumerate() {
-        let mc_layers: Vec<McLayer> = layers
-            .iter()
-            .map(|l| McLayer {
-                thickness_mm: l.thickness_mm,
-                sigma_a_per_mm: l.sigma_a_per_mm,
-                sigma_s_per_mm: l.sigma_s_reduced_per_mm,
-                ior: l.ior,
-            })
-            .collect();
+        let mc_layers = McLayer::isotropic_stack(layers);
         let mc = simulate(&mc_layers, &McConfig::new(200_000, 500 + k as u64, vec![0.0, 1.0]));
         let (paper, capped) = (total_with(layers, Boundaries::Paper), total_with(layers, Boundaries::Capped));
         let rel = |v: f64| v / mc.reflectance - 1.0;
@@ -237,8 +222,18 @@ fn boundaries_against_monte_carlo() {
     }
 }
 
+/// The total diffuse reflectance of `layers` with the paper's boundaries.
 fn total(layers: &[Layer]) -> f64 {
-    LayerStack::new(layers).unwrap().reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All)
+    total_with(layers, Boundaries::Paper)
+}
+
+/// The total diffuse reflectance of `layers` with `boundaries`.
+fn total_with(layers: &[Layer], boundaries: Boundaries) -> f64 {
+    LayerStack::with_boundaries(layers, boundaries).unwrap().reflectance_hat(
+        0.0,
+        Combination::Directional,
+        MultipoleTerms::All,
+    )
 }
 
 /// Issue 10, class 3: a vanishing layer vanishes (continuously: thickness -> 0 gives the stack without it), for a top,
@@ -469,24 +464,9 @@ fn diffusion_against_monte_carlo_by_top_layer_thickness() {
             continue;
         }
         let layers = [top, base];
-        let mc_layers: Vec<McLayer> = layers
-            .iter()
-            .map(|l| McLayer {
-                thickness_mm: l.thickness_mm,
-                sigma_a_per_mm: l.sigma_a_per_mm,
-                sigma_s_per_mm: l.sigma_s_reduced_per_mm,
-                ior: l.ior,
-            })
-            .collect();
+        let mc_layers = McLayer::isotropic_stack(&layers);
         let mc = simulate(&mc_layers, &McConfig::new(20_000, 9000 + k, vec![0.0, 1.0]));
-        let total = |b: Boundaries| {
-            LayerStack::with_boundaries(&layers, b).unwrap().reflectance_hat(
-                0.0,
-                Combination::Directional,
-                MultipoleTerms::All,
-            )
-        };
-        let (paper, capped) = (total(Boundaries::Paper), total(Boundaries::Capped));
+        let (paper, capped) = (total_with(&layers, Boundaries::Paper), total_with(&layers, Boundaries::Capped));
         let r = mc.reflectance;
         rows[c].push([(paper - r).abs(), (capped - r).abs(), (paper / r - 1.0).abs(), (capped / r - 1.0).abs()]);
     }

@@ -37,6 +37,22 @@ pub struct McLayer {
     pub ior: f64,
 }
 
+impl McLayer {
+    /// The Monte Carlo layers of the diffusion core's stack: the same thickness, absorption and index, with isotropic
+    /// scattering at sigma_s = sigma_s' (the transport problem the diffusion model approximates).
+    pub fn isotropic_stack(layers: &[spectral_skin::diffusion::Layer]) -> Vec<McLayer> {
+        layers
+            .iter()
+            .map(|l| McLayer {
+                thickness_mm: l.thickness_mm,
+                sigma_a_per_mm: l.sigma_a_per_mm,
+                sigma_s_per_mm: l.sigma_s_reduced_per_mm,
+                ior: l.ior,
+            })
+            .collect()
+    }
+}
+
 /// Run settings.
 #[derive(Debug, Clone)]
 pub struct McConfig {
