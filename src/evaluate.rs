@@ -15,7 +15,7 @@ use crate::fit::blender_target::{Target, TargetInfo};
 use crate::fit::burley::{
     fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM,
 };
-use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams};
+use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams, SurfaceConstants};
 pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
@@ -155,6 +155,10 @@ pub struct Work {
     pub transform_samples: usize,
     /// Radial profiles inverted (one per wavelength).
     pub radial_profiles: usize,
+    /// Burley fits of the Subsurface Radius (one per RGB channel of each parameter set whose radius was asked for).
+    pub radius_fits: usize,
+    /// Specular inputs computed from an oiliness (one per parameter set whose specular was asked for).
+    pub specular_evaluations: usize,
 }
 
 /// The result of [`evaluate`]; fields not requested are `None`. Serialises to the CLI's stable JSON.
@@ -180,6 +184,9 @@ pub struct Evaluation {
     pub radius_fit: Option<[BurleyFit; 3]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub specular: Option<SpecularParams>,
+    /// The surface's Principled inputs that no parameter changes (IOR, Roughness), always present: a front that
+    /// drops the specular lobe (Specular IOR Level 0) still sets them without asking for `specular`.
+    pub surface: SurfaceConstants,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub wavelengths_nm: Option<Vec<f64>>,
     /// Total diffuse reflectance per wavelength.
@@ -306,6 +313,7 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
     let (methods, radius_fit) = if out.radius {
         let fits = prepared.fits(&stacks, albedo, true);
         work.transform_samples += stacks.len() * prepared.fit_s.len();
+        work.radius_fits += fits.len();
         (Some(methods_from(&request.target, albedo, &fits)?), Some(fits))
     } else {
         (None, None)
@@ -340,6 +348,8 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
         None
     };
 
+    let specular = out.specular.then(|| specular_from_oiliness(params.oiliness));
+    work.specular_evaluations += usize::from(specular.is_some());
     Ok(Evaluation {
         params,
         color_space: request.working_space.name(),
@@ -352,7 +362,8 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
         default_method: DEFAULT_METHOD.name(),
         methods,
         radius_fit,
-        specular: out.specular.then(|| specular_from_oiliness(params.oiliness)),
+        specular,
+        surface: SurfaceConstants::of_model(),
         wavelengths_nm: (out.spectrum || out.profile_spectral).then(|| prepared.grid.wavelengths_nm.clone()),
         spectral_reflectance: out.spectrum.then_some(totals),
         profile,

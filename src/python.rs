@@ -557,7 +557,9 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
 ///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy", "model" (model["dermis_thickness_mm"]
 ///     is float("inf") for a semi-infinite dermis), "combination", "target" ({"blender": "5.3", "engine":
 ///     "cycles", "tested": True}), "default_method", "work" ({"wavelengths",
-///     "transform_samples", "radial_profiles"}), "seconds". Per requested output, numpy arrays where array-valued:
+///     "transform_samples", "radial_profiles", "radius_fits", "specular_evaluations"}: what was computed),
+///     "surface" ({"roughness", "ior", "beckmann_m"}: the inputs no parameter changes), "seconds". Per requested
+///     output, numpy arrays where array-valued:
 ///     albedo or radius: "diffuse_reflectance_rgb" (3,);
 ///     radius: "methods", one entry per subsurface method the target's Blender offers ("burley", "random_walk",
 ///     "random_walk_skin", and "random_walk_legacy" from 5.2) -> {"base_color" (3,), "subsurface_radius_mm" (3,),
@@ -1188,7 +1190,9 @@ fn read_parameter_map_py<'py>(
 ///     "constant" | "distinct_tuples" | "table" | "exact", with its figures: "tuples"; "evaluations"; or
 ///     "resolution", "nodes", "from_cache", "build_seconds", "measured_error"}), "clamped" (one dict per parameter
 ///     with bad values: {"parameter", "nan", "infinite", "out_of_range", "first": [[x, y], ...]}),
-///     "constant_parameters", "request" (accuracy and model), "seconds" ({"read", "compute", "write", "total"})}.
+///     "constant_parameters", "request" (accuracy and model), "work" ({"texels", "evaluations",
+///     "table_nodes_built", "table_lookups", "radius_fits", "specular_evaluations", "outputs": {"base_color",
+///     "radius", "specular"}}: what was computed), "seconds" ({"read", "compute", "write", "total"})}.
 ///     The arrays are new, writeable and C-contiguous (handed to numpy without a copy).
 ///
 /// Raises:

@@ -40,6 +40,10 @@ fn eval_json_has_the_stable_keys() {
             assert!(base.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
         }
         assert_eq!(triple(&j["methods"]["burley"]["base_color"]), albedo, "Burley renders Base Color as the albedo");
+        // The CLI's eval computes a material: one Burley fit per channel and one specular set, no profile.
+        assert_eq!(j["work"]["radius_fits"], 3);
+        assert_eq!(j["work"]["specular_evaluations"], 1);
+        assert_eq!(j["work"]["radial_profiles"], 0);
         luminance.push(0.2126 * albedo[0] + 0.7152 * albedo[1] + 0.0722 * albedo[2]);
     }
     assert!(luminance[0] < luminance[1] && luminance[1] < luminance[2], "{luminance:?}");
@@ -307,6 +311,11 @@ fn a_new_run_leaves_no_stale_outputs() {
     assert_eq!(present, listed, "the folder holds exactly the sidecar's files");
     assert!(!out_dir.join("specular.exr").exists());
     assert!(sidecar["outputs"]["specular_constants"].is_object());
+    // The work: one specular set for the constant oiliness, no specular map; every texel of the other two.
+    let work = &sidecar["report"]["work"];
+    let texels = work["texels"].as_u64().unwrap();
+    assert_eq!((work["specular_evaluations"].as_u64(), work["outputs"]["specular"].as_u64()), (Some(1), Some(0)));
+    assert_eq!(work["outputs"]["base_color"].as_u64(), Some(texels));
 }
 
 /// Ctrl-C during `maps` stops it within seconds with exit code 130 and leaves the output folder as it was: no new

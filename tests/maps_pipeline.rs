@@ -86,6 +86,12 @@ fn strategies_follow_the_input() {
         image(64, 64, [Plane::Constant(0.1), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.0)]);
     let r = compute_maps(&constant, &settings, None).unwrap();
     assert_eq!(r.report.strategy, Strategy::Constant);
+    let w = r.report.work;
+    // One material (three channel fits) and one specular set for 4096 texels of each output; no table, no map of
+    // the specular level.
+    assert_eq!((w.texels, w.evaluations, w.radius_fits, w.specular_evaluations), (4096, 1, 3, 1), "{w:?}");
+    assert_eq!((w.table_nodes_built, w.table_lookups), (0, 0));
+    assert_eq!((w.outputs.base_color, w.outputs.radius, w.outputs.specular), (4096, 4096, 0));
     // A map whose texels all hold one value is constant too.
     let uniform = image(
         64,
@@ -106,10 +112,22 @@ fn strategies_follow_the_input() {
         image(64, 64, [Plane::Texels(mask), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.2)]);
     let r = compute_maps(&masked, &settings, None).unwrap();
     assert_eq!(r.report.strategy, Strategy::DistinctTuples { tuples: 3 });
+    let w = r.report.work;
+    assert_eq!((w.evaluations, w.radius_fits, w.table_nodes_built), (3, 9, 0), "{w:?}");
+    // The oiliness is one value (0.2): one specular set, no specular map.
+    assert_eq!((w.specular_evaluations, w.outputs.specular), (1, 0));
     // Smooth variation everywhere: the table.
     let face = face_params(64);
     let r = compute_maps(&face, &settings, None).unwrap();
     assert!(matches!(r.report.strategy, Strategy::Table { .. }), "{:?}", r.report.strategy);
+    let w = r.report.work;
+    let res = TableResolution::default();
+    let nodes = res.melanin * res.melanin_blend * res.hemoglobin;
+    // No cache folder: the table is built (every node a material) and checked at the default 64 points.
+    assert_eq!((w.table_nodes_built, w.evaluations, w.table_lookups), (nodes, 64, 64 * 64), "{w:?}");
+    assert_eq!(w.radius_fits, 3 * (nodes + 64));
+    // The face's oiliness varies: one specular set per texel, and a specular map.
+    assert_eq!((w.specular_evaluations, w.outputs.specular), (64 * 64, 64 * 64));
 }
 
 fn files_in(dir: &Path) -> Vec<String> {

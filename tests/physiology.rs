@@ -49,18 +49,22 @@ fn only_requested_outputs_are_computed() {
     let ev = evaluate(&p, &Request::new(Outputs { albedo: true, ..Outputs::default() })).unwrap();
     assert_eq!(ev.work.radial_profiles, 0);
     assert_eq!(ev.work.transform_samples, ev.work.wavelengths, "one transform value per wavelength");
+    assert_eq!((ev.work.radius_fits, ev.work.specular_evaluations), (0, 0), "no fit, no specular: not asked");
     assert!(ev.methods.is_none() && ev.profile.is_none() && ev.specular.is_none() && ev.spectral_reflectance.is_none());
 
     let ev = evaluate(&p, &Request::new(Outputs { specular: true, ..Outputs::default() })).unwrap();
     assert_eq!(ev.work.wavelengths, 0, "specular alone needs no spectral work");
+    assert_eq!((ev.work.radius_fits, ev.work.specular_evaluations, ev.work.radial_profiles), (0, 1, 0));
     assert!(ev.specular.is_some() && ev.diffuse_reflectance_rgb.is_none());
 
     let ev = evaluate(&p, &Request::new(Outputs { albedo: true, radius: true, ..Outputs::default() })).unwrap();
     assert_eq!(ev.work.radial_profiles, 0, "the radius fit works in the frequency domain");
+    assert_eq!((ev.work.radius_fits, ev.work.specular_evaluations), (3, 0), "one fit per RGB channel");
     assert!(ev.methods.is_some());
 
     let ev = evaluate(&p, &Request::new(Outputs { profile_rgb: true, ..Outputs::default() })).unwrap();
     assert_eq!(ev.work.radial_profiles, ev.work.wavelengths);
+    assert_eq!((ev.work.radius_fits, ev.work.specular_evaluations), (0, 0), "a profile needs no fit");
     let profile = ev.profile.unwrap();
     assert!(profile.rgb_per_mm2.is_some() && profile.spectral_per_mm2.is_none());
 }

@@ -93,6 +93,29 @@ pub struct SpecularParams {
     pub hemispherical_albedo: f64,
 }
 
+/// The Principled inputs of the surface that do not depend on the oiliness: the [`SpecularParams`] fields of every
+/// oiliness that stay the same (IOR, Roughness, Beckmann m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SurfaceConstants {
+    /// Principled "Roughness": sqrt(m).
+    pub roughness: f64,
+    /// Principled "IOR" (and Subsurface IOR): the skin surface's 1.4 (`surface::SKIN_SURFACE_IOR`).
+    pub ior: f64,
+    /// DJ2006's Beckmann m.
+    pub beckmann_m: f64,
+}
+
+impl SurfaceConstants {
+    /// The model's constants (DJ2006: m = 0.35, eta = 1.4).
+    pub fn of_model() -> SurfaceConstants {
+        SurfaceConstants {
+            roughness: BECKMANN_ROUGHNESS_M.sqrt(),
+            ior: SKIN_SURFACE_IOR,
+            beckmann_m: BECKMANN_ROUGHNESS_M,
+        }
+    }
+}
+
 /// Principled BSDF specular inputs for oiliness rho_s (DJ2006 Torrance-Sparrow, m = 0.35, eta = 1.4).
 ///
 /// Mapping:
@@ -122,9 +145,9 @@ pub fn specular_from_oiliness(oiliness: f64) -> SpecularParams {
     SpecularParams {
         oiliness: rho_s,
         specular_ior_level: PRINCIPLED_NEUTRAL_SPECULAR_IOR_LEVEL * rho_s,
-        roughness: BECKMANN_ROUGHNESS_M.sqrt(),
-        ior: SKIN_SURFACE_IOR,
-        beckmann_m: BECKMANN_ROUGHNESS_M,
+        roughness: SurfaceConstants::of_model().roughness,
+        ior: SurfaceConstants::of_model().ior,
+        beckmann_m: SurfaceConstants::of_model().beckmann_m,
         directional_albedo_normal: rho_s * normal,
         hemispherical_albedo: rho_s * hemispherical,
     }

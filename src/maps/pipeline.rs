@@ -144,7 +144,38 @@ pub struct MapReport {
     pub clamped: Vec<BadTexels>,
     pub constant_parameters: Vec<&'static str>,
     pub request: Request,
+    /// What was computed, counted (so a front can show that an effect it dropped was not computed).
+    pub work: MapWork,
     pub seconds: Timings,
+}
+
+/// The work of a map run. Every direct evaluation and every table node built is one full material (albedo and the
+/// Burley fit of the Subsurface Radius, three channel fits); a table lookup interpolates nodes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct MapWork {
+    /// Texels of each output map.
+    pub texels: usize,
+    /// Parameter sets evaluated directly: 1 for a constant map, one per distinct tuple, one per texel (exact), or
+    /// the check points of a freshly built table.
+    pub evaluations: usize,
+    /// Lookup-table nodes computed (0 when the table came from the cache, or no table was used).
+    pub table_nodes_built: usize,
+    /// Texels interpolated from the table.
+    pub table_lookups: usize,
+    /// Burley fits of the Subsurface Radius (one per RGB channel of each evaluation and each node built).
+    pub radius_fits: usize,
+    /// Specular inputs computed from an oiliness: 1 when it is one value, one per texel when it varies.
+    pub specular_evaluations: usize,
+    /// Texels produced per output.
+    pub outputs: OutputTexels,
+}
+
+/// Texels produced per output map (0: the output is not a map).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct OutputTexels {
+    pub base_color: usize,
+    pub radius: usize,
+    pub specular: usize,
 }
 
 #[derive(Debug, Clone, Copy, Default, Serialize)]
@@ -257,7 +288,9 @@ pub fn compute_maps_cancellable(
     let select = |t: &TexelMaterial| (t.base_color, t.radius_mm);
 
     let all_constant = uniform_value(m).is_some() && uniform_value(b).is_some() && uniform_value(hb).is_some();
+    let mut work = MapWork { texels: n, ..MapWork::default() };
     let strategy = if all_constant {
+        work.evaluations = 1;
         let (c, r) = select(&evaluate_one(tuple(0))?);
         for k in 0..3 {
             base_color[k].fill(c[k]);
@@ -270,6 +303,7 @@ pub fn compute_maps_cancellable(
             .par_iter()
             .map(|k| evaluate_one(k.map(f32::from_bits)).map(|t| select(&t)))
             .collect::<Result<Vec<_>, SkinError>>()?;
+        work.evaluations = keys.len();
         let index: HashMap<[u32; 3], usize> = keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
         fill_rows(w, &mut base_color, &mut radius, progress, cancel, |i| values[index[&tuple(i).map(f32::to_bits)]]);
         if settings.strategy == StrategyChoice::Exact {
@@ -301,6 +335,7 @@ pub fn compute_maps_cancellable(
                 }
             }
         }
+        work.evaluations = n;
         Strategy::Exact { evaluations: n }
     } else {
         let build = Instant::now();
@@ -325,9 +360,16 @@ pub fn compute_maps_cancellable(
             table.lookup_method(t[0], t[1], t[2])
         });
         let (resolution, nodes) = (settings.table, settings.table.node_count());
+        work.evaluations = measured_error.as_ref().map_or(0, |_| settings.table_check_samples);
+        work.table_nodes_built = if from_cache { 0 } else { nodes };
+        work.table_lookups = n;
         Strategy::Table { resolution, nodes, from_cache, build_seconds, measured_error }
     };
 
+    // Every evaluation and every node built is a material with its three channel fits (`Prepared::material`).
+    work.radius_fits = 3 * (work.evaluations + work.table_nodes_built);
+    work.outputs.base_color = n;
+    work.outputs.radius = n;
     let specular = match (uniform_value(oil), oil) {
         (Some(v), _) => SpecularOutput::Constant(specular_from_oiliness(v as f64)),
         (None, Plane::Constant(_)) => unreachable!("a constant plane is uniform"),
@@ -337,6 +379,10 @@ pub fn compute_maps_cancellable(
                 values.par_iter().map(|&o| specular_from_oiliness(o as f64).specular_ior_level as f32).collect();
             SpecularOutput::Map { specular_ior_level, constants: specular_from_oiliness(0.0) }
         }
+    };
+    (work.specular_evaluations, work.outputs.specular) = match &specular {
+        SpecularOutput::Constant(_) => (1, 0),
+        SpecularOutput::Map { specular_ior_level, .. } => (specular_ior_level.len(), specular_ior_level.len()),
     };
 
     let constant_parameters =
@@ -352,6 +398,7 @@ pub fn compute_maps_cancellable(
         clamped: Vec::new(),
         constant_parameters,
         request: *prepared.request(),
+        work,
         seconds: Timings { compute: start.elapsed().as_secs_f64(), ..Timings::default() },
     };
     Ok(MapResult { width: w, height: h, base_color, radius_mm: radius, specular, report })

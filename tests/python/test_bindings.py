@@ -317,3 +317,22 @@ def test_accuracy_levels():
     maps = spectral_skin.maps(melanin=np.full((2, 2), 0.1, np.float32), melanin_blend=0.5, hemoglobin=0.01,
                               oiliness=0.2, accuracy="draft")
     assert maps["report"]["request"]["accuracy"]["wavelength_placement"] == "cmf_adapted"
+
+
+def test_work_counts_only_what_was_asked():
+    """The core's work counter: albedo alone needs no profile and no fit; specular only when asked; the radius one
+    Burley fit per RGB channel; a constant parameter map one evaluation for all its texels."""
+    albedo = spectral_skin.evaluate(preset="caucasian", outputs=["albedo"])["work"]
+    assert (albedo["radial_profiles"], albedo["radius_fits"], albedo["specular_evaluations"]) == (0, 0, 0)
+    assert albedo["transform_samples"] == albedo["wavelengths"] > 0
+    material = spectral_skin.evaluate(preset="caucasian")["work"]
+    assert (material["radial_profiles"], material["radius_fits"], material["specular_evaluations"]) == (0, 3, 1)
+    specular = spectral_skin.evaluate(preset="caucasian", outputs=["specular"])["work"]
+    assert (specular["wavelengths"], specular["radius_fits"], specular["specular_evaluations"]) == (0, 0, 1)
+    ev = spectral_skin.evaluate(preset="caucasian", outputs=["albedo"])
+    assert "specular" not in ev and ev["surface"]["ior"] == spectral_skin.evaluate(preset="caucasian")["specular"]["ior"]
+    constant = spectral_skin.maps(melanin=np.full((8, 8), 0.1, np.float32), melanin_blend=0.5, hemoglobin=0.02,
+                                  oiliness=0.3)["report"]["work"]
+    assert (constant["texels"], constant["evaluations"], constant["radius_fits"]) == (64, 1, 3), constant
+    assert (constant["table_nodes_built"], constant["table_lookups"], constant["specular_evaluations"]) == (0, 0, 1)
+    assert constant["outputs"] == {"base_color": 64, "radius": 64, "specular": 0}
