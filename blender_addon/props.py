@@ -154,6 +154,8 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     result_effects: bpy.props.StringProperty(
         name="Effects", description="The last Apply's decisions as JSON: [{effect, enabled, reason, figures, "
         "override}] (core/scene.py)")
+    result_work: bpy.props.StringProperty(
+        name="Work", description="What the core computed for the last Apply, as JSON (the plan's work: core/plan.py)")
 
 
 def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str, ParameterMap]:
@@ -246,6 +248,13 @@ def store_result(material: bpy.types.Material, plan: dict) -> None:
     target = plan["target"]
     props.result_target = f"Blender {target['blender']}, {target['engine'].upper()}"
     props.result_effects = json.dumps(plan.get("effects", []), default=float)
+    props.result_work = json.dumps(plan.get("work", {}))
+
+
+def stored_work(material: bpy.types.Material) -> dict:
+    """What the core computed for the material's last Apply (the plan's ``work``; empty before the first)."""
+    text = material.spectral_skin.result_work
+    return dict(json.loads(text)) if text else {}
 
 
 def stored_effects(material: bpy.types.Material) -> list[dict]:

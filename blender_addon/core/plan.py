@@ -13,6 +13,11 @@
 - ``textures``: {"albedo" | "radius" | "specular": final absolute path} of the maps this plan writes
   (``<folder>/<prefix>_<kind>.exr``; ``folder`` and ``prefix`` are in the plan of a material with maps);
 - ``images``: {same keys: numpy array, row 0 at the top} still to be written by :func:`write_textures`;
+- ``work``: what the core computed for this plan, as it reports it (``evaluate(...)["work"]``: wavelengths,
+  transform samples, radial profiles, radius fits, specular evaluations; or ``maps(...)["report"]["work"]``: texels,
+  evaluations, table nodes built, table lookups, radius fits, specular evaluations, texels per output);
+- ``computed``: {"radius": bool, "specular": bool}: whether the core was asked for the radius and the specular inputs
+  (the scene analysis asks for neither when it has dropped the effect before computing: core/scene.py);
 - ``summary``: what the panel shows: ``albedo`` (RGB), ``radius_mm`` (RGB), ``computed`` (a sentence),
   ``seconds``, ``warnings`` (list of sentences).
 
@@ -64,18 +69,24 @@ def describe_error(error: BaseException) -> str:
             "left. Tick 'Clamp Out-of-Range Texels' to clamp them into range, or correct the map.")
 
 
-def make_plan(settings: SkinSettings, progress: Any = None) -> dict[str, Any]:
-    """Compute everything the material needs; raises ``spectral_skin.SpectralSkinError`` (a ValueError) on bad input.
+def make_plan(settings: SkinSettings, progress: Any = None, *, radius: bool = True,
+              specular: bool = True) -> dict[str, Any]:
+    """Compute what the material needs; raises ``spectral_skin.SpectralSkinError`` (a ValueError) on bad input.
 
     ``progress``: None, or ``progress(done, total)`` told the texels done by the core (see ``spectral_skin.maps``);
-    returning False cancels (InterruptedError).
+    returning False cancels (InterruptedError). ``radius=False``: subsurface is off, so the core is not asked for the
+    radius: Base Color is the skin's total diffuse reflectance (the albedo, whatever the method) and ``radius`` is
+    None. ``specular=False``: the specular lobe is off: Specular IOR Level 0, no specular texture, and the core is
+    not asked for it (IOR and Roughness are the surface's constants, which no parameter changes). With maps the core
+    (``spectral_skin.maps``) still computes every output; the plan keeps only those asked for.
     """
     check(settings)
     start = time.perf_counter()
     if settings.maps:
-        plan = _plan_from_maps(settings, progress)
+        plan = _plan_from_maps(settings, progress, radius, specular)
     else:
-        plan = _plan_from_constants(settings)
+        plan = _plan_from_constants(settings, radius, specular)
+    plan["computed"] = {"radius": radius, "specular": specular}
     plan["method"] = settings.method
     plan["working_space"] = settings.working_space
     plan["scale"] = subsurface_scale(settings.scale_length)
@@ -89,36 +100,44 @@ def make_plan(settings: SkinSettings, progress: Any = None) -> dict[str, Any]:
     return plan
 
 
-def _plan_from_constants(settings: SkinSettings) -> dict[str, Any]:
+def _plan_from_constants(settings: SkinSettings, radius: bool, specular: bool) -> dict[str, Any]:
     import spectral_skin
 
     c = settings.constants()
-    ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"],
+    outputs = ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]
+    ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"], outputs=outputs,
                                 accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
                                 blender=settings.blender, engine=settings.engine)
-    name = method_name(settings.method)
-    if name not in ev["methods"]:
-        raise spectral_skin.SpectralSkinError(
-            f"Blender {ev['target']['blender']} has no subsurface method {settings.method}; it offers "
-            f"{', '.join(ev['methods'])}")
-    method = ev["methods"][name]
-    specular = ev["specular"]
-    base_color = _rgb(method["base_color"])
-    radius_mm = _rgb(method["subsurface_radius_mm"])
+    albedo = _rgb(ev["diffuse_reflectance_rgb"])
+    radius_mm: list[float] | None = None
+    base_color = albedo
+    if radius:
+        name = method_name(settings.method)
+        if name not in ev["methods"]:
+            raise spectral_skin.SpectralSkinError(
+                f"Blender {ev['target']['blender']} has no subsurface method {settings.method}; it offers "
+                f"{', '.join(ev['methods'])}")
+        method = ev["methods"][name]
+        base_color = _rgb(method["base_color"])
+        radius_mm = _rgb(method["subsurface_radius_mm"])
+    surface = ev["surface"]
     return {
         "base_color": base_color,
         "radius": radius_mm,
-        "ior": float(specular["ior"]),
-        "subsurface_ior": float(specular["ior"]),
-        "specular_ior_level": float(specular["specular_ior_level"]),
-        "roughness": float(specular["roughness"]),
+        "albedo": albedo,
+        "ior": float(surface["ior"]),
+        "subsurface_ior": float(surface["ior"]),
+        "specular_ior_level": float(ev["specular"]["specular_ior_level"]) if specular else 0.0,
+        "roughness": float(surface["roughness"]),
         "target": dict(ev["target"]),
         "textures": {},
         "images": {},
+        "work": dict(ev["work"]),
         "summary": {
             "albedo": base_color,
-            "radius_mm": radius_mm,
-            "computed": f"one evaluation ({ev['work']['wavelengths']} wavelengths)",
+            "radius_mm": radius_mm if radius_mm is not None else [0.0, 0.0, 0.0],
+            "computed": f"one evaluation ({ev['work']['wavelengths']} wavelengths"
+                        f"{'' if radius else ', no radius'}{'' if specular else ', no specular'})",
             "warnings": [],
         },
     }
@@ -141,28 +160,34 @@ def _safe_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "skin"
 
 
-def _plan_from_maps(settings: SkinSettings, progress: Any) -> dict[str, Any]:
+def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specular: bool) -> dict[str, Any]:
     import numpy as np
     import spectral_skin
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
-    result = spectral_skin.maps(**inputs, method=method_name(settings.method),
+    # Without subsurface Base Color is the albedo: Burley's Base Color, whatever the material's method.
+    result = spectral_skin.maps(**inputs, method=method_name(settings.method if radius else "BURLEY"),
                                 accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
                                 clamp=settings.clamp, progress=progress, blender=settings.blender,
                                 engine=settings.engine)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)
-    images: dict[str, Any] = {"albedo": result["base_color"], "radius": result["radius_mm"]}
+    images: dict[str, Any] = {"albedo": result["base_color"]}
+    if radius:
+        images["radius"] = result["radius_mm"]
     # Roughness and IOR always; the level is a map of its own when the oiliness varies.
-    specular: dict[str, Any] = dict(result["specular"])
-    specular_ior_level = None
-    if "specular_ior_level" in result:
+    constants: dict[str, Any] = dict(result["specular"])
+    specular_ior_level: float | None = 0.0
+    if not specular:
+        pass
+    elif "specular_ior_level" in result:
         images["specular"] = result["specular_ior_level"]
+        specular_ior_level = None
     else:
-        specular_ior_level = float(specular["specular_ior_level"])
-    roughness = float(specular["roughness"])
-    ior = float(specular["ior"])
+        specular_ior_level = float(constants["specular_ior_level"])
+    roughness = float(constants["roughness"])
+    ior = float(constants["ior"])
     strategy = report["strategy"]
     computed = f"{report['width']}×{report['height']} maps, strategy {strategy['name']}"
     if "tuples" in strategy:
@@ -183,9 +208,11 @@ def _plan_from_maps(settings: SkinSettings, progress: Any) -> dict[str, Any]:
         "prefix": prefix,
         "textures": {kind: os.path.join(folder, f"{prefix}_{kind}.exr") for kind in images},
         "images": images,
+        "work": dict(report["work"]),
         "summary": {
             "albedo": _rgb(np.asarray(result["base_color"], dtype=np.float64).reshape(-1, 3).mean(axis=0)),
-            "radius_mm": _rgb(np.asarray(result["radius_mm"], dtype=np.float64).reshape(-1, 3).mean(axis=0)),
+            "radius_mm": _rgb(np.asarray(result["radius_mm"], dtype=np.float64).reshape(-1, 3).mean(axis=0))
+            if radius else [0.0, 0.0, 0.0],
             "computed": computed,
             "warnings": warnings,
         },

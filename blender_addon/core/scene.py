@@ -3,7 +3,9 @@
 The bpy glue (``blender_addon/scene_facts.py``) gathers :class:`SceneFacts` from the scene; :func:`decide` turns
 them and a computed material plan (core/plan.py) into a list of decisions ``{"effect", "enabled", "reason",
 "figures", "override"}`` and :func:`apply_decisions` changes the material plan accordingly, before any texture is
-written. The same functions run from the operator and from the headless batch path.
+written. The same functions run from the operator and from the headless batch path. :func:`scene_plan` takes what
+it can decide before computing first (:func:`subsurface_before`, the oiliness), so that a dropped effect is not
+computed: the plan's ``work`` (the core's count) shows no radius fit or no specular evaluation.
 
 Effects:
 
@@ -21,7 +23,9 @@ Effects:
 - ``engine/version``: the target the core computed for (core/targets.py), recorded as the plan's first entry.
 - ``subsurface method``: a recommendation, never applied by itself (the method is the artist's choice on the
   material, and the Auto/On/Off overrides switch effects, not methods): per object using the material, its thickness
-  (the smallest dimension of its evaluated bounds, mm) against :data:`THIN_RADII` times the largest radius, and
+  part by part (ray-cast through the mesh from sampled faces: thin when at least :data:`THIN_AREA_FRACTION` of its
+  area is under :data:`THIN_RADII` times the largest radius; without samples, the smallest dimension of its
+  evaluated bounds, mm, against :data:`THIN_RADII` times the largest radius), and
   whether its mesh is closed (every edge shared by exactly two faces). Thinner than that and closed: a random walk
   (Burley's disk projection assumes a half-space, wrong on ears, nostrils, fingers); open: Burley, or close the mesh
   (a random walk leaks out through the holes). ``enabled``: the material's method suits every object.
@@ -55,6 +59,34 @@ MM_PER_METRE = 1000.0
 # of the profile's energy lies within one radius) is projected onto the near surface instead; at 3 radii the
 # half-space is a fair model. A rule of thumb, not a measurement (docs/scene-effects.md, Thin and open geometry).
 THIN_RADII = 3.0
+# An object with at least this fraction of its surface area thinner than THIN_RADII radii (measured part by part,
+# docs/scene-effects.md) has thin parts. A rule of thumb, not a measurement: 1 % ignores a few stray samples (a
+# crease whose ray meets the surface nearby) and keeps parts such as ears, a few per cent of a head (an estimate).
+THIN_AREA_FRACTION = 0.01
+
+
+def thin_parts(shape: ShapeFacts, thin_mm: float) -> dict[str, Any] | None:
+    """The part-by-part figures of ``shape`` against ``thin_mm``: {"sampled_faces", "measured_faces",
+    "thin_area_fraction", "thinnest_mm", "thin_median_mm", "thin_centre"} (the area-weighted median thickness and
+    the mean object-space centre of the thin samples; None without thin ones); None when no sample was measured."""
+    if not shape.parts:
+        return None
+    total = sum(area for _t, area, _c in shape.parts)
+    thin = sorted((p for p in shape.parts if p[0] < thin_mm), key=lambda p: p[0])
+    thin_area = sum(area for _t, area, _c in thin)
+    figures: dict[str, Any] = {"sampled_faces": shape.sampled_faces, "measured_faces": len(shape.parts),
+                               "thin_area_fraction": thin_area / total if total > 0.0 else 0.0,
+                               "thinnest_mm": min(p[0] for p in shape.parts), "thin_median_mm": None,
+                               "thin_centre": None}
+    if thin:
+        running = 0.0
+        for thickness, area, _c in thin:
+            running += area
+            if running >= thin_area / 2.0:
+                figures["thin_median_mm"] = thickness
+                break
+        figures["thin_centre"] = tuple(sum(p[2][i] for p in thin) / len(thin) for i in range(3))
+    return figures
 
 
 @dataclass(frozen=True)
@@ -87,13 +119,17 @@ class View:
 @dataclass(frozen=True)
 class ShapeFacts:
     """An object using the material, at the current frame: the smallest dimension of its evaluated bounds (object
-    axes, with its scale) in mm, and whether its evaluated mesh is closed (every edge shared by exactly two faces;
-    None: no faces, e.g. not a mesh) with the count of edges that are not."""
+    axes, with its scale) in mm, whether its evaluated mesh is closed (every edge shared by exactly two faces;
+    None: no faces, e.g. not a mesh) with the count of edges that are not, and its thickness part by part:
+    ``parts``, one ``(thickness_mm, area_mm2, (x, y, z))`` per sampled face whose inward ray met the opposite
+    surface (the face's object-space centre), of ``sampled_faces`` sampled."""
 
     object_name: str
     thickness_mm: float
     closed: bool | None
     open_edges: int = 0
+    parts: tuple[tuple[float, float, tuple[float, float, float]], ...] = ()
+    sampled_faces: int = 0
 
 
 @dataclass(frozen=True)
@@ -220,6 +256,61 @@ def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: fl
                   figures)
 
 
+# The least absorbing skin: no melanin (so its blend does not matter) and no blood. Every absorption coefficient of
+# the model grows with the melanin and haemoglobin fractions, and the largest radius with falling absorption: the
+# radius there bounds every parameter set's (checked over a grid of the parameter ranges for every method and
+# engine in tests/python/test_addon_scene.py::test_least_absorbing_skin_bounds_the_radius).
+LEAST_ABSORBING = {"melanin": 0.0, "melanin_blend": 0.0, "hemoglobin": 0.0, "oiliness": 0.0}
+
+_BOUNDS: dict[tuple[Any, ...], tuple[float, dict[str, int]]] = {}
+
+
+def radius_bound_mm(settings: Any) -> tuple[float, dict[str, int]]:
+    """The largest Subsurface Radius × Scale (mm) any skin parameters give for the settings' method, target,
+    accuracy and working space, and the core's work for it (one evaluation of :data:`LEAST_ABSORBING`, computed once
+    per process and key)."""
+    import spectral_skin
+
+    from .settings import ACCURACY_LEVELS
+    from .targets import method_name
+
+    key = (settings.method, settings.blender, settings.engine, settings.accuracy, settings.working_space)
+    if key not in _BOUNDS:
+        p = LEAST_ABSORBING
+        ev = spectral_skin.evaluate(p["melanin"], p["melanin_blend"], p["hemoglobin"], p["oiliness"],
+                                    outputs=["radius"], accuracy=ACCURACY_LEVELS[settings.accuracy],
+                                    working_space=settings.working_space, blender=settings.blender,
+                                    engine=settings.engine)
+        radius = ev["methods"][method_name(settings.method)]["subsurface_radius_mm"]
+        _BOUNDS[key] = (_largest(radius), dict(ev["work"]))
+    return _BOUNDS[key]
+
+
+def subsurface_before(settings: Any, facts: SceneFacts | None,
+                      threshold_px: float = SUBSURFACE_MIN_RADIUS_PX) -> dict[str, Any] | None:
+    """The subsurface decision taken before the material is computed, so that its radius is not computed at all:
+    off when even the largest radius of any skin (:func:`radius_bound_mm`) is under ``threshold_px`` pixels of the
+    smallest footprint; None when that does not settle it (the radius is then computed and :func:`decide` compares
+    the material's own)."""
+    if facts is None:
+        return None
+    try:
+        best = smallest_footprint(facts)
+    except ValueError:
+        return None
+    if best is None:
+        return None
+    bound_mm, work = radius_bound_mm(settings)
+    bound_px = bound_mm / best["footprint_mm"]
+    if bound_px >= threshold_px:
+        return None
+    figures: dict[str, Any] = {"largest_radius_bound_mm": bound_mm, "threshold_px": threshold_px, **best,
+                               "largest_radius_bound_px": bound_px, "bound_work": work}
+    where = f"at frame {best['frame']}, camera {best['camera']}, object {best['object']}"
+    return _entry("subsurface", False, f"the largest radius of any skin is {bound_px:.3g} px {where} (under "
+                  f"{threshold_px:g} px): plain diffuse with the same albedo; the radius was not computed", figures)
+
+
 def oiliness_zero_everywhere(settings: Any) -> bool:
     """True when the settings' oiliness is zero at every texel (a map of zeros, or the constant 0 without a map)."""
     import numpy as np
@@ -268,10 +359,25 @@ def _engine(plan: dict[str, Any]) -> dict[str, Any]:
 
 
 def _shape_advice(shape: ShapeFacts, largest_mm: float) -> tuple[str | None, str]:
-    """The method recommended for one object (None: any) and why."""
+    """The method recommended for one object (None: any) and why. Thin: measured part by part when the object has
+    such samples (at least :data:`THIN_AREA_FRACTION` of its surface under :data:`THIN_RADII` radii), else by the
+    smallest dimension of its bounds."""
     radii = shape.thickness_mm / largest_mm if largest_mm > 0.0 else float("inf")
     size = f"{shape.object_name}: {shape.thickness_mm:.3g} mm thick ({radii:.3g} × the largest radius)"
     thin = radii < THIN_RADII
+    parts = thin_parts(shape, THIN_RADII * largest_mm)
+    if parts is not None:
+        fraction = parts["thin_area_fraction"]
+        thin = fraction >= THIN_AREA_FRACTION
+        if thin:
+            centre = ", ".join(f"{v:.3g}" for v in parts["thin_centre"])
+            size = (f"{shape.object_name}: {100 * fraction:.3g} % of its surface thinner than {THIN_RADII:g} radii "
+                    f"({THIN_RADII * largest_mm:.3g} mm): parts {parts['thin_median_mm']:.3g} mm thick (thinnest "
+                    f"{parts['thinnest_mm']:.3g} mm) around ({centre}) in object space")
+        else:
+            size = (f"{shape.object_name}: thinnest part {parts['thinnest_mm']:.3g} mm "
+                    f"({parts['thinnest_mm'] / largest_mm:.3g} × the largest radius; "
+                    f"{100 * fraction:.3g} % of its surface under {THIN_RADII:g} radii)")
     if shape.closed is False:
         also = " (thin too: close the mesh, then a random walk)" if thin else ""
         return "BURLEY", (f"{size}, open mesh ({shape.open_edges} edges not shared by two faces): a random walk leaks "
@@ -285,13 +391,13 @@ def _shape_advice(shape: ShapeFacts, largest_mm: float) -> tuple[str | None, str
 
 def _method(plan: dict[str, Any], settings: Any, facts: SceneFacts | None, subsurface: bool) -> dict[str, Any]:
     """The recommended subsurface method per object (a recommendation: nothing is changed)."""
-    radius = plan["images"]["radius"] if plan.get("radius") is None else plan["radius"]
-    largest_mm = _largest(radius)
     method = settings.method
-    figures: dict[str, Any] = {"method": method, "thin_radii": THIN_RADII, "largest_radius_mm": largest_mm,
-                               "objects": {}}
+    figures: dict[str, Any] = {"method": method, "thin_radii": THIN_RADII, "objects": {}}
     if not subsurface:
         return _entry("subsurface method", True, "subsurface is off: the method does not matter", figures)
+    radius = plan["images"]["radius"] if plan.get("radius") is None else plan["radius"]
+    largest_mm = _largest(radius)
+    figures["largest_radius_mm"] = largest_mm
     if plan["target"]["engine"] == "eevee":
         return _entry("subsurface method", True, "EEVEE renders every method with its screen-space Burley-like "
                       "blur: no method to recommend", figures)
@@ -303,7 +409,8 @@ def _method(plan: dict[str, Any], settings: Any, facts: SceneFacts | None, subsu
         recommended, reason = _shape_advice(shape, largest_mm)
         figures["objects"][shape.object_name] = {
             "thickness_mm": shape.thickness_mm, "thickness_radii": shape.thickness_mm / largest_mm,
-            "closed": shape.closed, "open_edges": shape.open_edges, "recommended": recommended, "reason": reason}
+            "closed": shape.closed, "open_edges": shape.open_edges, "recommended": recommended, "reason": reason,
+            "parts": thin_parts(shape, THIN_RADII * largest_mm)}
         if recommended is not None and (recommended == "BURLEY") != (method == "BURLEY"):
             wrong.append(f"{reason} (the material uses {method})")
     if wrong:
@@ -330,12 +437,14 @@ def _animation(settings: Any, facts: SceneFacts | None) -> dict[str, Any]:
 
 def decide(plan: dict[str, Any], settings: Any, facts: SceneFacts | None,
            overrides: dict[str, str] | None = None,
-           threshold_px: float = SUBSURFACE_MIN_RADIUS_PX) -> list[dict[str, Any]]:
+           threshold_px: float = SUBSURFACE_MIN_RADIUS_PX,
+           subsurface: dict[str, Any] | None = None) -> list[dict[str, Any]]:
     """The decisions for a computed material plan (before its textures are written), with the overrides applied:
     {"subsurface": "AUTO" | "ON" | "OFF", "specular": ...}; an override other than AUTO wins over the decision and
-    is recorded in the entry ("override") and its reason."""
-    effects = [_engine(plan), _subsurface(plan, facts, threshold_px), _specular(plan, settings),
-               _constant_maps(plan, settings)]
+    is recorded in the entry ("override") and its reason. ``subsurface``: the subsurface decision when it was taken
+    before the plan was computed (:func:`subsurface_before`; the plan then has no radius)."""
+    sub = subsurface if subsurface is not None else _subsurface(plan, facts, threshold_px)
+    effects = [_engine(plan), sub, _specular(plan, settings), _constant_maps(plan, settings)]
     for entry in effects:
         choice = (overrides or {}).get(entry["effect"], "AUTO")
         if choice not in OVERRIDES:
@@ -371,7 +480,8 @@ def apply_decisions(plan: dict[str, Any], effects: list[dict[str, Any]], albedo:
     plan["subsurface_weight"] = 1.0
     if not enabled(effects, "subsurface"):
         plan["subsurface_weight"] = 0.0
-        plan["radius"] = [float(v) for v in plan["summary"]["radius_mm"]]
+        if plan.get("computed", {}).get("radius", True):
+            plan["radius"] = [float(v) for v in plan["summary"]["radius_mm"]]
         _drop_texture(plan, "radius")
         if albedo is not None:
             plan["base_color"] = [float(v) for v in albedo]
@@ -429,7 +539,7 @@ def _decided_plan(settings: Any, effects: list[dict[str, Any]], progress: Any,
     if plan is None:
         plan = make_plan(settings, progress)
     albedo = None
-    if not enabled(effects, "subsurface") and settings.method != "BURLEY":
+    if not enabled(effects, "subsurface") and settings.method != "BURLEY" and plan.get("computed", {}).get("radius", True):
         burley = make_plan(settings.replace(method="BURLEY"), progress)
         if burley["base_color"] is not None:
             albedo = burley["base_color"]
@@ -461,20 +571,32 @@ def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str
     animation = facts.animation if facts is not None else None
     if animation is not None and animation.parameters:
         settings = settings.replace(**animation.at(animation.current_frame))
-    plan = make_plan(settings, progress)
     per_frame: list[Any] = []
-    decision_plan, decision_settings = plan, settings
+    decision_settings = settings
     if animation is not None and animation.parameters and not settings.maps:
         per_frame = [settings.replace(**animation.at(frame)) for frame in animation.frames]
+        decision_settings = settings.replace(oiliness=max(s.oiliness for s in per_frame))
+    # Effects decided before anything is computed are not computed: subsurface dropped by the bound on every skin's
+    # radius (or forced off), specular off (oiliness zero at every texel and frame, or forced off).
+    choice = {effect: (overrides or {}).get(effect, "AUTO") for effect in OVERRIDABLE}
+    before = None if choice["subsurface"] == "ON" else subsurface_before(settings, facts)
+    if before is None and choice["subsurface"] == "OFF":
+        before = _entry("subsurface", True, "not compared: the radius is not computed when forced off",
+                        {"threshold_px": SUBSURFACE_MIN_RADIUS_PX})
+    radius = before is None
+    specular = choice["specular"] == "ON" or (choice["specular"] == "AUTO"
+                                              and not oiliness_zero_everywhere(decision_settings))
+    plan = make_plan(settings, progress, radius=radius, specular=specular)
+    decision_plan = plan
+    if per_frame:
         distinct = {tuple(s.constants().items()): s for s in per_frame}
-        plans = {key: make_plan(s, progress) for key, s in distinct.items()}
-        import numpy as np
+        plans = {key: make_plan(s, progress, radius=radius, specular=specular) for key, s in distinct.items()}
+        if radius:
+            import numpy as np
 
-        largest = np.max([p["radius"] for p in plans.values()], axis=0)
-        oiliness = max(s.oiliness for s in per_frame)
-        decision_plan = {**plan, "radius": [float(v) for v in largest]}
-        decision_settings = settings.replace(oiliness=oiliness)
-    effects = decide(decision_plan, decision_settings, facts, overrides)
+            largest = np.max([p["radius"] for p in plans.values()], axis=0)
+            decision_plan = {**plan, "radius": [float(v) for v in largest]}
+    effects = decide(decision_plan, decision_settings, facts, overrides, subsurface=before)
     plan = _decided_plan(settings, effects, progress, plan)
     if per_frame and animation is not None:
         decided = {key: _decided_plan(s, effects, progress, plans[key]) for key, s in distinct.items()}

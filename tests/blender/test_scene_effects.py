@@ -31,7 +31,7 @@ from blender_addon import batch  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 from blender_addon.ops import apply_skin  # noqa: E402
-from blender_addon.props import stored_effects  # noqa: E402
+from blender_addon.props import stored_effects, stored_work  # noqa: E402
 
 # 640 px across a 36 mm sensor behind a 50 mm lens: 36 / 50 / 640 m = 1.125 mm per pixel per metre of depth. The
 # caucasian preset's largest radius (4.35 mm) is then 0.039 px at 100 m (dropped) and 3.9 px at 1 m (kept).
@@ -79,8 +79,11 @@ def test_far_is_plain_diffuse_with_the_cores_albedo_close_keeps_subsurface(addon
     assert close.inputs["Subsurface Weight"].default_value == 1.0
     far_entry, close_entry = _effect(materials["Far"], "subsurface"), _effect(materials["Close"], "subsurface")
     assert not far_entry["enabled"] and far_entry["figures"]["camera"] == "Camera"
-    # The figure against the camera geometry computed here by hand.
-    assert far_entry["figures"]["largest_radius_px"] == pytest.approx(largest_mm / (36 / 50 / 640 * FAR_M * 1000), rel=1e-4)
+    # Far: dropped before computing, by the largest radius of any skin (the least absorbing skin's, at least the
+    # preset's), against the camera geometry computed here by hand.
+    bound_mm = far_entry["figures"]["largest_radius_bound_mm"]
+    assert bound_mm >= largest_mm
+    assert far_entry["figures"]["largest_radius_bound_px"] == pytest.approx(bound_mm / (36 / 50 / 640 * FAR_M * 1000), rel=1e-4)
     assert "frame 1" in far_entry["reason"] and "Camera" in far_entry["reason"]
     assert close_entry["enabled"]
     assert close_entry["figures"]["largest_radius_px"] == pytest.approx(largest_mm / (36 / 50 / 640 * CLOSE_M * 1000), rel=1e-4)
@@ -103,6 +106,30 @@ def test_zero_oiliness_writes_no_specular_texture(addon, tmp_path):
     assert _principled(material).inputs["Specular IOR Level"].default_value == 0.0
     entry = _effect(material, "specular")
     assert not entry["enabled"] and "oil" in entry["reason"]
+
+
+def test_dropped_effects_are_not_computed(addon, tmp_path):
+    """The core's work stored with each material: the far one (subsurface dropped) and a zero oiliness (specular
+    dropped) computed no radius fit, no profile and no specular evaluation; the close, oily one did. With parameter
+    maps, the dropped radius and specular maps are not written."""
+    materials = _scene_with_far_and_close()
+    materials["Far"].spectral_skin.oiliness = 0.0
+    for name in materials:
+        assert bpy.ops.spectral_skin.apply(material=name) == {"FINISHED"}
+    far, close = stored_work(materials["Far"]), stored_work(materials["Close"])
+    assert (far["radius_fits"], far["radial_profiles"], far["specular_evaluations"]) == (0, 0, 0), far
+    assert far["transform_samples"] == far["wavelengths"] > 0  # the albedo: one transform value per wavelength
+    assert (close["radius_fits"], close["radial_profiles"], close["specular_evaluations"]) == (3, 0, 1), close
+    assert not _effect(materials["Far"], "specular")["enabled"]
+    assert _principled(materials["Far"]).inputs["Specular IOR Level"].default_value == 0.0
+    # Far with parameter maps and zero oiliness: only the albedo texture.
+    hemoglobin = np.linspace(0.001, 0.05, 12, dtype=np.float32).reshape(3, 4)
+    settings = SkinSettings.from_preset("caucasian", oiliness=0.0, output_dir=str(tmp_path), file_prefix="Far",
+                                        maps={"hemoglobin": ParameterMap(hemoglobin, False)})
+    plan = apply_skin(materials["Far"], settings)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["Far_albedo.exr"]
+    assert plan["work"]["texels"] == 12 and stored_work(materials["Far"]) == plan["work"]
+    assert not addon_nodes.tagged_nodes(materials["Far"].node_tree, "radius")
 
 
 def test_override_wins_and_survives_reapplying(addon):
@@ -223,6 +250,56 @@ def test_thin_and_open_geometry_get_a_method_recommended(addon):
     entry = _shape_entry(material)
     assert not entry["enabled"] and "Open" in entry["reason"] and "leaks" in entry["reason"]
     assert "Thin" not in entry["reason"]
+
+
+def _sphere_with_ear(name: str, ear: bool):
+    """A closed UV sphere of 80 mm radius at 0.5 m in front of the camera; with ``ear``, a 2 mm thick, 50 mm square
+    plate in the same mesh, half of it sticking out of the sphere's side (a thin part of a thick object)."""
+    import bmesh
+    from mathutils import Matrix
+
+    bm = bmesh.new()
+    bmesh.ops.create_uvsphere(bm, u_segments=32, v_segments=16, radius=0.08)
+    if ear:
+        cube = bmesh.ops.create_cube(bm, size=1.0)
+        scale = Matrix.Diagonal((0.05, 0.002, 0.05, 1.0))
+        bmesh.ops.transform(bm, matrix=Matrix.Translation((0.095, 0.0, 0.0)) @ scale, verts=cube["verts"])
+    mesh = bpy.data.meshes.new(name)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location = (0.0, 0.5, 0.0)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+def test_per_part_thickness_finds_the_thin_part_of_a_thick_object(addon):
+    """A thick sphere with a 2 mm "ear" plate: its bounds are 160 mm thick (any method, by the bounding box), but the
+    ray-cast thickness finds 2 mm parts over a few per cent of the surface: a random walk. A plain sphere: none."""
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    data = bpy.data.cameras.new("Camera")
+    camera = bpy.data.objects.new("Camera", data)
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)  # looks along +y
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    material = bpy.data.materials.new("Skin")
+    assign(_sphere_with_ear("Head", ear=True), material)
+    assign(_sphere_with_ear("Ball", ear=False), material)
+    bpy.data.objects["Ball"].location = (0.3, 0.5, 0.0)
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    objects = _shape_entry(material)["figures"]["objects"]
+    head, ball = objects["Head"], objects["Ball"]
+    print("\nper-part thickness:", json.dumps({"Head": head["parts"], "Ball": ball["parts"]}, default=float))
+    assert head["thickness_mm"] == pytest.approx(160.0, rel=0.01) and head["thickness_radii"] > 3  # bounds: thick
+    # The plate's two large faces (2 x 50 mm x 50 mm, half outside the sphere) against the sphere's 4 pi 80^2 mm^2.
+    assert head["parts"]["thin_median_mm"] == pytest.approx(2.0, rel=1e-3)
+    assert 0.03 < head["parts"]["thin_area_fraction"] < 0.1
+    assert head["recommended"] == "RANDOM_WALK" and "Head" in _shape_entry(material)["reason"]
+    assert "2 mm thick" in head["reason"]
+    assert ball["parts"]["thin_area_fraction"] == 0.0 and ball["recommended"] is None
+    # A chord through the sphere's centre from every face: nearly the diameter.
+    assert ball["parts"]["thinnest_mm"] == pytest.approx(160.0, rel=0.05)
 
 
 def test_driven_haemoglobin_stores_the_cores_values_per_frame(addon):

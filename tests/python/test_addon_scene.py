@@ -312,3 +312,57 @@ def test_plan_textures_written_by_the_core_and_specular_constants_from_maps(tmp_
     off = scene.scene_plan(settings, None, {"specular": "OFF"})
     core.write_textures(off)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["Skin_albedo.exr", "Skin_radius.exr"]
+
+
+def test_least_absorbing_skin_bounds_the_radius():
+    """The bound the analysis drops subsurface by before computing (scene.radius_bound_mm) is at least the radius of
+    every parameter set on a grid over the ranges, per method and engine (monotone absorption: its premise)."""
+    ranges = spectral_skin.parameter_ranges()
+    grid = [np.linspace(*ranges[name], count) for name, count in (("melanin", 5), ("melanin_blend", 3),
+                                                                     ("hemoglobin", 5))]
+    for engine in ("cycles", "eevee"):
+        for method in ("BURLEY", "RANDOM_WALK", "RANDOM_WALK_SKIN"):
+            settings = core.SkinSettings(method=method, engine=engine)
+            bound_mm, work = scene.radius_bound_mm(settings)
+            assert work["radius_fits"] == 3
+            name = core.method_name(method)
+            largest = max(float(np.max(spectral_skin.evaluate(m, b, h, 0.0, outputs=["radius"], engine=engine)[
+                "methods"][name]["subsurface_radius_mm"])) for m in grid[0] for b in grid[1] for h in grid[2])
+            assert largest <= bound_mm * (1 + 1e-12), (engine, method, largest, bound_mm)
+
+
+def test_dropped_effects_are_not_computed():
+    """A far object with zero oiliness: the core's work for the material has no radius fit, no profile and no
+    specular evaluation (the decisions were taken before computing); close and oily, it has them."""
+    settings = core.SkinSettings.from_preset("caucasian", oiliness=0.0, method="RANDOM_WALK")
+    plan = scene.scene_plan(settings, _facts(1e4))
+    work = plan["work"]
+    assert (work["radius_fits"], work["radial_profiles"], work["specular_evaluations"]) == (0, 0, 0), work
+    assert work["transform_samples"] == work["wavelengths"] > 0  # the albedo alone: one value per wavelength
+    entry = _entry(plan["effects"], "subsurface")
+    assert not entry["enabled"] and "not computed" in entry["reason"]
+    assert entry["figures"]["largest_radius_bound_px"] < scene.SUBSURFACE_MIN_RADIUS_PX
+    assert not scene.enabled(plan["effects"], "specular") and plan["specular_ior_level"] == 0.0
+    albedo = spectral_skin.evaluate(preset="caucasian", outputs=["albedo"])["diffuse_reflectance_rgb"]
+    np.testing.assert_allclose(plan["base_color"], albedo, rtol=1e-12)
+    assert plan["subsurface_weight"] == 0.0 and plan["radius"] is None
+    assert plan["ior"] == plan["subsurface_ior"] == spectral_skin.evaluate(preset="caucasian")["specular"]["ior"]
+    close = scene.scene_plan(settings.replace(oiliness=0.3), _facts(0.5))
+    work = close["work"]
+    assert (work["radius_fits"], work["radial_profiles"], work["specular_evaluations"]) == (3, 0, 1), work
+    # Forced off: not computed either, whatever the distance.
+    forced = scene.scene_plan(settings.replace(oiliness=0.3), _facts(0.5), {"subsurface": "OFF", "specular": "OFF"})
+    assert (forced["work"]["radius_fits"], forced["work"]["specular_evaluations"]) == (0, 0)
+    assert not scene.enabled(forced["effects"], "subsurface") and "forced off" in _entry(
+        forced["effects"], "subsurface")["reason"]
+
+
+def test_dropped_effects_with_maps_are_not_kept(tmp_path):
+    """With maps the core computes every output (spectral_skin.maps has no output choice yet); the plan keeps no
+    radius and no specular texture when both are dropped, and records the core's work."""
+    hemoglobin = core.ParameterMap(np.linspace(0.001, 0.05, 16, dtype=np.float32).reshape(4, 4), False)
+    settings = core.SkinSettings.from_preset("caucasian", maps={"hemoglobin": hemoglobin}, oiliness=0.0,
+                                             output_dir=str(tmp_path))
+    plan = scene.scene_plan(settings, _facts(1e4))
+    assert set(plan["textures"]) == {"albedo"} and plan["radius"] is None
+    assert plan["work"]["texels"] == 16 and plan["work"]["evaluations"] == 16
