@@ -366,3 +366,31 @@ def test_dropped_effects_with_maps_are_not_kept(tmp_path):
     plan = scene.scene_plan(settings, _facts(1e4))
     assert set(plan["textures"]) == {"albedo"} and plan["radius"] is None
     assert plan["work"]["texels"] == 16 and plan["work"]["evaluations"] == 16
+
+
+def test_thin_parts_of_a_thick_object_by_area():
+    """Per-part thickness decides over the bounding box: 5 % of the area at 2 mm in a 160 mm thick object is thin
+    (a random walk, the reason naming the parts); 0.5 % is not (under THIN_AREA_FRACTION); no samples: the bounds."""
+    plan = _constant_plan()
+    largest = max(plan["radius"])
+    settings = core.SkinSettings.from_preset("caucasian")
+
+    def head(thin_area: float) -> scene.ShapeFacts:
+        parts = ((2.0, thin_area, (0.1, 0.0, 0.0)), (160.0, 100.0 - thin_area, (0.0, 0.0, 0.08)))
+        return scene.ShapeFacts("Head", 160.0, True, parts=parts, sampled_faces=2)
+
+    entry = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=(head(5.0),))), "subsurface method")
+    figures = entry["figures"]["objects"]["Head"]
+    assert figures["recommended"] == "RANDOM_WALK" and not entry["enabled"]
+    assert figures["parts"]["thin_area_fraction"] == pytest.approx(0.05)
+    assert figures["parts"]["thin_median_mm"] == 2.0 and figures["parts"]["thin_centre"] == (0.1, 0.0, 0.0)
+    assert "5 % of its surface" in figures["reason"] and "2 mm thick" in figures["reason"]
+    assert "(0.1, 0, 0)" in figures["reason"]
+    entry = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=(head(0.5),))), "subsurface method")
+    assert entry["enabled"] and entry["figures"]["objects"]["Head"]["recommended"] is None
+    # The fallback: without samples, the bounds' 2 mm make the object thin.
+    bounds = scene.ShapeFacts("Plate", 2.0, True)
+    entry = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=(bounds,))), "subsurface method")
+    assert entry["figures"]["objects"]["Plate"]["recommended"] == "RANDOM_WALK"
+    assert entry["figures"]["objects"]["Plate"]["parts"] is None
+    assert 2.0 < scene.THIN_RADII * largest
