@@ -38,6 +38,7 @@ Effects:
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -531,23 +532,41 @@ def active_camera(frame: int, scene_camera: str | None, markers: Sequence[tuple[
 def _decided_plan(settings: Any, effects: list[dict[str, Any]], progress: Any,
                   plan: dict[str, Any] | None = None) -> dict[str, Any]:
     """The material plan of ``settings`` (``plan`` when already computed: changed in place) changed as ``effects``
-    say. Where subsurface is dropped from a method other
-    than Burley (whose Base Color is not the albedo), the albedo is Burley's (the skin's total diffuse reflectance),
-    computed by the core for that method."""
+    say. Where subsurface is dropped from a method other than Burley (whose Base Color is not the albedo), Base
+    Color is the albedo (the skin's total diffuse reflectance): the core's, which came with a plan of constants (and
+    is all a plan computed without the radius has), else Burley's maps computed by the core (their work added)."""
     from .plan import make_plan
 
     if plan is None:
         plan = make_plan(settings, progress)
     albedo = None
-    if not enabled(effects, "subsurface") and settings.method != "BURLEY" and plan.get("computed", {}).get("radius", True):
-        burley = make_plan(settings.replace(method="BURLEY"), progress)
-        if burley["base_color"] is not None:
-            albedo = burley["base_color"]
+    radius_computed = plan.get("computed", {}).get("radius", True)
+    if not enabled(effects, "subsurface") and settings.method != "BURLEY" and radius_computed:
+        if plan.get("albedo") is not None:
+            albedo = plan["albedo"]
+            plan["summary"]["albedo"] = albedo
         else:
-            plan["images"]["albedo"] = burley["images"]["albedo"]
-        plan["summary"]["albedo"] = burley["summary"]["albedo"]
+            burley = make_plan(settings.replace(method="BURLEY"), progress)
+            plan["work"] = sum_work([plan["work"], burley["work"]])
+            if burley["base_color"] is not None:
+                albedo = burley["base_color"]
+            else:
+                plan["images"]["albedo"] = burley["images"]["albedo"]
+            plan["summary"]["albedo"] = burley["summary"]["albedo"]
     apply_decisions(plan, effects, albedo)
     return plan
+
+
+def sum_work(works: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The core's work counts of several computations added up, key by key (nested dicts too)."""
+    total: dict[str, Any] = {}
+    for work in works:
+        for key, value in work.items():
+            if isinstance(value, dict):
+                total[key] = sum_work([total.get(key, {}), value])
+            else:
+                total[key] = total.get(key, 0) + value
+    return total
 
 
 # The plan's values that the animation sets per frame (keys of the material plan).
@@ -586,16 +605,24 @@ def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str
     radius = before is None
     specular = choice["specular"] == "ON" or (choice["specular"] == "AUTO"
                                               and not oiliness_zero_everywhere(decision_settings))
-    plan = make_plan(settings, progress, radius=radius, specular=specular)
-    decision_plan = plan
+    decision_plan: dict[str, Any] = {}
     if per_frame:
         distinct = {tuple(s.constants().items()): s for s in per_frame}
         plans = {key: make_plan(s, progress, radius=radius, specular=specular) for key, s in distinct.items()}
+        current = plans.get(tuple(settings.constants().items()))
+        # The current frame's parameter set is usually one of the range's: its plan is not computed twice.
+        plan = copy.deepcopy(current) if current is not None else make_plan(settings, progress, radius=radius,
+                                                                             specular=specular)
+        works = [p["work"] for p in plans.values()] + ([] if current is not None else [plan["work"]])
+        plan["work"] = sum_work(works)
+        decision_plan = plan
         if radius:
             import numpy as np
 
             largest = np.max([p["radius"] for p in plans.values()], axis=0)
             decision_plan = {**plan, "radius": [float(v) for v in largest]}
+    else:
+        plan = decision_plan = make_plan(settings, progress, radius=radius, specular=specular)
     effects = decide(decision_plan, decision_settings, facts, overrides, subsurface=before)
     plan = _decided_plan(settings, effects, progress, plan)
     if per_frame and animation is not None:

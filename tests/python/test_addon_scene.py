@@ -250,6 +250,8 @@ def test_animated_constant_material_gets_the_cores_values_per_frame():
     np.testing.assert_allclose(plan["base_color"], plan["animation"]["base_color"][0])
     entry = _entry(plan["effects"], "animation")
     assert entry["enabled"] and entry["figures"]["evaluations"] == 3 and "hemoglobin keyframed" in entry["reason"]
+    # The plan's work: the three distinct parameter sets, each once (the current frame's is one of them).
+    assert (plan["work"]["radius_fits"], plan["work"]["specular_evaluations"]) == (9, 3)
     assert entry["figures"]["first_frame"] == 10 and entry["figures"]["last_frame"] == 13
 
 
@@ -394,3 +396,20 @@ def test_thin_parts_of_a_thick_object_by_area():
     assert entry["figures"]["objects"]["Plate"]["recommended"] == "RANDOM_WALK"
     assert entry["figures"]["objects"]["Plate"]["parts"] is None
     assert 2.0 < scene.THIN_RADII * largest
+
+
+def test_dropped_after_computing_the_radius_costs_one_evaluation():
+    """A material whose own radius is under the threshold while the bound on every skin's is not: the radius is
+    computed (three fits) and then dropped; a random walk's Base Color becomes the albedo that came with that one
+    evaluation (no second one)."""
+    settings = core.SkinSettings.from_preset("african", method="RANDOM_WALK")
+    own_mm = max(core.make_plan(settings)["radius"])
+    bound_mm, _work = scene.radius_bound_mm(settings)
+    depth = own_mm / 0.2 / 0.375  # the material's largest radius at 0.2 px
+    assert bound_mm / own_mm > scene.SUBSURFACE_MIN_RADIUS_PX / 0.2  # the bound alone does not drop it
+    plan = scene.scene_plan(settings, _facts(depth + 0.1))
+    assert plan["subsurface_weight"] == 0.0
+    assert "not computed" not in _entry(plan["effects"], "subsurface")["reason"]
+    assert plan["work"]["radius_fits"] == 3
+    albedo = spectral_skin.evaluate(preset="african", outputs=["albedo"])["diffuse_reflectance_rgb"]
+    np.testing.assert_allclose(plan["base_color"], albedo, rtol=1e-12)
