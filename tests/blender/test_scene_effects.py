@@ -2,7 +2,7 @@
 object's material renders plain diffuse with the core's albedo, a close one keeps subsurface, zero oiliness writes
 no specular texture, overrides win and survive re-applying, and the batch path decides exactly as the operator;
 thin and open objects get a subsurface method recommended; a driven parameter stores the core's values per frame and
-a keyframed haemoglobin renders the core's albedo at two frames of a headless batch render.
+a keyframed haemoglobin renders the core's albedo at two frames of a headless render (scripts/render_blend.py).
 
 Run: .venv-blender/5.0/bin/python -m pytest tests/blender/test_scene_effects.py -q
 """
@@ -25,6 +25,9 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
+sys.path.insert(0, str(REPO / "scripts"))
+
+import render_blend  # noqa: E402  (scripts/render_blend.py)
 from blender_scenes import add_box, assign  # noqa: E402
 
 from blender_addon import batch  # noqa: E402
@@ -265,7 +268,7 @@ def test_driven_haemoglobin_stores_the_cores_values_per_frame(addon):
 def test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon, tmp_path):
     """Acceptance (issue 13): haemoglobin keyframed 0.005 at frame 1 and 0.05 at frame 2 on a Burley flat slab
     under a white world (test_renders.py's set-up: the slab renders its Base Color, which is the core's total diffuse
-    reflectance), applied through the operator, saved, and rendered by the headless batch renderer with the add-on
+    reflectance), applied through the operator, saved, and rendered by the headless render script with the add-on
     unregistered (a render node): each frame's central mean is the core's albedo of that frame within 0.2 %."""
     import blender_scenes
 
@@ -289,8 +292,8 @@ def test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon, tmp
     melanin, melanin_blend = props.melanin, props.melanin_blend  # the file is reloaded: no bpy data after this
     blend = tmp_path / "animated.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
-    addon.unregister()  # the render node: no add-on, the batch renderer installs the handler itself
-    paths = batch.render_frames(str(blend), str(tmp_path / "renders"), frames=[1, 2], samples=512)
+    addon.unregister()  # the render node: no add-on, the render script installs the handler itself
+    paths = render_blend.render_frames(str(blend), str(tmp_path / "renders"), frames=[1, 2], samples=512)
     for path, (frame, value) in zip(paths, hemoglobin.items(), strict=True):
         expected = np.asarray(spectral_skin.evaluate(melanin, melanin_blend, value, 0.0,
                                                      blender=bpy.app.version)["diffuse_reflectance_rgb"])
