@@ -5,8 +5,8 @@ at every frame of the scene's range, computed by the core) on the material as th
 :data:`PROPERTY` (JSON), so it is saved with the .blend. :func:`frame_change` (``bpy.app.handlers.frame_change_pre``,
 persistent: it stays through loading other files) sets those values on the add-on's Principled BSDF at each frame
 change; a frame outside the range takes the nearest frame's values. No numerics here, and nothing but bpy: the
-headless renderer (batch.py ``render_frames``) installs the handler from this file without the add-on or
-``spectral_skin``.
+headless render script (scripts/render_blend.py, outside the extension) loads this file and installs the handler
+without the add-on or ``spectral_skin``.
 """
 
 from __future__ import annotations

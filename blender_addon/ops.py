@@ -1,13 +1,17 @@
-"""The operators: Apply (compute the material plan with the core, write its maps, then edit the material) and Remove.
+"""Apply (compute the material plan with the core, write its maps, then edit the material and store the plan:
+:func:`apply_skins`, the one path of the operator and of ``batch.py apply``) and the operators Apply and Remove.
 
-Apply with parameter maps, started from the UI, computes in a worker thread (the core releases the GIL) while a
-modal timer shows the progress and Esc cancels with nothing changed; the material is edited on Blender's main thread
-once everything is computed and written. From a script (or without maps) it runs synchronously, the same code.
+Apply with parameter maps, started from the UI, runs the computing step in a worker thread (the core releases the
+GIL) while a modal timer shows the progress and Esc cancels with nothing changed; the material is edited on Blender's
+main thread once everything is computed and written. From a script (or without maps) it runs synchronously, the same
+steps.
 """
 
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import bpy
@@ -21,34 +25,65 @@ from .nodes import scene_target, scene_working_space
 ERRORS = (spectral_skin.SpectralSkinError, ValueError, OSError)
 
 
-def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
-    """Compute everything, write the maps, and only then edit ``material``; returns the plan.
+@dataclass(frozen=True)
+class Job:
+    """What Apply computes a material's plan from, gathered from bpy on the main thread: the settings for the scene's
+    target and working space, the scene's facts for the material (:mod:`scene_facts`) and the material's overrides."""
 
-    Raises spectral_skin.SpectralSkinError / ValueError for bad settings, spectral_skin.SpectralSkinIOError (an OSError)
-    for a map that cannot be written (the core's writer names the file); the material and existing files are then unchanged. The plan is computed in the scene's working space
+    settings: SkinSettings
+    facts: analysis.SceneFacts | None
+    overrides: dict[str, str]
+
+
+def prepare(material: bpy.types.Material, settings: SkinSettings, scene: bpy.types.Scene) -> Job:
+    """Apply's first step (main thread): the plan is computed in the scene's working space
     (:func:`scene_working_space`) and for the running Blender and the scene's engine (:func:`scene_target`), whatever
-    ``settings`` says. The scene decides which effects are simulated (:mod:`scene_facts`, ``plan["effects"]``).
-    """
-    scene = bpy.context.scene
-    facts, overrides = scene_facts.gather(scene, material), scene_facts.overrides(material)
-    plan = compute_plan(settings.replace(**scene_target(scene)), facts, overrides)
-    finish_apply(material, plan)
-    return plan
+    ``settings`` says."""
+    return Job(settings.replace(working_space=scene_working_space(), **scene_target(scene)),
+               scene_facts.gather(scene, material), scene_facts.overrides(material))
 
 
-def compute_plan(settings: SkinSettings, facts: analysis.SceneFacts | None, overrides: dict[str, str],
-                 progress: Any = None) -> dict:
-    """The part of Apply that needs no bpy data (safe in a worker thread): the plan for the scene's facts (gathered
-    beforehand on the main thread) and its written maps."""
-    plan = analysis.scene_plan(settings.replace(working_space=scene_working_space()), facts, overrides, progress)
-    write_textures(plan)
-    return plan
+def compute(jobs: Sequence[Job], progress: Any = None, before_write: Callable[[], bool] | None = None) -> list[dict]:
+    """Apply's second step, which needs no bpy data (safe in a worker thread): every job's plan (the scene decides
+    which effects are simulated: ``plan["effects"]``), then, only once all are computed, every plan's maps written.
+
+    ``progress(done, total)`` is the core's callback (False cancels). ``before_write()`` is called between the two;
+    when it returns False nothing is written and the result is empty (a cancel)."""
+    plans = [analysis.scene_plan(job.settings, job.facts, job.overrides, progress) for job in jobs]
+    if before_write is not None and not before_write():
+        return []
+    for plan in plans:
+        write_textures(plan)
+    return plans
 
 
-def finish_apply(material: bpy.types.Material, plan: dict) -> None:
-    """The part of Apply on Blender's data (main thread only)."""
+def finish(material: bpy.types.Material, plan: dict) -> None:
+    """Apply's last step, on Blender's data (main thread only): the material's nodes, then the plan stored on it."""
     nodes.apply_plan(material, plan)
     props.store_result(material, plan)
+
+
+def apply_skins(items: Sequence[tuple[bpy.types.Material, SkinSettings]],
+                scene: bpy.types.Scene | None = None) -> list[dict]:
+    """Apply, the one path of the operator and of the batch apply: for each ``(material, settings)`` the plan for
+    ``scene`` (default: the context's), then every plan's maps written, and only then each material edited and its
+    plan stored (:func:`prepare`, :func:`compute`, :func:`finish`; the operator started from the panel runs
+    :func:`compute` in a worker thread). Returns the plans.
+
+    Raises spectral_skin.SpectralSkinError / ValueError for bad settings, spectral_skin.SpectralSkinIOError (an
+    OSError) for a map that cannot be written (the core's writer names the file); no material is then changed.
+    """
+    scene = scene if scene is not None else bpy.context.scene
+    jobs = [prepare(material, settings, scene) for material, settings in items]
+    plans = compute(jobs)
+    for (material, _), plan in zip(items, plans, strict=True):
+        finish(material, plan)
+    return plans
+
+
+def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
+    """:func:`apply_skins` for one material in the context's scene; returns its plan."""
+    return apply_skins([(material, settings)])[0]
 
 
 def _find_material(name: str, context: bpy.types.Context) -> bpy.types.Material | None:
@@ -62,29 +97,28 @@ def _find_material(name: str, context: bpy.types.Context) -> bpy.types.Material 
 
 
 class _Work:
-    """Apply's computation in a worker thread: its progress, a cancel flag, and its outcome."""
+    """Apply's :func:`compute` in a worker thread: its progress, a cancel flag, and its outcome."""
 
-    def __init__(self, settings: SkinSettings, facts: analysis.SceneFacts | None = None,
-                 overrides: dict[str, str] | None = None) -> None:
+    def __init__(self, job: Job) -> None:
         self.fraction = 0.0
         self.cancel = threading.Event()
         self.writing = False
         self.plan: dict | None = None
         self.error: BaseException | None = None
-        self.thread = threading.Thread(target=self._run, args=(settings, facts, overrides), daemon=True)
+        self.thread = threading.Thread(target=self._run, args=(job,), daemon=True)
 
     def _progress(self, done: int, total: int) -> bool:
         self.fraction = done / total if total else 1.0
         return not self.cancel.is_set()
 
-    def _run(self, settings: SkinSettings, facts: analysis.SceneFacts | None, overrides: dict[str, str] | None) -> None:
+    def _start_writing(self) -> bool:
+        self.writing = not self.cancel.is_set()
+        return self.writing
+
+    def _run(self, job: Job) -> None:
         try:
-            plan = analysis.scene_plan(settings, facts, overrides, self._progress)
-            if self.cancel.is_set():
-                return
-            self.writing = True
-            write_textures(plan)
-            self.plan = plan
+            plans = compute([job], self._progress, self._start_writing)
+            self.plan = plans[0] if plans else None
         except BaseException as error:  # reported on the main thread
             self.error = error
 
@@ -144,8 +178,7 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
         if not settings.maps or context.window is None:
             return self.execute(context)  # one evaluation: no time to show
         self._material_name = material.name
-        self._work = _Work(settings.replace(working_space=scene_working_space()),
-                           scene_facts.gather(context.scene, material), scene_facts.overrides(material))
+        self._work = _Work(prepare(material, settings, context.scene))
         self._work.thread.start()
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)
@@ -190,7 +223,7 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
             self.report({"ERROR"}, f"Spectral Skin: the material {self._material_name!r} is gone")
             return {"CANCELLED"}
         try:
-            finish_apply(material, work.plan)
+            finish(material, work.plan)
         except ERRORS as error:
             self.report({"ERROR"}, f"Spectral Skin: {describe_error(error)}")
             return {"CANCELLED"}

@@ -215,8 +215,3 @@ def override_property(effect: str) -> str:
     """The name of an effect's override on the material's Spectral Skin settings: ``override_constant_maps``."""
     return "override_" + effect.replace(" ", "_")
 
-
-def scene_plan(material: bpy.types.Material, scene: bpy.types.Scene, settings: Any, progress: Any = None) -> dict:
-    """The material plan for this scene: the one path of the operator and of the batch apply (maps not yet
-    written)."""
-    return analysis.scene_plan(settings, gather(scene, material), overrides(material), progress)

@@ -56,4 +56,22 @@ sed -i "s|^platforms = .*|platforms = [$(join "${platforms[@]}")]|" blender_addo
 mkdir -p dist
 rm -f dist/spectral_skin-*.zip
 "$PY" "$BLENDER_EXT" build --source-dir blender_addon --output-dir dist --split-platforms
+# Each zip holds exactly the add-on's tracked Python files (no render-only script: scripts/render_blend.py stays out),
+# the manifest and its one wheel.
+for zip in dist/spectral_skin-*.zip; do
+    "$PY" - "$zip" <<'PYEOF'
+import subprocess, sys, zipfile
+names = set(zipfile.ZipFile(sys.argv[1]).namelist())
+tracked = subprocess.run(["git", "ls-files", "blender_addon/*.py"], capture_output=True, text=True, check=True).stdout
+expected = {path.removeprefix("blender_addon/") for path in tracked.split()}
+python = {n for n in names if n.endswith(".py")}
+wheels = [n for n in names if n.startswith("wheels/")]
+problems = [f"missing {sorted(expected - python)}"] if expected - python else []
+problems += [f"unexpected {sorted(python - expected)}"] if python - expected else []
+problems += [] if "blender_manifest.toml" in names and len(wheels) == 1 else [f"manifest/wheels: {sorted(names)}"]
+if problems:
+    raise SystemExit(f"build_addon: {sys.argv[1]}: " + "; ".join(problems))
+print(f"{sys.argv[1]}: {len(python)} Python files, {wheels[0]}")
+PYEOF
+done
 ls -l dist/spectral_skin-*.zip

@@ -1,4 +1,4 @@
-"""Type stubs of spectral-skin's compiled core (src/python.rs): types only.
+"""Type stubs of spectral-skin's compiled core (src/python/): types only.
 
 Each function's documentation (arguments, units, returns, raises) lives once, in the Rust doc comment of its
 ``#[pyfunction]``, which pyo3 makes the function's ``__doc__``: read it with ``help(spectral_skin.evaluate)``.

@@ -257,9 +257,9 @@ def read_exr(path: str) -> np.ndarray:
     return np.asarray(pixels, dtype=np.float32)
 
 
-def render(scene, samples: int, filter_width: float = 1.5, seed: int = 1) -> np.ndarray:
-    """Render the scene with Cycles to a temporary EXR; returns its RGB as float64 (H, W, 3), row 0 = top row
-    (= +y side of the image)."""
+def render(scene, samples: int, filter_width: float = 1.5, seed: int = 1, alpha: bool = False) -> np.ndarray:
+    """Render the scene with Cycles to a temporary EXR; returns its RGB (RGBA with ``alpha``) as float64 (H, W, 3|4),
+    row 0 = top row (= +y side of the image)."""
     bpy = _bpy()
     scene.cycles.samples = samples
     scene.cycles.seed = seed
@@ -269,8 +269,9 @@ def render(scene, samples: int, filter_width: float = 1.5, seed: int = 1) -> np.
         scene.render.filepath = path
         bpy.ops.render.render(write_still=True)
         img = read_exr(path)
-    assert img.shape[:2] == (scene.render.resolution_y, scene.render.resolution_x), img.shape
-    return img[:, :, :3].astype(np.float64)
+    if not (scene.render.use_border and scene.render.use_crop_to_border):  # a cropped border render is smaller
+        assert img.shape[:2] == (scene.render.resolution_y, scene.render.resolution_x), img.shape
+    return img[:, :, : 4 if alpha else 3].astype(np.float64)
 
 
 def pixel_centres_x(ortho_scale: float, width: int, center_x: float = 0.0) -> np.ndarray:
@@ -308,6 +309,53 @@ def shadow_edge_scene(scene, material, ortho_mm: float, width: int, height: int,
     occluder.visible_camera = False  # casts the shadow, but camera rays pass through
     add_sun(scene, strength=1.0, angle=0.0)
     add_top_camera(scene, ortho_scale=ortho_mm * MM, width=width, height=height)
+
+
+HEAD_WIDTH_M = 0.2  # head_scene's object: Suzanne scaled to this width (a head)
+
+
+def head_scene(scene, material, distance_m: float, width: int, height: int, shape: str = "SPHERE",
+               lens_mm: float = 50.0):
+    """A head-sized object seen from ``distance_m`` (camera to the object's centre), at the origin, with
+    ``material``: ``shape`` "SPHERE", a closed UV sphere HEAD_WIDTH_M across (64 x 32 segments, with its UV map), or
+    "SUZANNE", Blender's monkey head (an open mesh with thin ears, with her UV map) scaled to HEAD_WIDTH_M wide with
+    one level of subdivision, facing -y; both smooth shaded. A perspective camera on the -y axis looks at it
+    (``lens_mm`` on a 36 mm sensor); a sun from the front left above with irradiance pi W/m^2 (a white Lambertian
+    surface facing it renders 1.0) and no angular size (hard shadows, where subsurface scattering shows), a dim white
+    world (0.1) and a transparent film (alpha = the object's coverage). Returns the object."""
+    bpy = _bpy()
+    from mathutils import Vector
+
+    set_world(scene, strength=0.1)
+    scene.render.film_transparent = True
+    if shape == "SPHERE":
+        bpy.ops.mesh.primitive_uv_sphere_add(radius=HEAD_WIDTH_M / 2, segments=64, ring_count=32, calc_uvs=True)
+        head = bpy.context.active_object
+    elif shape == "SUZANNE":
+        bpy.ops.mesh.primitive_monkey_add(size=1.0, calc_uvs=True)
+        head = bpy.context.active_object
+        head.scale = [HEAD_WIDTH_M / max(head.dimensions)] * 3
+        subdivision = head.modifiers.new("Subdivision", "SUBSURF")
+        subdivision.levels = subdivision.render_levels = 1
+    else:
+        raise ValueError(f"shape must be SPHERE or SUZANNE; got {shape!r}")
+    head.name = "Head"
+    head.data.polygons.foreach_set("use_smooth", [True] * len(head.data.polygons))
+    assign(head, material)
+    sun = add_sun(scene, strength=math.pi)
+    sun.rotation_mode = "QUATERNION"
+    sun.rotation_quaternion = Vector((-0.6, -1.0, 0.8)).to_track_quat("Z", "Y")  # +z towards the sun
+    data = bpy.data.cameras.new("Camera")
+    data.lens, data.sensor_width, data.sensor_fit = lens_mm, 36.0, "AUTO"
+    data.clip_start, data.clip_end = min(0.01, distance_m / 10), 2.0 * distance_m + 1.0
+    camera = bpy.data.objects.new("Camera", data)
+    camera.location = (0.0, -distance_m, 0.0)
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)  # -z (the view axis) onto +y
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    bpy.context.view_layer.update()  # the objects' world matrices, for what reads them next
+    return head
 
 
 def render_edge(scene, material, ortho_mm: float, width: int, height: int, samples: int, seed: int = 1):

@@ -28,7 +28,7 @@ from blender_scenes import material_snapshot  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
-from blender_addon.ops import apply_skin  # noqa: E402
+from blender_addon.ops import apply_skin, apply_skins  # noqa: E402
 
 # scripts/build_addon.sh builds one zip per platform (Blender's `--split-platforms` names): this machine's.
 SYSTEM = {"Linux": "linux", "Darwin": "macos", "Windows": "windows"}.get(platform.system(), platform.system())
@@ -128,6 +128,26 @@ def test_invalid_parameter_changes_nothing(addon):
     assert material_snapshot(material) == before
 
 
+def test_apply_writes_nothing_until_every_plan_is_computed(addon, tmp_path):
+    """apply_skins (the operator's and the batch apply's path): a material whose plan fails leaves the others
+    unchanged and no map written, though theirs were computed first."""
+    first, second = bpy.data.materials.new("First"), bpy.data.materials.new("Second")
+    for material in (first, second):
+        assert bpy.ops.spectral_skin.apply(material=material.name) == {"FINISHED"}
+    before = material_snapshot(first)
+    melanin = np.linspace(0.0, 0.3, 12, dtype=np.float32).reshape(3, 4)
+    good = SkinSettings.from_preset("asian", maps={"melanin": ParameterMap(melanin, normalized=False)},
+                                    output_dir=str(tmp_path), file_prefix="First")
+    with pytest.raises(spectral_skin.SpectralSkinError, match="melanin"):
+        apply_skins([(first, good), (second, SkinSettings.from_preset("caucasian", melanin=0.9))])
+    assert material_snapshot(first) == before
+    assert list(tmp_path.iterdir()) == []
+    plans = apply_skins([(first, good), (second, SkinSettings.from_preset("caucasian"))])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["First_albedo.exr", "First_radius.exr"]
+    assert [first.spectral_skin.result_computed, second.spectral_skin.result_computed] == [
+        plan["summary"]["computed"] for plan in plans]
+
+
 def test_operator_reports_error_and_changes_nothing(addon, tmp_path):
     material = bpy.data.materials.new("Skin")
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
@@ -197,6 +217,13 @@ INSTALL_SCRIPT = textwrap.dedent("""
 
 @pytest.mark.skipif(not ZIP.exists(), reason=f"no {ZIP.relative_to(REPO)}: run bash scripts/build_addon.sh")
 def test_built_zip_validates_and_installs(tmp_path):
+    # The add-on's own files, without the render-only script (scripts/render_blend.py needs no add-on).
+    import zipfile
+
+    with zipfile.ZipFile(ZIP) as archive:
+        sources = {name: archive.read(name) for name in archive.namelist() if name.endswith(".py")}
+    assert {"batch.py", "ops.py", "frame_values.py", "scene_facts.py", "core/scene.py"} <= set(sources)
+    assert not [name for name, text in sources.items() if b"bpy.ops.render.render" in text]
     validate = subprocess.run([sys.executable, str(BLENDER_EXT), "validate", str(ZIP)],
                               capture_output=True, text=True)
     assert validate.returncode == 0, validate.stdout + validate.stderr

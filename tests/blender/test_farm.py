@@ -3,8 +3,9 @@
 The add-on's output is plain Blender data (a Principled BSDF, image textures saved next to the .blend or packed into
 it), so a render node needs only Blender. These tests save such a .blend, render it in a fresh process that cannot
 import spectral_skin nor the add-on, and compare with the render made where the add-on is registered. Also: the
-packed .blend after its texture folder is deleted, the headless ``batch.py render`` command, and "nothing lost"
-when a parameter map cannot be read. Small renders (64x64, 32 spp, fixed seed).
+packed .blend after its texture folder is deleted, the headless render script ``scripts/render_blend.py`` (not part
+of the extension; run without spectral_skin), and "nothing lost" when a parameter map cannot be read. Small renders
+(64x64, 32 spp, fixed seed).
 
 Run: .venv/bin/python -m pytest tests/blender/test_farm.py -s   (-s shows the 2048² apply timing)
 """
@@ -31,7 +32,9 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+sys.path.insert(0, str(REPO / "scripts"))
 
+import render_blend  # noqa: E402  (scripts/render_blend.py)
 from blender_scenes import (  # noqa: E402
     add_slab,
     add_sun,
@@ -49,6 +52,10 @@ from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 
 BATCH = REPO / "blender_addon" / "batch.py"
+RENDER = REPO / "scripts" / "render_blend.py"
+# scripts/render_blend.py as a render node runs it: an isolated Python (-I) where importing spectral_skin fails.
+RENDER_NODE = ("import runpy, sys; sys.modules['spectral_skin'] = None; sys.argv = sys.argv[1:]; "
+               "runpy.run_path(sys.argv[0], run_name='__main__')")
 SIZE = 64
 SAMPLES = 32
 SEED = 7
@@ -145,7 +152,7 @@ def test_render_on_farm_node_without_addon_matches(addon, tmp_path):
     assert sorted(p.name for p in (tmp_path / "job" / "skin_maps").iterdir()) == ["scene_Skin_albedo.exr",
                                                                                    "scene_Skin_radius.exr"]
     # Reference: rendered here, with the add-on registered (render_frames reopens the saved file).
-    [reference_path] = batch.render_frames(str(blend), str(tmp_path / "ref"), frames=[1])
+    [reference_path] = render_blend.render_frames(str(blend), str(tmp_path / "ref"), frames=[1])
     assert _registered()
     reference = _rgb(reference_path)
     # The job folder is copied elsewhere, as onto a render node: the relative texture paths must follow.
@@ -169,7 +176,7 @@ def test_render_on_farm_node_without_addon_matches(addon, tmp_path):
 
 def test_packed_blend_renders_after_texture_folder_deleted(addon, tmp_path):
     reference_blend = _skin_blend(tmp_path, "plain", pack=False)
-    [reference_path] = batch.render_frames(str(reference_blend), str(tmp_path / "ref"))
+    [reference_path] = render_blend.render_frames(str(reference_blend), str(tmp_path / "ref"))
     packed = _skin_blend(tmp_path, "packed", pack=True)
     shutil.rmtree(tmp_path / "packed" / "skin_maps")
     info = _farm_render(packed, tmp_path / "packed_frame.exr")
@@ -178,7 +185,7 @@ def test_packed_blend_renders_after_texture_folder_deleted(addon, tmp_path):
     # The unpacked .blend without its texture folder: a clear error before rendering, not a magenta frame.
     shutil.rmtree(tmp_path / "plain" / "skin_maps")
     with pytest.raises(FileNotFoundError, match="scene_Skin_albedo.exr"):
-        batch.render_frames(str(reference_blend), str(tmp_path / "ref2"))
+        render_blend.render_frames(str(reference_blend), str(tmp_path / "ref2"))
     assert not (tmp_path / "ref2").exists()
 
 
@@ -187,30 +194,39 @@ def _run_batch(*args: str, cwd: pathlib.Path) -> subprocess.CompletedProcess:
                           timeout=300)
 
 
-def test_batch_render_cli(addon, tmp_path):
+def _run_render(*args: str, cwd: pathlib.Path) -> subprocess.CompletedProcess:
+    env = {k: v for k, v in os.environ.items() if k not in {"PYTHONPATH", "PYTHONSTARTUP"}}
+    return subprocess.run([sys.executable, "-I", "-c", RENDER_NODE, str(RENDER), *args], cwd=str(cwd), env=env,
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_render_script_cli(addon, tmp_path):
     blend = _skin_blend(tmp_path, "job", pack=True)
-    [reference] = batch.render_frames(str(blend), str(tmp_path / "ref"), frames=[2], samples=8,
-                                      resolution=(32, 24), seed=3)
-    proc = _run_batch("render", str(blend), "--out", str(tmp_path / "out"), "--frames", "1-2", "--samples", "8",
-                      "--resolution", "32x24", "--seed", "3", cwd=tmp_path)
+    [reference] = render_blend.render_frames(str(blend), str(tmp_path / "ref"), frames=[2], samples=8,
+                                             resolution=(32, 24), seed=3)
+    proc = _run_render(str(blend), "--out", str(tmp_path / "out"), "--frames", "1-2", "--samples", "8",
+                       "--resolution", "32x24", "--seed", "3", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     paths = proc.stdout.split()[-2:]
     assert [os.path.basename(p) for p in paths] == ["scene_0001.exr", "scene_0002.exr"]
     image = read_exr(paths[1])
     assert image.shape[:2] == (24, 32)
     assert np.array_equal(image, read_exr(reference))
-    proc = _run_batch("render", str(blend), "--out", str(tmp_path / "png"), "--format", "png", "--samples", "4",
-                      "--resolution", "16x16", cwd=tmp_path)
+    proc = _run_render(str(blend), "--out", str(tmp_path / "png"), "--format", "png", "--samples", "4",
+                       "--resolution", "16x16", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert os.path.basename(proc.stdout.split()[-1]) == "scene_0001.png"
     # Errors: one clear line, exit status 2.
-    for args, message in [(("render", str(tmp_path / "nope.blend"), "--out", str(tmp_path / "x")), "no such .blend"),
-                          (("render", str(blend), "--out", str(tmp_path / "x"), "--frames", "3-1"), "ends before"),
-                          (("render", str(blend), "--out", str(tmp_path / "x"), "--frames", "a"), "frames must"),
-                          (("render", str(blend), "--out", str(tmp_path / "x"), "--resolution", "12"), "resolution")]:
-        proc = _run_batch(*args, cwd=tmp_path)
+    for args, message in [((str(tmp_path / "nope.blend"), "--out", str(tmp_path / "x")), "no such .blend"),
+                          ((str(blend), "--out", str(tmp_path / "x"), "--frames", "3-1"), "ends before"),
+                          ((str(blend), "--out", str(tmp_path / "x"), "--frames", "a"), "frames must"),
+                          ((str(blend), "--out", str(tmp_path / "x"), "--resolution", "12"), "resolution")]:
+        proc = _run_render(*args, cwd=tmp_path)
         assert proc.returncode == 2, (args, proc.stderr)
-        assert proc.stderr.startswith("spectral-skin batch:") and message in proc.stderr, proc.stderr
+        assert proc.stderr.startswith("render_blend:") and message in proc.stderr, proc.stderr
+    # The add-on's batch.py no longer renders: it names the script.
+    proc = _run_batch("render", str(blend), "--out", str(tmp_path / "x"), cwd=tmp_path)
+    assert proc.returncode == 2 and "scripts/render_blend.py" in proc.stderr, proc.stderr
 
 
 def test_unreadable_map_changes_nothing(addon, tmp_path):

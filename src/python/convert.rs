@@ -1,0 +1,403 @@
+//! The conversion rules for arguments (numbers, sequences, names, arrays) and for results (JSON values, arrays).
+
+use numpy::ndarray::{Array2, ArrayView2, Axis, Ix2, Ix3};
+use numpy::{
+    AllowTypeChange, Element, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayLike1, PyArrayMethods, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
+use serde::Serialize;
+use serde_json::Value;
+
+use crate::color::{ALL_RGB_MAPPINGS, ALL_WAVELENGTH_PLACEMENTS, ALL_WORKING_SPACES};
+use crate::diffusion::{MultipoleTerms, ALL_BOUNDARIES, ALL_COMBINATIONS};
+use crate::error::SkinError;
+use crate::evaluate::ProfileGrid;
+use crate::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
+use crate::maps::io::PARAM_CHANNELS;
+use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
+
+use super::errors::{internal, invalid};
+
+/// The Outputs the material path needs: the default of `evaluate(outputs=...)`.
+pub(super) const MATERIAL_OUTPUTS: [&str; 3] = ["albedo", "radius", "specular"];
+
+/// A TypeError if `obj` is a str or bytes where a sequence is expected (strings are iterable, so they would
+/// otherwise be read character by character).
+pub(super) fn reject_string(obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<()> {
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyBytes>() {
+        return Err(PyTypeError::new_err(format!("{expected}, not a string")));
+    }
+    Ok(())
+}
+
+/// The Python type of `obj`, for messages.
+pub(super) fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+}
+
+/// True for Python's and numpy's booleans: they convert to numbers, but `True` as a concentration or a step is a
+/// mistake, not a 1.
+pub(super) fn is_boolean(obj: &Bound<'_, PyAny>) -> bool {
+    obj.is_instance_of::<PyBool>() || type_name(obj) == "bool_" || type_name(obj) == "bool"
+}
+
+/// The one rule for every numeric argument: an int or a float (or a numpy scalar of either), never a bool, str or
+/// bytes. A wrong type is a TypeError whose message names the argument (pyo3 only adds the name as a note).
+pub(super) fn number_type_check(name: &str, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<()> {
+    if is_boolean(obj) || obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyBytes>() {
+        return Err(PyTypeError::new_err(format!("{name} must be {what}; got {} {}", type_name(obj), obj.repr()?)));
+    }
+    Ok(())
+}
+
+/// A real number (see [`number_type_check`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Real(pub(super) f64);
+
+/// An integer (see [`number_type_check`]); a float is a TypeError too.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Count(pub(super) i64);
+
+pub(super) const A_NUMBER: &str = "a number (int or float)";
+pub(super) const AN_INTEGER: &str = "an integer";
+
+pub(super) fn real_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Real> {
+    number_type_check(name, obj, A_NUMBER)?;
+    obj.extract::<f64>()
+        .map(Real)
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be {A_NUMBER}; got {}", type_name(obj))))
+}
+
+pub(super) fn count_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Count> {
+    number_type_check(name, obj, AN_INTEGER)?;
+    obj.extract::<i64>()
+        .map(Count)
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be {AN_INTEGER}; got {}", type_name(obj))))
+}
+
+/// An optional numeric keyword argument (None is absent).
+pub(super) fn real_arg(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Real>> {
+    obj.filter(|o| !o.is_none()).map(|o| real_of(name, o)).transpose()
+}
+
+pub(super) fn count_arg(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Count>> {
+    obj.filter(|o| !o.is_none()).map(|o| count_of(name, o)).transpose()
+}
+
+/// `obj` as a sequence of numbers under the rule of [`Real`]; a wrong element is a TypeError naming `name[i]`.
+pub(super) fn real_sequence(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<f64>> {
+    reject_string(obj, &format!("{name} must be {expected}"))?;
+    let iter = obj
+        .try_iter()
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be {expected}; got {}", type_name(obj))))?;
+    iter.enumerate().map(|(i, item)| Ok(real_of(&format!("{name}[{i}]"), &item?)?.0)).collect()
+}
+
+/// `obj` as a sequence of integers under the rule of [`Count`]; a wrong element is a TypeError naming `name[i]`.
+pub(super) fn count_sequence(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<i64>> {
+    reject_string(obj, &format!("{name} must be {expected}"))?;
+    let iter = obj
+        .try_iter()
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be {expected}; got {}", type_name(obj))))?;
+    iter.enumerate().map(|(i, item)| Ok(count_of(&format!("{name}[{i}]"), &item?)?.0)).collect()
+}
+
+/// The serde name of a core enum value (e.g. "directional", "Linear Rec.709").
+pub(super) fn serde_name<T: Serialize>(value: &T) -> String {
+    match serde_json::to_value(value) {
+        Ok(Value::String(s)) => s,
+        _ => String::new(),
+    }
+}
+
+/// The value among `candidates` whose serde name is `name`; the error lists the accepted names.
+pub(super) fn by_name<T: Serialize + Copy>(what: &str, name: &str, candidates: &[T]) -> PyResult<T> {
+    candidates.iter().copied().find(|c| serde_name(c) == name).ok_or_else(|| {
+        let names: Vec<String> = candidates.iter().map(|c| format!("{:?}", serde_name(c))).collect();
+        invalid(what, format!("unknown {what} {name:?}; valid: {}", names.join(", ")))
+    })
+}
+
+/// Names in `outputs` (an iterable of str) to [`Outputs`]; the valid names are `Outputs`' field names.
+pub(super) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Outputs> {
+    let names: Vec<String> = match outputs {
+        None => MATERIAL_OUTPUTS.iter().map(|s| s.to_string()).collect(),
+        Some(obj) => {
+            reject_string(obj, "outputs must be an iterable of output names")?;
+            obj.try_iter()?.map(|item| item?.extract::<String>()).collect::<PyResult<_>>()?
+        }
+    };
+    let Ok(Value::Object(mut fields)) = serde_json::to_value(Outputs::default()) else {
+        return Err(PyRuntimeError::new_err("spectral-skin internal error: Outputs does not serialise to an object"));
+    };
+    for name in &names {
+        match fields.get_mut(name.as_str()) {
+            Some(flag) => *flag = Value::Bool(true),
+            None => {
+                let valid: Vec<String> = fields.keys().map(|k| format!("{k:?}")).collect();
+                return Err(invalid("outputs", format!("unknown output {name:?}; valid: {}", valid.join(", "))));
+            }
+        }
+    }
+    serde_json::from_value(Value::Object(fields))
+        .map_err(|e| PyRuntimeError::new_err(format!("spectral-skin internal error: {e}")))
+}
+
+/// A preset and/or the four parameters: explicit parameters override the preset's; without a preset all four are
+/// required. The core validates the ranges.
+pub(super) fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) -> PyResult<SkinParams> {
+    let explicit = explicit.map(|v| v.map(|r| r.0));
+    let base = preset.map(SkinParams::preset).transpose()?;
+    let from_preset = base.map(|p| [p.melanin, p.melanin_blend, p.hemoglobin, p.oiliness]);
+    let values: [Option<f64>; 4] = [0, 1, 2, 3].map(|i| explicit[i].or(from_preset.map(|p| p[i])));
+    let missing: Vec<&str> = (0..4).filter(|&i| values[i].is_none()).map(|i| PARAM_CHANNELS[i]).collect();
+    if !missing.is_empty() {
+        let presets: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
+        return Err(invalid(
+            "parameters",
+            format!(
+                "give preset= (one of {}) or all of {}; missing: {}",
+                presets.join(", "),
+                PARAM_CHANNELS.join(", "),
+                missing.join(", ")
+            ),
+        ));
+    }
+    let [m, b, h, o] = values.map(|v| v.unwrap_or(f64::NAN));
+    Ok(SkinParams::new(m, b, h, o)?)
+}
+
+/// `blender=` and `engine=` to a [`Target`]: the version as "MAJOR.MINOR" (or "MAJOR.MINOR.PATCH") or a tuple of
+/// ints such as `bpy.app.version`; None is the current release. The core validates both and names the range.
+pub(super) fn target_from(blender: Option<&Bound<'_, PyAny>>, engine: &str) -> PyResult<Target> {
+    const EXPECTED: &str = "blender must be a version string such as \"5.3\" or a tuple such as (5, 3, 0)";
+    let version = match blender {
+        None => CURRENT_RELEASE,
+        Some(obj) if obj.is_instance_of::<PyString>() => obj.extract::<String>()?.parse::<BlenderVersion>()?,
+        Some(obj) => {
+            if obj.is_instance_of::<PyBytes>() || is_boolean(obj) {
+                return Err(PyTypeError::new_err(EXPECTED));
+            }
+            let parts = count_sequence("blender", obj, EXPECTED.trim_start_matches("blender must be "))?;
+            BlenderVersion::from_parts(&parts)?
+        }
+    };
+    Ok(Target { blender: version, engine: Engine::from_name(engine)? })
+}
+
+/// An integer keyword to the `u32` the core takes; outside `u32` is an out-of-range error (the core checks its own,
+/// narrower ranges).
+pub(super) fn to_u32(name: &'static str, meaning: &'static str, value: i64) -> PyResult<u32> {
+    u32::try_from(value).map_err(|_| {
+        SkinError::OutOfRange { name, meaning, min: 0.0, max: u32::MAX as f64, value: value as f64 }.into()
+    })
+}
+
+/// The accuracy and model choices common to `evaluate` and `profile`.
+pub(super) struct Knobs<'a> {
+    /// A named level (draft, default, reference); the knobs below override it where given.
+    pub(super) accuracy: &'a str,
+    pub(super) wavelength_step_nm: Option<Real>,
+    pub(super) wavelength_placement: Option<&'a str>,
+    pub(super) multipole_pairs: Option<Count>,
+    pub(super) profile_r_min_mm: Option<Real>,
+    pub(super) profile_r_max_mm: Option<Real>,
+    pub(super) profile_count: Option<Count>,
+    pub(super) combination: &'a str,
+    pub(super) working_space: &'a str,
+    pub(super) rgb_mapping: &'a str,
+    pub(super) boundaries: &'a str,
+    pub(super) target: Target,
+}
+
+impl Knobs<'_> {
+    pub(super) fn request(&self, outputs: Outputs) -> PyResult<Request> {
+        let level = AccuracyLevel::from_name(self.accuracy)?.accuracy();
+        let defaults = level.profile_grid;
+        let count = match self.profile_count {
+            Some(Count(n)) => to_u32("profile_count", "number of profile radii", n)? as usize,
+            None => defaults.count,
+        };
+        let multipole_terms = match self.multipole_pairs {
+            Some(Count(n)) => MultipoleTerms::Pairs(to_u32("multipole_pairs", "image pairs per side", n)?),
+            None => level.multipole_terms,
+        };
+        let accuracy = Accuracy {
+            wavelength_step_nm: self.wavelength_step_nm.map_or(level.wavelength_step_nm, |r| r.0),
+            wavelength_placement: match self.wavelength_placement {
+                Some(name) => by_name("wavelength_placement", name, &ALL_WAVELENGTH_PLACEMENTS)?,
+                None => level.wavelength_placement,
+            },
+            multipole_terms,
+            profile_grid: ProfileGrid {
+                r_min_mm: self.profile_r_min_mm.map_or(defaults.r_min_mm, |r| r.0),
+                r_max_mm: self.profile_r_max_mm.map_or(defaults.r_max_mm, |r| r.0),
+                count,
+            },
+            ..level
+        };
+        Ok(Request {
+            outputs,
+            accuracy,
+            combination: by_name("combination", self.combination, &ALL_COMBINATIONS)?,
+            working_space: by_name("working_space", self.working_space, &ALL_WORKING_SPACES)?,
+            rgb_mapping: by_name("rgb_mapping", self.rgb_mapping, &ALL_RGB_MAPPINGS)?,
+            boundaries: by_name("boundaries", self.boundaries, &ALL_BOUNDARIES)?,
+            target: self.target,
+            ..Request::default()
+        })
+    }
+}
+
+/// serde_json `Value` to plain Python objects (dict, list, str, int, float, bool, None).
+pub(super) fn json_to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match value {
+        Value::Null => py.None().into_bound(py),
+        Value::Bool(b) => b.into_pyobject(py)?.to_owned().into_any(),
+        Value::Number(n) => {
+            if let Some(i) = n.as_i64() {
+                i.into_pyobject(py)?.into_any()
+            } else if let Some(u) = n.as_u64() {
+                u.into_pyobject(py)?.into_any()
+            } else {
+                n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any()
+            }
+        }
+        Value::String(s) => PyString::new(py, s).into_any(),
+        Value::Array(items) => {
+            PyList::new(py, items.iter().map(|v| json_to_py(py, v)).collect::<PyResult<Vec<_>>>()?)?.into_any()
+        }
+        Value::Object(map) => {
+            let dict = PyDict::new(py);
+            for (k, v) in map {
+                dict.set_item(k, json_to_py(py, v)?)?;
+            }
+            dict.into_any()
+        }
+    })
+}
+
+/// Rows of equal length to a 2-D float64 array.
+pub(super) fn array2<'py>(
+    py: Python<'py>,
+    rows: usize,
+    cols: usize,
+    flat: Vec<f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    Ok(PyArray2::from_owned_array(py, Array2::from_shape_vec((rows, cols), flat).map_err(internal)?))
+}
+
+pub(super) fn rgb_rows<'py>(py: Python<'py>, rgb: &[[f64; 3]]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    array2(py, rgb.len(), 3, rgb.iter().flatten().copied().collect())
+}
+
+pub(super) fn nested_rows<'py>(py: Python<'py>, rows: &[Vec<f64>]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let cols = rows.first().map_or(0, Vec::len);
+    array2(py, rows.len(), cols, rows.iter().flatten().copied().collect())
+}
+
+/// A 1-D numpy array of ints or floats (any strides, read-only too) or a sequence of numbers under the rule of
+/// [`Real`]. A bool, str or other dtype is a TypeError, another number of dimensions a SpectralSkinError; both name
+/// `name`.
+pub(super) fn real_vector(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<f64>> {
+    let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
+        return real_sequence(name, obj, expected);
+    };
+    let kind = untyped.dtype().kind();
+    if !matches!(kind, b'f' | b'i' | b'u') {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must be {expected}; got an array of dtype {}",
+            untyped.dtype()
+        )));
+    }
+    if untyped.ndim() != 1 {
+        return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(untyped.shape()))));
+    }
+    let values = obj
+        .extract::<PyArrayLike1<'_, f64, AllowTypeChange>>()
+        .map_err(|e| PyTypeError::new_err(format!("{name} must be {expected}: {e}")))?;
+    Ok(values.as_array().iter().copied().collect())
+}
+
+/// A numpy array of float32, or of float64 (converted to float32 while it is copied).
+pub(super) enum FloatArray<'py> {
+    F32(Bound<'py, PyArrayDyn<f32>>),
+    F64(Bound<'py, PyArrayDyn<f64>>),
+}
+
+impl FloatArray<'_> {
+    pub(super) fn shape(&self) -> Vec<usize> {
+        match self {
+            FloatArray::F32(a) => a.shape().to_vec(),
+            FloatArray::F64(a) => a.shape().to_vec(),
+        }
+    }
+
+    /// One row-major (H, W) plane as float32: the whole (H, W) array, or channel `c` of an (H, W, C) array. One pass
+    /// over the data (a copy, converting float64); any strides.
+    pub(super) fn plane(&self, channel: Option<usize>) -> PyResult<Vec<f32>> {
+        match self {
+            FloatArray::F32(a) => plane_of(a, channel, |v| v),
+            FloatArray::F64(a) => plane_of(a, channel, |v| v as f32),
+        }
+    }
+}
+
+pub(super) fn plane_of<T: Element + Copy>(
+    array: &Bound<'_, PyArrayDyn<T>>,
+    channel: Option<usize>,
+    convert: impl Fn(T) -> f32,
+) -> PyResult<Vec<f32>> {
+    let readonly = array.try_readonly().map_err(|e| PyTypeError::new_err(format!("cannot read the array: {e}")))?;
+    let view = readonly.as_array();
+    let view: ArrayView2<'_, T> = match channel {
+        None => view.into_dimensionality::<Ix2>().map_err(internal)?,
+        Some(c) => view.into_dimensionality::<Ix3>().map_err(internal)?.index_axis_move(Axis(2), c),
+    };
+    Ok(match view.as_slice() {
+        Some(values) => values.iter().map(|&v| convert(v)).collect(),
+        None => view.iter().map(|&v| convert(v)).collect(),
+    })
+}
+
+/// A shape as Python prints it: (8, 8, 4).
+pub(super) fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => format!("({})", shape.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")),
+    }
+}
+
+/// `obj` as a float32/float64 array of `ndim` dimensions, or None if it is not a numpy array. Another dtype or
+/// an unaligned array is a TypeError; another number of dimensions a SpectralSkinError.
+pub(super) fn float_array<'py>(
+    name: &str,
+    obj: &Bound<'py, PyAny>,
+    ndim: usize,
+    expected: &str,
+) -> PyResult<Option<FloatArray<'py>>> {
+    let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
+        return Ok(None);
+    };
+    let array = if let Ok(a) = obj.cast::<PyArrayDyn<f32>>() {
+        FloatArray::F32(a.clone())
+    } else if let Ok(a) = obj.cast::<PyArrayDyn<f64>>() {
+        FloatArray::F64(a.clone())
+    } else {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must be {expected}; got an array of dtype {} (float32 and float64 in native byte order are \
+             accepted)",
+            untyped.dtype()
+        )));
+    };
+    if !untyped.is_aligned() {
+        return Err(PyTypeError::new_err(format!("{name} must be an aligned array; pass {name}.copy()")));
+    }
+    if untyped.ndim() != ndim {
+        return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(untyped.shape()))));
+    }
+    Ok(Some(array))
+}

@@ -1,0 +1,667 @@
+//! `maps`, `read_parameter_map` and `write_maps`: texture maps, with progress and cancelling.
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use numpy::ndarray::{Array2, Array3};
+use numpy::{PyArray, PyArray3};
+use pyo3::exceptions::{PyInterruptedError, PyTypeError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyBytes, PyDict, PyString};
+use rayon::prelude::*;
+
+use crate::fit::SubsurfaceMethod;
+use crate::maps::io::{
+    read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, MAX_TEXELS, PARAM_CHANNELS,
+};
+use crate::maps::lut::TableResolution;
+use crate::maps::pipeline::{
+    check_planes, commit_map_files, compute_maps_cancellable, output_name, stage_map_files, MapFiles, MapSettings,
+    SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
+};
+use crate::Outputs;
+
+use super::convert::{
+    count_sequence, float_array, is_boolean, json_to_py, real_arg, shape_text, target_from, type_name, FloatArray,
+    Knobs,
+};
+use super::detach::{detached, detached_interruptible};
+use super::errors::{internal, invalid};
+
+/// The fields of `SpecularParams` that do not depend on the oiliness: what `maps` returns in "specular" when the
+/// oiliness varies (beside the per-texel "specular_ior_level").
+pub(super) const SPECULAR_CONSTANTS: [&str; 3] = ["roughness", "ior", "beckmann_m"];
+
+/// What `params` of `maps` must be, for messages.
+pub(super) const PARAMS_ARRAY: &str =
+    "a float32 (H, W, 4) numpy array (channels melanin, melanin_blend, hemoglobin, oiliness)";
+/// What a per-parameter keyword of `maps` must be, for messages.
+pub(super) const PARAM_ARRAY: &str = "a float32 (H, W) numpy array or a float";
+
+/// A per-parameter input of `maps`.
+pub(super) enum MapInput<'py> {
+    Array(FloatArray<'py>),
+    Constant(f64),
+}
+
+pub(super) fn map_input<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<MapInput<'py>> {
+    if let Some(array) = float_array(name, obj, 2, PARAM_ARRAY)? {
+        return Ok(MapInput::Array(array));
+    }
+    let type_error = || {
+        let type_name = obj.get_type().name().map(|n| n.to_string()).unwrap_or_default();
+        PyTypeError::new_err(format!("{name} must be {PARAM_ARRAY}; got {type_name}"))
+    };
+    if obj.is_instance_of::<PyString>() || obj.is_instance_of::<PyBytes>() || is_boolean(obj) {
+        return Err(type_error());
+    }
+    obj.extract::<f64>().map(MapInput::Constant).map_err(|_| type_error())
+}
+
+/// `table_resolution=`: None for the default, else 3 node counts, each at least 2.
+pub(super) fn table_resolution(obj: Option<&Bound<'_, PyAny>>) -> PyResult<TableResolution> {
+    const EXPECTED: &str = "a tuple (melanin, melanin_blend, hemoglobin) of node counts";
+    let Some(obj) = obj else {
+        return Ok(TableResolution::default());
+    };
+    let counts = count_sequence("table_resolution", obj, EXPECTED)?;
+    let [m, b, h] = counts[..] else {
+        return Err(invalid("table_resolution", format!("expected {EXPECTED}; got {} values", counts.len())));
+    };
+    let count = |axis: &str, n: i64| {
+        usize::try_from(n)
+            .ok()
+            .filter(|&n| n >= 2)
+            .ok_or_else(|| invalid("table_resolution", format!("need at least 2 nodes per axis; {axis} has {n}")))
+    };
+    let r = TableResolution {
+        melanin: count("melanin", m)?,
+        melanin_blend: count("melanin_blend", b)?,
+        hemoglobin: count("hemoglobin", h)?,
+    };
+    // The core's bound (lut.rs, `TableResolution::validate`), checked before anything is allocated.
+    r.validate()?;
+    Ok(r)
+}
+
+/// Planar RGB to one row-major (H, W, 3) buffer, rows in parallel.
+pub(super) fn interleave(width: usize, planes: [Vec<f32>; 3]) -> Vec<f32> {
+    let [p0, p1, p2] = planes;
+    let mut out = vec![0f32; 3 * p0.len()];
+    out.par_chunks_mut(3 * width).enumerate().for_each(|(y, row)| {
+        let start = y * width;
+        let (r0, r1, r2) = (&p0[start..start + width], &p1[start..start + width], &p2[start..start + width]);
+        for (x, texel) in row.chunks_exact_mut(3).enumerate() {
+            texel[0] = r0[x];
+            texel[1] = r1[x];
+            texel[2] = r2[x];
+        }
+    });
+    out
+}
+
+/// An interleaved (H, W, 3) buffer to numpy, without copying it.
+pub(super) fn rgb_image(
+    py: Python<'_>,
+    height: usize,
+    width: usize,
+    data: Vec<f32>,
+) -> PyResult<Bound<'_, PyArray3<f32>>> {
+    Ok(PyArray::from_owned_array(py, Array3::from_shape_vec((height, width, 3), data).map_err(internal)?))
+}
+
+/// `maps(progress=...)`: a Python callable told (texels done, total texels) from the worker threads, about once per
+/// percent (it takes the GIL for each call); returning False cancels (the core skips the rows not yet started). An
+/// exception it raises cancels too and is re-raised by `maps`.
+pub(super) struct Progress {
+    callback: Py<PyAny>,
+    done: AtomicUsize,
+    reported_percent: AtomicUsize,
+    stopped: AtomicBool,
+    error: Mutex<Option<PyErr>>,
+}
+
+impl Progress {
+    fn new(callback: Py<PyAny>) -> Self {
+        Progress {
+            callback,
+            done: AtomicUsize::new(0),
+            reported_percent: AtomicUsize::new(0),
+            stopped: AtomicBool::new(false),
+            error: Mutex::new(None),
+        }
+    }
+
+    fn stopped(&self) -> bool {
+        self.stopped.load(Ordering::Relaxed)
+    }
+
+    /// `increment` more texels are done out of `total` (0 for the first call).
+    fn report(&self, increment: usize, total: usize) {
+        let done = self.done.fetch_add(increment, Ordering::Relaxed) + increment;
+        let percent = done.saturating_mul(100) / total.max(1);
+        if self.stopped() || (increment > 0 && self.reported_percent.fetch_max(percent, Ordering::Relaxed) >= percent) {
+            return;
+        }
+        // Calls are serialised by the GIL but may arrive out of order (a thread that counted fewer texels can get the
+        // GIL after the one that finished), so each call reports the count as it stands once the GIL is held: what
+        // the callback sees never goes backwards, and the last call says total.
+        Python::attach(|py| match self.callback.call1(py, (self.done.load(Ordering::Relaxed).min(total), total)) {
+            Ok(answer) => {
+                if answer.bind(py).is_instance_of::<PyBool>() && !answer.bind(py).is_truthy().unwrap_or(true) {
+                    self.stopped.store(true, Ordering::Relaxed);
+                }
+            }
+            Err(e) => {
+                if let Ok(mut slot) = self.error.lock() {
+                    slot.get_or_insert(e);
+                }
+                self.stopped.store(true, Ordering::Relaxed);
+            }
+        });
+    }
+
+    /// Why the work stopped: the callback's exception, or an InterruptedError for a False answer.
+    fn into_error(self) -> PyErr {
+        match self.error.into_inner().ok().flatten() {
+            Some(e) => e,
+            None => PyInterruptedError::new_err("maps: cancelled by the progress callback (it returned False)"),
+        }
+    }
+}
+
+/// Parameter maps read from a file with the core's reader: the formats and rules of ``spectral-skin maps``.
+///
+/// Arguments:
+///     path: the file.
+///     name: None for the four-channel parameter EXR (as ``spectral-skin maps --params``; ``spectral-skin
+///         example`` writes one): channels named melanin, melanin_blend, hemoglobin and oiliness, all required.
+///         A parameter name ("melanin", "melanin_blend", "hemoglobin" or "oiliness") for that parameter's own map
+///         (as ``--melanin`` etc.): an EXR with exactly one channel (any name) or with a channel named like the
+///         parameter, whose values are the parameter itself; or an 8/16-bit greyscale PNG or TIFF, whose 0..1
+///         values map linearly onto the parameter's range (:func:`parameter_ranges`).
+///
+/// Returns:
+///     {parameter name: float32 (H, W) array, row 0 at the top}: the four parameters, or the one named. Values are
+///     not range-checked (:func:`maps` does that).
+///
+/// Raises:
+///     SpectralSkinError: a missing or unreadable file, an unsupported format, a missing channel or a multi-channel
+///         file without the parameter's channel (the message names the file and the channels found), an unknown
+///         name.
+#[pyfunction]
+#[pyo3(name = "read_parameter_map", signature = (path, name = None))]
+pub(super) fn read_parameter_map_py<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    name: Option<&str>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let inputs = match name {
+        None => ParamInputs::Multi { path, constants: [None; 4] },
+        Some(name) => {
+            let Some(p) = PARAM_CHANNELS.iter().position(|c| *c == name) else {
+                let expected = PARAM_CHANNELS.join(", ");
+                return Err(invalid(
+                    "name",
+                    format!("expected one of {expected} (or None for the four-channel file); got {name:?}"),
+                ));
+            };
+            ParamInputs::Separate(std::array::from_fn(|k| {
+                if k == p {
+                    ParamSource::File(path.clone())
+                } else {
+                    ParamSource::Constant(0.0)
+                }
+            }))
+        }
+    };
+    let image = detached(py, move || read_params(&inputs))?;
+    let dict = PyDict::new(py);
+    let (height, width) = (image.height, image.width);
+    for (parameter, plane) in PARAM_CHANNELS.iter().zip(image.planes) {
+        if let Plane::Texels(values) = plane {
+            let array = Array2::from_shape_vec((height, width), values).map_err(internal)?;
+            dict.set_item(parameter, PyArray::from_owned_array(py, array))?;
+        }
+    }
+    Ok(dict)
+}
+
+/// Principled BSDF texture maps (Base Color, Subsurface Radius, specular) from per-texel parameter maps.
+///
+/// The Python side of ``spectral-skin maps``, on numpy arrays instead of files. Row 0 is the top row, as numpy and
+/// EXR store images. Each texel is evaluated as :func:`evaluate` would, by the cheapest strategy that is exact enough:
+/// "constant" (one evaluation) when melanin, melanin_blend and hemoglobin each hold one value everywhere (floats, or
+/// arrays of one value); "distinct_tuples" (one evaluation per distinct (melanin, melanin_blend, hemoglobin)) when
+/// there are at most 2048 of them; otherwise "table": a lookup table built for the call and interpolated per texel,
+/// worst error below 0.5 % in albedo and 1 % in radius (its measured figures are in ``report["strategy"]``).
+/// ``exact=True`` evaluates every texel (or distinct tuple) directly instead of using the table: a few milliseconds
+/// of CPU per texel.
+///
+/// The inputs are copied once into float32 planes (the core's type) before the GIL is released. float32 arrays are
+/// copied as they are; float64 arrays are converted to float32 in that same pass (no extra copy, but the values are
+/// rounded to float32 before the range check and the evaluation); non-contiguous arrays (slices, transposes, Fortran
+/// order) are gathered in that pass too. No other dtype is accepted: convert with ``a.astype(np.float32)``.
+///
+/// Arguments:
+///     params: (H, W, 4) array, channels melanin, melanin_blend, hemoglobin, oiliness (in that order); None when
+///         each parameter is given by its keyword.
+///     melanin: C_m, melanin volume fraction of the epidermis, 0..0.5: an (H, W) array, a float (the same value
+///         everywhere), or None (take channel 0 of params). Given together with params, it replaces that channel.
+///     melanin_blend: beta_m, eumelanin share of the melanin, 0..1; as melanin (channel 1).
+///     hemoglobin: C_h, whole-blood volume fraction of the dermis, 0..0.1; as melanin (channel 2).
+///     oiliness: rho_s, scale of the surface's specular lobe, 0..1; as melanin (channel 3).
+///     method: the subsurface method the maps are for: "burley" (Christensen-Burley), "random_walk",
+///         "random_walk_legacy" (Blender 5.2 and later only) or "random_walk_skin".
+///     blender, engine: the target, as for :func:`evaluate`; the radius (and for the random walks Base Color) is
+///         computed for it per texel (for EEVEE from each texel's own albedo).
+///     exact: evaluate every texel (or distinct tuple) directly, never the table.
+///     clamp: clamp NaN (to the minimum), infinite and out-of-range values into range and count them in
+///         ``report["clamped"]``, instead of raising. The input arrays are not modified.
+///     accuracy: a named accuracy level, "draft", "default" or "reference", as for :func:`evaluate`.
+///     wavelength_step_nm, wavelength_placement: as for :func:`evaluate`.
+///     working_space: linear RGB space of Base Color, as for :func:`evaluate`: "Linear Rec.709" (Blender's
+///         default scene linear), "Linear Rec.2020" or "ACEScg"; use the scene's working space.
+///     table_cache: keep a built lookup table in the per-user cache folder ($SPECTRAL_SKIN_CACHE_DIR, else
+///         $XDG_CACHE_HOME/spectral-skin, else ~/.cache/spectral-skin) and reuse it (as the CLI does); False
+///         always builds it afresh.
+///     table_resolution: nodes per axis of the lookup table, (melanin, melanin_blend, hemoglobin), each >= 2;
+///         None: the core's default (chosen for the error bound above; the report names it). Used only by "table".
+///     progress: None, or a callable ``progress(done, total)`` told how many texels of ``total`` are done: once
+///         with 0 before the computation, with the same ``done`` about once per percent of a lookup table's nodes
+///         while one is built, then about once per percent as rows are filled (from the core's worker threads,
+///         taking the GIL for each call; a "constant" map has no rows to report). Returning False cancels: the
+///         rows (or table nodes) being computed are finished, the others skipped, nothing is returned and
+///         InterruptedError is raised. An exception raised by the callback cancels the same way and is re-raised.
+///     boundaries: the layers' boundary conditions, "paper" or "capped", as for :func:`evaluate` (a cached table
+///         is kept per choice).
+///
+/// Ctrl-C (KeyboardInterrupt, or any exception a Python signal handler raises) stops the call the same way: the
+/// calling thread checks for signals every 0.1 s while the work runs, the rows or table nodes being computed are
+/// finished (a node is about a millisecond) and the exception is raised; a table stopped part-way is not cached.
+///
+/// Returns:
+///     A dict:
+///     "base_color": float32 (H, W, 3), Principled Base Color for ``method``, linear RGB in ``working_space``;
+///     "radius_mm": float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for ``method``, mm (with
+///     Radius set to these values, Scale is 0.001 in a scene whose unit is the metre);
+///     "specular": the specular constants, always: when the oiliness is one value everywhere (a float, or an
+///     array of one value), {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
+///     "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``); when it varies, the
+///     ones that do not depend on it: {"roughness", "ior", "beckmann_m"} (Principled IOR is 1.4 everywhere);
+///     "specular_ior_level": only when the oiliness varies, float32 (H, W): Principled Specular IOR Level per texel;
+///     "report": what was done: {"crate_version", "width", "height", "method", "target" ({"blender", "engine",
+///     "tested"}), "color_space", "strategy" ({"name":
+///     "constant" | "distinct_tuples" | "table" | "exact", with its figures: "tuples"; "evaluations"; or
+///     "resolution", "nodes", "from_cache", "build_seconds", "measured_error"}), "clamped" (one dict per parameter
+///     with bad values: {"parameter", "nan", "infinite", "out_of_range", "first": [[x, y], ...]}),
+///     "constant_parameters", "request" (accuracy and model), "work" ({"texels", "evaluations",
+///     "table_nodes_built", "table_lookups", "radius_fits", "specular_evaluations", "outputs": {"base_color",
+///     "radius", "specular"}}: what was computed), "seconds" ({"read", "compute", "write", "total"})}.
+///     The arrays are new, writeable and C-contiguous (handed to numpy without a copy).
+///
+/// Raises:
+///     SpectralSkinError: a NaN, infinite or out-of-range value without clamp=True (the message names the parameter,
+///         its range, the counts and the first (x, y) coordinates); inputs whose (H, W) differ (the message lists
+///         each input's shape); params not (H, W, 4) or a keyword array not (H, W); an empty map or one over 2^28
+///         texels; only constants and no array; a parameter given neither by params nor by its keyword; an unknown
+///         method, a method the target's Blender lacks, an unknown working space or engine, a Blender version older
+///         than 4.2; a wavelength step out of range; a table resolution below 2 nodes per axis or over the core's node bound
+///         (checked before anything is allocated).
+///     TypeError: an input that is not a numpy array of float32 or float64 (or, for the keywords, a number): e.g. a
+///         list, an integer array, a string, a bool (Python's or numpy's); a non-integer in table_resolution; a
+///         progress that is not callable. The message names the argument. Non-contiguous and read-only arrays are
+///         read as they are.
+///     InterruptedError: the progress callback returned False.
+///
+/// A SpectralSkinError for NaN, infinite or out-of-range texels (clamp=False) also has an attribute
+/// ``bad_texels``: {"parameter", "min", "max", "nan", "infinite", "out_of_range", "first": [(x, y), ...]}.
+#[pyfunction]
+#[pyo3(
+    name = "maps",
+    signature = (
+        params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
+        method = "burley", exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
+        wavelength_placement = None,
+        working_space = "Linear Rec.709", table_resolution = None, table_cache = true, blender = None,
+        engine = "cycles", progress = None, boundaries = "paper"
+    )
+)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn maps_py<'py>(
+    py: Python<'py>,
+    params: Option<&Bound<'py, PyAny>>,
+    melanin: Option<&Bound<'py, PyAny>>,
+    melanin_blend: Option<&Bound<'py, PyAny>>,
+    hemoglobin: Option<&Bound<'py, PyAny>>,
+    oiliness: Option<&Bound<'py, PyAny>>,
+    method: &str,
+    exact: bool,
+    clamp: bool,
+    accuracy: &str,
+    wavelength_step_nm: Option<&Bound<'py, PyAny>>,
+    wavelength_placement: Option<&str>,
+    working_space: &str,
+    table_resolution: Option<&Bound<'py, PyAny>>,
+    table_cache: bool,
+    blender: Option<&Bound<'py, PyAny>>,
+    engine: &str,
+    progress: Option<Bound<'py, PyAny>>,
+    boundaries: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let start = Instant::now();
+    if let Some(callback) = progress.as_ref().filter(|c| !c.is_callable()) {
+        let type_name = callback.get_type().name().map(|n| n.to_string()).unwrap_or_default();
+        return Err(PyTypeError::new_err(format!(
+            "progress must be a callable (done, total) -> bool | None, or None; got {type_name}"
+        )));
+    }
+    let progress = progress.map(|callback| Progress::new(callback.unbind()));
+    // Settings first: their errors come before any copy.
+    let knobs = Knobs {
+        accuracy,
+        wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
+        wavelength_placement,
+        multipole_pairs: None,
+        profile_r_min_mm: None,
+        profile_r_max_mm: None,
+        profile_count: None,
+        combination: "directional",
+        working_space,
+        rgb_mapping: "linear",
+        boundaries,
+        target: target_from(blender, engine)?,
+    };
+    let method = SubsurfaceMethod::from_name(method)?;
+    knobs.target.method_entry(method)?;
+    let settings = MapSettings {
+        method,
+        strategy: if exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
+        clamp,
+        table: self::table_resolution(table_resolution)?,
+        table_cache: if table_cache { crate::maps::lut::default_cache_dir() } else { None },
+        request: knobs.request(Outputs::material())?,
+        ..MapSettings::default()
+    };
+
+    // The inputs and their shapes.
+    let params = match params {
+        None => None,
+        Some(obj) => Some(
+            float_array("params", obj, 3, PARAMS_ARRAY)?
+                .ok_or_else(|| PyTypeError::new_err(format!("params must be {PARAMS_ARRAY} or None")))?,
+        ),
+    };
+    let keywords = [melanin, melanin_blend, hemoglobin, oiliness];
+    let mut inputs: Vec<Option<MapInput<'py>>> = Vec::with_capacity(4);
+    for (name, obj) in PARAM_CHANNELS.iter().zip(keywords) {
+        inputs.push(obj.map(|o| map_input(name, o)).transpose()?);
+    }
+    let mut shapes: Vec<(&str, Vec<usize>)> = Vec::new();
+    if let Some(p) = &params {
+        let shape = p.shape();
+        if shape[2] != 4 {
+            return Err(invalid("params", format!("must be {PARAMS_ARRAY}; got shape {}", shape_text(&shape))));
+        }
+        shapes.push(("params", shape));
+    }
+    for (name, input) in PARAM_CHANNELS.iter().zip(&inputs) {
+        if let Some(MapInput::Array(a)) = input {
+            shapes.push((name, a.shape()));
+        }
+    }
+    let missing: Vec<&str> =
+        (0..4).filter(|&c| params.is_none() && inputs[c].is_none()).map(|c| PARAM_CHANNELS[c]).collect();
+    if !missing.is_empty() {
+        return Err(invalid(
+            "parameters",
+            format!(
+                "give params= ({PARAMS_ARRAY}) or each of {}; missing: {}",
+                PARAM_CHANNELS.join(", "),
+                missing.join(", ")
+            ),
+        ));
+    }
+    let Some((_, first)) = shapes.first() else {
+        return Err(invalid(
+            "parameters",
+            "give at least one array (params or a per-parameter map): with only constants there is no map size \
+             (for one material use evaluate())",
+        ));
+    };
+    let (height, width) = (first[0], first[1]);
+    if shapes.iter().any(|(_, s)| (s[0], s[1]) != (height, width)) {
+        let listed: Vec<String> = shapes.iter().map(|(n, s)| format!("{n} {}", shape_text(s))).collect();
+        return Err(invalid("shapes", format!("the arrays must agree in (H, W); got {}", listed.join(", "))));
+    }
+    if height == 0 || width == 0 || height.saturating_mul(width) > MAX_TEXELS {
+        return Err(invalid(
+            "shapes",
+            format!("a map needs 1 to {MAX_TEXELS} texels; got (H, W) = ({height}, {width})"),
+        ));
+    }
+    // Constants are checked here, with their own message; clamp=True leaves them to the check of the planes.
+    if !clamp {
+        for (c, input) in inputs.iter().enumerate() {
+            if let Some(MapInput::Constant(v)) = input {
+                let (lo, hi) = crate::maps::io::PARAM_RANGES[c];
+                if !(*v >= lo && *v <= hi) {
+                    let name = PARAM_CHANNELS[c];
+                    let reason = format!("must be in [{lo}, {hi}]; got {v} (pass clamp=True to clamp it)");
+                    return Err(invalid(name, reason));
+                }
+            }
+        }
+    }
+    let mut planes = Vec::with_capacity(4);
+    for (c, input) in inputs.iter().enumerate() {
+        planes.push(match (input, &params) {
+            (Some(MapInput::Constant(v)), _) => Plane::Constant(*v as f32),
+            (Some(MapInput::Array(a)), _) => Plane::Texels(a.plane(None)?),
+            (None, Some(p)) => Plane::Texels(p.plane(Some(c))?),
+            (None, None) => return Err(internal("a parameter without a source")),
+        });
+    }
+    let planes: [Plane; 4] = planes.try_into().map_err(|_| internal("not four planes"))?;
+    let mut image = ParamImage { width, height, planes };
+    drop(params);
+    drop(inputs);
+
+    // Check, compute and interleave with the GIL released.
+    struct Computed {
+        base_color: Vec<f32>,
+        radius_mm: Vec<f32>,
+        specular: SpecularOutput,
+        report: crate::maps::MapReport,
+    }
+    let hook = progress.as_ref();
+    // Ctrl-C (and a progress callback's False or exception) stops the work through one flag.
+    let own_flag = AtomicBool::new(false);
+    let cancel = hook.map_or(&own_flag, |h| &h.stopped);
+    let computed = detached_interruptible(py, cancel, move || {
+        let clamped = check_planes(&mut image, clamp)?;
+        let read = start.elapsed().as_secs_f64();
+        let report = |done: usize, total: usize| {
+            if let Some(h) = hook {
+                h.report(done, total)
+            }
+        };
+        report(0, image.texel_count());
+        if hook.is_some_and(Progress::stopped) {
+            return Ok(None);
+        }
+        let progress = hook.map(|_| &report as &(dyn Fn(usize, usize) + Sync));
+        let computed = compute_maps_cancellable(&image, &settings, progress, cancel);
+        drop(image);
+        // A stopped table build is an error; the callback's answer (or exception) is what the caller sees.
+        if hook.is_some_and(Progress::stopped) {
+            return Ok(None);
+        }
+        let mut result = computed?;
+        let write = Instant::now();
+        let base_color = interleave(width, std::mem::take(&mut result.base_color));
+        let radius_mm = interleave(width, std::mem::take(&mut result.radius_mm));
+        let specular = result.specular;
+        let mut report = result.report;
+        report.clamped = clamped;
+        report.seconds.read = read;
+        report.seconds.write = write.elapsed().as_secs_f64();
+        Ok(Some(Computed { base_color, radius_mm, specular, report }))
+    })?;
+    let Some(computed) = computed else {
+        return Err(progress.map(Progress::into_error).unwrap_or_else(|| internal("stopped without a progress hook")));
+    };
+
+    let dict = PyDict::new(py);
+    dict.set_item("base_color", rgb_image(py, height, width, computed.base_color)?)?;
+    dict.set_item("radius_mm", rgb_image(py, height, width, computed.radius_mm)?)?;
+    match computed.specular {
+        SpecularOutput::Map { specular_ior_level, constants } => {
+            dict.set_item(
+                "specular_ior_level",
+                PyArray::from_owned_array(
+                    py,
+                    Array2::from_shape_vec((height, width), specular_ior_level).map_err(internal)?,
+                ),
+            )?;
+            // Only the constants that do not depend on the oiliness (fit::principled_specular::specular_from_oiliness).
+            let all = json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?;
+            let kept = PyDict::new(py);
+            for key in SPECULAR_CONSTANTS {
+                kept.set_item(key, all.get_item(key)?)?;
+            }
+            dict.set_item("specular", kept)?
+        }
+        SpecularOutput::Constant(constants) => {
+            dict.set_item("specular", json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?)?
+        }
+    }
+    let mut report = computed.report;
+    report.seconds.total = start.elapsed().as_secs_f64();
+    let report_dict = json_to_py(py, &serde_json::to_value(&report).map_err(internal)?)?;
+    // JSON has no infinity: serde_json writes a semi-infinite dermis as null. Python floats do.
+    report_dict
+        .get_item("request")?
+        .get_item("model")?
+        .set_item("dermis_thickness_mm", report.request.model.dermis_thickness_mm)?;
+    dict.set_item("report", report_dict)?;
+    Ok(dict)
+}
+
+/// An image of `write_maps`' result: its size and its channels as row-major planes.
+pub(super) struct ResultImage {
+    height: usize,
+    width: usize,
+    planes: Vec<Vec<f32>>,
+}
+
+/// One image of `write_maps`' result as row-major planes: `channels` of them (an (H, W, channels) array, or (H, W)
+/// for one channel). None when the key is absent or None.
+pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyResult<Option<ResultImage>> {
+    let obj = match result.get_item(key) {
+        Ok(obj) if !obj.is_none() => obj,
+        Ok(_) => return Ok(None),
+        Err(e) if e.is_instance_of::<pyo3::exceptions::PyKeyError>(result.py()) => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    let (ndim, expected) = if channels == 1 {
+        (2, "a float32 (H, W) numpy array".to_string())
+    } else {
+        (3, format!("a float32 (H, W, {channels}) numpy array"))
+    };
+    let name = format!("result[{key:?}]");
+    let array = float_array(&name, &obj, ndim, &expected)?
+        .ok_or_else(|| PyTypeError::new_err(format!("{name} must be {expected} or None; got {}", type_name(&obj))))?;
+    let shape = array.shape();
+    if channels > 1 && shape[2] != channels {
+        return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(&shape))));
+    }
+    let planes = if channels == 1 {
+        vec![array.plane(None)?]
+    } else {
+        (0..channels).map(|c| array.plane(Some(c))).collect::<PyResult<_>>()?
+    };
+    Ok(Some(ResultImage { height: shape[0], width: shape[1], planes }))
+}
+
+/// Write the images of a :func:`maps` result as float EXRs, with the core's writer (that of ``spectral-skin maps``).
+///
+/// Each image present (and not None) becomes one file in ``folder`` (created if missing): "base_color" ->
+/// ``albedo.exr`` (channels R, G, B), "radius_mm" -> ``radius.exr`` (R, G, B), "specular_ior_level" ->
+/// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc. 32-bit float, PIZ compression, row 0 at the
+/// top. The files are written as temporary files in ``folder`` and renamed into place together once all are written,
+/// so a failure leaves the existing files as they were. Then the files of an earlier write with the same prefix that
+/// this one did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the
+/// folder holds exactly this result's maps. No sidecar is written: the report is in the result.
+///
+/// Arguments:
+///     result: a mapping with any of "base_color" (H, W, 3), "radius_mm" (H, W, 3) and "specular_ior_level" (H, W),
+///         float32 or float64 numpy arrays (float64 is rounded to float32); other keys are ignored. A result of
+///         :func:`maps`, or a part of one.
+///     folder: the output folder.
+///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
+///
+/// Returns:
+///     {"albedo" | "radius" | "specular": path of the file written}, for the images written.
+///
+/// Raises:
+///     SpectralSkinError: no image in ``result``, images whose (H, W) differ, an image of the wrong shape, a prefix
+///         that is empty or holds a path separator; a file that cannot be written (the message names it).
+///     TypeError: an image that is not a float32 or float64 numpy array.
+#[pyfunction]
+#[pyo3(name = "write_maps", signature = (result, folder, prefix = None))]
+pub(super) fn write_maps_py<'py>(
+    py: Python<'py>,
+    result: &Bound<'py, PyAny>,
+    folder: std::path::PathBuf,
+    prefix: Option<&str>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(prefix) = prefix {
+        if prefix.is_empty() || prefix.contains(['/', '\\']) || prefix == "." || prefix == ".." {
+            return Err(invalid(
+                "prefix",
+                format!("must be a non-empty file name part without / or \\; got {prefix:?}"),
+            ));
+        }
+    }
+    let base_color = result_planes(result, "base_color", 3)?;
+    let radius_mm = result_planes(result, "radius_mm", 3)?;
+    let specular = result_planes(result, "specular_ior_level", 1)?;
+    let sizes: Vec<(&str, usize, usize)> =
+        [("base_color", &base_color), ("radius_mm", &radius_mm), ("specular_ior_level", &specular)]
+            .into_iter()
+            .filter_map(|(name, image)| image.as_ref().map(|i| (name, i.height, i.width)))
+            .collect();
+    let Some(&(_, height, width)) = sizes.first() else {
+        return Err(invalid("result", "holds none of base_color, radius_mm, specular_ior_level: nothing to write"));
+    };
+    if sizes.iter().any(|&(_, h, w)| (h, w) != (height, width)) {
+        let listed: Vec<String> = sizes.iter().map(|(n, h, w)| format!("{n} ({h}, {w})")).collect();
+        return Err(invalid("result", format!("the images must agree in (H, W); got {}", listed.join(", "))));
+    }
+    let rgb = |image: Option<ResultImage>| -> Option<[Vec<f32>; 3]> { image.and_then(|i| i.planes.try_into().ok()) };
+    let (base_color, radius_mm) = (rgb(base_color), rgb(radius_mm));
+    let specular = specular.and_then(|mut i| i.planes.pop());
+    let written = detached(py, || {
+        let files = MapFiles {
+            width,
+            height,
+            base_color: base_color.as_ref(),
+            radius_mm: radius_mm.as_ref(),
+            specular_ior_level: specular.as_deref(),
+        };
+        let staged = stage_map_files(&folder, prefix, &files, ExrOptions::default())?;
+        let written: Vec<std::path::PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
+        commit_map_files(&folder, prefix, staged)?;
+        Ok(written)
+    })?;
+    let dict = PyDict::new(py);
+    for (key, file) in [("albedo", ALBEDO_FILE), ("radius", RADIUS_FILE), ("specular", SPECULAR_FILE)] {
+        let path = folder.join(output_name(prefix, file));
+        if written.contains(&path) {
+            dict.set_item(key, path)?;
+        }
+    }
+    Ok(dict)
+}

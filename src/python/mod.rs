@@ -1,0 +1,36 @@
+//! Python bindings (`spectral_skin._core`, built by maturin with the `python` feature). Bindings only: every function
+//! reads its arguments under the GIL, makes one core call with the GIL released, and converts the result. No physics
+//! lives here; names of outputs, combinations and working spaces come from the core's serde names.
+
+mod catalog;
+mod convert;
+mod detach;
+mod errors;
+mod evaluate;
+mod maps;
+
+use pyo3::prelude::*;
+
+use catalog::{blender_targets_py, parameter_ranges_py, presets_py};
+use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
+use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
+use maps::{maps_py, read_parameter_map_py, write_maps_py};
+
+/// spectral-skin's compiled core: Donner & Jensen 2006's spectral skin BSSRDF.
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SpectralSkinError", m.py().get_type::<SpectralSkinError>())?;
+    m.add("SpectralSkinWarning", m.py().get_type::<SpectralSkinWarning>())?;
+    m.add("SpectralSkinIOError", m.py().get_type::<SpectralSkinIOError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(evaluate_py, m)?)?;
+    m.add_function(wrap_pyfunction!(profile_py, m)?)?;
+    m.add_function(wrap_pyfunction!(presets_py, m)?)?;
+    m.add_function(wrap_pyfunction!(parameter_ranges_py, m)?)?;
+    m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
+    m.add_function(wrap_pyfunction!(maps_py, m)?)?;
+    m.add_function(wrap_pyfunction!(blender_targets_py, m)?)?;
+    m.add_function(wrap_pyfunction!(read_parameter_map_py, m)?)?;
+    m.add_function(wrap_pyfunction!(write_maps_py, m)?)?;
+    Ok(())
+}
