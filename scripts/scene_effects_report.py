@@ -238,7 +238,31 @@ def apply_times(shape: str, distance: float, size: int, map_path: Path, maps_dir
 
 
 # The rest of the report: what the analysis decides besides dropping subsurface (no measurement of this script).
-DECISIONS_TEXT = """## Thin and open geometry: which subsurface method
+DECISIONS_TEXT = """## What is not computed
+
+A dropped effect is not computed at all, and the core's count of its work (`plan["work"]`: `evaluate(...)["work"]`,
+or `maps(...)["report"]["work"]`; stored per material with its decisions, `result_work`) shows it:
+
+- Subsurface is decided before anything is computed when the largest radius of *any* skin is already under the
+  threshold: the radius of the least absorbing skin (no melanin, no blood; `LEAST_ABSORBING` in core/scene.py), for
+  the material's method, target, accuracy and working space, bounds every parameter set's (every absorption
+  coefficient of the model grows with the melanin and haemoglobin fractions; checked on a 5 × 3 × 5 grid of the
+  ranges for every method and engine by `tests/python/test_addon_scene.py::test_least_absorbing_skin_bounds_the_radius`).
+  That bound is one evaluation, made once per process and key, and its work is in the decision's figures
+  (`bound_work`). The material is then computed without the radius: its Base Color is the albedo (whatever the
+  method), and its work has no radius fit and no profile. Forced off, the radius is not computed either. Otherwise
+  the radius is computed and compared as above (a material whose own radius is under the threshold, while the
+  bound is not, has computed its radius: three fits; for a method other than Burley its Base Color is then the
+  albedo that came with that evaluation, without a second one).
+- The work of an animated constant material is the sum over the distinct parameter sets of its frames, each
+  computed once (the current frame's is one of them).
+- Specular is not asked of the core when the oiliness is zero at every texel and frame (or forced off): no specular
+  evaluation, Specular IOR Level 0, IOR and Roughness from the core's `surface` constants (no parameter changes
+  them).
+- With parameter maps, `spectral_skin.maps` computes every output (it has no output choice yet): the work shows the
+  radius fits of its evaluations and table nodes; the plan keeps and writes only the maps the decisions keep.
+
+## Thin and open geometry: which subsurface method
 
 The analysis also recommends a subsurface method per object using the material (the decision `subsurface method`;
 figures per object: `thickness_mm`, `thickness_radii`, `closed`, `open_edges`, `recommended`, `reason`). It is a
@@ -246,20 +270,37 @@ recommendation: the method stays the one chosen on the material, because the met
 changes the look and the render time) and the Auto / On / Off overrides switch effects, not methods. Its check box
 (`enabled`) says whether the material's method suits every object; the reason names the objects it does not suit.
 
-- Thickness: the smallest dimension of the object's evaluated bounding box (object axes, with its scale and
-  modifiers) × the scene's unit scale, in mm, at the current frame (`scene_facts.py`). Thinner than
-  `THIN_RADII` = 3 × the largest Subsurface Radius × Scale (over the animation's frames when it is animated): a
-  random walk. Burley's profile is a half-space's; most of its energy lies within one radius, so a part one or two
-  radii thick lets light through that Burley projects back onto the near surface; at three radii the half-space
-  is a fair model. The 3 is a rule of thumb, not a measurement.
+- Thickness, part by part (`scene_facts.py`): up to `THICKNESS_SAMPLES` = 2048 faces of the evaluated mesh, evenly
+  spread over the face indices; from each face's centre a ray cast just inside the surface along the inward normal
+  (`mathutils.bvhtree.BVHTree` of the evaluated mesh, cast in object space so scale and modifiers count) to the
+  first surface it meets: the part's thickness in mm, weighted by the face's world area. Faces whose ray meets
+  nothing (a one-sided surface) are left out. Thin: at least `THIN_AREA_FRACTION` = 1 % of the sampled area is
+  thinner than `THIN_RADII` = 3 × the largest Subsurface Radius × Scale (over the animation's frames when it is
+  animated): a random walk. The reason names the object, the thin fraction of its surface, the thin parts'
+  area-weighted median and smallest thickness and their mean centre in object coordinates (figures per object:
+  `parts` = `sampled_faces`, `measured_faces`, `thin_area_fraction`, `thinnest_mm`, `thin_median_mm`,
+  `thin_centre`). Without measured faces (not a mesh, or no ray met a surface) the fallback is the smallest
+  dimension of the object's evaluated bounding box (object axes, with its scale and modifiers) × the scene's unit
+  scale, against the same 3 radii. Burley's profile is a half-space's: most of its energy lies within one radius,
+  so a part one or two radii thick lets light through that Burley projects back onto the near surface; at three
+  radii the half-space is a fair model. The 3 and the 1 % are rules of thumb, not measurements: 1 % ignores a few
+  stray samples (a crease whose ray meets the surface close by) and keeps parts such as ears, which cover a few per
+  cent of a head's surface (an estimate).
 - Closed: every edge of the evaluated mesh is shared by exactly two faces (counted from the faces' loops). An open
   mesh (or one with edges of three or more faces) gets Burley recommended: a random walk leaves the volume through
   the holes and loses light. Thin and open: Burley, with the advice to close the mesh and use a random walk.
 - No advice where subsurface is off (dropped or forced off), in EEVEE (every method renders as its screen-space
   blur), or with no object using the material.
 
-Open: the bounding box sees the whole object, not its parts: a head's ears and nostrils are thin parts of a thick
-object and are not found (that needs a per-part measure, e.g. ray-cast thickness over the surface).
+Measured (`tests/blender/test_scene_effects.py::test_per_part_thickness_finds_the_thin_part_of_a_thick_object`, run
+with `-s` to print the figures): a closed UV sphere of 80 mm radius with a 2 mm thick, 50 mm square plate in the
+same mesh, half of it outside the sphere (an "ear"): the bounding box says 160 mm (any method), the per-part
+measure finds 6.0 % of the surface thinner than 3 radii (13 mm), 2.0 mm thick (the plate's two large
+faces; area-weighted median and smallest 2.0 mm) and recommends a random walk; a plain sphere: no thin part
+(thinnest 158 mm, a chord through the centre). Cost (`scripts/part_thickness_timing.py`,
+Blender 5.0.1, a shared machine at load 7): on a UV sphere of 100 000 faces, 0.38 s per object (best of 5;
+0.38 to 0.74 s), of which about 0.12 s builds the BVH tree, 0.13 s reads the mesh's loops (the closed-mesh count)
+and faces, and the 2048 ray casts take 7 ms; once per object using the material, at the current frame.
 
 ## Animated parameters
 
