@@ -369,7 +369,8 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
     unresolved = [r for r in sphere_dropped if not _resolved(r)]
     far_distances = ", ".join(f"{r['distance_m']:g}" for r in unresolved)
     far_pixels = ", ".join(f"{r['plain']['pixels']:.0f}" for r in unresolved)
-    suzanne = [r["plain"]["mean"] for r in rows if r["shape"] == "SUZANNE" and _resolved(r)]
+    suzanne_rows = [r for r in rows if r["shape"] == "SUZANNE"]
+    suzanne = [r["plain"]["mean"] for r in suzanne_rows if _resolved(r)]
     suzanne_de = [r["plain"]["de_object"] for r in rows if r["shape"] == "SUZANNE" and _resolved(r)]
     lines = [
         "## A head at several distances: render time and image difference",
@@ -419,13 +420,17 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         + (f"At {far_distances} m it covers about {far_pixels} px and its mean colour's noise floor "
            "(the full render against itself) is over half the bound: there the difference is within twice the "
            "noise floor (\"within noise\"), which is all these renders can tell. " if unresolved else "")
-        + (f"Suzanne does not meet it: with subsurface her mean colour differs by {_pct(min(suzanne))} to "
-           f"{_pct(max(suzanne))} wherever the renders resolve it, close up and far alike (ΔE00 of the mean colour up to "
-           f"{_de(max(suzanne_de))}, under the just-noticeable 1), so it is no blur a pixel could hide but light "
-           "carried through her thin ears and across her open eye sockets (Burley's disk projection finds surface on "
-           "any part of the mesh within the radius): translucency the footprint rule does not model. Keeping "
-           "subsurface for such thin parts needs the per-part thickness that the bounding box cannot give "
-           "(*Thin and open geometry* below); for a closed object thicker than a few radii the rule holds."
+        + (f"Suzanne shows why thin parts keep subsurface: dropping it would change her mean colour by "
+           f"{_pct(min(suzanne))} to {_pct(max(suzanne))} wherever the renders resolve it, close up and far alike "
+           f"(ΔE00 of the mean colour up to {_de(max(suzanne_de))}), so it is no blur a pixel could hide but light "
+           "carried through her thin ears (Burley's disk projection finds surface on any part of the mesh within the "
+           "radius): translucency, which plain diffuse loses at any distance. "
+           + ("The analysis finds her thin parts (the per-part thickness of *Thin and open geometry* below) and keeps "
+              f"subsurface at every distance (reason at {suzanne_rows[-1]['distance_m']:g} m: "
+              f"\"{suzanne_rows[-1]['reason']}\")."
+              if not any(r["dropped"] for r in suzanne_rows) else
+              "The analysis does not find all her thin parts: it drops subsurface for her at "
+              + ", ".join(f"{r['distance_m']:g} m" for r in suzanne_rows if r["dropped"]) + ".")
            if suzanne else ""),
         "",
         "Time: each row's two times are of the object's region at that row's samples (a far object's few pixels "
@@ -531,7 +536,9 @@ def main(argv: list[str] | None = None) -> int:
         "its largest Subsurface Radius × Scale is under a threshold in pixels of the smallest pixel footprint on the "
         "skin, over every object using the material, every rendering camera and the sampled frames. The material then "
         "renders plain diffuse (Subsurface Weight 0) with the skin's total diffuse reflectance as Base Color, so the "
-        "total reflectance is exact and only the blur is lost.",
+        "total reflectance is exact and only the blur is lost. An object with thin parts (under 3 radii, measured "
+        "part by part) keeps subsurface however far: the light its thin parts carry through is not a blur (the "
+        "Suzanne rows below).",
         "",
         "Measured on a Burley slab with the caucasian preset's values (albedo "
         f"{', '.join(f'{a:.4f}' for a in albedo)}, radius {', '.join(f'{r:.3f}' for r in radius_mm)} mm) across a "

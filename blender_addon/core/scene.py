@@ -14,7 +14,9 @@ Effects:
   :data:`SUBSURFACE_MIN_RADIUS_PX` pixels everywhere, subsurface scattering is dropped: Subsurface Weight 0 with the
   skin's total diffuse reflectance (the albedo) as Base Color, which keeps the total reflectance exact and only
   loses the blur no pixel can show (Subsurface Weight 0 is a diffuse closure of weight Base Color:
-  docs/blender-principled.md, Subsurface Weight).
+  docs/blender-principled.md, Subsurface Weight). Not where an object using the material has thin parts (as the
+  ``subsurface method`` advice below measures them): light carried through an ear is no blur a pixel hides, and a
+  far Suzanne rendered plain diffuse differs by about 1.3 % in mean colour (docs/scene-effects.md).
 - ``specular``: the model's only surface term is the oil layer on the skin (Donner & Jensen 2006, ρ_s scales the
   Torrance-Sparrow lobe); oiliness zero everywhere means no oil film, hence no specular lobe at all: Specular IOR
   Level 0 and no specular texture.
@@ -250,6 +252,13 @@ def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: fl
     radius_px = largest_mm / best["footprint_mm"]
     figures.update(best, largest_radius_px=radius_px)
     where = f"at frame {best['frame']}, camera {best['camera']}, object {best['object']}"
+    thin = thin_objects(facts, largest_mm)
+    if radius_px < threshold_px and thin:
+        figures["thin_objects"] = thin
+        return _entry("subsurface", True, f"kept: {', '.join(thin)} {'has' if len(thin) == 1 else 'have'} parts "
+                      f"thinner than {THIN_RADII:g} radii, through which subsurface scattering carries light (plain "
+                      f"diffuse would lose it at any distance), although the largest radius is {radius_px:.3g} px "
+                      f"{where}", figures)
     if radius_px < threshold_px:
         return _entry("subsurface", False, f"largest radius {radius_px:.3g} px {where} (under {threshold_px:g} px): "
                       "plain diffuse with the same albedo", figures)
@@ -303,7 +312,7 @@ def subsurface_before(settings: Any, facts: SceneFacts | None,
         return None
     bound_mm, work = radius_bound_mm(settings)
     bound_px = bound_mm / best["footprint_mm"]
-    if bound_px >= threshold_px:
+    if bound_px >= threshold_px or thin_objects(facts, bound_mm):
         return None
     figures: dict[str, Any] = {"largest_radius_bound_mm": bound_mm, "threshold_px": threshold_px, **best,
                                "largest_radius_bound_px": bound_px, "bound_work": work}
@@ -359,17 +368,31 @@ def _engine(plan: dict[str, Any]) -> dict[str, Any]:
                   f"{tested}", dict(target))
 
 
+def is_thin(shape: ShapeFacts, largest_mm: float) -> bool:
+    """Whether ``shape`` has parts thinner than :data:`THIN_RADII` × ``largest_mm``: measured part by part when the
+    object has such samples (at least :data:`THIN_AREA_FRACTION` of its surface), else by the smallest dimension of
+    its bounds."""
+    parts = thin_parts(shape, THIN_RADII * largest_mm)
+    if parts is not None:
+        return bool(parts["thin_area_fraction"] >= THIN_AREA_FRACTION)
+    return shape.thickness_mm < THIN_RADII * largest_mm
+
+
+def thin_objects(facts: SceneFacts | None, largest_mm: float) -> list[str]:
+    """The objects using the material that have thin parts (:func:`is_thin`) for the largest radius ``largest_mm``."""
+    if facts is None:
+        return []
+    return [shape.object_name for shape in facts.shapes if is_thin(shape, largest_mm)]
+
+
 def _shape_advice(shape: ShapeFacts, largest_mm: float) -> tuple[str | None, str]:
-    """The method recommended for one object (None: any) and why. Thin: measured part by part when the object has
-    such samples (at least :data:`THIN_AREA_FRACTION` of its surface under :data:`THIN_RADII` radii), else by the
-    smallest dimension of its bounds."""
+    """The method recommended for one object (None: any) and why (thin: :func:`is_thin`)."""
     radii = shape.thickness_mm / largest_mm if largest_mm > 0.0 else float("inf")
     size = f"{shape.object_name}: {shape.thickness_mm:.3g} mm thick ({radii:.3g} × the largest radius)"
-    thin = radii < THIN_RADII
+    thin = is_thin(shape, largest_mm)
     parts = thin_parts(shape, THIN_RADII * largest_mm)
     if parts is not None:
         fraction = parts["thin_area_fraction"]
-        thin = fraction >= THIN_AREA_FRACTION
         if thin:
             centre = ", ".join(f"{v:.3g}" for v in parts["thin_centre"])
             size = (f"{shape.object_name}: {100 * fraction:.3g} % of its surface thinner than {THIN_RADII:g} radii "

@@ -223,8 +223,9 @@ def test_no_method_advice_where_subsurface_is_off_or_in_eevee():
     plan = _constant_plan()
     shapes = (scene.ShapeFacts("Ear", 1.0, True),)
     settings = core.SkinSettings.from_preset("caucasian")
-    far = _entry(scene.decide(plan, settings, _with(_facts(1e4), shapes=shapes)), "subsurface method")
-    assert far["enabled"] and "subsurface is off" in far["reason"]
+    off = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=shapes), {"subsurface": "OFF"}),
+                 "subsurface method")
+    assert off["enabled"] and "subsurface is off" in off["reason"]
     eevee = core.make_plan(settings.replace(engine="eevee"))
     entry = _entry(scene.decide(eevee, settings, _with(_facts(0.5), shapes=shapes)), "subsurface method")
     assert entry["enabled"] and "EEVEE" in entry["reason"] and entry["figures"]["objects"] == {}
@@ -413,3 +414,25 @@ def test_dropped_after_computing_the_radius_costs_one_evaluation():
     assert plan["work"]["radius_fits"] == 3
     albedo = spectral_skin.evaluate(preset="african", outputs=["albedo"])["diffuse_reflectance_rgb"]
     np.testing.assert_allclose(plan["base_color"], albedo, rtol=1e-12)
+
+
+def test_thin_parts_keep_subsurface_however_far():
+    """Far away a thick object drops subsurface; one with thin parts (by the part-by-part measure or, without
+    samples, its bounds) keeps it, the reason naming the object, and the radius is computed (no early drop)."""
+    plan = _constant_plan()
+    largest = max(plan["radius"])
+    settings = core.SkinSettings.from_preset("caucasian")
+    parts = ((2.0, 5.0, (0.1, 0.0, 0.0)), (160.0, 95.0, (0.0, 0.0, 0.08)))
+    thick = scene.ShapeFacts("Ball", 160.0, True, parts=((160.0, 1.0, (0.0, 0.0, 0.0)),), sampled_faces=1)
+    for shapes, kept in (((thick,), False), ((thick, scene.ShapeFacts("Head", 160.0, True, parts=parts,
+                                                                       sampled_faces=2)), True),
+                         ((scene.ShapeFacts("Plate", 0.5 * largest, True),), True)):
+        entry = _entry(scene.decide(plan, settings, _with(_facts(1e4), shapes=shapes)), "subsurface")
+        assert entry["figures"]["largest_radius_px"] < scene.SUBSURFACE_MIN_RADIUS_PX
+        assert entry["enabled"] is kept, entry["reason"]
+        if kept:
+            assert entry["figures"]["thin_objects"] == [shapes[-1].object_name]
+            assert shapes[-1].object_name in entry["reason"] and "thinner than 3 radii" in entry["reason"]
+        planned = scene.scene_plan(settings, _with(_facts(1e4), shapes=shapes))
+        assert (planned["work"]["radius_fits"] > 0) is kept, planned["work"]
+        assert scene.enabled(planned["effects"], "subsurface") is kept
