@@ -145,7 +145,8 @@ struct MapsArgs {
           value_parser = clap::value_parser!(u64).range(0..=spectral_skin::maps::pipeline::MAX_TABLE_CHECK_SAMPLES as u64))]
     table_check: u64,
     /// Build the lookup table afresh instead of reusing one kept in the cache folder
-    /// ($SPECTRAL_SKIN_CACHE_DIR, else $XDG_CACHE_HOME/spectral-skin, else ~/.cache/spectral-skin).
+    /// ($SPECTRAL_SKIN_CACHE_DIR, else spectral-skin in the platform's cache folder: $XDG_CACHE_HOME or ~/.cache on
+    /// Linux, ~/Library/Caches on macOS, %LOCALAPPDATA% on Windows).
     #[arg(long)]
     no_cache: bool,
     /// EXR compression.

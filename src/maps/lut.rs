@@ -367,13 +367,14 @@ fn cache_key(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableRes
     fnv1a(text.as_bytes())
 }
 
-/// The per-user cache folder: `$SPECTRAL_SKIN_CACHE_DIR`, else `$XDG_CACHE_HOME/spectral-skin`, else
-/// `$HOME/.cache/spectral-skin`.
+/// The per-user cache folder: `$SPECTRAL_SKIN_CACHE_DIR` if set and not empty, else `spectral-skin` in the
+/// platform's cache folder (the `dirs` crate: `$XDG_CACHE_HOME` or `~/.cache` on Linux, `~/Library/Caches` on macOS,
+/// `%LOCALAPPDATA%` on Windows). None when neither exists.
 pub fn default_cache_dir() -> Option<PathBuf> {
-    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
-    var("SPECTRAL_SKIN_CACHE_DIR")
-        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("spectral-skin")))
-        .or_else(|| var("HOME").map(|d| d.join(".cache").join("spectral-skin")))
+    std::env::var_os("SPECTRAL_SKIN_CACHE_DIR")
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| dirs::cache_dir().map(|d| d.join("spectral-skin")))
 }
 
 /// The parameters at node n (oiliness does not enter the table).

@@ -9,8 +9,7 @@ use crate::maps::io::PARAM_CHANNELS;
 use crate::skin::PARAMS;
 use crate::PRESETS;
 
-use super::convert::json_to_py;
-use super::errors::internal;
+use super::convert::to_py;
 
 /// The named presets.
 ///
@@ -108,5 +107,5 @@ pub(super) fn accuracy_levels_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> 
 #[pyfunction]
 #[pyo3(name = "blender_targets")]
 pub(super) fn blender_targets_py(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
-    json_to_py(py, &serde_json::to_value(describe_targets()).map_err(internal)?)
+    to_py(py, &describe_targets())
 }
