@@ -58,7 +58,10 @@ class SpectralSkinError(ValueError):
     """
 
 class SpectralSkinIOError(OSError):
-    """A file spectral-skin could not read or write; the message names it and says what went wrong."""
+    """A file spectral-skin could not read or write; the message names it and says what went wrong.
+
+    ``errno`` is the operating system's error code where it gave one (e.g. ``errno.ENOENT``), else None.
+    """
 
 class SpectralSkinWarning(UserWarning):
     """A result computed but changed on its way out: a negative lobe of a radial profile set to 0.
