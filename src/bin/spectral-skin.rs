@@ -469,11 +469,8 @@ fn map_help(spec: &ParamSpec) -> String {
 }
 
 fn print_summary(ev: &Evaluation, only: Option<SubsurfaceMethod>) {
-    let p = ev.params;
-    println!(
-        "parameters: melanin {} melanin_blend {} hemoglobin {} oiliness {}",
-        p.melanin, p.melanin_blend, p.hemoglobin, p.oiliness
-    );
+    let values: Vec<String> = PARAMS.iter().zip(ev.params.values()).map(|(s, v)| format!("{} {v}", s.name)).collect();
+    println!("parameters: {}", values.join(" "));
     println!("colour space: {}", ev.color_space);
     let t = ev.target;
     let tested = if t.tested { "tested" } else { "untested: newest known behaviour" };

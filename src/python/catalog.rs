@@ -5,7 +5,6 @@ use pyo3::types::{PyDict, PyList};
 
 use crate::accuracy::ALL_ACCURACY_LEVELS;
 use crate::fit::blender_target::describe_targets;
-use crate::maps::io::PARAM_CHANNELS;
 use crate::skin::PARAMS;
 use crate::PRESETS;
 
@@ -22,9 +21,8 @@ pub(super) fn presets_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     let all = PyDict::new(py);
     for p in PRESETS {
         let d = PyDict::new(py);
-        let q = p.params;
-        for (name, value) in PARAM_CHANNELS.iter().zip([q.melanin, q.melanin_blend, q.hemoglobin, q.oiliness]) {
-            d.set_item(name, value)?;
+        for (spec, value) in PARAMS.iter().zip(p.params.values()) {
+            d.set_item(spec.name, value)?;
         }
         d.set_item("description", p.description)?;
         all.set_item(p.name, d)?;

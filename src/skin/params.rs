@@ -146,6 +146,11 @@ impl SkinParams {
         })
     }
 
+    /// The values in [`PARAMS`] order.
+    pub fn values(&self) -> [f64; 4] {
+        [self.melanin, self.melanin_blend, self.hemoglobin, self.oiliness]
+    }
+
     /// A named preset (case-insensitive); the error lists the known names.
     pub fn preset(name: &str) -> Result<Self, SkinError> {
         PRESETS.iter().find(|p| p.name.eq_ignore_ascii_case(name)).map(|p| p.params).ok_or_else(|| {
@@ -211,6 +216,12 @@ mod tests {
             assert!(e.starts_with(&format!("{} must be in", spec.name)), "{e}");
         }
         assert_eq!(param_spec("hemoglobin").map(|s| s.max), Some(0.1));
+        // values() is in PARAMS order: each value is the field of that name.
+        let q = SkinParams::new(0.1, 0.2, 0.03, 0.4).unwrap();
+        let fields = serde_json::to_value(q).unwrap();
+        for (spec, value) in PARAMS.iter().zip(q.values()) {
+            assert_eq!(fields[spec.name].as_f64(), Some(value), "{}", spec.name);
+        }
     }
 
     #[test]
