@@ -11,7 +11,16 @@ import bpy
 import numpy as np
 import spectral_skin
 
-from .core import PARAMETER_INFO, PARAMETERS, ParameterMap, SkinSettings, read_map_file, texture_prefix
+from .core import (
+    ACCURACY_DESCRIPTIONS,
+    ACCURACY_LEVELS,
+    PARAMETER_INFO,
+    PARAMETERS,
+    ParameterMap,
+    SkinSettings,
+    read_map_file,
+    texture_prefix,
+)
 from .core import methods as core_methods
 from .nodes import scene_target, scene_working_space
 from .scene_facts import OVERRIDE_ITEMS
@@ -47,11 +56,8 @@ METHOD_ITEMS = [
     for m in core_methods(bpy.app.version)
 ]
 
-ACCURACY_ITEMS = [
-    ("DRAFT", "Draft", "Fast preview: fewer wavelengths and fit frequencies (see docs/accuracy-vs-time.md)"),
-    ("DEFAULT", "Default", "Albedo within 0.2 % and radius within 1 % of the converged reference"),
-    ("REFERENCE", "Reference", "The converged reference: 1 nm wavelength steps; about 30 times slower"),
-]
+# The core's accuracy levels and their descriptions (core/settings.py).
+ACCURACY_ITEMS = [(key, name.title(), ACCURACY_DESCRIPTIONS[key]) for key, name in ACCURACY_LEVELS.items()]
 
 
 # True while a preset writes the four parameters, so that their update does not switch the menu to Custom.

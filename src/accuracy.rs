@@ -134,12 +134,15 @@ impl Accuracy {
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum AccuracyLevel {
-    /// For interactive previews: 1.5-2x faster than `default`, albedo within 0.1 % and radius within 1 %.
+    /// [`Accuracy::draft`]; what it is for: [`AccuracyLevel::description`].
+    #[cfg_attr(feature = "cli", value(help = AccuracyLevel::Draft.description()))]
     Draft,
-    /// The best trade-off: albedo within 0.2 % and radius within 1 % of the reference for every preset.
+    /// [`Accuracy::default`].
     #[default]
+    #[cfg_attr(feature = "cli", value(help = AccuracyLevel::Default.description()))]
     Default,
-    /// The converged reference, for checking the others.
+    /// [`Accuracy::reference`].
+    #[cfg_attr(feature = "cli", value(help = AccuracyLevel::Reference.description()))]
     Reference,
 }
 
@@ -153,6 +156,24 @@ impl AccuracyLevel {
             AccuracyLevel::Draft => "draft",
             AccuracyLevel::Default => "default",
             AccuracyLevel::Reference => "reference",
+        }
+    }
+
+    /// What the level is for, one line, for every front (the CLI's help, Python's `accuracy_levels()`, the add-on's
+    /// menu). The figures are those of docs/accuracy-vs-time.md (worst over the presets, against the reference).
+    pub fn description(self) -> &'static str {
+        match self {
+            AccuracyLevel::Draft => {
+                "For interactive previews: 1.5-2x faster than default; albedo within 0.1 % and radius within 1 % of \
+                 the reference"
+            }
+            AccuracyLevel::Default => {
+                "The best trade-off: albedo within 0.2 % and radius within 1 % of the reference for every preset"
+            }
+            AccuracyLevel::Reference => {
+                "The converged reference (1 nm wavelength steps), for checking the others: about 20x slower per material than \
+                 default"
+            }
         }
     }
 

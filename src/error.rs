@@ -12,9 +12,15 @@ pub enum SkinError {
     /// An input that is not a single range (a layer list, a radius grid, a preset name) is invalid.
     #[error("invalid {name}: {reason}")]
     Invalid { name: String, reason: String },
-    /// A file could not be read or written.
+    /// A file could not be read or written. `source` is the operating system's error where there is one (its text is
+    /// part of `reason` too, so the message alone says everything).
     #[error("{path}: {reason}")]
-    Io { path: String, reason: String },
+    Io {
+        path: String,
+        reason: String,
+        #[source]
+        source: Option<IoSource>,
+    },
     /// A parameter map holds NaN, infinite or out-of-range texels and clamping is off. The fields let each front
     /// word its own way to enable clamping (the CLI's `--clamp`, Python's `clamp=True`, the add-on's checkbox).
     #[error(
@@ -35,11 +41,51 @@ pub enum SkinError {
 
 impl SkinError {
     pub(crate) fn io(path: &std::path::Path, reason: impl std::fmt::Display) -> Self {
-        SkinError::Io { path: path.display().to_string(), reason: reason.to_string() }
+        SkinError::Io { path: path.display().to_string(), reason: reason.to_string(), source: None }
+    }
+
+    /// [`SkinError::io`] caused by `source`: `reason` words the failure (with the source's text), `source` keeps the
+    /// error itself (its kind and OS error code) for callers.
+    pub(crate) fn io_caused(path: &std::path::Path, reason: impl std::fmt::Display, source: std::io::Error) -> Self {
+        SkinError::Io {
+            path: path.display().to_string(),
+            reason: reason.to_string(),
+            source: Some(IoSource(std::sync::Arc::new(source))),
+        }
     }
 
     pub(crate) fn invalid(name: impl Into<String>, reason: impl Into<String>) -> Self {
         SkinError::Invalid { name: name.into(), reason: reason.into() }
+    }
+}
+
+/// The operating system's error behind a [`SkinError::Io`], shared so that the error stays `Clone`. Two are equal
+/// when their kind and text are.
+#[derive(Debug, Clone)]
+pub struct IoSource(pub std::sync::Arc<std::io::Error>);
+
+impl IoSource {
+    /// The error itself.
+    pub fn error(&self) -> &std::io::Error {
+        &self.0
+    }
+}
+
+impl std::fmt::Display for IoSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for IoSource {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
+}
+
+impl PartialEq for IoSource {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.kind() == other.0.kind() && self.0.to_string() == other.0.to_string()
     }
 }
 

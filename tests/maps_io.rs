@@ -602,3 +602,18 @@ fn chunk_sizes_past_the_end_are_refused_before_reading() {
     let e = err_text(read_params_from_bytes(&bytes, "packed", Some(0)));
     assert!(e.contains("packed") && !e.contains("claims"), "{e}");
 }
+
+#[test]
+fn io_errors_keep_the_operating_systems_error_as_their_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.exr");
+    let err = read_params(&ParamInputs::Multi { path: missing.clone(), constants: [None; 4] }).unwrap_err();
+    assert!(err.to_string().contains("missing.exr"), "{err}");
+    let source = std::error::Error::source(&err).expect("an I/O error keeps its source");
+    let source = source.downcast_ref::<spectral_skin::error::IoSource>().expect("the source is the OS error");
+    assert_eq!(source.error().kind(), std::io::ErrorKind::NotFound);
+    // A failure the core detects itself (no OS error) has no source.
+    let err = stage_bytes(&dir.path().join("absent").join("out.json"), b"{}").unwrap_err();
+    assert!(err.to_string().contains("expected an existing directory"), "{err}");
+    assert!(std::error::Error::source(&err).is_none(), "{err}");
+}

@@ -2,6 +2,7 @@
 
 from .plan import describe_error, make_plan, subsurface_scale, texture_prefix, write_textures
 from .settings import (
+    ACCURACY_DESCRIPTIONS,
     ACCURACY_LEVELS,
     DEFAULT_WORKING_SPACE,
     PARAMETER_INFO,
@@ -15,6 +16,7 @@ from .settings import (
 from .targets import engine_name, method_name, methods, version_text
 
 __all__ = [
+    "ACCURACY_DESCRIPTIONS",
     "ACCURACY_LEVELS",
     "DEFAULT_WORKING_SPACE",
     "PARAMETERS",

@@ -8,38 +8,56 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, NamedTuple
 
 import spectral_skin
 
 from .targets import method_name
 
-PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
+if TYPE_CHECKING:
+    from spectral_skin._core import _ParameterSpec
+
+# The model's parameters, from the core's parameter table (src/skin/params.rs, ``spectral_skin.parameters()``): names,
+# ranges, labels and meanings, for the UI (slider limits and tooltips) and for scaling 8/16-bit parameter images onto
+# the range (as `spectral-skin maps` does). The core validates every value itself.
+_SPECS = spectral_skin.parameters()
+PARAMETERS = tuple(p["name"] for p in _SPECS)
 
 # Blender 5.0's scene-linear working spaces (``bpy.data.colorspace.working_space``), which are also the names of
 # their OCIO colour spaces and the core's ``working_space`` names. Blender before 5.0 has only Linear Rec.709.
 WORKING_SPACES = ("Linear Rec.709", "Linear Rec.2020", "ACEScg")
 DEFAULT_WORKING_SPACE = "Linear Rec.709"
 
-# The core's named accuracy levels (docs/accuracy-vs-time.md): Blender's enum identifier -> the core's name.
-ACCURACY_LEVELS = {"DRAFT": "draft", "DEFAULT": "default", "REFERENCE": "reference"}
+# The core's named accuracy levels, cheapest first (``spectral_skin.accuracy_levels()``; docs/accuracy-vs-time.md):
+# Blender's enum identifier -> the core's name; ACCURACY_DESCRIPTIONS: the core's one-line description of each.
+ACCURACY_LEVELS = {a["name"].upper(): a["name"] for a in spectral_skin.accuracy_levels()}
+ACCURACY_DESCRIPTIONS = {a["name"].upper(): a["description"] for a in spectral_skin.accuracy_levels()}
+
+# Greek letters for the core's ASCII-spelled symbols ("beta_m" -> "β_m"), for labels.
+_GREEK = {"beta": "β", "rho": "ρ"}
 
 
-# The parameters' ranges, labels and meanings, for the UI (slider limits and tooltips) and for scaling 8/16-bit
-# parameter images onto the range (as `spectral-skin maps` does). The core validates every value itself; these
-# duplicate the spec's parameter table (src/skin/params.rs) because the Python API does not expose the ranges.
-_RANGES = spectral_skin.parameter_ranges()  # the core's ranges: slider limits and 8/16-bit map scaling
-PARAMETER_INFO = {
-    "melanin": (*_RANGES["melanin"], "Melanin (C_m)",
-                "Melanin volume fraction of the epidermis, C_m (0 to 0.5): from fair (0.005) to very dark (0.5) skin"),
-    "melanin_blend": (*_RANGES["melanin_blend"], "Melanin Blend (β_m)",
-                      "Eumelanin share of the melanin, β_m (0 to 1): 0 is all red-yellow pheomelanin, "
-                      "1 all brown-black eumelanin"),
-    "hemoglobin": (*_RANGES["hemoglobin"], "Haemoglobin (C_h)",
-                   "Whole-blood volume fraction of the dermis, C_h (0 to 0.1): more blood gives redder skin"),
-    "oiliness": (*_RANGES["oiliness"], "Oiliness (ρ_s)",
-                 "Scale of the skin's specular lobe from its oil layer, ρ_s (0 to 1): sets Specular IOR Level and "
-                 "Roughness"),
-}
+def _symbol(ascii_symbol: str) -> str:
+    head, _, tail = ascii_symbol.partition("_")
+    return _GREEK.get(head, head) + (f"_{tail}" if tail else "")
+
+
+class ParameterInfo(NamedTuple):
+    """One parameter as the UI shows it: slider limits, label and tooltip."""
+
+    low: float
+    high: float
+    label: str
+    description: str
+
+
+def _info(spec: _ParameterSpec) -> ParameterInfo:
+    low, high, symbol, meaning = spec["min"], spec["max"], _symbol(spec["symbol"]), spec["description"]
+    return ParameterInfo(low, high, f"{spec['label']} ({symbol})",
+                         f"{meaning[:1].upper()}{meaning[1:]}, {symbol} ({low:g} to {high:g}): {spec['effect']}")
+
+
+PARAMETER_INFO = {p["name"]: _info(p) for p in _SPECS}
 
 
 @dataclass

@@ -7,7 +7,9 @@ nanometres. The work runs in the compiled core (``spectral_skin._core``) with th
 Functions:
     evaluate: what a material needs (albedo, Subsurface Radius, specular) or any subset of the outputs.
     profile: the radial reflectance profile R(r), RGB or per wavelength.
+    parameters: each parameter's name, symbol, label, meaning, unit and range (the core's parameter table).
     parameter_ranges: the allowed range of each parameter.
+    accuracy_levels: the named accuracy levels and what each is for.
     presets: the named parameter sets.
     layered_reflectance: the layered diffusion solver alone, for checks against other solvers.
     maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
@@ -26,11 +28,13 @@ from ._core import (
     SpectralSkinIOError,
     SpectralSkinWarning,
     __version__,
+    accuracy_levels,
     blender_targets,
     evaluate,
     layered_reflectance,
     maps,
     parameter_ranges,
+    parameters,
     presets,
     profile,
     read_parameter_map,
@@ -42,11 +46,13 @@ __all__ = [
     "SpectralSkinIOError",
     "SpectralSkinWarning",
     "__version__",
+    "accuracy_levels",
     "blender_targets",
     "evaluate",
     "layered_reflectance",
     "maps",
     "parameter_ranges",
+    "parameters",
     "presets",
     "profile",
     "read_parameter_map",

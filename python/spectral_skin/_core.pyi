@@ -19,11 +19,13 @@ __all__ = [
     "SpectralSkinIOError",
     "SpectralSkinWarning",
     "__version__",
+    "accuracy_levels",
     "blender_targets",
     "evaluate",
     "layered_reflectance",
     "maps",
     "parameter_ranges",
+    "parameters",
     "presets",
     "profile",
     "read_parameter_map",
@@ -52,11 +54,14 @@ class SpectralSkinError(ValueError):
     """Invalid input to spectral-skin.
 
     The message names the input, its allowed range and the value received, e.g.
-    ``melanin must be in [0, 0.5] (melanin fraction C_m); got 0.7``.
+    ``melanin must be in [0, 0.5] (melanin volume fraction of the epidermis); got 0.7``.
     """
 
 class SpectralSkinIOError(OSError):
-    """A file spectral-skin could not read or write; the message names it and says what went wrong."""
+    """A file spectral-skin could not read or write; the message names it and says what went wrong.
+
+    ``errno`` is the operating system's error code where it gave one (e.g. ``errno.ENOENT``), else None.
+    """
 
 class SpectralSkinWarning(UserWarning):
     """A result computed but changed on its way out: a negative lobe of a radial profile set to 0.
@@ -123,8 +128,34 @@ def profile(
 ) -> dict[str, _FloatArray]:
     """Documented once, in the compiled module: ``help(spectral_skin.profile)``."""
 
+class _ParameterSpec(TypedDict):
+    """One parameter of the core's parameter table (see :func:`parameters`)."""
+
+    name: str
+    symbol: str
+    label: str
+    description: str
+    effect: str
+    unit: str
+    min: float
+    max: float
+    default: float | None
+    source: str
+
+class _AccuracyLevelSpec(TypedDict):
+    """A named accuracy level (see :func:`accuracy_levels`)."""
+
+    name: str
+    description: str
+
+def parameters() -> list[_ParameterSpec]:
+    """Documented once, in the compiled module: ``help(spectral_skin.parameters)``."""
+
 def parameter_ranges() -> dict[str, tuple[float, float]]:
     """Documented once, in the compiled module: ``help(spectral_skin.parameter_ranges)``."""
+
+def accuracy_levels() -> list[_AccuracyLevelSpec]:
+    """Documented once, in the compiled module: ``help(spectral_skin.accuracy_levels)``."""
 
 def presets() -> dict[str, _Preset]:
     """Documented once, in the compiled module: ``help(spectral_skin.presets)``."""

@@ -14,6 +14,7 @@ use spectral_skin::fit::{SubsurfaceMethod, DEFAULT_METHOD};
 use spectral_skin::maps::example::{write_example_params, ExampleKind};
 use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
+use spectral_skin::skin::params::{ParamSpec, HEMOGLOBIN, MELANIN, MELANIN_BLEND, OILINESS, PARAMS};
 use spectral_skin::{evaluate, AccuracyLevel, Evaluation, Outputs, Request, SkinError, SkinParams, PRESETS};
 
 #[derive(Parser)]
@@ -104,32 +105,23 @@ enum Command {
 
 #[derive(Args)]
 struct MapsArgs {
-    /// One EXR with channels melanin, melanin_blend, hemoglobin, oiliness.
-    #[arg(long, conflicts_with_all = ["melanin_map", "melanin_blend_map", "hemoglobin_map", "oiliness_map"])]
+    #[arg(long, help = params_help(), conflicts_with_all = ["melanin_map", "melanin_blend_map", "hemoglobin_map", "oiliness_map"])]
     params: Option<PathBuf>,
-    /// Melanin map (single-channel EXR, or 8/16-bit PNG/TIFF mapped 0..1 onto 0..0.5), or use --melanin.
-    #[arg(long)]
+    #[arg(long, help = map_help(&MELANIN))]
     melanin_map: Option<PathBuf>,
-    /// Melanin-blend map (EXR, or PNG/TIFF mapped onto 0..1), or use --melanin-blend.
-    #[arg(long)]
+    #[arg(long, help = map_help(&MELANIN_BLEND))]
     melanin_blend_map: Option<PathBuf>,
-    /// Blood map (EXR, or PNG/TIFF mapped onto 0..0.1), or use --hemoglobin.
-    #[arg(long)]
+    #[arg(long, help = map_help(&HEMOGLOBIN))]
     hemoglobin_map: Option<PathBuf>,
-    /// Oiliness map (EXR, or PNG/TIFF mapped onto 0..1), or use --oiliness.
-    #[arg(long)]
+    #[arg(long, help = map_help(&OILINESS))]
     oiliness_map: Option<PathBuf>,
-    /// Constant melanin fraction (also fills a channel missing from --params).
-    #[arg(long)]
+    #[arg(long, help = constant_help(&MELANIN))]
     melanin: Option<f64>,
-    /// Constant eumelanin share.
-    #[arg(long)]
+    #[arg(long, help = constant_help(&MELANIN_BLEND))]
     melanin_blend: Option<f64>,
-    /// Constant blood fraction.
-    #[arg(long)]
+    #[arg(long, help = constant_help(&HEMOGLOBIN))]
     hemoglobin: Option<f64>,
-    /// Constant oiliness.
-    #[arg(long)]
+    #[arg(long, help = constant_help(&OILINESS))]
     oiliness: Option<f64>,
     /// Output folder (created if missing).
     #[arg(long)]
@@ -153,7 +145,8 @@ struct MapsArgs {
           value_parser = clap::value_parser!(u64).range(0..=spectral_skin::maps::pipeline::MAX_TABLE_CHECK_SAMPLES as u64))]
     table_check: u64,
     /// Build the lookup table afresh instead of reusing one kept in the cache folder
-    /// ($SPECTRAL_SKIN_CACHE_DIR, else $XDG_CACHE_HOME/spectral-skin, else ~/.cache/spectral-skin).
+    /// ($SPECTRAL_SKIN_CACHE_DIR, else spectral-skin in the platform's cache folder: $XDG_CACHE_HOME or ~/.cache on
+    /// Linux, ~/Library/Caches on macOS, %LOCALAPPDATA% on Windows).
     #[arg(long)]
     no_cache: bool,
     /// EXR compression.
@@ -175,17 +168,13 @@ struct SkinArgs {
     /// Named preset (caucasian, asian, african); explicit parameters override its values.
     #[arg(long)]
     preset: Option<String>,
-    /// Melanin fraction C_m of the epidermis, 0..0.5.
-    #[arg(long)]
+    #[arg(long, help = param_help(&MELANIN))]
     melanin: Option<f64>,
-    /// Eumelanin share beta_m of the melanin, 0..1.
-    #[arg(long)]
+    #[arg(long, help = param_help(&MELANIN_BLEND))]
     melanin_blend: Option<f64>,
-    /// Blood fraction C_h of the dermis, 0..0.1.
-    #[arg(long)]
+    #[arg(long, help = param_help(&HEMOGLOBIN))]
     hemoglobin: Option<f64>,
-    /// Oiliness rho_s of the surface, 0..1.
-    #[arg(long)]
+    #[arg(long, help = param_help(&OILINESS))]
     oiliness: Option<f64>,
 }
 
@@ -218,17 +207,18 @@ impl SkinArgs {
             Some(name) => Some(SkinParams::preset(name)?),
             None => None,
         };
-        let pick = |explicit: Option<f64>, from_preset: Option<f64>, flag: &str| {
+        let pick = |explicit: Option<f64>, from_preset: Option<f64>, spec: &ParamSpec| {
+            let flag = flag(spec);
             explicit.or(from_preset).ok_or_else(|| SkinError::Invalid {
                 name: flag.to_string(),
                 reason: format!("give --preset or --{flag}"),
             })
         };
         SkinParams::new(
-            pick(self.melanin, base.map(|p| p.melanin), "melanin")?,
-            pick(self.melanin_blend, base.map(|p| p.melanin_blend), "melanin-blend")?,
-            pick(self.hemoglobin, base.map(|p| p.hemoglobin), "hemoglobin")?,
-            pick(self.oiliness, base.map(|p| p.oiliness), "oiliness")?,
+            pick(self.melanin, base.map(|p| p.melanin), &MELANIN)?,
+            pick(self.melanin_blend, base.map(|p| p.melanin_blend), &MELANIN_BLEND)?,
+            pick(self.hemoglobin, base.map(|p| p.hemoglobin), &HEMOGLOBIN)?,
+            pick(self.oiliness, base.map(|p| p.oiliness), &OILINESS)?,
         )
     }
 }
@@ -365,10 +355,10 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
                     (Some(f), None) => ParamSource::File(f.to_path_buf()),
                     (None, Some(v)) => ParamSource::Constant(v),
                     (Some(_), Some(_)) => {
-                        return Err(format!("give either --{0}-map or --{0}, not both", FLAGS[k]).into())
+                        return Err(format!("give either --{0}-map or --{0}, not both", flag(&PARAMS[k])).into())
                     }
                     (None, None) => {
-                        return Err(format!("missing {0}: give --params, --{0}-map or --{0}", FLAGS[k]).into())
+                        return Err(format!("missing {0}: give --params, --{0}-map or --{0}", flag(&PARAMS[k])).into())
                     }
                 });
             }
@@ -442,15 +432,45 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// CLI flag stems of the four parameters, in PARAM_CHANNELS order.
-const FLAGS: [&str; 4] = ["melanin", "melanin-blend", "hemoglobin", "oiliness"];
+/// The CLI flag stem of a parameter: its name with `-` for `_` ("melanin-blend").
+fn flag(spec: &ParamSpec) -> String {
+    spec.name.replace('_', "-")
+}
+
+/// The help of a parameter's flag, from the core's parameter table: "Melanin volume fraction of the epidermis, C_m,
+/// 0..0.5."
+fn param_help(spec: &ParamSpec) -> String {
+    let summary = spec.summary();
+    let mut chars = summary.chars();
+    let first = chars.next().map(|c| c.to_uppercase().collect::<String>()).unwrap_or_default();
+    format!("{first}{}", chars.as_str())
+}
+
+/// The help of a constant for `maps`.
+fn constant_help(spec: &ParamSpec) -> String {
+    format!("Constant {}", spec.summary())
+}
+
+/// The help of `maps --params`.
+fn params_help() -> String {
+    let names: Vec<&str> = PARAMS.iter().map(|p| p.name).collect();
+    format!("One EXR with channels {}; a constant (--melanin etc.) fills a channel it lacks", names.join(", "))
+}
+
+/// The help of a parameter's map for `maps`.
+fn map_help(spec: &ParamSpec) -> String {
+    format!(
+        "{} map (single-channel EXR, or 8/16-bit PNG/TIFF mapped 0..1 onto {}..{}), or use --{}",
+        spec.label,
+        spec.min,
+        spec.max,
+        flag(spec)
+    )
+}
 
 fn print_summary(ev: &Evaluation, only: Option<SubsurfaceMethod>) {
-    let p = ev.params;
-    println!(
-        "parameters: melanin {} melanin_blend {} hemoglobin {} oiliness {}",
-        p.melanin, p.melanin_blend, p.hemoglobin, p.oiliness
-    );
+    let values: Vec<String> = PARAMS.iter().zip(ev.params.values()).map(|(s, v)| format!("{} {v}", s.name)).collect();
+    println!("parameters: {}", values.join(" "));
     println!("colour space: {}", ev.color_space);
     let t = ev.target;
     let tested = if t.tested { "tested" } else { "untested: newest known behaviour" };

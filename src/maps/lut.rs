@@ -16,7 +16,7 @@ use super::io::write_atomic;
 use crate::error::SkinError;
 use crate::evaluate::{Material, Prepared};
 use crate::fit::SubsurfaceMethod;
-use crate::skin::params::{HEMOGLOBIN_RANGE, MELANIN_BLEND_RANGE, MELANIN_RANGE};
+use crate::skin::params::{HEMOGLOBIN, MELANIN, MELANIN_BLEND};
 use crate::skin::SkinParams;
 
 /// Outputs per texel that depend on (C_m, beta_m, C_h), for one subsurface method on the request's target: the
@@ -232,9 +232,9 @@ impl MaterialTable {
             let i = (x as usize).min(n - 2); // x >= 0: truncation is floor, without a libm call
             (i, (x - i as f64) as f32)
         };
-        let (i, ti) = axis(warp(melanin as f64, MELANIN_RANGE.1), r.melanin);
-        let (j, tj) = axis((melanin_blend as f64 - MELANIN_BLEND_RANGE.0) / MELANIN_BLEND_RANGE.1, r.melanin_blend);
-        let (k, tk) = axis(warp(hemoglobin as f64, HEMOGLOBIN_RANGE.1), r.hemoglobin);
+        let (i, ti) = axis(warp(melanin as f64, MELANIN.max), r.melanin);
+        let (j, tj) = axis((melanin_blend as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, r.melanin_blend);
+        let (k, tk) = axis(warp(hemoglobin as f64, HEMOGLOBIN.max), r.hemoglobin);
         let index = |a: usize, b: usize, c: usize| (a * r.melanin_blend + b) * r.hemoglobin + c;
         for (di, wi) in [(0, 1.0 - ti), (1, ti)] {
             for (dj, wj) in [(0, 1.0 - tj), (1, tj)] {
@@ -367,13 +367,14 @@ fn cache_key(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableRes
     fnv1a(text.as_bytes())
 }
 
-/// The per-user cache folder: `$SPECTRAL_SKIN_CACHE_DIR`, else `$XDG_CACHE_HOME/spectral-skin`, else
-/// `$HOME/.cache/spectral-skin`.
+/// The per-user cache folder: `$SPECTRAL_SKIN_CACHE_DIR` if set and not empty, else `spectral-skin` in the
+/// platform's cache folder (the `dirs` crate: `$XDG_CACHE_HOME` or `~/.cache` on Linux, `~/Library/Caches` on macOS,
+/// `%LOCALAPPDATA%` on Windows). None when neither exists.
 pub fn default_cache_dir() -> Option<PathBuf> {
-    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
-    var("SPECTRAL_SKIN_CACHE_DIR")
-        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("spectral-skin")))
-        .or_else(|| var("HOME").map(|d| d.join(".cache").join("spectral-skin")))
+    std::env::var_os("SPECTRAL_SKIN_CACHE_DIR")
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| dirs::cache_dir().map(|d| d.join("spectral-skin")))
 }
 
 /// The parameters at node n (oiliness does not enter the table).
@@ -383,9 +384,9 @@ fn node_params(r: TableResolution, n: usize) -> SkinParams {
     let i = n / (r.hemoglobin * r.melanin_blend);
     let at = |idx: usize, count: usize| idx as f64 / (count - 1) as f64;
     SkinParams {
-        melanin: unwarp(at(i, r.melanin), MELANIN_RANGE.1),
-        melanin_blend: MELANIN_BLEND_RANGE.0 + at(j, r.melanin_blend) * (MELANIN_BLEND_RANGE.1 - MELANIN_BLEND_RANGE.0),
-        hemoglobin: unwarp(at(k, r.hemoglobin), HEMOGLOBIN_RANGE.1),
+        melanin: unwarp(at(i, r.melanin), MELANIN.max),
+        melanin_blend: MELANIN_BLEND.min + at(j, r.melanin_blend) * (MELANIN_BLEND.max - MELANIN_BLEND.min),
+        hemoglobin: unwarp(at(k, r.hemoglobin), HEMOGLOBIN.max),
         oiliness: 0.0,
     }
 }
@@ -442,9 +443,9 @@ pub fn measure_error_cancellable(
                 return Err(interrupted("table check"));
             }
             let p = SkinParams {
-                melanin: unwarp(u[0], MELANIN_RANGE.1),
+                melanin: unwarp(u[0], MELANIN.max),
                 melanin_blend: u[1],
-                hemoglobin: unwarp(u[2], HEMOGLOBIN_RANGE.1),
+                hemoglobin: unwarp(u[2], HEMOGLOBIN.max),
                 oiliness: 0.0,
             };
             let exact = TexelMaterial::of(&prepared.material(&p)?, table.method)?;

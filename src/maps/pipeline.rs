@@ -562,7 +562,7 @@ pub fn stage_map_files(
     exr: ExrOptions,
 ) -> Result<Vec<Staged>, SkinError> {
     std::fs::create_dir_all(out_dir)
-        .map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
+        .map_err(|e| SkinError::io_caused(out_dir, format!("cannot create the output folder: {e}"), e))?;
     let (w, h) = (files.width, files.height);
     let path = |file: &str| out_dir.join(output_name(prefix, file));
     // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
@@ -604,9 +604,10 @@ pub fn commit_map_files(out_dir: &Path, prefix: Option<&str>, staged: Vec<Staged
             Ok(()) => {}
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
             Err(e) => {
-                return Err(SkinError::io(
+                return Err(SkinError::io_caused(
                     &stale,
                     format!("cannot remove the previous run's output (not written by this run): {e}"),
+                    e,
                 ))
             }
         }

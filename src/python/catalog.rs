@@ -1,14 +1,14 @@
-//! The core's tables for fronts: presets, parameter ranges, Blender targets.
+//! The core's tables for fronts: parameters, presets, accuracy levels, Blender targets.
 
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 
+use crate::accuracy::ALL_ACCURACY_LEVELS;
 use crate::fit::blender_target::describe_targets;
-use crate::maps::io::PARAM_CHANNELS;
+use crate::skin::PARAMS;
 use crate::PRESETS;
 
-use super::convert::json_to_py;
-use super::errors::internal;
+use super::convert::to_py;
 
 /// The named presets.
 ///
@@ -21,9 +21,8 @@ pub(super) fn presets_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     let all = PyDict::new(py);
     for p in PRESETS {
         let d = PyDict::new(py);
-        let q = p.params;
-        for (name, value) in PARAM_CHANNELS.iter().zip([q.melanin, q.melanin_blend, q.hemoglobin, q.oiliness]) {
-            d.set_item(name, value)?;
+        for (spec, value) in PARAMS.iter().zip(p.params.values()) {
+            d.set_item(spec.name, value)?;
         }
         d.set_item("description", p.description)?;
         all.set_item(p.name, d)?;
@@ -31,7 +30,36 @@ pub(super) fn presets_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(all)
 }
 
-/// The allowed range of each parameter.
+/// The model's parameters, from the core's parameter table: what fronts build their inputs from.
+///
+/// Returns:
+///     One dict per parameter, in the order of :func:`evaluate`'s arguments and of a parameter map's channels:
+///     {"name": "melanin" (the keyword and map channel), "symbol": "C_m" (DJ2006's, ASCII-spelled: "beta_m"),
+///     "label": "Melanin" (a UI title), "description": "melanin volume fraction of the epidermis" (what it is),
+///     "effect": what changing it does, "unit": "" (empty: dimensionless), "min": 0.0, "max": 0.5, "default": None
+///     (None: it must be given, by value or by a preset), "source": where meaning and range come from}.
+#[pyfunction]
+#[pyo3(name = "parameters")]
+pub(super) fn parameters_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let all = PyList::empty(py);
+    for p in PARAMS {
+        let d = PyDict::new(py);
+        d.set_item("name", p.name)?;
+        d.set_item("symbol", p.symbol)?;
+        d.set_item("label", p.label)?;
+        d.set_item("description", p.description)?;
+        d.set_item("effect", p.effect)?;
+        d.set_item("unit", p.unit)?;
+        d.set_item("min", p.min)?;
+        d.set_item("max", p.max)?;
+        d.set_item("default", p.default)?;
+        d.set_item("source", p.source)?;
+        all.append(d)?;
+    }
+    Ok(all)
+}
+
+/// The allowed range of each parameter (:func:`parameters` has the rest of each one's description).
 ///
 /// Returns:
 ///     {"melanin": (0.0, 0.5), "melanin_blend": (0.0, 1.0), "hemoglobin": (0.0, 0.1), "oiliness": (0.0, 1.0)}:
@@ -40,10 +68,29 @@ pub(super) fn presets_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 #[pyo3(name = "parameter_ranges")]
 pub(super) fn parameter_ranges_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
-    for (name, range) in crate::maps::io::PARAM_CHANNELS.iter().zip(crate::maps::io::PARAM_RANGES) {
-        d.set_item(name, range)?;
+    for p in PARAMS {
+        d.set_item(p.name, p.range())?;
     }
     Ok(d)
+}
+
+/// The named accuracy levels, cheapest first (docs/accuracy-vs-time.md).
+///
+/// Returns:
+///     [{"name": "draft", "description": one line: what the level is for and how close it is to the reference},
+///     {"name": "default", ...}, {"name": "reference", ...}]; the names are accepted by ``accuracy=`` of
+///     :func:`evaluate`, :func:`profile` and :func:`maps`.
+#[pyfunction]
+#[pyo3(name = "accuracy_levels")]
+pub(super) fn accuracy_levels_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let all = PyList::empty(py);
+    for level in ALL_ACCURACY_LEVELS {
+        let d = PyDict::new(py);
+        d.set_item("name", level.name())?;
+        d.set_item("description", level.description())?;
+        all.append(d)?;
+    }
+    Ok(all)
 }
 
 /// The Blender target table of the core, for fronts that derive their choices from it (the add-on).
@@ -58,5 +105,5 @@ pub(super) fn parameter_ranges_py(py: Python<'_>) -> PyResult<Bound<'_, PyDict>>
 #[pyfunction]
 #[pyo3(name = "blender_targets")]
 pub(super) fn blender_targets_py(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
-    json_to_py(py, &serde_json::to_value(describe_targets()).map_err(internal)?)
+    to_py(py, &describe_targets())
 }

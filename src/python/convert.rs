@@ -7,7 +7,7 @@ use numpy::{
 };
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyBytes, PyDict, PyList, PyString};
+use pyo3::types::{PyBool, PyBytes, PyString};
 use serde::Serialize;
 use serde_json::Value;
 
@@ -252,32 +252,16 @@ impl Knobs<'_> {
     }
 }
 
-/// serde_json `Value` to plain Python objects (dict, list, str, int, float, bool, None).
+/// serde_json `Value` to plain Python objects (dict, list, str, int, float, bool, None), by pythonize. Results go
+/// through the `Value` (not straight from the struct) so that they are what the CLI's JSON is: keys sorted, arrays as
+/// lists, a non-finite float as None.
 pub(super) fn json_to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>> {
-    Ok(match value {
-        Value::Null => py.None().into_bound(py),
-        Value::Bool(b) => b.into_pyobject(py)?.to_owned().into_any(),
-        Value::Number(n) => {
-            if let Some(i) = n.as_i64() {
-                i.into_pyobject(py)?.into_any()
-            } else if let Some(u) = n.as_u64() {
-                u.into_pyobject(py)?.into_any()
-            } else {
-                n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any()
-            }
-        }
-        Value::String(s) => PyString::new(py, s).into_any(),
-        Value::Array(items) => {
-            PyList::new(py, items.iter().map(|v| json_to_py(py, v)).collect::<PyResult<Vec<_>>>()?)?.into_any()
-        }
-        Value::Object(map) => {
-            let dict = PyDict::new(py);
-            for (k, v) in map {
-                dict.set_item(k, json_to_py(py, v)?)?;
-            }
-            dict.into_any()
-        }
-    })
+    Ok(pythonize::pythonize(py, value)?)
+}
+
+/// A core value as the CLI's JSON would have it, as plain Python objects (see [`json_to_py`]).
+pub(super) fn to_py<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyAny>> {
+    json_to_py(py, &serde_json::to_value(value).map_err(internal)?)
 }
 
 /// Rows of equal length to a 2-D float64 array.

@@ -42,12 +42,23 @@ pub(super) fn warn_lobe(py: Python<'_>, lobe: Option<impl std::fmt::Display>) ->
 }
 
 impl From<SkinError> for PyErr {
-    /// A SpectralSkinIOError (an OSError) for a file that cannot be read or written, else a SpectralSkinError. Bad texels in a parameter map also carry ``bad_texels``: {"parameter", "min", "max",
-    /// "nan", "infinite", "out_of_range", "first"}, so a front can word its own advice (the add-on's checkbox).
+    /// A SpectralSkinIOError (an OSError, with ``errno`` where the operating system gave one) for a file that cannot
+    /// be read or written, else a SpectralSkinError. Bad texels in a parameter map also carry ``bad_texels``:
+    /// {"parameter", "min", "max", "nan", "infinite", "out_of_range", "first"}, so a front can word its own advice
+    /// (the add-on's checkbox).
     fn from(e: SkinError) -> PyErr {
-        // No `filename` attribute: with one and no errno, OSError's str() turns into "[Errno None] None: path".
-        if let SkinError::Io { .. } = &e {
-            return SpectralSkinIOError::new_err(e.to_string());
+        // No `filename` attribute: with one and no errno, OSError's str() turns into "[Errno None] None: path". The
+        // operating system's error code, where there is one, is `errno` (str() stays the message: it shows errno only
+        // with a strerror).
+        if let SkinError::Io { source, .. } = &e {
+            let err = SpectralSkinIOError::new_err(e.to_string());
+            if let Some(code) = source.as_ref().and_then(|s| s.error().raw_os_error()) {
+                // Only the attribute is lost if this fails; the message says it all.
+                Python::attach(|py| {
+                    let _ = err.value(py).setattr("errno", code);
+                });
+            }
+            return err;
         }
         let err = SpectralSkinError::new_err(e.with_clamp_advice("pass clamp=True"));
         if let SkinError::BadTexels { parameter, min, max, nan, infinite, out_of_range, first } = e {

@@ -12,7 +12,7 @@ use crate::Outputs;
 
 use super::convert::{
     by_name, count_arg, json_to_py, nested_rows, parse_outputs, real_arg, real_sequence, real_vector, reject_string,
-    resolve_params, rgb_rows, target_from, Knobs,
+    resolve_params, rgb_rows, target_from, to_py, Knobs,
 };
 use super::detach::detached;
 use super::errors::{internal, invalid, warn_lobe};
@@ -72,7 +72,7 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
             profile.set_item("spectral_per_mm2", nested_rows(py, spectral)?)?;
         }
         if let Some(lobe) = &p.negative_lobe {
-            profile.set_item("negative_lobe", json_to_py(py, &serde_json::to_value(lobe).map_err(internal)?)?)?;
+            profile.set_item("negative_lobe", to_py(py, &lobe)?)?;
         }
         dict.set_item("profile", profile)?;
     }

@@ -23,8 +23,7 @@ use crate::maps::pipeline::{
 use crate::Outputs;
 
 use super::convert::{
-    count_sequence, float_array, is_boolean, json_to_py, real_arg, shape_text, target_from, type_name, FloatArray,
-    Knobs,
+    count_sequence, float_array, is_boolean, real_arg, shape_text, target_from, to_py, type_name, FloatArray, Knobs,
 };
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
@@ -264,8 +263,8 @@ pub(super) fn read_parameter_map_py<'py>(
 ///     working_space: linear RGB space of Base Color, as for :func:`evaluate`: "Linear Rec.709" (Blender's
 ///         default scene linear), "Linear Rec.2020" or "ACEScg"; use the scene's working space.
 ///     table_cache: keep a built lookup table in the per-user cache folder ($SPECTRAL_SKIN_CACHE_DIR, else
-///         $XDG_CACHE_HOME/spectral-skin, else ~/.cache/spectral-skin) and reuse it (as the CLI does); False
-///         always builds it afresh.
+///         spectral-skin in the platform's cache folder: $XDG_CACHE_HOME or ~/.cache on Linux, ~/Library/Caches
+///         on macOS, %LOCALAPPDATA% on Windows) and reuse it (as the CLI does); False always builds it afresh.
 ///     table_resolution: nodes per axis of the lookup table, (melanin, melanin_blend, hemoglobin), each >= 2;
 ///         None: the core's default (chosen for the error bound above; the report names it). Used only by "table".
 ///     progress: None, or a callable ``progress(done, total)`` told how many texels of ``total`` are done: once
@@ -526,20 +525,18 @@ pub(super) fn maps_py<'py>(
                 ),
             )?;
             // Only the constants that do not depend on the oiliness (fit::principled_specular::specular_from_oiliness).
-            let all = json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?;
+            let all = to_py(py, &constants)?;
             let kept = PyDict::new(py);
             for key in SPECULAR_CONSTANTS {
                 kept.set_item(key, all.get_item(key)?)?;
             }
             dict.set_item("specular", kept)?
         }
-        SpecularOutput::Constant(constants) => {
-            dict.set_item("specular", json_to_py(py, &serde_json::to_value(constants).map_err(internal)?)?)?
-        }
+        SpecularOutput::Constant(constants) => dict.set_item("specular", to_py(py, &constants)?)?,
     }
     let mut report = computed.report;
     report.seconds.total = start.elapsed().as_secs_f64();
-    let report_dict = json_to_py(py, &serde_json::to_value(&report).map_err(internal)?)?;
+    let report_dict = to_py(py, &report)?;
     // JSON has no infinity: serde_json writes a semi-infinite dermis as null. Python floats do.
     report_dict
         .get_item("request")?

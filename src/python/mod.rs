@@ -11,7 +11,7 @@ mod maps;
 
 use pyo3::prelude::*;
 
-use catalog::{blender_targets_py, parameter_ranges_py, presets_py};
+use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, parameters_py, presets_py};
 use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
 use maps::{maps_py, read_parameter_map_py, write_maps_py};
@@ -27,6 +27,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(profile_py, m)?)?;
     m.add_function(wrap_pyfunction!(presets_py, m)?)?;
     m.add_function(wrap_pyfunction!(parameter_ranges_py, m)?)?;
+    m.add_function(wrap_pyfunction!(parameters_py, m)?)?;
+    m.add_function(wrap_pyfunction!(accuracy_levels_py, m)?)?;
     m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
     m.add_function(wrap_pyfunction!(maps_py, m)?)?;
     m.add_function(wrap_pyfunction!(blender_targets_py, m)?)?;

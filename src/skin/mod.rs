@@ -6,4 +6,4 @@ pub mod params;
 pub mod scattering;
 
 pub use optics::{skin_layers, SkinModel, EPIDERMIS_THICKNESS_MM, SKIN_IOR};
-pub use params::{Preset, SkinParams, PRESETS};
+pub use params::{ParamSpec, Preset, SkinParams, PARAMS, PRESETS};

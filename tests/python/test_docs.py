@@ -14,12 +14,12 @@ import spectral_skin
 STUB = Path(spectral_skin.__file__).resolve().parent / "_core.pyi"
 FUNCTIONS = sorted(name for name in spectral_skin.__all__ if inspect.isroutine(getattr(spectral_skin, name)))
 # Functions without arguments have nothing to raise on.
-NO_RAISES = {"blender_targets", "parameter_ranges", "presets"}
+NO_RAISES = {"accuracy_levels", "blender_targets", "parameter_ranges", "parameters", "presets"}
 
 
 def test_every_public_function_is_checked() -> None:
-    assert FUNCTIONS == ["blender_targets", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets",
-                         "profile", "read_parameter_map", "write_maps"]
+    assert FUNCTIONS == ["accuracy_levels", "blender_targets", "evaluate", "layered_reflectance", "maps",
+                         "parameter_ranges", "parameters", "presets", "profile", "read_parameter_map", "write_maps"]
 
 
 @pytest.mark.parametrize("name", FUNCTIONS)

@@ -3,6 +3,7 @@ files written by OpenImageIO (an independent EXR/PNG writer); and maps(progress=
 
 from __future__ import annotations
 
+import errno
 from pathlib import Path
 
 import numpy as np
@@ -80,6 +81,8 @@ def test_errors_name_the_file_and_channels(tmp_path: Path) -> None:
     with pytest.raises(OSError, match=r"missing\.exr") as info:  # an I/O failure, not bad input
         spectral_skin.read_parameter_map(tmp_path / "missing.exr", "melanin")
     assert isinstance(info.value, spectral_skin.SpectralSkinIOError) and not isinstance(info.value, ValueError)
+    # The operating system's code is kept; the message is the core's alone (no "[Errno 2]" prefix).
+    assert info.value.errno == errno.ENOENT and not str(info.value).startswith("[Errno")
     with pytest.raises(SpectralSkinError, match=r'name.*melanin, melanin_blend.*"blood"'):
         spectral_skin.read_parameter_map(rgb, "blood")
 

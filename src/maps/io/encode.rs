@@ -72,9 +72,9 @@ pub fn stage_channels_exr(
         let mut out = BufWriter::with_capacity(1 << 20, temp.as_file_mut());
         write_exr_to(&mut out, width, height, channels, options)
             .map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
-        out.flush().map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
+        out.flush().map_err(|e| SkinError::io_caused(path, format!("cannot write output EXR: {e}"), e))?;
     }
-    temp.as_file().sync_all().map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
+    temp.as_file().sync_all().map_err(|e| SkinError::io_caused(path, format!("cannot write output EXR: {e}"), e))?;
     Ok(Staged::from_temp(temp, path))
 }
 

@@ -27,15 +27,15 @@ pub use encode::{stage_channels_exr, stage_rgb_exr, write_channels_exr, write_rg
 pub use read::{read_exr_channels, read_params, read_params_from_bytes};
 pub use staging::{commit_all, stage_bytes, write_atomic, Staged};
 
-use crate::skin::params::{HEMOGLOBIN_RANGE, MELANIN_BLEND_RANGE, MELANIN_RANGE, OILINESS_RANGE};
+use crate::skin::params::PARAMS;
 
-/// The four parameters in the order melanin, melanin_blend, hemoglobin, oiliness. These are also the channel names
+/// The names of the four parameters ([`PARAMS`]: melanin, melanin_blend, hemoglobin, oiliness). These are also the channel names
 /// a multi-channel parameter EXR must use (exact, case-sensitive).
-pub const PARAM_CHANNELS: [&str; 4] = ["melanin", "melanin_blend", "hemoglobin", "oiliness"];
+pub const PARAM_CHANNELS: [&str; 4] = [PARAMS[0].name, PARAMS[1].name, PARAMS[2].name, PARAMS[3].name];
 
-/// The allowed range `(min, max)` of each parameter, in [`PARAM_CHANNELS`] order (unitless volume fractions and
+/// The allowed range `(min, max)` of each parameter ([`PARAMS`]), in [`PARAM_CHANNELS`] order (unitless volume fractions and
 /// shares). An integer PNG/TIFF value `v` of bit depth `b` maps to `min + (max - min) * v / (2^b - 1)`.
-pub const PARAM_RANGES: [(f64, f64); 4] = [MELANIN_RANGE, MELANIN_BLEND_RANGE, HEMOGLOBIN_RANGE, OILINESS_RANGE];
+pub const PARAM_RANGES: [(f64, f64); 4] = [PARAMS[0].range(), PARAMS[1].range(), PARAMS[2].range(), PARAMS[3].range()];
 
 /// The largest image accepted or written, in texels (16384 x 16384). Larger headers are rejected before any
 /// allocation, so a corrupt size field gives an error instead of an out-of-memory abort.

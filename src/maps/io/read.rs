@@ -285,8 +285,9 @@ fn open_file(path: &Path, what: &str) -> Result<File, SkinError> {
     if path.is_dir() {
         return Err(SkinError::io(path, format!("cannot read {what}: expected a file, found a directory")));
     }
-    File::open(path)
-        .map_err(|e| SkinError::io(path, format!("cannot read {what}: {e} (expected an existing, readable file)")))
+    File::open(path).map_err(|e| {
+        SkinError::io_caused(path, format!("cannot read {what}: {e} (expected an existing, readable file)"), e)
+    })
 }
 
 fn is_exr(src: Source<'_>, what: &str) -> Result<bool, SkinError> {
@@ -299,7 +300,7 @@ fn is_exr(src: Source<'_>, what: &str) -> Result<bool, SkinError> {
             Ok(0) => break,
             Ok(n) => filled += n,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(SkinError::io(path, format!("cannot read {what}: {e}"))),
+            Err(e) => return Err(SkinError::io_caused(path, format!("cannot read {what}: {e}"), e)),
         }
     }
     Ok(filled == 4 && magic == EXR_MAGIC)
@@ -410,7 +411,7 @@ fn image_reader<'a>(src: Source<'a>, what: &str) -> Result<image::ImageReader<So
     let path = src.label();
     let reader = image::ImageReader::new(src.open(what)?)
         .with_guessed_format()
-        .map_err(|e| SkinError::io(path, format!("cannot read {what}: {e}")))?;
+        .map_err(|e| SkinError::io_caused(path, format!("cannot read {what}: {e}"), e))?;
     match reader.format() {
         Some(image::ImageFormat::Png) | Some(image::ImageFormat::Tiff) => Ok(reader),
         Some(other) => Err(SkinError::invalid(

@@ -67,8 +67,9 @@ pub fn commit_all(staged: Vec<Staged>) -> Result<(), SkinError> {
     let mut dirs: Vec<PathBuf> = Vec::new();
     for mut s in staged {
         let Some(temp) = s.temp.take() else { continue };
-        temp.persist(&s.target)
-            .map_err(|e| SkinError::io(&s.target, format!("cannot move the finished file into place: {}", e.error)))?;
+        temp.persist(&s.target).map_err(|e| {
+            SkinError::io_caused(&s.target, format!("cannot move the finished file into place: {}", e.error), e.error)
+        })?;
         let dir = parent_dir(&s.target).to_path_buf();
         if !dirs.contains(&dir) {
             dirs.push(dir);
@@ -116,7 +117,8 @@ pub(super) fn create_temp(path: &Path) -> Result<tempfile::NamedTempFile, SkinEr
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
     builder.tempfile_in(dir).map_err(|e| {
-        SkinError::io(path, format!("cannot write output: cannot create a temporary file in {}: {e}", dir.display()))
+        let reason = format!("cannot write output: cannot create a temporary file in {}: {e}", dir.display());
+        SkinError::io_caused(path, reason, e)
     })
 }
 
@@ -124,7 +126,7 @@ pub(super) fn create_temp(path: &Path) -> Result<tempfile::NamedTempFile, SkinEr
 /// The directory must exist.
 pub fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<Staged, SkinError> {
     let mut temp = create_temp(path)?;
-    let fail = |e: std::io::Error| SkinError::io(path, format!("cannot write output: {e}"));
+    let fail = |e: std::io::Error| SkinError::io_caused(path, format!("cannot write output: {e}"), e);
     temp.write_all(bytes).map_err(fail)?;
     temp.as_file().sync_all().map_err(fail)?;
     Ok(Staged::from_temp(temp, path))
