@@ -19,7 +19,7 @@ NO_RAISES = {"blender_targets", "parameter_ranges", "presets"}
 
 def test_every_public_function_is_checked() -> None:
     assert FUNCTIONS == ["blender_targets", "evaluate", "layered_reflectance", "maps", "parameter_ranges", "presets",
-                         "profile", "read_parameter_map", "write_maps"]
+                         "profile", "read_parameter_map", "shader_table", "write_maps", "write_shader_table"]
 
 
 @pytest.mark.parametrize("name", FUNCTIONS)
