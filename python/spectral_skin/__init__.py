@@ -16,6 +16,8 @@ Functions:
     blender_targets: the Blender versions, engines and subsurface methods the mappings target.
     read_parameter_map: parameter maps read from an EXR, PNG or TIFF file by the CLI's rules.
     write_maps: a maps() result written as EXRs, atomically, by the CLI's writer.
+    shader_table: Base Color and Subsurface Radius tabulated as images for a live node group in Blender.
+    write_shader_table: a shader_table() result written as EXRs and a JSON sidecar.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
@@ -38,7 +40,9 @@ from ._core import (
     presets,
     profile,
     read_parameter_map,
+    shader_table,
     write_maps,
+    write_shader_table,
 )
 
 __all__ = [
@@ -56,5 +60,7 @@ __all__ = [
     "presets",
     "profile",
     "read_parameter_map",
+    "shader_table",
     "write_maps",
+    "write_shader_table",
 ]

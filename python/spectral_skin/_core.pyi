@@ -29,7 +29,9 @@ __all__ = [
     "presets",
     "profile",
     "read_parameter_map",
+    "shader_table",
     "write_maps",
+    "write_shader_table",
 ]
 
 __version__: str
@@ -222,6 +224,54 @@ def write_maps(
     result: Mapping[str, Any], folder: str | os.PathLike[str], prefix: str | None = None
 ) -> dict[str, pathlib.Path]:
     """Documented once, in the compiled module: ``help(spectral_skin.write_maps)``."""
+
+class _ShaderAxis(TypedDict):
+    nodes: int
+    min: float
+    max: float
+    warp: Literal["cube_root", "linear"]
+
+class _ShaderTableMetadata(TypedDict):
+    format: str
+    crate_version: str
+    method: str
+    blender: str
+    engine: str
+    color_space: str
+    width: int
+    height: int
+    slice_width: int
+    gutter: int
+    melanin: _ShaderAxis
+    melanin_blend: _ShaderAxis
+    hemoglobin: _ShaderAxis
+    stored: Literal["ln"]
+    request: dict[str, Any]
+
+class _ShaderTable(TypedDict):
+    """The result of :func:`shader_table`."""
+
+    base_color_log: _Float32Array
+    radius_log: _Float32Array
+    metadata: _ShaderTableMetadata
+
+def shader_table(
+    *,
+    method: _Method | str = "burley",
+    blender: _BlenderVersion | None = None,
+    engine: _Engine | str = "cycles",
+    resolution: tuple[int, int, int] | None = None,
+    accuracy: _AccuracyLevel | str = "default",
+    working_space: _WorkingSpace | str = "Linear Rec.709",
+    boundaries: _Boundaries | str = "paper",
+    table_cache: bool = True,
+) -> _ShaderTable:
+    """Documented once, in the compiled module: ``help(spectral_skin.shader_table)``."""
+
+def write_shader_table(
+    result: Mapping[str, Any], folder: str | os.PathLike[str], prefix: str | None = None
+) -> dict[str, pathlib.Path]:
+    """Documented once, in the compiled module: ``help(spectral_skin.write_shader_table)``."""
 
 def read_parameter_map(path: str | os.PathLike[str], name: _Parameter | str | None = None) -> dict[str, _Float32Array]:
     """Documented once, in the compiled module: ``help(spectral_skin.read_parameter_map)``."""

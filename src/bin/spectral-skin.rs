@@ -88,6 +88,9 @@ enum Command {
     /// Parameter maps in, Principled texture maps out: albedo.exr, radius.exr, specular.exr, skin_maps.json.
     #[command(allow_negative_numbers = true)]
     Maps(MapsArgs),
+    /// The lookup table as images for the add-on's live node group: shader_base_color.exr, shader_radius.exr (ln of
+    /// Base Color and radius, float32) and shader_table.json (layout and axes).
+    ShaderTable(ShaderTableArgs),
     /// Write the built-in example parameter map (a face-like test card) as one four-channel EXR.
     #[command(allow_negative_numbers = true)]
     Example {
@@ -326,6 +329,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             print_profile_csv(&ev);
         }
         Command::Maps(args) => run_maps(args)?,
+        Command::ShaderTable(args) => run_shader_table(args)?,
         Command::Example { out, size, kind } => {
             write_example_params(&out, kind, size)?;
             println!("wrote {} ({size}x{size}, channels melanin, melanin_blend, hemoglobin, oiliness)", out.display());
@@ -517,4 +521,63 @@ fn print_profile_csv(ev: &Evaluation) {
             println!("{r:.6e},{}", row.join(","));
         }
     }
+}
+
+#[derive(Args)]
+struct ShaderTableArgs {
+    /// Output folder (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// File-name prefix: <PREFIX>_shader_base_color.exr etc.
+    #[arg(long)]
+    prefix: Option<String>,
+    /// Subsurface method the table is for (it must be one the target's Blender offers).
+    #[arg(long, value_enum, default_value_t = DEFAULT_METHOD)]
+    method: SubsurfaceMethod,
+    #[command(flatten)]
+    target: TargetArgs,
+    /// Nodes along melanin, melanin blend and haemoglobin [default: 33 7 17, docs/shader-table.md].
+    #[arg(long, num_args = 3, value_names = ["MELANIN", "BLEND", "HEMOGLOBIN"])]
+    resolution: Option<Vec<usize>>,
+    /// Build the table afresh instead of reusing one kept in the cache folder (as for `maps`).
+    #[arg(long)]
+    no_cache: bool,
+    #[command(flatten)]
+    accuracy: AccuracyArgs,
+}
+
+fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Error>> {
+    use spectral_skin::maps::lut::TableResolution;
+    use spectral_skin::maps::shader_table::{ShaderTable, DEFAULT_SHADER_TABLE_RESOLUTION};
+    let target = args.target.target();
+    target.method_entry(args.method)?;
+    let resolution = match args.resolution.as_deref() {
+        Some(&[melanin, melanin_blend, hemoglobin]) => TableResolution { melanin, melanin_blend, hemoglobin },
+        _ => DEFAULT_SHADER_TABLE_RESOLUTION,
+    };
+    let request = Request { target, ..args.accuracy.request(Outputs::material()) };
+    let prepared = spectral_skin::evaluate::Prepared::new(&request)?;
+    let cache = if args.no_cache { None } else { spectral_skin::maps::lut::default_cache_dir() };
+    ctrl_c::catch();
+    let started = std::time::Instant::now();
+    let table = ShaderTable::load_or_build_cancellable(
+        &prepared,
+        args.method,
+        resolution,
+        cache.as_deref(),
+        &ctrl_c::INTERRUPTED,
+    )?;
+    let paths = table.write(&args.out, args.prefix.as_deref(), ExrOptions::default())?;
+    let m = table.meta();
+    println!(
+        "{}x{}x{} nodes as {}x{} texels, {:.2} s; wrote {}",
+        m.melanin.nodes,
+        m.melanin_blend.nodes,
+        m.hemoglobin.nodes,
+        m.width,
+        m.height,
+        started.elapsed().as_secs_f64(),
+        paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+    );
+    Ok(())
 }

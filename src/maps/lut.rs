@@ -199,6 +199,13 @@ impl MaterialTable {
         self.resolution
     }
 
+    /// ln of Base Color and of radius (mm) at node (i, j, k) = (melanin, melanin blend, haemoglobin) indices.
+    pub fn node_log_method(&self, i: usize, j: usize, k: usize) -> ([f32; 3], [f32; 3]) {
+        let r = self.resolution;
+        let v = &self.log_values[(i * r.melanin_blend + j) * r.hemoglobin + k];
+        ([v[3], v[4], v[5]], [v[6], v[7], v[8]])
+    }
+
     /// Base Color and radius (mm) of the table's method: the part of [`MaterialTable::lookup`] a texture needs.
     pub fn lookup_method(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> ([f32; 3], [f32; 3]) {
         const OFFSET: usize = 3;
@@ -401,6 +408,37 @@ pub struct TableError {
     pub max_base_color_relative: f64,
 }
 
+/// The points `measure_error` checks a table of resolution `r` at, in the warped coordinates (u_m, beta_m, u_h), each
+/// in [0, 1]: every other point the centre of a cell (where interpolation error peaks), the others a fixed
+/// low-discrepancy sequence (so the figure is reproducible).
+pub fn check_points(r: TableResolution, samples: usize) -> Vec<[f64; 3]> {
+    let cells = [r.melanin - 1, r.melanin_blend - 1, r.hemoglobin - 1];
+    (0..samples)
+        .map(|n| {
+            // Additive recurrence with the plastic-number constants (R3 sequence), offset 0.5.
+            const G: f64 = 1.220_744_084_605_759_5;
+            let alpha = [1.0 / G, 1.0 / (G * G), 1.0 / (G * G * G)];
+            let u = alpha.map(|a| (0.5 + a * (n + 1) as f64).fract());
+            if n % 2 == 0 {
+                // Snap every other point to the centre of its cell.
+                [0, 1, 2].map(|d| ((u[d] * cells[d] as f64).floor().min(cells[d] as f64 - 1.0) + 0.5) / cells[d] as f64)
+            } else {
+                u
+            }
+        })
+        .collect()
+}
+
+/// The parameters at warped point `u` of [`check_points`] (oiliness 0: it does not enter the table).
+pub fn check_point_params(u: [f64; 3]) -> SkinParams {
+    SkinParams {
+        melanin: unwarp(u[0], MELANIN.max),
+        melanin_blend: MELANIN_BLEND.min + u[1] * (MELANIN_BLEND.max - MELANIN_BLEND.min),
+        hemoglobin: unwarp(u[2], HEMOGLOBIN.max),
+        oiliness: 0.0,
+    }
+}
+
 /// Measure the table's error at `samples` points: cell centres (where trilinear error peaks) and pseudo-random points
 /// (a fixed low-discrepancy sequence, so the figure is reproducible), against `prepared.material` evaluated directly.
 pub fn measure_error(table: &MaterialTable, prepared: &Prepared, samples: usize) -> Result<TableError, SkinError> {
@@ -420,34 +458,14 @@ pub fn measure_error_cancellable(
             format!("at most {MAX_TABLE_CHECK_SAMPLES} points (each is a direct evaluation); got {samples}"),
         ));
     }
-    let r = table.resolution;
-    let cells = [r.melanin - 1, r.melanin_blend - 1, r.hemoglobin - 1];
-    let points: Vec<[f64; 3]> = (0..samples)
-        .map(|n| {
-            // Additive recurrence with the plastic-number constants (R3 sequence), offset 0.5.
-            const G: f64 = 1.220_744_084_605_759_5;
-            let alpha = [1.0 / G, 1.0 / (G * G), 1.0 / (G * G * G)];
-            let u = alpha.map(|a| (0.5 + a * (n + 1) as f64).fract());
-            if n % 2 == 0 {
-                // Snap every other point to the centre of its cell.
-                [0, 1, 2].map(|d| ((u[d] * cells[d] as f64).floor().min(cells[d] as f64 - 1.0) + 0.5) / cells[d] as f64)
-            } else {
-                u
-            }
-        })
-        .collect();
+    let points = check_points(table.resolution, samples);
     let errors = points
         .par_iter()
         .map(|u| {
             if cancel.load(Ordering::Relaxed) {
                 return Err(interrupted("table check"));
             }
-            let p = SkinParams {
-                melanin: unwarp(u[0], MELANIN.max),
-                melanin_blend: u[1],
-                hemoglobin: unwarp(u[2], HEMOGLOBIN.max),
-                oiliness: 0.0,
-            };
+            let p = check_point_params(*u);
             let exact = TexelMaterial::of(&prepared.material(&p)?, table.method)?;
             let approx = table.lookup(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
             let rel =

@@ -4,5 +4,6 @@ pub mod example;
 pub mod io;
 pub mod lut;
 pub mod pipeline;
+pub mod shader_table;
 
 pub use pipeline::{compute_maps, run_maps, MapReport, MapResult, MapSettings, StrategyChoice};

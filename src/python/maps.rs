@@ -548,9 +548,9 @@ pub(super) fn maps_py<'py>(
 
 /// An image of `write_maps`' result: its size and its channels as row-major planes.
 pub(super) struct ResultImage {
-    height: usize,
-    width: usize,
-    planes: Vec<Vec<f32>>,
+    pub(super) height: usize,
+    pub(super) width: usize,
+    pub(super) planes: Vec<Vec<f32>>,
 }
 
 /// One image of `write_maps`' result as row-major planes: `channels` of them (an (H, W, channels) array, or (H, W)

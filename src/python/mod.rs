@@ -8,6 +8,7 @@ mod detach;
 mod errors;
 mod evaluate;
 mod maps;
+mod shader_table;
 
 use pyo3::prelude::*;
 
@@ -15,6 +16,7 @@ use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, param
 use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
 use maps::{maps_py, read_parameter_map_py, write_maps_py};
+use shader_table::{shader_table_py, write_shader_table_py};
 
 /// spectral-skin's compiled core: Donner & Jensen 2006's spectral skin BSSRDF.
 #[pymodule]
@@ -34,5 +36,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(blender_targets_py, m)?)?;
     m.add_function(wrap_pyfunction!(read_parameter_map_py, m)?)?;
     m.add_function(wrap_pyfunction!(write_maps_py, m)?)?;
+    m.add_function(wrap_pyfunction!(shader_table_py, m)?)?;
+    m.add_function(wrap_pyfunction!(write_shader_table_py, m)?)?;
     Ok(())
 }

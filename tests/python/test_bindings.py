@@ -255,7 +255,8 @@ def test_error_and_warning_classes_are_exported():
     assert issubclass(spectral_skin.SpectralSkinIOError, OSError)
     assert set(spectral_skin.__all__) == {
         "SpectralSkinError", "SpectralSkinIOError", "SpectralSkinWarning", "__version__", "blender_targets", "evaluate", "layered_reflectance", "maps",
-        "parameter_ranges", "parameters", "accuracy_levels", "presets", "profile", "read_parameter_map", "write_maps"
+        "parameter_ranges", "parameters", "accuracy_levels", "presets", "profile", "read_parameter_map", "shader_table",
+        "write_maps", "write_shader_table"
     }
 
 

@@ -1,0 +1,103 @@
+"""The live node group (blender_addon/live.py) rendered by Cycles: its Base Color and Subsurface Radius outputs,
+shown through an Emission shader (radiance = the output, Raw view, float EXR), against the core's direct evaluation
+(within the shader table's error, docs/shader-table.md) and against a numpy emulation of the documented lookup at float
+precision (the layout, the coordinate maths and Cycles' Linear/Extend image lookup agree)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from blender_scenes import _bpy, add_plane, add_top_camera, assign, render, set_world
+
+REPO = str(Path(__file__).resolve().parents[2])
+
+
+def _bilinear(image: np.ndarray, x: float, y: float) -> np.ndarray:
+    """Image Texture, Linear, Extend, at (x, y) in [0, 1]^2 with y = 0 the bottom row; image row 0 is the top."""
+    h, w, _ = image.shape
+    px, py = x * w - 0.5, y * h - 0.5
+    x0, y0 = int(np.floor(px)), int(np.floor(py))
+    tx, ty = px - x0, py - y0
+    up = image[::-1].astype(np.float64)
+
+    def at(xi: int, yi: int) -> np.ndarray:
+        return up[min(max(yi, 0), h - 1), min(max(xi, 0), w - 1)]
+
+    return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) + ty * (
+        (1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1)
+    )
+
+
+def _emulated(table: dict, key: str, c_m: float, beta: float, c_h: float) -> np.ndarray:
+    meta = table["metadata"]
+    n_m, n_b, n_h = (meta[a]["nodes"] for a in ("melanin", "melanin_blend", "hemoglobin"))
+    u_m, u_h = min(c_m / 0.5, 1.0) ** (1 / 3), min(c_h / 0.1, 1.0) ** (1 / 3)
+    b = min(max(beta, 0.0), 1.0) * (n_b - 1)
+    j = min(np.floor(b), n_b - 2)
+    t = b - j
+    xs = [(s * meta["slice_width"] + meta["gutter"] + u_m * (n_m - 1) + 0.5) / meta["width"] for s in (j, j + 1)]
+    y = (u_h * (n_h - 1) + 0.5) / n_h
+    return np.exp((1 - t) * _bilinear(table[key], xs[0], y) + t * _bilinear(table[key], xs[1], y))
+
+
+def test_live_group_in_cycles_matches_the_core(scene) -> None:
+    spectral_skin = pytest.importorskip("spectral_skin")
+    if not hasattr(spectral_skin, "shader_table"):
+        pytest.skip("the installed spectral_skin predates shader_table")
+    if REPO not in sys.path:
+        sys.path.insert(0, REPO)
+    from blender_addon import live
+
+    bpy = _bpy()
+    table = spectral_skin.shader_table(method="random_walk", blender="5.0")
+    group = live.build_group(table)
+    set_world(scene, 0.0)
+    add_top_camera(scene, ortho_scale=0.5, width=4, height=4)
+    plane = add_plane("Plane", -1.0, 1.0, -1.0, 1.0, 0.0)
+    mat = bpy.data.materials.new("Live")
+    if mat.node_tree is None:
+        mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    emission = nt.nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = 1.0
+    nt.links.new(emission.outputs["Emission"], out.inputs["Surface"])
+    node = nt.nodes.new("ShaderNodeGroup")
+    node.node_tree = group
+    assign(plane, mat)
+    points = [
+        (0.1, 0.5, 0.02),
+        (0.0, 0.0, 0.0),
+        (0.5, 1.0, 0.1),
+        (0.013, 0.31, 0.004),
+        (0.37, 0.83, 0.071),
+        (0.25, 1.0 / 6.0, 0.05),
+    ]
+    rng = np.random.default_rng(3)
+    points += [
+        tuple(v) for v in np.column_stack([rng.uniform(0, 0.5, 4), rng.uniform(0, 1, 4), rng.uniform(0, 0.1, 4)])
+    ]
+    for c_m, beta, c_h in points:
+        for socket, value in zip(live.INPUTS, (c_m, beta, c_h, 0.3), strict=True):
+            node.inputs[socket].default_value = value
+        exact = spectral_skin.evaluate(melanin=c_m, melanin_blend=beta, hemoglobin=c_h, oiliness=0.3, blender="5.0")
+        rw = exact["methods"]["random_walk"]
+        for output, key, reference in (
+            ("Base Color", "base_color_log", rw["base_color"]),
+            ("Subsurface Radius", "radius_log", rw["subsurface_radius_mm"]),
+        ):
+            nt.links.new(node.outputs[output], emission.inputs["Color"])
+            pixels = render(scene, samples=1, filter_width=0.01)
+            got = pixels.reshape(-1, 3)
+            assert np.ptp(got, axis=0).max() <= 1e-6 * got.max(), "uniform emission"
+            where = f"{output} at {(c_m, beta, c_h)}"
+            np.testing.assert_allclose(got[0], _emulated(table, key, c_m, beta, c_h), rtol=1e-4, err_msg=where)
+            np.testing.assert_allclose(got[0], reference, rtol=0.01, err_msg=where)
+    # Specular IOR Level: 0.5 * clamp(oiliness, 0, 1), the core's mapping, at the last point's oiliness 0.3.
+    nt.links.new(node.outputs["Specular IOR Level"], emission.inputs["Color"])
+    level = render(scene, samples=1, filter_width=0.01).reshape(-1, 3)
+    np.testing.assert_allclose(level, exact["specular"]["specular_ior_level"], rtol=1e-6)
