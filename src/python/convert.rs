@@ -146,6 +146,15 @@ pub(super) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Outp
         .map_err(|e| PyRuntimeError::new_err(format!("spectral-skin internal error: {e}")))
 }
 
+/// The four parameter arguments (in [`PARAM_CHANNELS`] order) and a preset to [`SkinParams`] ([`resolve_params`]).
+pub(super) fn params_arg(preset: Option<&str>, args: [Option<&Bound<'_, PyAny>>; 4]) -> PyResult<SkinParams> {
+    let mut values = [None; 4];
+    for ((value, name), obj) in values.iter_mut().zip(PARAM_CHANNELS).zip(args) {
+        *value = real_arg(name, obj)?;
+    }
+    resolve_params(preset, values)
+}
+
 /// A preset and/or the four parameters: explicit parameters override the preset's; without a preset all four are
 /// required. The core validates the ranges.
 pub(super) fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) -> PyResult<SkinParams> {
@@ -213,7 +222,58 @@ pub(super) struct Knobs<'a> {
     pub(super) target: Target,
 }
 
-impl Knobs<'_> {
+impl<'a> Knobs<'a> {
+    /// The knobs of `evaluate` and `profile` from their keyword arguments (converted and named here).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn from_args(
+        accuracy: &'a str,
+        wavelength_step_nm: Option<&Bound<'_, PyAny>>,
+        wavelength_placement: Option<&'a str>,
+        multipole_pairs: Option<&Bound<'_, PyAny>>,
+        profile_r_min_mm: Option<&Bound<'_, PyAny>>,
+        profile_r_max_mm: Option<&Bound<'_, PyAny>>,
+        profile_count: Option<&Bound<'_, PyAny>>,
+        combination: &'a str,
+        working_space: &'a str,
+        rgb_mapping: &'a str,
+        boundaries: &'a str,
+        target: Target,
+    ) -> PyResult<Self> {
+        Ok(Knobs {
+            accuracy,
+            wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
+            wavelength_placement,
+            multipole_pairs: count_arg("multipole_pairs", multipole_pairs)?,
+            profile_r_min_mm: real_arg("profile_r_min_mm", profile_r_min_mm)?,
+            profile_r_max_mm: real_arg("profile_r_max_mm", profile_r_max_mm)?,
+            profile_count: count_arg("profile_count", profile_count)?,
+            combination,
+            working_space,
+            rgb_mapping,
+            boundaries,
+            target,
+        })
+    }
+
+    /// The knobs of a material table or map (`maps`, `shader_table`): no profile, the directional combination and
+    /// the linear RGB mapping; the level's wavelength grid unless a caller overrides it.
+    pub(super) fn material(accuracy: &'a str, working_space: &'a str, boundaries: &'a str, target: Target) -> Self {
+        Knobs {
+            accuracy,
+            wavelength_step_nm: None,
+            wavelength_placement: None,
+            multipole_pairs: None,
+            profile_r_min_mm: None,
+            profile_r_max_mm: None,
+            profile_count: None,
+            combination: "directional",
+            working_space,
+            rgb_mapping: "linear",
+            boundaries,
+            target,
+        }
+    }
+
     pub(super) fn request(&self, outputs: Outputs) -> PyResult<Request> {
         let level = AccuracyLevel::from_name(self.accuracy)?.accuracy();
         let defaults = level.profile_grid;

@@ -11,8 +11,8 @@ use crate::fit::blender_target::Target;
 use crate::Outputs;
 
 use super::convert::{
-    by_name, count_arg, json_to_py, nested_rows, parse_outputs, real_arg, real_sequence, real_vector, reject_string,
-    resolve_params, rgb_rows, target_from, to_py, Knobs,
+    by_name, json_to_py, nested_rows, params_arg, parse_outputs, real_sequence, real_vector, reject_string, rgb_rows,
+    target_from, to_py, Knobs,
 };
 use super::detach::detached;
 use super::errors::{internal, invalid, warn_lobe};
@@ -182,27 +182,21 @@ pub(super) fn evaluate_py<'py>(
     rgb_mapping: &str,
     boundaries: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let explicit =
-        [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
-    let mut values = [None; 4];
-    for (value, (name, obj)) in values.iter_mut().zip(explicit) {
-        *value = real_arg(name, obj)?;
-    }
-    let params = resolve_params(preset, values)?;
-    let knobs = Knobs {
+    let params = params_arg(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
+    let knobs = Knobs::from_args(
         accuracy,
-        wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
+        wavelength_step_nm,
         wavelength_placement,
-        multipole_pairs: count_arg("multipole_pairs", multipole_pairs)?,
-        profile_r_min_mm: real_arg("profile_r_min_mm", profile_r_min_mm)?,
-        profile_r_max_mm: real_arg("profile_r_max_mm", profile_r_max_mm)?,
-        profile_count: count_arg("profile_count", profile_count)?,
+        multipole_pairs,
+        profile_r_min_mm,
+        profile_r_max_mm,
+        profile_count,
         combination,
         working_space,
         rgb_mapping,
         boundaries,
-        target: target_from(blender, engine)?,
-    };
+        target_from(blender, engine)?,
+    )?;
     let request = knobs.request(parse_outputs(outputs)?)?;
     let evaluation = detached(py, move || crate::evaluate(&params, &request))?;
     warn_lobe(py, evaluation.profile.as_ref().and_then(|p| p.negative_lobe))?;
@@ -268,27 +262,21 @@ pub(super) fn profile_py<'py>(
     rgb_mapping: &str,
     boundaries: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let explicit =
-        [("melanin", melanin), ("melanin_blend", melanin_blend), ("hemoglobin", hemoglobin), ("oiliness", oiliness)];
-    let mut values = [None; 4];
-    for (value, (name, obj)) in values.iter_mut().zip(explicit) {
-        *value = real_arg(name, obj)?;
-    }
-    let params = resolve_params(preset, values)?;
-    let knobs = Knobs {
+    let params = params_arg(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
+    let knobs = Knobs::from_args(
         accuracy,
-        wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
+        wavelength_step_nm,
         wavelength_placement,
-        multipole_pairs: count_arg("multipole_pairs", multipole_pairs)?,
-        profile_r_min_mm: real_arg("profile_r_min_mm", profile_r_min_mm)?,
-        profile_r_max_mm: real_arg("profile_r_max_mm", profile_r_max_mm)?,
-        profile_count: count_arg("profile_count", profile_count)?,
+        multipole_pairs,
+        profile_r_min_mm,
+        profile_r_max_mm,
+        profile_count,
         combination,
         working_space,
         rgb_mapping,
         boundaries,
-        target: Target::default(),
-    };
+        Target::default(),
+    )?;
     let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
     let request = knobs.request(outputs)?;
     let evaluation = detached(py, move || crate::evaluate(&params, &request))?;

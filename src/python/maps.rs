@@ -359,18 +359,9 @@ pub(super) fn maps_py<'py>(
     let progress = progress.map(|callback| Progress::new(callback.unbind()));
     // Settings first: their errors come before any copy.
     let knobs = Knobs {
-        accuracy,
         wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
         wavelength_placement,
-        multipole_pairs: None,
-        profile_r_min_mm: None,
-        profile_r_max_mm: None,
-        profile_count: None,
-        combination: "directional",
-        working_space,
-        rgb_mapping: "linear",
-        boundaries,
-        target: target_from(blender, engine)?,
+        ..Knobs::material(accuracy, working_space, boundaries, target_from(blender, engine)?)
     };
     let method = SubsurfaceMethod::from_name(method)?;
     knobs.target.method_entry(method)?;

@@ -75,20 +75,7 @@ pub(super) fn shader_table_py<'py>(
     boundaries: &str,
     table_cache: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let knobs = Knobs {
-        accuracy,
-        wavelength_step_nm: None,
-        wavelength_placement: None,
-        multipole_pairs: None,
-        profile_r_min_mm: None,
-        profile_r_max_mm: None,
-        profile_count: None,
-        combination: "directional",
-        working_space,
-        rgb_mapping: "linear",
-        boundaries,
-        target: target_from(blender, engine)?,
-    };
+    let knobs = Knobs::material(accuracy, working_space, boundaries, target_from(blender, engine)?);
     let method = SubsurfaceMethod::from_name(method)?;
     knobs.target.method_entry(method)?;
     let request = knobs.request(Outputs::material())?;

@@ -42,18 +42,25 @@ from blender_addon.props import stored_effects, stored_work  # noqa: E402
 FAR_M, CLOSE_M = 100.0, 1.0
 
 
+def _cycles_scene_looking_along_y():
+    """The context scene in Cycles at 640 x 360 px, with a new camera at the origin looking along +y (its view axis,
+    -z, turned onto +y) as the scene camera."""
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.render.resolution_x, scene.render.resolution_y = 640, 360
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    return scene
+
+
 def _scene_with_far_and_close():
     """A perspective camera at the origin looking along +y; a 20 cm cube with material Far at 100 m and one with
     material Close at 1 m (near faces)."""
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 640, 360, 100
-    data = bpy.data.cameras.new("Camera")
-    data.lens, data.sensor_width, data.sensor_fit = 50.0, 36.0, "AUTO"
-    camera = bpy.data.objects.new("Camera", data)
-    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)  # -z (the view axis) onto +y
-    scene.collection.objects.link(camera)
-    scene.camera = camera
+    scene = _cycles_scene_looking_along_y()
+    scene.render.resolution_percentage = 100
+    scene.camera.data.lens, scene.camera.data.sensor_width, scene.camera.data.sensor_fit = 50.0, 36.0, "AUTO"
     materials = {}
     for name, near in (("Far", FAR_M), ("Close", CLOSE_M)):
         materials[name] = bpy.data.materials.new(name)
@@ -220,14 +227,7 @@ def test_thin_and_open_geometry_get_a_method_recommended(addon):
     """A 2 mm thick closed box (thinner than 3 radii of caucasian skin's 4.35 mm), an open quad and a 20 cm closed
     box share the material: the thin box gets a random walk recommended, the open quad Burley (a walk leaks), and
     the material's Burley does not suit the thin box; nothing is changed."""
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.render.resolution_x, scene.render.resolution_y = 640, 360
-    data = bpy.data.cameras.new("Camera")
-    camera = bpy.data.objects.new("Camera", data)
-    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)  # looks along +y
-    scene.collection.objects.link(camera)
-    scene.camera = camera
+    _cycles_scene_looking_along_y()
     material = bpy.data.materials.new("Skin")
     assign(add_box("Thin", -0.05, 0.05, 0.5, 0.502, -0.05, 0.05), material)
     assign(add_box("Thick", -0.1, 0.1, 0.6, 0.8, -0.1, 0.1), material)
@@ -280,13 +280,7 @@ def _sphere_with_ear(name: str, ear: bool):
 def test_per_part_thickness_finds_the_thin_part_of_a_thick_object(addon):
     """A thick sphere with a 2 mm "ear" plate: its bounds are 160 mm thick (any method, by the bounding box), but the
     ray-cast thickness finds 2 mm parts over a few per cent of the surface: a random walk. A plain sphere: none."""
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    data = bpy.data.cameras.new("Camera")
-    camera = bpy.data.objects.new("Camera", data)
-    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)  # looks along +y
-    scene.collection.objects.link(camera)
-    scene.camera = camera
+    _cycles_scene_looking_along_y()
     material = bpy.data.materials.new("Skin")
     assign(_sphere_with_ear("Head", ear=True), material)
     assign(_sphere_with_ear("Ball", ear=False), material)
