@@ -28,7 +28,8 @@ use crate::evaluate::{Evaluation, MethodParams, ProfileGrid};
 use crate::fit::blender_target::{describe_targets, BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{
-    read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, MAX_TEXELS, PARAM_CHANNELS,
+    read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, ALL_COMPRESSIONS, ALL_PRECISIONS, MAX_TEXELS,
+    PARAM_CHANNELS,
 };
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
@@ -1479,8 +1480,8 @@ fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyRes
 ///
 /// Each image present (and not None) becomes one file in ``folder`` (created if missing): "base_color" ->
 /// ``albedo.exr`` (channels R, G, B), "radius_mm" -> ``radius.exr`` (R, G, B), "specular_ior_level" ->
-/// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc. 32-bit float, PIZ compression, row 0 at the
-/// top. The files are written as temporary files in ``folder`` and renamed into place together once all are written,
+/// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc. Row 0 at the top; ``precision`` and
+/// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files are written as temporary files in ``folder`` and renamed into place together once all are written,
 /// so a failure leaves the existing files as they were. Then the files of an earlier write with the same prefix that
 /// this one did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the
 /// folder holds exactly this result's maps. No sidecar is written: the report is in the result.
@@ -1491,6 +1492,9 @@ fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyRes
 ///         :func:`maps`, or a part of one.
 ///     folder: the output folder.
 ///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
+///     precision: "half" (16-bit, within 0.049 % of each value; the default) or "float" (32-bit).
+///     compression: "auto" (PIZ, or none for a file PIZ would shrink by under 10 %; the default), "piz", "zip",
+///         "zips", "rle" or "none".
 ///
 /// Returns:
 ///     {"albedo" | "radius" | "specular": path of the file written}, for the images written.
@@ -1500,13 +1504,19 @@ fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyRes
 ///         that is empty or holds a path separator; a file that cannot be written (the message names it).
 ///     TypeError: an image that is not a float32 or float64 numpy array.
 #[pyfunction]
-#[pyo3(name = "write_maps", signature = (result, folder, prefix = None))]
+#[pyo3(name = "write_maps", signature = (result, folder, prefix = None, precision = "half", compression = "auto"))]
 fn write_maps_py<'py>(
     py: Python<'py>,
     result: &Bound<'py, PyAny>,
     folder: std::path::PathBuf,
     prefix: Option<&str>,
+    precision: &str,
+    compression: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let exr = ExrOptions {
+        precision: by_name("precision", precision, &ALL_PRECISIONS)?,
+        compression: by_name("compression", compression, &ALL_COMPRESSIONS)?,
+    };
     if let Some(prefix) = prefix {
         if prefix.is_empty() || prefix.contains(['/', '\\']) || prefix == "." || prefix == ".." {
             return Err(invalid(
@@ -1541,7 +1551,7 @@ fn write_maps_py<'py>(
             radius_mm: radius_mm.as_ref(),
             specular_ior_level: specular.as_deref(),
         };
-        let staged = stage_map_files(&folder, prefix, &files, ExrOptions::default())?;
+        let staged = stage_map_files(&folder, prefix, &files, exr)?;
         let written: Vec<std::path::PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
         commit_map_files(&folder, prefix, staged)?;
         Ok(written)
