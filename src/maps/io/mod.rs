@@ -147,10 +147,9 @@ pub const ALL_PRECISIONS: [Precision; 2] = [Precision::Half, Precision::Float];
 
 /// Lossless EXR compression of written files. Python's `compression=` and the CLI's `--compression` take the serde
 /// names. `Auto` (the default) compresses a sample of each file's blocks with the precision's candidate (ZIPS for
-/// half, PIZ for float: the faster and smaller of the lossless codecs on smooth maps, see
-/// [`Compression::auto_candidate`]) and writes the file uncompressed when that would save less than
-/// [`AUTO_MIN_SAVING`] of its size (maps that vary everywhere, like noise), else with the candidate. Figures for each
-/// choice: docs/maps-performance.md.
+/// half, PIZ for float, see [`Compression::auto_candidate`]) and writes the file uncompressed when that would save less than
+/// [`AUTO_MIN_SAVING`] of its size (maps that vary everywhere, like noise), else with the candidate. Figures:
+/// docs/maps-performance.md.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
@@ -175,9 +174,9 @@ pub const ALL_COMPRESSIONS: [Compression; 6] =
     [Compression::Auto, Compression::Piz, Compression::Zip, Compression::Zips, Compression::Rle, Compression::None];
 
 /// [`Compression::Auto`] compresses a file only if its candidate shrinks a sample of its blocks by at least this share.
-/// Measured at 4096² (docs/maps-performance.md): smooth maps shrink by over 60 % (float, PIZ) and 90 % (half, ZIPS);
-/// noise by 8 % (float, PIZ) and 13 % (half, ZIPS; 22 % with PIZ) at two to four times the uncompressed write's CPU
-/// time, which is what the threshold avoids.
+/// At 4096² (docs/maps-performance.md) smooth maps shrink by over 60 % (float, PIZ) and 90 % (half, ZIPS), while noise
+/// shrinks by 8 % (float, PIZ) and 22 % (half, PIZ; 13 % with ZIPS in a run of `--compression zips`) at two to four
+/// times the CPU time of the uncompressed run: the threshold keeps such maps uncompressed.
 pub const AUTO_MIN_SAVING: f64 = 0.25;
 
 impl Compression {
