@@ -180,8 +180,8 @@ pub const ALL_COMPRESSIONS: [Compression; 6] =
 pub const AUTO_MIN_SAVING: f64 = 0.25;
 
 impl Compression {
-    /// The codec [`Compression::Auto`] tries for `precision`: ZIPS for half (on half samples of smooth maps smaller
-    /// and faster than PIZ), PIZ for float (faster than ZIP there, at about the same size).
+    /// The codec [`Compression::Auto`] tries for `precision`: ZIPS for half (on the 4096² face, 7.8 MB against PIZ's
+    /// 12.7 MB at the same CPU time), PIZ for float (ZIP is a few per cent smaller there at about 1.5 times the CPU).
     pub fn auto_candidate(precision: Precision) -> Compression {
         match precision {
             Precision::Half => Compression::Zips,
