@@ -1481,8 +1481,8 @@ fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyRes
 /// Each image present (and not None) becomes one file in ``folder`` (created if missing): "base_color" ->
 /// ``albedo.exr`` (channels R, G, B), "radius_mm" -> ``radius.exr`` (R, G, B), "specular_ior_level" ->
 /// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc. Row 0 at the top; ``precision`` and
-/// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files are written as temporary files in ``folder`` and renamed into place together once all are written,
-/// so a failure leaves the existing files as they were. Then the files of an earlier write with the same prefix that
+/// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files are written as temporary files in
+/// ``folder`` and renamed into place together once all are written, so a failure leaves the existing files as they were. Then the files of an earlier write with the same prefix that
 /// this one did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the
 /// folder holds exactly this result's maps. No sidecar is written: the report is in the result.
 ///
@@ -1493,8 +1493,8 @@ fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyRes
 ///     folder: the output folder.
 ///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
 ///     precision: "half" (16-bit, within 0.049 % of each value; the default) or "float" (32-bit).
-///     compression: "auto" (PIZ, or none for a file PIZ would shrink by under 10 %; the default), "piz", "zip",
-///         "zips", "rle" or "none".
+///     compression: "auto" (the default: ZIPS for half, PIZ for float, or none for a file that would shrink by under
+///         25 %), "piz", "zip", "zips", "rle" or "none".
 ///
 /// Returns:
 ///     {"albedo" | "radius" | "specular": path of the file written}, for the images written.

@@ -156,7 +156,7 @@ struct MapsArgs {
     /// ($SPECTRAL_SKIN_CACHE_DIR, else $XDG_CACHE_HOME/spectral-skin, else ~/.cache/spectral-skin).
     #[arg(long)]
     no_cache: bool,
-    /// EXR compression; auto: PIZ, or none for a file PIZ would shrink by under 10 %.
+    /// EXR compression; auto: ZIPS for half, PIZ for float, or none for a file that would shrink by under 25 %.
     #[arg(long, value_enum, default_value_t = Compression::default())]
     compression: Compression,
     #[command(flatten)]
