@@ -53,7 +53,7 @@ def param_map_seeds(tmp: Path) -> None:
     for i, (half, compression) in enumerate([(False, "piz"), (True, "zip"), (False, "none")]):
         out = tmp / f"maps{i}"
         args = ["maps", "--params", str(tmp / "face.exr"), "--out", str(out), "--compression", compression]
-        run(*args, *(["--half"] if half else []), "--no-cache")
+        run(*args, "--precision", "half" if half else "float", "--no-cache")
         write("param_map", f"specular_{compression}.exr.seed", bytes([3]) + (out / "specular.exr").read_bytes())
         if i == 0:
             write("param_map", "albedo_rgb.exr.seed", b"\x00" + (out / "albedo.exr").read_bytes())

@@ -54,5 +54,7 @@ mod one_spelling {
         check(&crate::diffusion::ALL_BOUNDARIES);
         check(&crate::fit::SubsurfaceMethod::ALL);
         check(&crate::fit::blender_target::Engine::ALL);
+        check(&crate::maps::io::ALL_COMPRESSIONS);
+        check(&crate::maps::io::ALL_PRECISIONS);
     }
 }

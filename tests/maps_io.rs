@@ -4,18 +4,17 @@ use std::path::Path;
 
 use spectral_skin::maps::io::{
     commit_all, read_exr_channels, read_params, read_params_from_bytes, stage_bytes, stage_rgb_exr, write_atomic,
-    write_channels_exr, write_rgb_exr, Compression, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane,
-    PARAM_CHANNELS, PARAM_RANGES,
+    write_channels_exr, write_rgb_exr, Compression, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, Precision,
+    ALL_COMPRESSIONS, ALL_PRECISIONS, PARAM_CHANNELS, PARAM_RANGES,
 };
 
-const ALL_OPTIONS: [ExrOptions; 6] = [
-    ExrOptions { half: false, compression: Compression::Zip },
-    ExrOptions { half: true, compression: Compression::Zip },
-    ExrOptions { half: false, compression: Compression::Piz },
-    ExrOptions { half: true, compression: Compression::Piz },
-    ExrOptions { half: false, compression: Compression::None },
-    ExrOptions { half: true, compression: Compression::None },
-];
+/// Every precision with every compression.
+fn all_options() -> Vec<ExrOptions> {
+    ALL_PRECISIONS
+        .iter()
+        .flat_map(|&precision| ALL_COMPRESSIONS.iter().map(move |&compression| ExrOptions { precision, compression }))
+        .collect()
+}
 
 /// Sorted file names in a directory (temporary files included: they start with a dot).
 fn names_in(dir: &Path) -> Vec<String> {
@@ -30,8 +29,8 @@ fn plane(width: usize, height: usize, seed: f32) -> Vec<f32> {
     (0..width * height).map(|i| ((i as f32) * 0.37 + seed).sin() * (1.0 + seed) + (i % 7) as f32 * 0.01).collect()
 }
 
-fn as_stored(values: &[f32], half: bool) -> Vec<f32> {
-    if half {
+fn as_stored(values: &[f32], precision: Precision) -> Vec<f32> {
+    if precision == Precision::Half {
         values.iter().map(|&v| half::f16::from_f32(v).to_f32()).collect()
     } else {
         values.to_vec()
@@ -72,7 +71,7 @@ fn multi_channel_exr_round_trips_in_every_encoding() {
     // 41 x 70: several ZIP (16-line) and PIZ (32-line) blocks, the last one partial.
     let (w, h) = (41, 70);
     let planes: Vec<Vec<f32>> = (0..4).map(|k| plane(w, h, k as f32)).collect();
-    for (n, options) in ALL_OPTIONS.iter().enumerate() {
+    for (n, options) in all_options().iter().enumerate() {
         let path = dir.path().join(format!("params{n}.exr"));
         let channels: Vec<(&str, &[f32])> =
             PARAM_CHANNELS.iter().zip(&planes).map(|(n, p)| (*n, p.as_slice())).collect();
@@ -80,17 +79,17 @@ fn multi_channel_exr_round_trips_in_every_encoding() {
         let img = read_params(&ParamInputs::Multi { path: path.clone(), constants: [None; 4] }).unwrap();
         assert_eq!((img.width, img.height), (w, h));
         for (k, expected) in planes.iter().enumerate() {
-            assert_eq!(texels(&img.planes[k]), as_stored(expected, options.half).as_slice(), "{options:?} {k}");
+            assert_eq!(texels(&img.planes[k]), as_stored(expected, options.precision).as_slice(), "{options:?} {k}");
         }
         // The generic reader gives the channels sorted by name, with their sample type converted to f32.
         let (rw, rh, chans) = read_exr_channels(&path).unwrap();
         assert_eq!((rw, rh), (w, h));
         let names: Vec<&str> = chans.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, ["hemoglobin", "melanin", "melanin_blend", "oiliness"]);
-        assert_eq!(chans[1].1, as_stored(&planes[0], options.half));
+        assert_eq!(chans[1].1, as_stored(&planes[0], options.precision));
     }
     // Only the finished files are left.
-    assert_eq!(names_in(dir.path()).len(), ALL_OPTIONS.len());
+    assert_eq!(names_in(dir.path()).len(), all_options().len());
 }
 
 #[test]
@@ -100,7 +99,7 @@ fn rgb_exr_round_trips_with_row_0_at_the_top() {
     let r: Vec<f32> = (0..w * h).map(|i| i as f32).collect(); // value = row-major index
     let g: Vec<f32> = (0..w * h).map(|i| (i / w) as f32).collect(); // row number
     let b: Vec<f32> = (0..w * h).map(|i| (i % w) as f32 * 0.5).collect(); // column
-    for options in ALL_OPTIONS {
+    for options in all_options() {
         let path = dir.path().join("albedo.exr");
         write_rgb_exr(&path, w, h, [&r, &g, &b], options).unwrap();
         let (rw, rh, chans) = read_exr_channels(&path).unwrap();
@@ -116,7 +115,8 @@ fn rgb_exr_round_trips_with_row_0_at_the_top() {
     // The file is a standard single-part scan-line EXR that the exr crate's own RGBA reader opens,
     // with the sample type and compression asked for.
     let path = dir.path().join("radius.exr");
-    write_rgb_exr(&path, w, h, [&r, &g, &b], ExrOptions { half: true, compression: Compression::Piz }).unwrap();
+    write_rgb_exr(&path, w, h, [&r, &g, &b], ExrOptions { precision: Precision::Half, compression: Compression::Piz })
+        .unwrap();
     let meta = exr::meta::MetaData::read_from_file(&path, true).unwrap();
     assert_eq!(meta.headers.len(), 1);
     let header = &meta.headers[0];
@@ -149,7 +149,7 @@ fn multi_channel_constants_fill_missing_channels_and_override_present_ones() {
         w,
         h,
         &[("melanin", &mel), ("hemoglobin", &hem), ("oiliness", &oil)],
-        ExrOptions::default(),
+        ExrOptions::FLOAT_PIZ,
     )
     .unwrap();
     let img = read_params(&ParamInputs::Multi { path: path.clone(), constants: [None, Some(0.7), None, Some(0.25)] })
@@ -166,7 +166,7 @@ fn missing_channel_lists_the_channels_found() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("partial.exr");
     let v = vec![0.1f32; 6];
-    write_channels_exr(&path, 3, 2, &[("melanin", &v), ("hemoglobin", &v), ("Y", &v)], ExrOptions::default()).unwrap();
+    write_channels_exr(&path, 3, 2, &[("melanin", &v), ("hemoglobin", &v), ("Y", &v)], ExrOptions::FLOAT_PIZ).unwrap();
     let e = err_text(read_params(&ParamInputs::Multi { path: path.clone(), constants: [None; 4] }));
     assert!(e.contains(&path.display().to_string()), "{e}");
     assert!(e.contains("melanin_blend") && e.contains("oiliness"), "{e}");
@@ -182,10 +182,17 @@ fn single_channel_exrs_of_any_sample_type_and_layout() {
     let blend = plane(w, h, 1.5);
     // A half-float file with one channel named "Y".
     let p_mel = dir.path().join("mel.exr");
-    write_channels_exr(&p_mel, w, h, &[("Y", &mel)], ExrOptions { half: true, compression: Compression::Zip }).unwrap();
+    write_channels_exr(
+        &p_mel,
+        w,
+        h,
+        &[("Y", &mel)],
+        ExrOptions { precision: Precision::Half, compression: Compression::Zip },
+    )
+    .unwrap();
     // A multi-channel file used as a separate source: the channel named like the parameter is taken.
     let p_blend = dir.path().join("blend.exr");
-    write_channels_exr(&p_blend, w, h, &[("R", &mel), ("melanin_blend", &blend)], ExrOptions::default()).unwrap();
+    write_channels_exr(&p_blend, w, h, &[("R", &mel), ("melanin_blend", &blend)], ExrOptions::FLOAT_PIZ).unwrap();
     // A tiled, u32, offset-data-window file written by the exr crate directly.
     let p_hem = dir.path().join("hem.exr");
     {
@@ -208,7 +215,7 @@ fn single_channel_exrs_of_any_sample_type_and_layout() {
         read_params(&ParamInputs::Separate([file(&p_mel), file(&p_blend), file(&p_hem), ParamSource::Constant(0.3)]))
             .unwrap();
     assert_eq!((img.width, img.height), (w, h));
-    assert_eq!(texels(&img.planes[0]), as_stored(&mel, true).as_slice());
+    assert_eq!(texels(&img.planes[0]), as_stored(&mel, Precision::Half).as_slice());
     assert_eq!(texels(&img.planes[1]), blend.as_slice());
     let hem: Vec<f32> = (0..w * h).map(|i| i as f32).collect();
     assert_eq!(texels(&img.planes[2]), hem.as_slice());
@@ -216,7 +223,7 @@ fn single_channel_exrs_of_any_sample_type_and_layout() {
 
     // A multi-channel file without a channel named like the parameter is refused.
     let p_rgb = dir.path().join("rgb.exr");
-    write_rgb_exr(&p_rgb, w, h, [&mel, &mel, &mel], ExrOptions::default()).unwrap();
+    write_rgb_exr(&p_rgb, w, h, [&mel, &mel, &mel], ExrOptions::FLOAT_PIZ).unwrap();
     let e = err_text(read_params(&ParamInputs::Separate([
         file(&p_rgb),
         ParamSource::Constant(0.5),
@@ -274,7 +281,7 @@ fn mixed_formats_agree_on_row_order() {
     save_l16(&tif, w as u32, h as u32, (0..w * h).map(|i| (i / w) as u16 * 21845).collect());
     let exr_path = dir.path().join("blend.exr");
     let rows: Vec<f32> = (0..w * h).map(|i| (i / w) as f32 / 3.0).collect();
-    write_channels_exr(&exr_path, w, h, &[("v", &rows)], ExrOptions::default()).unwrap();
+    write_channels_exr(&exr_path, w, h, &[("v", &rows)], ExrOptions::FLOAT_PIZ).unwrap();
     let img =
         read_params(&ParamInputs::Separate([file(&png), file(&exr_path), file(&tif), ParamSource::Constant(0.0)]))
             .unwrap();
@@ -320,7 +327,7 @@ fn mismatched_sizes_list_every_file() {
     let a = dir.path().join("a.png");
     save_l8(&a, 4, 3, vec![0; 12]);
     let b = dir.path().join("b.exr");
-    write_channels_exr(&b, 5, 3, &[("Y", &[0.0; 15])], ExrOptions::default()).unwrap();
+    write_channels_exr(&b, 5, 3, &[("Y", &[0.0; 15])], ExrOptions::FLOAT_PIZ).unwrap();
     let c = dir.path().join("c.tif");
     save_l16(&c, 4, 3, vec![0; 12]);
     let e = err_text(read_params(&ParamInputs::Separate([file(&a), ParamSource::Constant(0.5), file(&b), file(&c)])));
@@ -388,7 +395,7 @@ fn truncated_exr_is_an_error_naming_the_file() {
     let planes: Vec<Vec<f32>> = (0..4).map(|k| plane(w, h, k as f32)).collect();
     let path = dir.path().join("params.exr");
     let channels: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().zip(&planes).map(|(n, p)| (*n, p.as_slice())).collect();
-    for options in ALL_OPTIONS {
+    for options in all_options() {
         write_channels_exr(&path, w, h, &channels, options).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         for cut in [bytes.len() / 2, bytes.len() - 1, 200, 10] {
@@ -407,7 +414,7 @@ fn dropped_stages_leave_nothing_behind() {
     let dir = tempfile::tempdir().unwrap();
     let v = plane(8, 8, 1.0);
     {
-        let a = stage_rgb_exr(&dir.path().join("albedo.exr"), 8, 8, [&v, &v, &v], ExrOptions::default()).unwrap();
+        let a = stage_rgb_exr(&dir.path().join("albedo.exr"), 8, 8, [&v, &v, &v], ExrOptions::FLOAT_PIZ).unwrap();
         let b = stage_bytes(&dir.path().join("albedo.json"), b"{}").unwrap();
         // The temporary files live beside their destination until then.
         assert!(a.temp_path().unwrap().parent() == Some(dir.path()));
@@ -423,13 +430,13 @@ fn committed_stages_appear_together() {
     let dir = tempfile::tempdir().unwrap();
     let v = plane(8, 8, 1.0);
     let staged = vec![
-        stage_rgb_exr(&dir.path().join("albedo.exr"), 8, 8, [&v, &v, &v], ExrOptions::default()).unwrap(),
+        stage_rgb_exr(&dir.path().join("albedo.exr"), 8, 8, [&v, &v, &v], ExrOptions::FLOAT_PIZ).unwrap(),
         stage_rgb_exr(
             &dir.path().join("radius.exr"),
             8,
             8,
             [&v, &v, &v],
-            ExrOptions { half: true, compression: Compression::Piz },
+            ExrOptions { precision: Precision::Half, compression: Compression::Piz },
         )
         .unwrap(),
         stage_bytes(&dir.path().join("maps.json"), b"{\"ok\": true}").unwrap(),
@@ -451,14 +458,14 @@ fn a_failing_later_stage_does_not_clobber_existing_outputs() {
     let dir = tempfile::tempdir().unwrap();
     let albedo = dir.path().join("albedo.exr");
     let old = vec![0.25f32; 16];
-    write_rgb_exr(&albedo, 4, 4, [&old, &old, &old], ExrOptions::default()).unwrap();
+    write_rgb_exr(&albedo, 4, 4, [&old, &old, &old], ExrOptions::FLOAT_PIZ).unwrap();
     let old_bytes = std::fs::read(&albedo).unwrap();
 
     let new = vec![0.75f32; 16];
     let result = (|| {
-        let a = stage_rgb_exr(&albedo, 4, 4, [&new, &new, &new], ExrOptions::default())?;
+        let a = stage_rgb_exr(&albedo, 4, 4, [&new, &new, &new], ExrOptions::FLOAT_PIZ)?;
         // The radius planes have the wrong length: staging fails and nothing is committed.
-        let r = stage_rgb_exr(&dir.path().join("radius.exr"), 4, 4, [&new, &new, &new[..15]], ExrOptions::default())?;
+        let r = stage_rgb_exr(&dir.path().join("radius.exr"), 4, 4, [&new, &new, &new[..15]], ExrOptions::FLOAT_PIZ)?;
         commit_all(vec![a, r])
     })();
     let e = result.unwrap_err().to_string();
@@ -467,8 +474,8 @@ fn a_failing_later_stage_does_not_clobber_existing_outputs() {
     assert_eq!(names_in(dir.path()), ["albedo.exr"]);
 
     // A commit whose checks fail renames nothing either: here a directory sits where radius.exr should go.
-    let a = stage_rgb_exr(&albedo, 4, 4, [&new, &new, &new], ExrOptions::default()).unwrap();
-    let r = stage_rgb_exr(&dir.path().join("radius.exr"), 4, 4, [&new, &new, &new], ExrOptions::default()).unwrap();
+    let a = stage_rgb_exr(&albedo, 4, 4, [&new, &new, &new], ExrOptions::FLOAT_PIZ).unwrap();
+    let r = stage_rgb_exr(&dir.path().join("radius.exr"), 4, 4, [&new, &new, &new], ExrOptions::FLOAT_PIZ).unwrap();
     std::fs::create_dir(dir.path().join("radius.exr")).unwrap();
     let e = err_text(commit_all(vec![a, r]));
     assert!(e.contains("radius.exr") && e.contains("directory"), "{e}");
@@ -477,7 +484,7 @@ fn a_failing_later_stage_does_not_clobber_existing_outputs() {
 
     // Writing into a directory that does not exist fails before creating anything.
     let nowhere = dir.path().join("missing").join("albedo.exr");
-    let e = err_text(write_rgb_exr(&nowhere, 4, 4, [&new, &new, &new], ExrOptions::default()));
+    let e = err_text(write_rgb_exr(&nowhere, 4, 4, [&new, &new, &new], ExrOptions::FLOAT_PIZ));
     assert!(e.contains("missing") && e.contains("directory"), "{e}");
     let e = err_text(write_atomic(&nowhere, b"x"));
     assert!(e.contains("albedo.exr"), "{e}");
@@ -499,20 +506,90 @@ fn bad_write_arguments_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("x.exr");
     let v = vec![0.0f32; 4];
-    assert!(err_text(write_channels_exr(&p, 0, 4, &[("Y", &[])], ExrOptions::default())).contains("0x4"));
-    assert!(err_text(write_channels_exr(&p, 2, 2, &[], ExrOptions::default())).contains("at least one channel"));
-    assert!(err_text(write_channels_exr(&p, 2, 2, &[("Y", &v), ("Y", &v)], ExrOptions::default())).contains("twice"));
-    assert!(err_text(write_channels_exr(&p, 2, 2, &[("", &v)], ExrOptions::default())).contains("channel name"));
+    assert!(err_text(write_channels_exr(&p, 0, 4, &[("Y", &[])], ExrOptions::FLOAT_PIZ)).contains("0x4"));
+    assert!(err_text(write_channels_exr(&p, 2, 2, &[], ExrOptions::FLOAT_PIZ)).contains("at least one channel"));
+    assert!(err_text(write_channels_exr(&p, 2, 2, &[("Y", &v), ("Y", &v)], ExrOptions::FLOAT_PIZ)).contains("twice"));
+    assert!(err_text(write_channels_exr(&p, 2, 2, &[("", &v)], ExrOptions::FLOAT_PIZ)).contains("channel name"));
     assert!(names_in(dir.path()).is_empty());
+}
+
+/// The compression a written file's header names.
+fn compression_on_disk(path: &Path) -> exr::compression::Compression {
+    exr::meta::MetaData::read_from_file(path, true).unwrap().headers[0].compression
+}
+
+#[test]
+fn auto_compression_compresses_where_it_pays_and_not_where_it_does_not() {
+    let dir = tempfile::tempdir().unwrap();
+    // 64 x 200: 7 PIZ blocks or 200 ZIPS blocks, sampled. A ramp (constant along rows) shrinks under either codec;
+    // white noise (a xorshift generator's mantissas, every bit random) cannot shrink by 25 %.
+    let (w, h) = (64, 200);
+    let smooth: Vec<f32> = (0..w * h).map(|i| 0.2 + 0.001 * (i / w) as f32).collect();
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut random_bits = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    // Float: 23 random mantissa bits in [1, 2). Half: random half bit patterns (sign, 10 mantissa bits and 4 of the 5
+    // exponent bits random: finite values), exact in f32.
+    // Three planes of each, as a repeated plane would compress.
+    let float_noise: Vec<Vec<f32>> = (0..3)
+        .map(|_| (0..w * h).map(|_| f32::from_bits(0x3f80_0000 | (random_bits() >> 41) as u32)).collect())
+        .collect();
+    let half_noise: Vec<Vec<f32>> = (0..3)
+        .map(|_| (0..w * h).map(|_| half::f16::from_bits((random_bits() >> 48) as u16 & 0xfbff).to_f32()).collect())
+        .collect();
+    for precision in ALL_PRECISIONS {
+        let noise = if precision == Precision::Half { &half_noise } else { &float_noise };
+        let options = ExrOptions { precision, compression: Compression::Auto };
+        let (candidate, candidate_on_disk) = match precision {
+            Precision::Half => (Compression::Zips, exr::compression::Compression::ZIP1),
+            Precision::Float => (Compression::Piz, exr::compression::Compression::PIZ),
+        };
+        assert_eq!(Compression::auto_candidate(precision), candidate);
+        for (name, planes, expected, on_disk) in [
+            ("smooth", [&smooth, &smooth, &smooth], candidate, candidate_on_disk),
+            (
+                "noise",
+                [&noise[0], &noise[1], &noise[2]],
+                Compression::None,
+                exr::compression::Compression::Uncompressed,
+            ),
+        ] {
+            let path = dir.path().join(format!("{name}.exr"));
+            let staged = stage_rgb_exr(&path, w, h, planes.map(Vec::as_slice), options).unwrap();
+            assert_eq!(staged.compression(), Some(expected), "{name} {precision:?}");
+            staged.commit().unwrap();
+            assert_eq!(compression_on_disk(&path), on_disk, "{name} {precision:?}");
+            let (_, _, chans) = read_exr_channels(&path).unwrap();
+            assert_eq!(chans[2].1, as_stored(planes[0], precision), "{name} {precision:?}");
+            // R, stored last
+        }
+    }
+    // A chosen compression is written as asked, whatever the content.
+    let path = dir.path().join("forced.exr");
+    let staged = stage_rgb_exr(
+        &path,
+        w,
+        h,
+        [&float_noise[0], &float_noise[1], &float_noise[2]],
+        ExrOptions { precision: Precision::Float, compression: Compression::Rle },
+    )
+    .unwrap();
+    assert_eq!(staged.compression(), Some(Compression::Rle));
+    staged.commit().unwrap();
+    assert_eq!(compression_on_disk(&path), exr::compression::Compression::RLE);
 }
 
 #[test]
 fn options_serialise_in_lowercase() {
-    let o = ExrOptions { half: true, compression: Compression::Piz };
+    let o = ExrOptions { precision: Precision::Float, compression: Compression::Zips };
     let s = serde_json::to_string(&o).unwrap();
-    assert_eq!(s, r#"{"half":true,"compression":"piz"}"#);
+    assert_eq!(s, r#"{"precision":"float","compression":"zips"}"#);
     assert_eq!(serde_json::from_str::<ExrOptions>(&s).unwrap(), o);
-    assert_eq!(ExrOptions::default(), ExrOptions { half: false, compression: Compression::Piz });
+    assert_eq!(ExrOptions::default(), ExrOptions { precision: Precision::Half, compression: Compression::Auto });
     assert_eq!(serde_json::to_string(&Compression::None).unwrap(), r#""none""#);
 }
 
@@ -543,13 +620,13 @@ fn bytes_reader_equals_file_reader() {
     let multi = dir.path().join("multi.exr");
     let planes: Vec<Vec<f32>> = (0..4).map(|p| plane(w, h, p as f32)).collect();
     let channels: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().zip(&planes).map(|(n, v)| (*n, v.as_slice())).collect();
-    write_channels_exr(&multi, w, h, &channels, ExrOptions::default()).unwrap();
+    write_channels_exr(&multi, w, h, &channels, ExrOptions::FLOAT_PIZ).unwrap();
     let from_file = read_params(&ParamInputs::Multi { path: multi.clone(), constants: [None; 4] }).unwrap();
     let from_bytes = read_params_from_bytes(&std::fs::read(&multi).unwrap(), "multi", None).unwrap();
     assert_eq!(from_bytes, from_file);
 
     let single = dir.path().join("single.exr");
-    write_channels_exr(&single, w, h, &[("Y", &planes[2])], ExrOptions::default()).unwrap();
+    write_channels_exr(&single, w, h, &[("Y", &planes[2])], ExrOptions::FLOAT_PIZ).unwrap();
     let png = dir.path().join("m.png");
     save_l8(&png, w as u32, h as u32, (0..w * h).map(|i| (i * 17) as u8).collect());
     let tif = dir.path().join("m.tif");
@@ -581,7 +658,7 @@ fn bytes_reader_equals_file_reader() {
 fn chunk_sizes_past_the_end_are_refused_before_reading() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("m.exr");
-    let options = ExrOptions { half: false, compression: Compression::None };
+    let options = ExrOptions { precision: Precision::Float, compression: Compression::None };
     write_channels_exr(&path, 4, 1, &[("Y", &[0.1, 0.2, 0.3, 0.4])], options).unwrap();
     let mut bytes = std::fs::read(&path).unwrap();
     let window = bytes.windows(17).position(|w| w == b"dataWindow\0box2i\0").unwrap() + 17 + 4;

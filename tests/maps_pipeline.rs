@@ -8,7 +8,7 @@ use spectral_skin::fit::blender_target::Target;
 use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::maps::example::{face_params, write_face_params};
 use spectral_skin::maps::io::{
-    read_exr_channels, write_channels_exr, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane,
+    read_exr_channels, write_channels_exr, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, Precision,
 };
 use spectral_skin::maps::lut::{measure_error, MaterialTable, TableResolution};
 use spectral_skin::maps::pipeline::{check_planes, Strategy, ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE};
@@ -182,8 +182,14 @@ fn writes_the_documented_files() {
         ParamSource::Constant(0.01),
         ParamSource::Constant(0.0),
     ]);
-    run_maps(&separate, &out2, &MapSettings::default(), ExrOptions { half: true, ..ExrOptions::default() }, None)
-        .unwrap();
+    run_maps(
+        &separate,
+        &out2,
+        &MapSettings::default(),
+        ExrOptions { precision: Precision::Half, ..ExrOptions::default() },
+        None,
+    )
+    .unwrap();
     assert_eq!(files_in(&out2), vec![ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE]);
     let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out2.join(SIDECAR_FILE)).unwrap()).unwrap();
     assert_eq!(sidecar["outputs"]["specular_constants"]["specular_ior_level"], 0.0);

@@ -224,9 +224,9 @@ _RESULT_KEYS = {"albedo": "base_color", "radius": "radius_mm", "specular": "spec
 
 
 def write_textures(plan: dict[str, Any]) -> None:
-    """Write the plan's maps with ``spectral_skin.write_maps`` (the core's writer: float EXRs, PIZ, staged as
-    temporary files and renamed into place together), as ``<prefix>_albedo.exr`` etc. in the plan's folder; an
-    earlier texture of this prefix that the plan no longer has is removed.
+    """Write the plan's maps with ``spectral_skin.write_maps`` (the core's writer: half-float EXRs, compression chosen
+    per file, staged as temporary files and renamed into place together), as ``<prefix>_albedo.exr`` etc. in the
+    plan's folder; an earlier texture of this prefix that the plan no longer has is removed.
 
     Raises spectral_skin.SpectralSkinIOError (an OSError naming the file) when a file cannot be written; the final paths are then
     untouched.

@@ -44,6 +44,8 @@ _Combination = Literal["directional", "symmetric"]
 _WorkingSpace = Literal["Linear Rec.709", "Linear Rec.2020", "ACEScg"]
 _Method = Literal["burley", "random_walk", "random_walk_legacy", "random_walk_skin"]
 _Engine = Literal["cycles", "eevee"]
+_Precision = Literal["half", "float"]
+_Compression = Literal["auto", "piz", "zip", "zips", "rle", "none"]
 _BlenderVersion = str | tuple[int, int] | tuple[int, int, int]
 _AccuracyLevel = Literal["draft", "default", "reference"]
 _WavelengthPlacement = Literal["uniform", "cmf_adapted", "rgb_shortcut"]
@@ -221,7 +223,11 @@ def maps(
     """Documented once, in the compiled module: ``help(spectral_skin.maps)``."""
 
 def write_maps(
-    result: Mapping[str, Any], folder: str | os.PathLike[str], prefix: str | None = None
+    result: Mapping[str, Any],
+    folder: str | os.PathLike[str],
+    prefix: str | None = None,
+    precision: _Precision | str = "half",
+    compression: _Compression | str = "auto",
 ) -> dict[str, pathlib.Path]:
     """Documented once, in the compiled module: ``help(spectral_skin.write_maps)``."""
 

@@ -4,7 +4,7 @@ use std::process::ExitCode;
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use spectral_skin::color::{RgbMapping, WavelengthPlacement};
 use spectral_skin::diffusion::{Boundaries, Combination, MultipoleTerms};
@@ -12,7 +12,7 @@ use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use spectral_skin::fit::{SubsurfaceMethod, DEFAULT_METHOD};
 use spectral_skin::maps::example::{write_example_params, ExampleKind};
-use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource};
+use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource, Precision};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
 use spectral_skin::skin::params::{ParamSpec, HEMOGLOBIN, MELANIN, MELANIN_BLEND, OILINESS, PARAMS};
 use spectral_skin::{evaluate, AccuracyLevel, Evaluation, Outputs, Request, SkinError, SkinParams, PRESETS};
@@ -140,9 +140,9 @@ struct MapsArgs {
     /// Clamp NaN, infinite and out-of-range texels (and report them) instead of failing.
     #[arg(long)]
     clamp: bool,
-    /// Write 16-bit half floats instead of 32-bit floats.
-    #[arg(long)]
-    half: bool,
+    /// Sample precision of the written EXRs: half (16-bit, within 0.049 % of the computed value) or float.
+    #[arg(long, value_enum, default_value_t = Precision::default())]
+    precision: Precision,
     /// Points at which a freshly built table is checked against direct evaluation (reported in the sidecar).
     #[arg(long, default_value_t = spectral_skin::maps::pipeline::DEFAULT_TABLE_CHECK_SAMPLES as u64,
           value_parser = clap::value_parser!(u64).range(0..=spectral_skin::maps::pipeline::MAX_TABLE_CHECK_SAMPLES as u64))]
@@ -152,18 +152,11 @@ struct MapsArgs {
     /// Linux, ~/Library/Caches on macOS, %LOCALAPPDATA% on Windows).
     #[arg(long)]
     no_cache: bool,
-    /// EXR compression.
-    #[arg(long, value_enum, default_value_t = CompressionArg::Piz)]
-    compression: CompressionArg,
+    /// EXR compression; auto: ZIPS for half, PIZ for float, or none for a file that would shrink by under 25 %.
+    #[arg(long, value_enum, default_value_t = Compression::default())]
+    compression: Compression,
     #[command(flatten)]
     accuracy: AccuracyArgs,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum CompressionArg {
-    Zip,
-    Piz,
-    None,
 }
 
 #[derive(Args)]
@@ -380,14 +373,7 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         ..MapSettings::default()
     };
     settings.request = Request { target, ..args.accuracy.request(Outputs::material()) };
-    let exr = ExrOptions {
-        half: args.half,
-        compression: match args.compression {
-            CompressionArg::Zip => Compression::Zip,
-            CompressionArg::Piz => Compression::Piz,
-            CompressionArg::None => Compression::None,
-        },
-    };
+    let exr = ExrOptions { precision: args.precision, compression: args.compression };
     // A progress bar for work that lasts over a second (hidden until then).
     let bar = ProgressBar::hidden();
     let started = std::time::Instant::now();

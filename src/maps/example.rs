@@ -135,5 +135,5 @@ pub fn write_example_params(path: &Path, kind: ExampleKind, size: usize) -> Resu
         })
         .collect();
     let channels: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().cloned().zip(planes).collect();
-    write_channels_exr(path, image.width, image.height, &channels, ExrOptions::default())
+    write_channels_exr(path, image.width, image.height, &channels, ExrOptions::FLOAT_PIZ)
 }

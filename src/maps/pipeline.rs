@@ -12,8 +12,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::io::{
-    commit_all, read_params, stage_bytes, stage_channels_exr, ExrOptions, ParamImage, ParamInputs, Plane, Staged,
-    PARAM_CHANNELS, PARAM_RANGES,
+    commit_all, read_params, stage_bytes, stage_channels_exr, Compression, ExrOptions, ParamImage, ParamInputs, Plane,
+    Staged, PARAM_CHANNELS, PARAM_RANGES,
 };
 use super::lut::{measure_error_cancellable, MaterialTable, TableError, TableResolution, TexelMaterial};
 use crate::error::SkinError;
@@ -524,7 +524,11 @@ pub fn run_maps_cancellable(
     report.seconds.read = read;
     report.seconds.write = write_start.elapsed().as_secs_f64();
     report.seconds.total = start.elapsed().as_secs_f64();
-    let sidecar = sidecar_json(&report, inputs, &result.specular, exr);
+    let compressions: Vec<(String, Compression)> = staged
+        .iter()
+        .filter_map(|s| Some((s.target().file_name()?.to_string_lossy().into_owned(), s.compression()?)))
+        .collect();
+    let sidecar = sidecar_json(&report, inputs, &result.specular, exr, &compressions);
     staged.push(stage_bytes(&out_dir.join(SIDECAR_FILE), sidecar.as_bytes())?);
     if cancel.load(Ordering::Relaxed) {
         // Dropping the staged files deletes them.
@@ -616,7 +620,14 @@ pub fn commit_map_files(out_dir: &Path, prefix: Option<&str>, staged: Vec<Staged
 }
 
 /// The sidecar: what each file holds (channels, meaning, units, colour space), the inputs, and the report.
-fn sidecar_json(report: &MapReport, inputs: &ParamInputs, specular: &SpecularOutput, exr: ExrOptions) -> String {
+/// `compressions` holds each EXR's file name and the compression it was written with (what `auto` chose).
+fn sidecar_json(
+    report: &MapReport,
+    inputs: &ParamInputs,
+    specular: &SpecularOutput,
+    exr: ExrOptions,
+    compressions: &[(String, Compression)],
+) -> String {
     let inputs_json = match inputs {
         ParamInputs::Multi { path, constants } => serde_json::json!({
             "file": path.display().to_string(),
@@ -648,6 +659,11 @@ fn sidecar_json(report: &MapReport, inputs: &ParamInputs, specular: &SpecularOut
                 "roughness": constants.roughness, "ior": constants.ior});
         }
         SpecularOutput::Constant(s) => outputs["specular_constants"] = serde_json::json!(s),
+    }
+    for (file, compression) in compressions {
+        if outputs[file.as_str()].is_object() {
+            outputs[file.as_str()]["compression"] = serde_json::json!(compression);
+        }
     }
     let value = serde_json::json!({
         "inputs": inputs_json,

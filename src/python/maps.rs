@@ -13,7 +13,8 @@ use rayon::prelude::*;
 
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{
-    read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, MAX_TEXELS, PARAM_CHANNELS,
+    read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, ALL_COMPRESSIONS, ALL_PRECISIONS, MAX_TEXELS,
+    PARAM_CHANNELS,
 };
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
@@ -23,7 +24,8 @@ use crate::maps::pipeline::{
 use crate::Outputs;
 
 use super::convert::{
-    count_sequence, float_array, is_boolean, real_arg, shape_text, target_from, to_py, type_name, FloatArray, Knobs,
+    by_name, count_sequence, float_array, is_boolean, real_arg, shape_text, target_from, to_py, type_name, FloatArray,
+    Knobs,
 };
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
@@ -577,9 +579,10 @@ pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usiz
 ///
 /// Each image present (and not None) becomes one file in ``folder`` (created if missing): "base_color" ->
 /// ``albedo.exr`` (channels R, G, B), "radius_mm" -> ``radius.exr`` (R, G, B), "specular_ior_level" ->
-/// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc. 32-bit float, PIZ compression, row 0 at the
-/// top. The files are written as temporary files in ``folder`` and renamed into place together once all are written,
-/// so a failure leaves the existing files as they were. Then the files of an earlier write with the same prefix that
+/// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc. Row 0 at the top; ``precision`` and
+/// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files are written as temporary files in
+/// ``folder`` and renamed into place together once all are written, so a failure leaves the existing files as they
+/// were. Then the files of an earlier write with the same prefix that
 /// this one did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the
 /// folder holds exactly this result's maps. No sidecar is written: the report is in the result.
 ///
@@ -589,6 +592,9 @@ pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usiz
 ///         :func:`maps`, or a part of one.
 ///     folder: the output folder.
 ///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
+///     precision: "half" (16-bit, within 0.049 % of each value; the default) or "float" (32-bit).
+///     compression: "auto" (the default: ZIPS for half, PIZ for float, or none for a file that would shrink by under
+///         25 %), "piz", "zip", "zips", "rle" or "none".
 ///
 /// Returns:
 ///     {"albedo" | "radius" | "specular": path of the file written}, for the images written.
@@ -598,13 +604,19 @@ pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usiz
 ///         that is empty or holds a path separator; a file that cannot be written (the message names it).
 ///     TypeError: an image that is not a float32 or float64 numpy array.
 #[pyfunction]
-#[pyo3(name = "write_maps", signature = (result, folder, prefix = None))]
+#[pyo3(name = "write_maps", signature = (result, folder, prefix = None, precision = "half", compression = "auto"))]
 pub(super) fn write_maps_py<'py>(
     py: Python<'py>,
     result: &Bound<'py, PyAny>,
     folder: std::path::PathBuf,
     prefix: Option<&str>,
+    precision: &str,
+    compression: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let exr = ExrOptions {
+        precision: by_name("precision", precision, &ALL_PRECISIONS)?,
+        compression: by_name("compression", compression, &ALL_COMPRESSIONS)?,
+    };
     if let Some(prefix) = prefix {
         if prefix.is_empty() || prefix.contains(['/', '\\']) || prefix == "." || prefix == ".." {
             return Err(invalid(
@@ -639,7 +651,7 @@ pub(super) fn write_maps_py<'py>(
             radius_mm: radius_mm.as_ref(),
             specular_ior_level: specular.as_deref(),
         };
-        let staged = stage_map_files(&folder, prefix, &files, ExrOptions::default())?;
+        let staged = stage_map_files(&folder, prefix, &files, exr)?;
         let written: Vec<std::path::PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
         commit_map_files(&folder, prefix, staged)?;
         Ok(written)

@@ -102,11 +102,17 @@ def test_write_maps_writes_what_it_was_given(tmp_path: Path) -> None:
                                 ("specular", "specular_ior_level", ("Y",))):
         names, pixels = read(out / f"scene_Skin_{name}.exr")
         assert names == channels, name
-        # Float EXR, lossless: bit for bit what maps() returned, row 0 at the top.
-        np.testing.assert_array_equal(pixels.reshape(result[key].shape), result[key], err_msg=name)
-    # float64 input is rounded to float32, as maps() does with its inputs.
-    spectral_skin.write_maps({"radius_mm": result["radius_mm"].astype(np.float64)}, tmp_path / "f64")
-    np.testing.assert_array_equal(read(tmp_path / "f64" / "radius.exr")[1], result["radius_mm"])
+        # Half floats by default: what maps() returned rounded to nearest half (as numpy rounds), row 0 at the top.
+        expected = result[key].astype(np.float16).astype(np.float32)
+        np.testing.assert_array_equal(pixels.reshape(result[key].shape), expected, err_msg=name)
+    # precision="float": bit for bit what maps() returned; float64 input is rounded to float32, as maps() does with
+    # its inputs. The compression names are the CLI's.
+    radius64 = {"radius_mm": result["radius_mm"].astype(np.float64)}
+    spectral_skin.write_maps(radius64, tmp_path / "f64", precision="float", compression="zips")
+    np.testing.assert_array_equal(read(tmp_path / "f64" / "radius.exr")[1].reshape(result["radius_mm"].shape),
+                                  result["radius_mm"])
+    with pytest.raises(spectral_skin.SpectralSkinError, match="unknown compression"):
+        spectral_skin.write_maps(radius64, tmp_path / "f64", compression="PIZ")
 
 
 def test_write_maps_removes_outputs_it_no_longer_writes(tmp_path: Path) -> None:

@@ -1,5 +1,6 @@
 //! EXR encoding of output planes: single-part scan-line files, blocks built straight from the planes and compressed
-//! in parallel, staged beside their destination (see [`super::staging`]).
+//! in parallel, staged beside their destination (see [`super::staging`]). [`Compression::Auto`] is resolved here,
+//! per file, from a sample of its blocks.
 
 use std::cell::Cell;
 use std::io::{BufWriter, Write};
@@ -13,12 +14,12 @@ use exr::meta::BlockDescription;
 use exr::prelude::f16;
 
 use super::staging::{create_temp, Staged};
-use super::{guard, ExrOptions, MAX_TEXELS};
+use super::{guard, Compression, ExrOptions, Precision, AUTO_MIN_SAVING, MAX_TEXELS};
 use crate::error::SkinError;
 
 /// Stage an RGB EXR (channels `R`, `G`, `B`) from three row-major planes of `width * height` values each (row 0 at
 /// the top; units are the caller's: reflectance for albedo, millimetres for radius). Samples are converted to f16
-/// on the fly when `options.half` is set (no extra copy of the planes is made).
+/// on the fly for [`Precision::Half`] (no extra copy of the planes is made).
 pub fn stage_rgb_exr(
     path: &Path,
     width: usize,
@@ -30,7 +31,8 @@ pub fn stage_rgb_exr(
 }
 
 /// Stage an EXR with arbitrary named channels (each a row-major plane of `width * height` values). Names must be
-/// unique, non-empty, at most 255 bytes of Latin-1. They are stored sorted by name.
+/// unique, non-empty, at most 255 bytes of Latin-1. They are stored sorted by name. [`Staged::compression`] tells
+/// the compression written (what [`Compression::Auto`] chose).
 pub fn stage_channels_exr(
     path: &Path,
     width: usize,
@@ -67,15 +69,149 @@ pub fn stage_channels_exr(
         }
     }
 
+    let compression = resolve_compression(width, height, channels, options)
+        .map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
     let mut temp = create_temp(path)?;
     {
         let mut out = BufWriter::with_capacity(1 << 20, temp.as_file_mut());
-        write_exr_to(&mut out, width, height, channels, options)
+        write_exr_to(&mut out, width, height, channels, options.precision, compression)
             .map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
         out.flush().map_err(|e| SkinError::io_caused(path, format!("cannot write output EXR: {e}"), e))?;
     }
     temp.as_file().sync_all().map_err(|e| SkinError::io_caused(path, format!("cannot write output EXR: {e}"), e))?;
-    Ok(Staged::from_temp(temp, path))
+    Ok(Staged::from_temp(temp, path).with_compression(compression))
+}
+
+/// How many blocks [`Compression::Auto`] compresses to decide (evenly spaced over the image; all of a smaller one).
+const AUTO_SAMPLE_BLOCKS: usize = 32;
+
+/// The compression `options` mean for these planes: itself, or for [`Compression::Auto`] the precision's candidate
+/// ([`Compression::auto_candidate`]) if it shrinks a sample of the blocks (built as the writer builds them) by at
+/// least [`AUTO_MIN_SAVING`], else none. The planes must have been checked as [`stage_channels_exr`] checks them.
+pub fn resolve_compression(
+    width: usize,
+    height: usize,
+    channels: &[(&str, &[f32])],
+    options: ExrOptions,
+) -> Result<Compression, String> {
+    if options.compression != Compression::Auto {
+        return Ok(options.compression);
+    }
+    let candidate = Compression::auto_candidate(options.precision);
+    let header = exr_header(width, height, channels, options.precision, candidate.to_exr().ok_or("no candidate")?)?;
+    let sources = sorted_sources(channels);
+    let lines = header.compression.scan_lines_per_block();
+    let blocks = height.div_ceil(lines);
+    let picked: Vec<usize> = if blocks <= AUTO_SAMPLE_BLOCKS {
+        (0..blocks).collect()
+    } else {
+        (0..AUTO_SAMPLE_BLOCKS).map(|i| (2 * i + 1) * blocks / (2 * AUTO_SAMPLE_BLOCKS)).collect()
+    };
+    let headers = [header];
+    let failed = Cell::new(false);
+    let sizes = guard(|| {
+        use rayon::prelude::*;
+        let uncompressed: Vec<UncompressedBlock> = picked
+            .iter()
+            .map(|&b| {
+                let y = b * lines;
+                let index = exr::block::BlockIndex {
+                    layer: 0,
+                    pixel_position: exr::math::Vec2(0, y),
+                    pixel_size: exr::math::Vec2(width, lines.min(height - y)),
+                    level: exr::math::Vec2(0, 0),
+                };
+                fill_block(&headers[0], index, width, &sources, options.precision, &failed)
+            })
+            .collect();
+        let raw: usize = uncompressed.iter().map(|b| b.data.len()).sum();
+        let packed: Result<Vec<usize>, exr::error::Error> = uncompressed
+            .into_par_iter()
+            .map(|b| b.compress_to_chunk(&headers).map(|c| compressed_len(&c.compressed_block)))
+            .collect();
+        packed.map(|p| (raw, p.iter().sum::<usize>()))
+    });
+    match sizes {
+        Ok(Ok(_)) if failed.get() => Err("internal error: a pixel line did not match the image layout".to_string()),
+        Ok(Ok((raw, packed))) if (packed as f64) <= (1.0 - AUTO_MIN_SAVING) * raw as f64 => Ok(candidate),
+        Ok(Ok(_)) => Ok(Compression::None),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(panic) => Err(panic),
+    }
+}
+
+/// Bytes of a compressed scan-line block's pixel data.
+fn compressed_len(block: &exr::block::chunk::CompressedBlock) -> usize {
+    match block {
+        exr::block::chunk::CompressedBlock::ScanLine(b) => b.compressed_pixels_le.len(),
+        _ => 0,
+    }
+}
+
+/// The header of a single-part scan-line file of these channels (stored sorted by name).
+fn exr_header(
+    width: usize,
+    height: usize,
+    channels: &[(&str, &[f32])],
+    precision: Precision,
+    compression: exr::compression::Compression,
+) -> Result<Header, String> {
+    let sample_type = match precision {
+        Precision::Half => SampleType::F16,
+        Precision::Float => SampleType::F32,
+    };
+    let mut descriptions = Vec::with_capacity(channels.len());
+    for (name, _) in sorted(channels) {
+        let name = Text::new_or_none(name).ok_or_else(|| format!("invalid channel name {name:?}"))?;
+        descriptions.push(ChannelDescription::named(name, sample_type));
+    }
+    let layer_name = Text::new_or_none("").ok_or("invalid layer name")?;
+    let mut header = Header::new(layer_name, (width, height), descriptions.into_iter().collect()).with_encoding(
+        compression,
+        BlockDescription::ScanLines,
+        LineOrder::Increasing,
+    );
+    header.own_attributes.layer_name = None;
+    Ok(header)
+}
+
+/// The channels sorted by name, as they are stored.
+fn sorted<'a>(channels: &[(&'a str, &'a [f32])]) -> Vec<(&'a str, &'a [f32])> {
+    let mut order = channels.to_vec();
+    order.sort_by(|a, b| a.0.as_bytes().cmp(b.0.as_bytes()));
+    order
+}
+
+/// The planes in stored (name) order.
+fn sorted_sources<'a>(channels: &[(&'a str, &'a [f32])]) -> Vec<&'a [f32]> {
+    sorted(channels).into_iter().map(|(_, plane)| plane).collect()
+}
+
+/// One uncompressed block of the file, built straight from the planes; a line that does not match the layout sets
+/// `failed`.
+fn fill_block(
+    header: &Header,
+    index: exr::block::BlockIndex,
+    width: usize,
+    sources: &[&[f32]],
+    precision: Precision,
+    failed: &Cell<bool>,
+) -> UncompressedBlock {
+    UncompressedBlock::from_lines(&header.channels, index, |line| {
+        let (x, y, n) = (line.location.position.0, line.location.position.1, line.location.sample_count);
+        let start = y * width + x;
+        let Some(row) = sources.get(line.location.channel).and_then(|s| s.get(start..start + n)) else {
+            failed.set(true);
+            return;
+        };
+        let ok = match precision {
+            Precision::Half => line.write_samples(|i| f16::from_f32(row[i])).is_ok(),
+            Precision::Float => line.write_samples_from_slice(row).is_ok(),
+        };
+        if !ok {
+            failed.set(true);
+        }
+    })
 }
 
 /// Encode an EXR block by block straight from the planes (no full-image copy).
@@ -84,47 +220,19 @@ fn write_exr_to<W: std::io::Write + std::io::Seek>(
     width: usize,
     height: usize,
     channels: &[(&str, &[f32])],
-    options: ExrOptions,
+    precision: Precision,
+    compression: Compression,
 ) -> Result<(), String> {
-    let sample_type = if options.half { SampleType::F16 } else { SampleType::F32 };
-    let mut order: Vec<usize> = (0..channels.len()).collect();
-    order.sort_by(|&a, &b| channels[a].0.as_bytes().cmp(channels[b].0.as_bytes()));
-    let mut descriptions = Vec::with_capacity(order.len());
-    for &i in &order {
-        let name =
-            Text::new_or_none(channels[i].0).ok_or_else(|| format!("invalid channel name {:?}", channels[i].0))?;
-        descriptions.push(ChannelDescription::named(name, sample_type));
-    }
-    let layer_name = Text::new_or_none("").ok_or("invalid layer name")?;
-    let mut header = Header::new(layer_name, (width, height), descriptions.into_iter().collect()).with_encoding(
-        options.compression.to_exr(),
-        BlockDescription::ScanLines,
-        LineOrder::Increasing,
-    );
-    header.own_attributes.layer_name = None;
-    let sources: Vec<&[f32]> = order.iter().map(|&i| channels[i].1).collect();
+    let exr_compression = compression.to_exr().ok_or("internal error: the compression was not resolved")?;
+    let header = exr_header(width, height, channels, precision, exr_compression)?;
+    let sources = sorted_sources(channels);
     let failed = Cell::new(false);
 
     let written = guard(|| {
         exr::block::write(out, std::iter::once(header).collect(), true, |meta, chunk_writer| {
             let header = &meta.headers[0];
             let blocks = meta.collect_ordered_blocks(|block_index| {
-                UncompressedBlock::from_lines(&header.channels, block_index, |line| {
-                    let (x, y, n) = (line.location.position.0, line.location.position.1, line.location.sample_count);
-                    let start = y * width + x;
-                    let Some(row) = sources.get(line.location.channel).and_then(|s| s.get(start..start + n)) else {
-                        failed.set(true);
-                        return;
-                    };
-                    let ok = if options.half {
-                        line.write_samples(|i| f16::from_f32(row[i])).is_ok()
-                    } else {
-                        line.write_samples_from_slice(row).is_ok()
-                    };
-                    if !ok {
-                        failed.set(true);
-                    }
-                })
+                fill_block(header, block_index, width, &sources, precision, &failed)
             });
             chunk_writer.on_progress(|_| ()).compress_all_blocks_parallel(&meta, blocks)?;
             Ok(())

@@ -23,7 +23,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-pub use encode::{stage_channels_exr, stage_rgb_exr, write_channels_exr, write_rgb_exr};
+pub use encode::{resolve_compression, stage_channels_exr, stage_rgb_exr, write_channels_exr, write_rgb_exr};
 pub use read::{read_exr_channels, read_params, read_params_from_bytes};
 pub use staging::{commit_all, stage_bytes, write_atomic, Staged};
 
@@ -114,36 +114,91 @@ impl ParamImage {
     }
 }
 
-/// Output encoding. The default is float (32-bit) samples with PIZ compression.
+/// Output encoding: the sample precision and the compression of every written EXR. The default is half floats with
+/// the compression chosen per file ([`Compression::Auto`]); see docs/maps-performance.md for the measured trade-off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct ExrOptions {
-    /// Write 16-bit half floats instead of 32-bit floats (values rounded to nearest; above 65504 become infinite).
-    pub half: bool,
+    /// Sample precision of the written files.
+    pub precision: Precision,
     /// Lossless compression of the written files.
     pub compression: Compression,
 }
 
-/// Lossless EXR compression of written files. PIZ is the default: faster than ZIP at about the same size. On maps that
-/// hardly compress (noise) its Huffman coder is most of a run's CPU time, and `None` or half floats are the faster
-/// choices (figures: docs/maps-performance.md).
+impl ExrOptions {
+    /// 32-bit floats, PIZ: the encoding of parameter maps written for the examples and tests (exact inputs).
+    pub const FLOAT_PIZ: ExrOptions = ExrOptions { precision: Precision::Float, compression: Compression::Piz };
+}
+
+/// Sample precision of written EXRs. Python's `precision=` and the CLI's `--precision` take the serde names.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
+#[serde(rename_all = "snake_case")]
+pub enum Precision {
+    /// 16-bit half floats, rounded to nearest: a relative error of at most 2^-11 (0.049 %) in half's normal range
+    /// (6.1e-5 to 65504; larger values become infinite), and at most 3e-8 absolute below it.
+    #[default]
+    Half,
+    /// 32-bit floats: the computed values as they are.
+    Float,
+}
+
+/// Every precision, the default first.
+pub const ALL_PRECISIONS: [Precision; 2] = [Precision::Half, Precision::Float];
+
+/// Lossless EXR compression of written files. Python's `compression=` and the CLI's `--compression` take the serde
+/// names. `Auto` (the default) compresses a sample of each file's blocks with the precision's candidate (ZIPS for
+/// half, PIZ for float, see [`Compression::auto_candidate`]) and writes the file uncompressed when that would save less than
+/// [`AUTO_MIN_SAVING`] of its size (maps that vary everywhere, like noise), else with the candidate. Figures:
+/// docs/maps-performance.md.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
+#[serde(rename_all = "snake_case")]
 pub enum Compression {
+    /// ZIPS (half) or PIZ (float), or none, chosen per file from a sample of its blocks.
+    #[default]
+    Auto,
+    /// PIZ wavelet compression, 32 scan lines per block (Blender's "PIZ").
+    Piz,
     /// ZIP, 16 scan lines per block (OpenEXR `ZIP_COMPRESSION`, Blender's "ZIP").
     Zip,
-    /// PIZ wavelet compression (Blender's "PIZ").
-    #[default]
-    Piz,
+    /// ZIP, one scan line per block (OpenEXR `ZIPS_COMPRESSION`, Blender's "ZIPS").
+    Zips,
+    /// Run-length encoding (OpenEXR `RLE_COMPRESSION`, Blender's "RLE").
+    Rle,
     /// No compression.
     None,
 }
 
+/// Every compression, the default first.
+pub const ALL_COMPRESSIONS: [Compression; 6] =
+    [Compression::Auto, Compression::Piz, Compression::Zip, Compression::Zips, Compression::Rle, Compression::None];
+
+/// [`Compression::Auto`] compresses a file only if its candidate shrinks a sample of its blocks by at least this share.
+/// At 4096² (docs/maps-performance.md) smooth maps shrink by over 60 % (float, PIZ) and 90 % (half, ZIPS), while noise
+/// shrinks by 8 % (float, PIZ) and 22 % (half, PIZ; 13 % with ZIPS in a run of `--compression zips`) at two to four
+/// times the CPU time of the uncompressed run: the threshold keeps such maps uncompressed.
+pub const AUTO_MIN_SAVING: f64 = 0.25;
+
 impl Compression {
-    fn to_exr(self) -> exr::compression::Compression {
+    /// The codec [`Compression::Auto`] tries for `precision`: ZIPS for half (on the 4096² face, 7.8 MB against PIZ's
+    /// 12.7 MB at the same CPU time), PIZ for float (ZIP is a few per cent smaller there at about 1.5 times the CPU).
+    pub fn auto_candidate(precision: Precision) -> Compression {
+        match precision {
+            Precision::Half => Compression::Zips,
+            Precision::Float => Compression::Piz,
+        }
+    }
+
+    /// The exr crate's compression; `None` for `Auto`, which is resolved per file first.
+    fn to_exr(self) -> Option<exr::compression::Compression> {
+        use exr::compression::Compression as C;
         match self {
-            Compression::Zip => exr::compression::Compression::ZIP16,
-            Compression::Piz => exr::compression::Compression::PIZ,
-            Compression::None => exr::compression::Compression::Uncompressed,
+            Compression::Auto => None,
+            Compression::Piz => Some(C::PIZ),
+            Compression::Zip => Some(C::ZIP16),
+            Compression::Zips => Some(C::ZIP1),
+            Compression::Rle => Some(C::RLE),
+            Compression::None => Some(C::Uncompressed),
         }
     }
 }

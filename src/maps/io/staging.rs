@@ -14,12 +14,24 @@ use crate::error::SkinError;
 pub struct Staged {
     temp: Option<tempfile::TempPath>,
     target: PathBuf,
+    compression: Option<super::Compression>,
 }
 
 impl Staged {
     /// A finished temporary file (from [`create_temp`]) that is to become `target`.
     pub(super) fn from_temp(temp: tempfile::NamedTempFile, target: &Path) -> Staged {
-        Staged { temp: Some(temp.into_temp_path()), target: target.to_path_buf() }
+        Staged { temp: Some(temp.into_temp_path()), target: target.to_path_buf(), compression: None }
+    }
+
+    /// The same file, recorded as an EXR written with `compression`.
+    pub(super) fn with_compression(mut self, compression: super::Compression) -> Staged {
+        self.compression = Some(compression);
+        self
+    }
+
+    /// For an EXR, the compression it was written with (never [`super::Compression::Auto`]); `None` for other files.
+    pub fn compression(&self) -> Option<super::Compression> {
+        self.compression
     }
 
     /// The final path this file will be renamed to.
