@@ -283,6 +283,14 @@ impl Prepared {
         })
     }
 
+    /// The RGB albedo (total diffuse reflectance) of one parameter set, alone: one transform value per wavelength and
+    /// no radius fit. It is [`Material::albedo`] to the last bit (the same sums), and the Base Color of a material
+    /// without subsurface, whatever the method.
+    pub fn albedo(&self, params: &SkinParams) -> Result<[f64; 3], SkinError> {
+        let stacks = self.stacks(params)?;
+        Ok(spectrum_to_rgb(&self.totals(&stacks), &self.weights))
+    }
+
     /// Albedo and both methods' Base Color and radius for one parameter set, computed on the calling thread (callers
     /// that evaluate many parameter sets parallelise across them).
     pub fn material(&self, params: &SkinParams) -> Result<Material, SkinError> {

@@ -137,6 +137,11 @@ struct MapsArgs {
     /// Evaluate every texel directly instead of through the lookup table.
     #[arg(long)]
     exact: bool,
+    /// The maps to compute, comma-separated: albedo (Base Color: albedo.exr), radius (radius.exr), specular
+    /// (specular.exr when the oiliness varies). Without radius no radius is fitted and Base Color is the albedo
+    /// whatever the method (a material without subsurface); without specular no specular input is computed.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "albedo,radius,specular")]
+    outputs: Vec<MapOutputArg>,
     /// Clamp NaN, infinite and out-of-range texels (and report them) instead of failing.
     #[arg(long)]
     clamp: bool,
@@ -157,6 +162,13 @@ struct MapsArgs {
     compression: CompressionArg,
     #[command(flatten)]
     accuracy: AccuracyArgs,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum MapOutputArg {
+    Albedo,
+    Radius,
+    Specular,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -379,7 +391,14 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         table_cache: if args.no_cache { None } else { spectral_skin::maps::lut::default_cache_dir() },
         ..MapSettings::default()
     };
-    settings.request = Request { target, ..args.accuracy.request(Outputs::material()) };
+    let wanted = |o: MapOutputArg| args.outputs.contains(&o);
+    let outputs = Outputs {
+        albedo: wanted(MapOutputArg::Albedo),
+        radius: wanted(MapOutputArg::Radius),
+        specular: wanted(MapOutputArg::Specular),
+        ..Outputs::default()
+    };
+    settings.request = Request { target, ..args.accuracy.request(outputs) };
     let exr = ExrOptions {
         half: args.half,
         compression: match args.compression {
