@@ -107,12 +107,13 @@ def sidecar_path(out_blend: str) -> str:
 
 
 def _write_sidecar(out_blend: str, plans: dict[str, dict[str, Any]]) -> None:
-    """Per material: the target, the decisions (``effects``), the texture files and the per-frame values of an
-    animated constant material (``animation``, or null), as JSON next to the .blend."""
+    """Per material: the target, the decisions (``effects``), the core's work (``work``: what was computed, the
+    counts the operator stores on the material), the texture files and the per-frame values of an animated constant
+    material (``animation``, or null), as JSON next to the .blend."""
     import json
 
     content = {name: {"target": plan["target"], "method": plan["method"], "effects": plan["effects"],
-                      "textures": plan["textures"], "animation": plan.get("animation")}
+                      "work": plan.get("work", {}), "textures": plan["textures"], "animation": plan.get("animation")}
                for name, plan in plans.items()}
     path = sidecar_path(out_blend)
     tmp = f"{path}.{os.getpid()}.tmp"

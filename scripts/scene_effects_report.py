@@ -259,8 +259,12 @@ or `maps(...)["report"]["work"]`; stored per material with its decisions, `resul
 - Specular is not asked of the core when the oiliness is zero at every texel and frame (or forced off): no specular
   evaluation, Specular IOR Level 0, IOR and Roughness from the core's `surface` constants (no parameter changes
   them).
-- With parameter maps, `spectral_skin.maps` computes every output (it has no output choice yet): the work shows the
-  radius fits of its evaluations and table nodes; the plan keeps and writes only the maps the decisions keep.
+- With parameter maps the same holds: `spectral_skin.maps(outputs=...)` is asked only for the outputs the decisions
+  taken before computing keep. Without the radius its evaluations and table nodes are the albedo alone (no radius
+  fit: `radius_fits` 0; the albedo-only table is cached apart) and the Base Color texture is the albedo whatever the
+  method; without specular no specular input is computed. Subsurface dropped after computing (the material's own
+  radius under the threshold) keeps the work already done; for a method other than Burley its Base Color texture is
+  then the albedo of a second `maps(outputs=["albedo"])` run, whose work (no radius fit) is added.
 
 ## Thin and open geometry: which subsurface method
 

@@ -38,7 +38,35 @@ pub struct Outputs {
     pub specular: bool,
 }
 
+/// An output a material map run can compute (`maps`: Python's `outputs=`, the CLI's `--outputs`, one spelling).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialOutput {
+    /// Base Color (the albedo, or the method's Base Color with `Radius`).
+    Albedo,
+    /// Subsurface Radius (and the method's Base Color).
+    Radius,
+    /// Specular IOR Level.
+    Specular,
+}
+
+/// Every material output.
+pub const ALL_MATERIAL_OUTPUTS: [MaterialOutput; 3] =
+    [MaterialOutput::Albedo, MaterialOutput::Radius, MaterialOutput::Specular];
+
 impl Outputs {
+    /// The [`Outputs`] that compute these material outputs.
+    pub fn of_material(outputs: &[MaterialOutput]) -> Outputs {
+        let wanted = |o| outputs.contains(&o);
+        Outputs {
+            albedo: wanted(MaterialOutput::Albedo),
+            radius: wanted(MaterialOutput::Radius),
+            specular: wanted(MaterialOutput::Specular),
+            ..Outputs::default()
+        }
+    }
+
     pub fn all() -> Outputs {
         Outputs {
             albedo: true,
@@ -281,6 +309,14 @@ impl Prepared {
                 RadiusFit::SecondMoment => fit_burley_second_moment(normalized[0]),
             }
         })
+    }
+
+    /// The RGB albedo (total diffuse reflectance) of one parameter set, alone: one transform value per wavelength and
+    /// no radius fit. It is [`Material::albedo`] to the last bit (the same sums), and the Base Color of a material
+    /// without subsurface, whatever the method.
+    pub fn albedo(&self, params: &SkinParams) -> Result<[f64; 3], SkinError> {
+        let stacks = self.stacks(params)?;
+        Ok(spectrum_to_rgb(&self.totals(&stacks), &self.weights))
     }
 
     /// Albedo and both methods' Base Color and radius for one parameter set, computed on the calling thread (callers

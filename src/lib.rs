@@ -24,7 +24,7 @@ mod python;
 
 pub use accuracy::{Accuracy, AccuracyLevel};
 pub use error::SkinError;
-pub use evaluate::{evaluate, Evaluation, Outputs, Request};
+pub use evaluate::{evaluate, Evaluation, MaterialOutput, Outputs, Request, ALL_MATERIAL_OUTPUTS};
 pub use skin::{SkinModel, SkinParams, PRESETS};
 
 /// One spelling of every value in every front: the CLI's value names (clap) are the serde names Python takes and
@@ -56,5 +56,6 @@ mod one_spelling {
         check(&crate::fit::blender_target::Engine::ALL);
         check(&crate::maps::io::ALL_COMPRESSIONS);
         check(&crate::maps::io::ALL_PRECISIONS);
+        check(&crate::ALL_MATERIAL_OUTPUTS);
     }
 }

@@ -390,3 +390,22 @@ fn profile_rgb_mapping() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("non_negative"));
 }
+
+/// `maps --outputs` computes and writes only the maps named: without radius no radius fit and no radius.exr.
+#[test]
+fn maps_outputs_choose_the_maps() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("face.exr");
+    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]).status.success());
+    let out_dir = dir.path().join("maps");
+    let (params, out) = (params.to_str().unwrap(), out_dir.to_str().unwrap());
+    let out = run(&["maps", "--params", params, "--out", out, "--outputs", "albedo,specular"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out_dir.join("albedo.exr").is_file() && !out_dir.join("radius.exr").exists());
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["report"]["work"]["radius_fits"], 0);
+    assert_eq!(sidecar["report"]["work"]["outputs"]["radius"], 0);
+    let bad = run(&["maps", "--params", params, "--out", out_dir.to_str().unwrap(), "--outputs", "profile_rgb"]);
+    assert_eq!(bad.status.code(), Some(2));
+}

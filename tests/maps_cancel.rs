@@ -34,13 +34,18 @@ fn cancel_skips_the_rows_not_started() {
     let done = rows.load(Ordering::SeqCst);
     assert!((12..48).contains(&done), "{done} rows done of 48");
     let width = image.width;
-    let written_rows =
-        (0..image.height).filter(|y| part.base_color[0][y * width..(y + 1) * width].iter().any(|&v| v != 0.0)).count();
+    let written_rows = (0..image.height)
+        .filter(|y| part.base_color.as_ref().unwrap()[0][y * width..(y + 1) * width].iter().any(|&v| v != 0.0))
+        .count();
     assert_eq!(written_rows, done, "rows written = rows reported");
     for y in 0..image.height {
         let row = y * width..(y + 1) * width;
-        if part.base_color[0][row.clone()].iter().any(|&v| v != 0.0) {
-            assert_eq!(part.base_color[0][row.clone()], full.base_color[0][row], "a finished row is complete");
+        if part.base_color.as_ref().unwrap()[0][row.clone()].iter().any(|&v| v != 0.0) {
+            assert_eq!(
+                part.base_color.as_ref().unwrap()[0][row.clone()],
+                full.base_color.as_ref().unwrap()[0][row],
+                "a finished row is complete"
+            );
         }
     }
 }

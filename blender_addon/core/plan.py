@@ -78,7 +78,8 @@ def make_plan(settings: SkinSettings, progress: Any = None, *, radius: bool = Tr
     radius: Base Color is the skin's total diffuse reflectance (the albedo, whatever the method) and ``radius`` is
     None. ``specular=False``: the specular lobe is off: Specular IOR Level 0, no specular texture, and the core is
     not asked for it (IOR and Roughness are the surface's constants, which no parameter changes). With maps the core
-    (``spectral_skin.maps``) still computes every output; the plan keeps only those asked for.
+    (``spectral_skin.maps(outputs=...)``) likewise computes only those outputs: no radius fit without the radius, no
+    specular input without specular (``plan["work"]`` counts it).
     """
     check(settings)
     start = time.perf_counter()
@@ -165,26 +166,32 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
     import spectral_skin
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
-    # Without subsurface Base Color is the albedo: Burley's Base Color, whatever the material's method.
+    # Without subsurface the core fits no radius and Base Color is the albedo (Burley's Base Color), whatever the
+    # material's method.
+    outputs = ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]
     result = spectral_skin.maps(**inputs, method=method_name(settings.method if radius else "BURLEY"),
-                                accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
-                                clamp=settings.clamp, progress=progress, blender=settings.blender,
-                                engine=settings.engine)
+                                outputs=outputs, accuracy=ACCURACY_LEVELS[settings.accuracy],
+                                working_space=settings.working_space, clamp=settings.clamp, progress=progress,
+                                blender=settings.blender, engine=settings.engine)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)
     images: dict[str, Any] = {"albedo": result["base_color"]}
     if radius:
         images["radius"] = result["radius_mm"]
-    # Roughness and IOR always; the level is a map of its own when the oiliness varies.
-    constants: dict[str, Any] = dict(result["specular"])
+    # Roughness and IOR always (without specular: the surface's constants, which an evaluation of no output gives);
+    # the level is a map of its own when the oiliness varies.
     specular_ior_level: float | None = 0.0
     if not specular:
-        pass
+        c = settings.constants()
+        constants: dict[str, Any] = dict(spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"],
+                                                                c["oiliness"], outputs=())["surface"])
     elif "specular_ior_level" in result:
+        constants = dict(result["specular"])
         images["specular"] = result["specular_ior_level"]
         specular_ior_level = None
     else:
+        constants = dict(result["specular"])
         specular_ior_level = float(constants["specular_ior_level"])
     roughness = float(constants["roughness"])
     ior = float(constants["ior"])

@@ -557,7 +557,8 @@ def _decided_plan(settings: Any, effects: list[dict[str, Any]], progress: Any,
     """The material plan of ``settings`` (``plan`` when already computed: changed in place) changed as ``effects``
     say. Where subsurface is dropped from a method other than Burley (whose Base Color is not the albedo), Base
     Color is the albedo (the skin's total diffuse reflectance): the core's, which came with a plan of constants (and
-    is all a plan computed without the radius has), else Burley's maps computed by the core (their work added)."""
+    is all a plan computed without the radius has), else the albedo maps computed by the core without radius or
+    specular (their work added)."""
     from .plan import make_plan
 
     if plan is None:
@@ -569,7 +570,8 @@ def _decided_plan(settings: Any, effects: list[dict[str, Any]], progress: Any,
             albedo = plan["albedo"]
             plan["summary"]["albedo"] = albedo
         else:
-            burley = make_plan(settings.replace(method="BURLEY"), progress)
+            # The albedo alone: no radius fit, no specular (the core's maps(outputs=["albedo"])).
+            burley = make_plan(settings.replace(method="BURLEY"), progress, radius=False, specular=False)
             plan["work"] = sum_work([plan["work"], burley["work"]])
             if burley["base_color"] is not None:
                 albedo = burley["base_color"]

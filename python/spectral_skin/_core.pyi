@@ -53,6 +53,7 @@ _Parameter = Literal["melanin", "melanin_blend", "hemoglobin", "oiliness"]
 _RgbMapping = Literal["linear", "non_negative"]
 _Boundaries = Literal["paper", "capped"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
+_MapOutputName = Literal["albedo", "radius", "specular"]
 
 class SpectralSkinError(ValueError):
     """Invalid input to spectral-skin.
@@ -191,7 +192,7 @@ class _SpecularMapConstants(TypedDict):
     beckmann_m: float
 
 class _Maps(TypedDict, total=False):
-    """The result of :func:`maps` (``specular_ior_level`` only when the oiliness varies)."""
+    """The result of :func:`maps`: the outputs asked for (``specular_ior_level`` only when the oiliness varies)."""
 
     base_color: _Float32Array
     radius_mm: _Float32Array
@@ -207,6 +208,7 @@ def maps(
     hemoglobin: _MapArray | float | None = None,
     oiliness: _MapArray | float | None = None,
     method: _Method | str = "burley",
+    outputs: Iterable[_MapOutputName | str] | None = None,
     exact: bool = False,
     clamp: bool = False,
     accuracy: _AccuracyLevel | str = "default",

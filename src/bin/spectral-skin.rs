@@ -15,7 +15,9 @@ use spectral_skin::maps::example::{write_example_params, ExampleKind};
 use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource, Precision};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
 use spectral_skin::skin::params::{ParamSpec, HEMOGLOBIN, MELANIN, MELANIN_BLEND, OILINESS, PARAMS};
-use spectral_skin::{evaluate, AccuracyLevel, Evaluation, Outputs, Request, SkinError, SkinParams, PRESETS};
+use spectral_skin::{
+    evaluate, AccuracyLevel, Evaluation, MaterialOutput, Outputs, Request, SkinError, SkinParams, PRESETS,
+};
 
 #[derive(Parser)]
 #[command(
@@ -137,6 +139,11 @@ struct MapsArgs {
     /// Evaluate every texel directly instead of through the lookup table.
     #[arg(long)]
     exact: bool,
+    /// The maps to compute, comma-separated: albedo (Base Color: albedo.exr), radius (radius.exr), specular
+    /// (specular.exr when the oiliness varies). Without radius no radius is fitted and Base Color is the albedo
+    /// whatever the method (a material without subsurface); without specular no specular input is computed.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "albedo,radius,specular")]
+    outputs: Vec<MaterialOutput>,
     /// Clamp NaN, infinite and out-of-range texels (and report them) instead of failing.
     #[arg(long)]
     clamp: bool,
@@ -372,7 +379,7 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         table_cache: if args.no_cache { None } else { spectral_skin::maps::lut::default_cache_dir() },
         ..MapSettings::default()
     };
-    settings.request = Request { target, ..args.accuracy.request(Outputs::material()) };
+    settings.request = Request { target, ..args.accuracy.request(Outputs::of_material(&args.outputs)) };
     let exr = ExrOptions { precision: args.precision, compression: args.compression };
     // A progress bar for work that lasts over a second (hidden until then).
     let bar = ProgressBar::hidden();

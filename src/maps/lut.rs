@@ -42,6 +42,13 @@ impl TexelMaterial {
         Ok(TexelMaterial { albedo: f(m.albedo), base_color: f(p.base_color), radius_mm: f(p.subsurface_radius_mm) })
     }
 
+    /// A material computed without its radius (`Prepared::albedo`): Base Color is the albedo (that of a material
+    /// without subsurface, whatever the method) and the radius is zero (not computed).
+    pub fn albedo_only(albedo: [f64; 3]) -> Self {
+        let a = albedo.map(|x| x as f32);
+        TexelMaterial { albedo: a, base_color: a, radius_mm: [0.0; 3] }
+    }
+
     fn to_array(self) -> [f32; STORED] {
         let mut a = [0.0; STORED];
         a[0..3].copy_from_slice(&self.albedo);
@@ -168,6 +175,9 @@ fn unwarp(u: f64, max: f64) -> f64 {
 pub struct MaterialTable {
     resolution: TableResolution,
     method: SubsurfaceMethod,
+    /// Whether the nodes hold the method's radius and Base Color; false: an albedo-only table (no radius fit at any
+    /// node; Base Color is the albedo, the radius zero: [`TexelMaterial::albedo_only`]).
+    radius: bool,
     /// ln of the 9 outputs per node; node (i, j, k) at ((i * nb) + j) * nh + k.
     log_values: Vec<[f32; STORED]>,
     /// The method's part of `log_values` (ln Base Color in lanes 0..3, ln radius in 3..6, two lanes of padding), laid
@@ -198,6 +208,19 @@ impl MaterialTable {
         cancel: &AtomicBool,
         tick: Option<&(dyn Fn() + Sync)>,
     ) -> Result<MaterialTable, SkinError> {
+        MaterialTable::build_outputs(prepared, method, resolution, true, cancel, tick)
+    }
+
+    /// [`MaterialTable::build_cancellable`] of a full table (`radius`) or of an albedo-only one, whose nodes cost
+    /// one transform value per wavelength each and no radius fit.
+    pub fn build_outputs(
+        prepared: &Prepared,
+        method: SubsurfaceMethod,
+        resolution: TableResolution,
+        radius: bool,
+        cancel: &AtomicBool,
+        tick: Option<&(dyn Fn() + Sync)>,
+    ) -> Result<MaterialTable, SkinError> {
         resolution.validate()?;
         prepared.request().target.method_entry(method)?;
         let r = resolution;
@@ -213,17 +236,26 @@ impl MaterialTable {
                     tick();
                 }
                 let p = node_params(r, n);
-                let m = prepared.material(&p)?;
-                Ok(TexelMaterial::of(&m, method)?.to_array().map(stored_log))
+                Ok(texel_material(prepared, &p, method, radius)?.to_array().map(stored_log))
             })
             .collect::<Result<Vec<_>, SkinError>>()?;
-        Ok(MaterialTable::new(resolution, method, log_values))
+        Ok(MaterialTable::new(resolution, method, radius, log_values))
     }
 
-    fn new(resolution: TableResolution, method: SubsurfaceMethod, log_values: Vec<[f32; STORED]>) -> MaterialTable {
+    fn new(
+        resolution: TableResolution,
+        method: SubsurfaceMethod,
+        radius: bool,
+        log_values: Vec<[f32; STORED]>,
+    ) -> MaterialTable {
         let method_logs =
             log_values.iter().map(|v| std::array::from_fn(|q| if q < 6 { v[3 + q] } else { 0.0 })).collect();
-        MaterialTable { resolution, method, log_values, method_logs }
+        MaterialTable { resolution, method, radius, log_values, method_logs }
+    }
+
+    /// Whether the table holds the method's radius (false: an albedo-only table).
+    pub fn has_radius(&self) -> bool {
+        self.radius
     }
 
     /// The method the table holds.
@@ -333,12 +365,26 @@ impl MaterialTable {
         cancel: &AtomicBool,
         tick: Option<&(dyn Fn() + Sync)>,
     ) -> Result<(MaterialTable, bool), SkinError> {
-        let key = cache_key(prepared, method, resolution);
+        MaterialTable::load_or_build_outputs(prepared, method, resolution, true, cache_dir, cancel, tick)
+    }
+
+    /// [`MaterialTable::load_or_build_cancellable`] of a full table (`radius`) or of an albedo-only one (see
+    /// [`MaterialTable::build_outputs`]; the two are cached under different keys).
+    pub fn load_or_build_outputs(
+        prepared: &Prepared,
+        method: SubsurfaceMethod,
+        resolution: TableResolution,
+        radius: bool,
+        cache_dir: Option<&Path>,
+        cancel: &AtomicBool,
+        tick: Option<&(dyn Fn() + Sync)>,
+    ) -> Result<(MaterialTable, bool), SkinError> {
+        let key = cache_key(prepared, method, resolution, radius);
         let path = cache_dir.map(|d| d.join(format!("table-{key:016x}.bin")));
         if let Some(table) = path.as_deref().and_then(|p| MaterialTable::read(p, method, resolution)) {
-            return Ok((table, true));
+            return Ok((MaterialTable { radius, ..table }, true));
         }
-        let table = MaterialTable::build_cancellable(prepared, method, resolution, cancel, tick)?;
+        let table = MaterialTable::build_outputs(prepared, method, resolution, radius, cancel, tick)?;
         if let Some(p) = &path {
             // A cache that cannot be written is no error: the table is still good.
             if std::fs::create_dir_all(p.parent().unwrap_or(Path::new("."))).is_ok() {
@@ -401,7 +447,7 @@ impl MaterialTable {
             return None;
         }
         let log_values = floats.chunks(STORED).map(|c| std::array::from_fn(|q| c[q])).collect();
-        Some(MaterialTable::new(resolution, method, log_values))
+        Some(MaterialTable::new(resolution, method, true, log_values))
     }
 }
 
@@ -422,16 +468,31 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 /// FNV-1a hash of everything the table depends on: crate version, request (accuracy, model, working space, target),
-/// method and resolution. Stable across runs and platforms.
-fn cache_key(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableResolution) -> u64 {
+/// method (or "albedo only" for a table without radius, which no method changes) and resolution. Stable across runs
+/// and platforms.
+fn cache_key(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableResolution, radius: bool) -> u64 {
     let text = format!(
         "{}|{}|{}|{:?}",
         env!("CARGO_PKG_VERSION"),
         serde_json::to_string(prepared.request()).unwrap_or_default(),
-        method.name(),
+        if radius { method.name() } else { "albedo only" },
         resolution
     );
     fnv1a(text.as_bytes())
+}
+
+/// The material at `p` for a table of `method`: the full material (`radius`), or the albedo alone.
+fn texel_material(
+    prepared: &Prepared,
+    p: &SkinParams,
+    method: SubsurfaceMethod,
+    radius: bool,
+) -> Result<TexelMaterial, SkinError> {
+    if radius {
+        TexelMaterial::of(&prepared.material(p)?, method)
+    } else {
+        Ok(TexelMaterial::albedo_only(prepared.albedo(p)?))
+    }
 }
 
 /// The per-user cache folder: `$SPECTRAL_SKIN_CACHE_DIR` if set and not empty, else `spectral-skin` in the
@@ -458,7 +519,8 @@ fn node_params(r: TableResolution, n: usize) -> SkinParams {
     }
 }
 
-/// Worst relative error of the table against direct evaluation.
+/// Worst relative error of the table against direct evaluation (an albedo-only table's radius error is 0: it has
+/// none).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
 pub struct TableError {
     pub samples: usize,
@@ -526,15 +588,13 @@ pub fn measure_error_cancellable(
                 return Err(interrupted("table check"));
             }
             let p = check_point_params(*u);
-            let exact = TexelMaterial::of(&prepared.material(&p)?, table.method)?;
+            let exact = texel_material(prepared, &p, table.method, table.radius)?;
             let approx = table.lookup(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
             let rel =
                 |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| ((a[c] - b[c]) / b[c]).abs() as f64).fold(0.0, f64::max);
-            Ok([
-                rel(approx.albedo, exact.albedo),
-                rel(approx.radius_mm, exact.radius_mm),
-                rel(approx.base_color, exact.base_color),
-            ])
+            // An albedo-only table has no radius to be wrong about.
+            let radius = if table.radius { rel(approx.radius_mm, exact.radius_mm) } else { 0.0 };
+            Ok([rel(approx.albedo, exact.albedo), radius, rel(approx.base_color, exact.base_color)])
         })
         .collect::<Result<Vec<_>, SkinError>>()?;
     let max = |q: usize| errors.iter().map(|e| e[q]).fold(0.0, f64::max);

@@ -56,7 +56,10 @@ pub struct MapSettings {
     pub table_check_samples: usize,
     /// Folder where built tables are kept for later runs (None: always build). See `lut::default_cache_dir`.
     pub table_cache: Option<PathBuf>,
-    /// Accuracy, model and working space; its `outputs` are ignored (maps need albedo, radius and specular).
+    /// Accuracy, model and working space; its `outputs` say which maps are computed: `albedo` (Base Color),
+    /// `radius` (Subsurface Radius) and `specular` (its other outputs are ignored). Without `radius` no radius is fitted
+    /// anywhere and Base Color is the albedo, whatever the method (the Base Color of a material without subsurface);
+    /// without `specular` no specular input is computed. The default asks for all three.
     pub request: Request,
 }
 
@@ -92,6 +95,8 @@ pub enum Strategy {
     Exact {
         evaluations: usize,
     },
+    /// Neither Base Color nor radius was asked for: no material was evaluated.
+    None,
 }
 
 /// Texels that were out of range, NaN or infinite, per parameter (counted whether or not they were clamped).
@@ -117,16 +122,16 @@ pub enum SpecularOutput {
     },
 }
 
-/// Everything a map run computed, before it is written.
+/// Everything a map run computed, before it is written; an output not asked for (`MapSettings::request`) is None.
 #[derive(Debug, Clone)]
 pub struct MapResult {
     pub width: usize,
     pub height: usize,
-    /// Principled Base Color for the chosen method and target, linear RGB planes.
-    pub base_color: [Vec<f32>; 3],
+    /// Principled Base Color for the chosen method and target, linear RGB planes (without the radius: the albedo).
+    pub base_color: Option<[Vec<f32>; 3]>,
     /// Principled Subsurface Radius x Scale for the chosen method and target, mm, RGB planes.
-    pub radius_mm: [Vec<f32>; 3],
-    pub specular: SpecularOutput,
+    pub radius_mm: Option<[Vec<f32>; 3]>,
+    pub specular: Option<SpecularOutput>,
     pub report: MapReport,
 }
 
@@ -149,8 +154,9 @@ pub struct MapReport {
     pub seconds: Timings,
 }
 
-/// The work of a map run. Every direct evaluation and every table node built is one full material (albedo and the
-/// Burley fit of the Subsurface Radius, three channel fits); a table lookup interpolates nodes.
+/// The work of a map run. Every direct evaluation and every table node built is one material: the albedo, and when
+/// the radius is asked for the Burley fit of the Subsurface Radius (three channel fits); a table lookup interpolates
+/// nodes.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct MapWork {
     /// Texels of each output map.
@@ -162,15 +168,17 @@ pub struct MapWork {
     pub table_nodes_built: usize,
     /// Texels interpolated from the table.
     pub table_lookups: usize,
-    /// Burley fits of the Subsurface Radius (one per RGB channel of each evaluation and each node built).
+    /// Burley fits of the Subsurface Radius (one per RGB channel of each evaluation and each node built; 0 without
+    /// the radius output).
     pub radius_fits: usize,
-    /// Specular inputs computed from an oiliness: 1 when it is one value, one per texel when it varies.
+    /// Specular inputs computed from an oiliness: 1 when it is one value, one per texel when it varies (0 without the
+    /// specular output).
     pub specular_evaluations: usize,
     /// Texels produced per output.
     pub outputs: OutputTexels,
 }
 
-/// Texels produced per output map (0: the output is not a map).
+/// Texels produced per output map (0: the output is not a map, or was not asked for).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct OutputTexels {
     pub base_color: usize,
@@ -275,26 +283,40 @@ pub fn compute_maps_cancellable(
     settings.request.target.method_entry(method)?;
     let n = image.texel_count();
     let [m, b, hb, oil] = &image.planes;
+    let wanted = settings.request.outputs;
+    let fit_radius = wanted.radius;
     let evaluate_one = |t: [f32; 3]| -> Result<TexelMaterial, SkinError> {
         // Texels passed `check_planes` in f32; widening can step just past a bound (0.1f32 > 0.1), so round back in.
         let v = |k: usize| (t[k] as f64).clamp(PARAM_RANGES[k].0, PARAM_RANGES[k].1);
         let p = SkinParams::new(v(0), v(1), v(2), 0.0)?;
-        TexelMaterial::of(&prepared.material(&p)?, method)
+        if fit_radius {
+            TexelMaterial::of(&prepared.material(&p)?, method)
+        } else {
+            Ok(TexelMaterial::albedo_only(prepared.albedo(&p)?))
+        }
     };
     let tuple = |i: usize| [m.value(i), b.value(i), hb.value(i)];
 
-    let mut base_color = [vec![0f32; n], vec![0f32; n], vec![0f32; n]];
-    let mut radius = [vec![0f32; n], vec![0f32; n], vec![0f32; n]];
+    // The radius plane is filled only when asked for; Base Color whenever a material is evaluated (the radius needs
+    // the albedo) and kept only when asked for.
+    let needs_material = wanted.albedo || wanted.radius;
+    let planes = |wanted: bool| if wanted { [vec![0f32; n], vec![0f32; n], vec![0f32; n]] } else { Default::default() };
+    let mut base_color = planes(needs_material);
+    let mut radius = planes(fit_radius);
     let select = |t: &TexelMaterial| (t.base_color, t.radius_mm);
 
     let all_constant = uniform_value(m).is_some() && uniform_value(b).is_some() && uniform_value(hb).is_some();
     let mut work = MapWork { texels: n, ..MapWork::default() };
-    let strategy = if all_constant {
+    let strategy = if !needs_material {
+        Strategy::None
+    } else if all_constant {
         work.evaluations = 1;
         let (c, r) = select(&evaluate_one(tuple(0))?);
         for k in 0..3 {
             base_color[k].fill(c[k]);
-            radius[k].fill(r[k]);
+            if fit_radius {
+                radius[k].fill(r[k]);
+            }
         }
         Strategy::Constant
     } else if let Some(tuples) = distinct_tuples(image, MAX_DISTINCT_TUPLES) {
@@ -331,7 +353,9 @@ pub fn compute_maps_cancellable(
             for (x, (c, r)) in row?.into_iter().enumerate() {
                 for k in 0..3 {
                     base_color[k][y * w + x] = c[k];
-                    radius[k][y * w + x] = r[k];
+                    if fit_radius {
+                        radius[k][y * w + x] = r[k];
+                    }
                 }
             }
         }
@@ -340,10 +364,12 @@ pub fn compute_maps_cancellable(
     } else {
         let build = Instant::now();
         let tick = progress.map(|p| move || p(0, n));
-        let (table, from_cache) = MaterialTable::load_or_build_cancellable(
+        // Without the radius the table holds the albedo alone: its nodes fit no radius.
+        let (table, from_cache) = MaterialTable::load_or_build_outputs(
             &prepared,
             method,
             settings.table,
+            fit_radius,
             settings.table_cache.as_deref(),
             cancel,
             tick.as_ref().map(|t| t as &(dyn Fn() + Sync)),
@@ -366,11 +392,16 @@ pub fn compute_maps_cancellable(
         Strategy::Table { resolution, nodes, from_cache, build_seconds, measured_error }
     };
 
-    // Every evaluation and every node built is a material with its three channel fits (`Prepared::material`).
-    work.radius_fits = 3 * (work.evaluations + work.table_nodes_built);
-    work.outputs.base_color = n;
-    work.outputs.radius = n;
-    let specular = match (uniform_value(oil), oil) {
+    // With the radius, every evaluation and every node built is a material with its three channel fits
+    // (`Prepared::material`); without it, the albedo alone (`Prepared::albedo`).
+    if fit_radius {
+        work.radius_fits = 3 * (work.evaluations + work.table_nodes_built);
+        work.outputs.radius = n;
+    }
+    if wanted.albedo {
+        work.outputs.base_color = n;
+    }
+    let specular = wanted.specular.then(|| match (uniform_value(oil), oil) {
         (Some(v), _) => SpecularOutput::Constant(specular_from_oiliness(v as f64)),
         (None, Plane::Constant(_)) => unreachable!("a constant plane is uniform"),
         (None, Plane::Texels(values)) => {
@@ -379,10 +410,11 @@ pub fn compute_maps_cancellable(
                 values.par_iter().map(|&o| specular_from_oiliness(o as f64).specular_ior_level as f32).collect();
             SpecularOutput::Map { specular_ior_level, constants: specular_from_oiliness(0.0) }
         }
-    };
+    });
     (work.specular_evaluations, work.outputs.specular) = match &specular {
-        SpecularOutput::Constant(_) => (1, 0),
-        SpecularOutput::Map { specular_ior_level, .. } => (specular_ior_level.len(), specular_ior_level.len()),
+        None => (0, 0),
+        Some(SpecularOutput::Constant(_)) => (1, 0),
+        Some(SpecularOutput::Map { specular_ior_level, .. }) => (specular_ior_level.len(), specular_ior_level.len()),
     };
 
     let constant_parameters =
@@ -401,7 +433,14 @@ pub fn compute_maps_cancellable(
         work,
         seconds: Timings { compute: start.elapsed().as_secs_f64(), ..Timings::default() },
     };
-    Ok(MapResult { width: w, height: h, base_color, radius_mm: radius, specular, report })
+    Ok(MapResult {
+        width: w,
+        height: h,
+        base_color: wanted.albedo.then_some(base_color),
+        radius_mm: fit_radius.then_some(radius),
+        specular,
+        report,
+    })
 }
 
 /// The plane's value if every texel holds the same one (a constant, or a map that is constant in fact).
@@ -429,7 +468,7 @@ fn distinct_tuples(image: &ParamImage, limit: usize) -> Option<HashMap<[u32; 3],
 }
 
 /// Fill the output planes row by row in parallel from a per-texel function; rows not started when `cancel` is set
-/// are skipped.
+/// are skipped. Empty radius planes (the radius not asked for) stay empty.
 fn fill_rows(
     width: usize,
     base_color: &mut [Vec<f32>; 3],
@@ -441,10 +480,21 @@ fn fill_rows(
     let total = base_color[0].len();
     let [c0, c1, c2] = base_color;
     let [r0, r1, r2] = radius;
+    // Without the radius its rows are empty slices, one per row of Base Color.
+    let with_radius = !r0.is_empty();
+    fn rows(plane: &mut [f32], width: usize, count: usize) -> Vec<&mut [f32]> {
+        if plane.is_empty() {
+            (0..count).map(|_| &mut [][..]).collect()
+        } else {
+            plane.chunks_mut(width).collect()
+        }
+    }
+    let count = total / width;
+    let (r0, r1, r2) = (rows(r0, width, count), rows(r1, width, count), rows(r2, width, count));
     c0.par_chunks_mut(width)
         .zip(c1.par_chunks_mut(width))
         .zip(c2.par_chunks_mut(width))
-        .zip(r0.par_chunks_mut(width).zip(r1.par_chunks_mut(width)).zip(r2.par_chunks_mut(width)))
+        .zip(r0.into_par_iter().zip(r1.into_par_iter()).zip(r2.into_par_iter()))
         .enumerate()
         .for_each(|(y, (((c0, c1), c2), ((r0, r1), r2)))| {
             if cancel.load(Ordering::Relaxed) {
@@ -453,7 +503,9 @@ fn fill_rows(
             for x in 0..width {
                 let (c, r) = texel(y * width + x);
                 (c0[x], c1[x], c2[x]) = (c[0], c[1], c[2]);
-                (r0[x], r1[x], r2[x]) = (r[0], r[1], r[2]);
+                if with_radius {
+                    (r0[x], r1[x], r2[x]) = (r[0], r[1], r[2]);
+                }
             }
             if let Some(p) = progress {
                 p(width, total);
@@ -508,14 +560,14 @@ pub fn run_maps_cancellable(
     }
     let write_start = Instant::now();
     let specular_ior_level = match &result.specular {
-        SpecularOutput::Map { specular_ior_level, .. } => Some(specular_ior_level.as_slice()),
-        SpecularOutput::Constant(_) => None,
+        Some(SpecularOutput::Map { specular_ior_level, .. }) => Some(specular_ior_level.as_slice()),
+        Some(SpecularOutput::Constant(_)) | None => None,
     };
     let files = MapFiles {
         width: result.width,
         height: result.height,
-        base_color: Some(&result.base_color),
-        radius_mm: Some(&result.radius_mm),
+        base_color: result.base_color.as_ref(),
+        radius_mm: result.radius_mm.as_ref(),
         specular_ior_level,
     };
     let mut staged = stage_map_files(out_dir, None, &files, exr)?;
@@ -528,7 +580,7 @@ pub fn run_maps_cancellable(
         .iter()
         .filter_map(|s| Some((s.target().file_name()?.to_string_lossy().into_owned(), s.compression()?)))
         .collect();
-    let sidecar = sidecar_json(&report, inputs, &result.specular, exr, &compressions);
+    let sidecar = sidecar_json(&report, inputs, &result, exr, &compressions);
     staged.push(stage_bytes(&out_dir.join(SIDECAR_FILE), sidecar.as_bytes())?);
     if cancel.load(Ordering::Relaxed) {
         // Dropping the staged files deletes them.
@@ -624,7 +676,7 @@ pub fn commit_map_files(out_dir: &Path, prefix: Option<&str>, staged: Vec<Staged
 fn sidecar_json(
     report: &MapReport,
     inputs: &ParamInputs,
-    specular: &SpecularOutput,
+    result: &MapResult,
     exr: ExrOptions,
     compressions: &[(String, Compression)],
 ) -> String {
@@ -646,19 +698,23 @@ fn sidecar_json(
             ))
             .collect::<HashMap<_, _>>()),
     };
-    let mut outputs = serde_json::json!({
-        ALBEDO_FILE: {"channels": ["R", "G", "B"], "meaning": "Principled BSDF Base Color", "units": "reflectance",
-                      "color_space": report.color_space},
-        RADIUS_FILE: {"channels": ["R", "G", "B"], "meaning": "Principled BSDF Subsurface Radius x Subsurface Scale",
-                      "units": "mm", "color_space": "Non-Color"},
-    });
-    match specular {
-        SpecularOutput::Map { constants, .. } => {
+    let mut outputs = serde_json::json!({});
+    if result.base_color.is_some() {
+        outputs[ALBEDO_FILE] = serde_json::json!({"channels": ["R", "G", "B"], "meaning": "Principled BSDF Base Color",
+            "units": "reflectance", "color_space": report.color_space});
+    }
+    if result.radius_mm.is_some() {
+        outputs[RADIUS_FILE] = serde_json::json!({"channels": ["R", "G", "B"],
+            "meaning": "Principled BSDF Subsurface Radius x Subsurface Scale", "units": "mm", "color_space": "Non-Color"});
+    }
+    match &result.specular {
+        None => {}
+        Some(SpecularOutput::Map { constants, .. }) => {
             outputs[SPECULAR_FILE] = serde_json::json!({"channels": ["Y"],
                 "meaning": "Principled Specular IOR Level", "units": "dimensionless", "color_space": "Non-Color",
                 "roughness": constants.roughness, "ior": constants.ior});
         }
-        SpecularOutput::Constant(s) => outputs["specular_constants"] = serde_json::json!(s),
+        Some(SpecularOutput::Constant(s)) => outputs["specular_constants"] = serde_json::json!(s),
     }
     for (file, compression) in compressions {
         if outputs[file.as_str()].is_object() {

@@ -22,7 +22,10 @@ use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
 use super::errors::{internal, invalid};
 
 /// The Outputs the material path needs: the default of `evaluate(outputs=...)`.
-pub(super) const MATERIAL_OUTPUTS: [&str; 3] = ["albedo", "radius", "specular"];
+/// The outputs `maps` computes, by their names (the core's [`crate::MaterialOutput`]).
+pub(super) fn material_outputs() -> Vec<String> {
+    crate::ALL_MATERIAL_OUTPUTS.iter().map(serde_name).collect()
+}
 
 /// A TypeError if `obj` is a str or bytes where a sequence is expected (strings are iterable, so they would
 /// otherwise be read character by character).
@@ -124,7 +127,7 @@ pub(super) fn by_name<T: Serialize + Copy>(what: &str, name: &str, candidates: &
 /// Names in `outputs` (an iterable of str) to [`Outputs`]; the valid names are `Outputs`' field names.
 pub(super) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Outputs> {
     let names: Vec<String> = match outputs {
-        None => MATERIAL_OUTPUTS.iter().map(|s| s.to_string()).collect(),
+        None => material_outputs(),
         Some(obj) => {
             reject_string(obj, "outputs must be an iterable of output names")?;
             obj.try_iter()?.map(|item| item?.extract::<String>()).collect::<PyResult<_>>()?

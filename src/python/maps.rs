@@ -24,8 +24,8 @@ use crate::maps::pipeline::{
 use crate::Outputs;
 
 use super::convert::{
-    by_name, count_sequence, float_array, is_boolean, real_arg, shape_text, target_from, to_py, type_name, FloatArray,
-    Knobs,
+    by_name, count_sequence, float_array, is_boolean, material_outputs, parse_outputs, real_arg, shape_text,
+    target_from, to_py, type_name, FloatArray, Knobs,
 };
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
@@ -257,6 +257,11 @@ pub(super) fn read_parameter_map_py<'py>(
 ///         "random_walk_legacy" (Blender 5.2 and later only) or "random_walk_skin".
 ///     blender, engine: the target, as for :func:`evaluate`; the radius (and for the random walks Base Color) is
 ///         computed for it per texel (for EEVEE from each texel's own albedo).
+///     outputs: the maps to compute, names among "albedo" (Base Color), "radius" (Subsurface Radius) and
+///         "specular" (the specular inputs); None (the default) is all three. Without "radius" no radius is fitted
+///         (``report["work"]["radius_fits"]`` is 0, a table holds the albedo alone) and Base Color is the albedo,
+///         whatever the method (the Base Color of a material without subsurface); without "specular" no specular
+///         input is computed. An output not asked for is absent from the result.
 ///     exact: evaluate every texel (or distinct tuple) directly, never the table.
 ///     clamp: clamp NaN (to the minimum), infinite and out-of-range values into range and count them in
 ///         ``report["clamped"]``, instead of raising. The input arrays are not modified.
@@ -284,17 +289,19 @@ pub(super) fn read_parameter_map_py<'py>(
 ///
 /// Returns:
 ///     A dict:
-///     "base_color": float32 (H, W, 3), Principled Base Color for ``method``, linear RGB in ``working_space``;
-///     "radius_mm": float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for ``method``, mm (with
-///     Radius set to these values, Scale is 0.001 in a scene whose unit is the metre);
-///     "specular": the specular constants, always: when the oiliness is one value everywhere (a float, or an
+///     "base_color" (with "albedo"): float32 (H, W, 3), Principled Base Color for ``method`` (without "radius": the
+///     albedo), linear RGB in ``working_space``;
+///     "radius_mm" (with "radius"): float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for
+///     ``method``, mm (with Radius set to these values, Scale is 0.001 in a scene whose unit is the metre);
+///     "specular" (with "specular"): the specular constants: when the oiliness is one value everywhere (a float, or an
 ///     array of one value), {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
 ///     "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``); when it varies, the
 ///     ones that do not depend on it: {"roughness", "ior", "beckmann_m"} (Principled IOR is 1.4 everywhere);
-///     "specular_ior_level": only when the oiliness varies, float32 (H, W): Principled Specular IOR Level per texel;
+///     "specular_ior_level": only with "specular" and when the oiliness varies, float32 (H, W): Principled Specular IOR Level per texel;
 ///     "report": what was done: {"crate_version", "width", "height", "method", "target" ({"blender", "engine",
 ///     "tested"}), "color_space", "strategy" ({"name":
-///     "constant" | "distinct_tuples" | "table" | "exact", with its figures: "tuples"; "evaluations"; or
+///     "constant" | "distinct_tuples" | "table" | "exact" | "none" (neither Base Color nor radius asked for), with
+///     its figures: "tuples"; "evaluations"; or
 ///     "resolution", "nodes", "from_cache", "build_seconds", "measured_error"}), "clamped" (one dict per parameter
 ///     with bad values: {"parameter", "nan", "infinite", "out_of_range", "first": [[x, y], ...]}),
 ///     "constant_parameters", "request" (accuracy and model), "work" ({"texels", "evaluations",
@@ -323,7 +330,7 @@ pub(super) fn read_parameter_map_py<'py>(
     name = "maps",
     signature = (
         params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
-        method = "burley", exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
+        method = "burley", outputs = None, exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
         wavelength_placement = None,
         working_space = "Linear Rec.709", table_resolution = None, table_cache = true, blender = None,
         engine = "cycles", progress = None, boundaries = "paper"
@@ -338,6 +345,7 @@ pub(super) fn maps_py<'py>(
     hemoglobin: Option<&Bound<'py, PyAny>>,
     oiliness: Option<&Bound<'py, PyAny>>,
     method: &str,
+    outputs: Option<&Bound<'py, PyAny>>,
     exact: bool,
     clamp: bool,
     accuracy: &str,
@@ -373,7 +381,7 @@ pub(super) fn maps_py<'py>(
         clamp,
         table: self::table_resolution(table_resolution)?,
         table_cache: if table_cache { crate::maps::lut::default_cache_dir() } else { None },
-        request: knobs.request(Outputs::material())?,
+        request: knobs.request(map_outputs(outputs)?)?,
         ..MapSettings::default()
     };
 
@@ -462,9 +470,9 @@ pub(super) fn maps_py<'py>(
 
     // Check, compute and interleave with the GIL released.
     struct Computed {
-        base_color: Vec<f32>,
-        radius_mm: Vec<f32>,
-        specular: SpecularOutput,
+        base_color: Option<Vec<f32>>,
+        radius_mm: Option<Vec<f32>>,
+        specular: Option<SpecularOutput>,
         report: crate::maps::MapReport,
     }
     let hook = progress.as_ref();
@@ -492,9 +500,9 @@ pub(super) fn maps_py<'py>(
         }
         let mut result = computed?;
         let write = Instant::now();
-        let base_color = interleave(width, std::mem::take(&mut result.base_color));
-        let radius_mm = interleave(width, std::mem::take(&mut result.radius_mm));
-        let specular = result.specular;
+        let base_color = result.base_color.take().map(|p| interleave(width, p));
+        let radius_mm = result.radius_mm.take().map(|p| interleave(width, p));
+        let specular = result.specular.take();
         let mut report = result.report;
         report.clamped = clamped;
         report.seconds.read = read;
@@ -506,10 +514,15 @@ pub(super) fn maps_py<'py>(
     };
 
     let dict = PyDict::new(py);
-    dict.set_item("base_color", rgb_image(py, height, width, computed.base_color)?)?;
-    dict.set_item("radius_mm", rgb_image(py, height, width, computed.radius_mm)?)?;
+    if let Some(base_color) = computed.base_color {
+        dict.set_item("base_color", rgb_image(py, height, width, base_color)?)?;
+    }
+    if let Some(radius_mm) = computed.radius_mm {
+        dict.set_item("radius_mm", rgb_image(py, height, width, radius_mm)?)?;
+    }
     match computed.specular {
-        SpecularOutput::Map { specular_ior_level, constants } => {
+        None => {}
+        Some(SpecularOutput::Map { specular_ior_level, constants }) => {
             dict.set_item(
                 "specular_ior_level",
                 PyArray::from_owned_array(
@@ -525,7 +538,7 @@ pub(super) fn maps_py<'py>(
             }
             dict.set_item("specular", kept)?
         }
-        SpecularOutput::Constant(constants) => dict.set_item("specular", to_py(py, &constants)?)?,
+        Some(SpecularOutput::Constant(constants)) => dict.set_item("specular", to_py(py, &constants)?)?,
     }
     let mut report = computed.report;
     report.seconds.total = start.elapsed().as_secs_f64();
@@ -664,4 +677,19 @@ pub(super) fn write_maps_py<'py>(
         }
     }
     Ok(dict)
+}
+
+/// The maps `maps(outputs=...)` asks for: names among the material outputs ("albedo", "radius", "specular"), at
+/// least one; None is all three.
+fn map_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Outputs> {
+    let parsed = parse_outputs(outputs)?;
+    let material =
+        Outputs { albedo: parsed.albedo, radius: parsed.radius, specular: parsed.specular, ..Outputs::default() };
+    if parsed != material || material == Outputs::default() {
+        return Err(invalid(
+            "outputs",
+            format!("maps computes {}: give one or more of them (or None for all)", material_outputs().join(", ")),
+        ));
+    }
+    Ok(material)
 }

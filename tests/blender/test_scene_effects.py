@@ -172,9 +172,16 @@ def test_batch_decides_as_the_operator(addon, tmp_path):
     headless = {name: json.loads(json.dumps(plan["effects"], default=float)) for name, plan in plans.items()}
     sidecar = json.loads(pathlib.Path(batch.sidecar_path(str(tmp_path / "out.blend"))).read_text())
     assert {name: entry["effects"] for name, entry in sidecar.items()} == headless
+    # The core's work, as stored on each material: far (subsurface dropped before computing) fitted no radius, close
+    # (specular forced off) computed no specular input.
+    for name in ("Far", "Close"):
+        assert sidecar[name]["work"] == plans[name]["work"] == stored_work(bpy.data.materials[name]), name
+    assert sidecar["Far"]["work"]["radius_fits"] == 0 and sidecar["Close"]["work"]["radius_fits"] == 3
+    assert sidecar["Close"]["work"]["specular_evaluations"] == 0
     bpy.ops.wm.open_mainfile(filepath=str(source))
     for name in ("Far", "Close"):
         assert bpy.ops.spectral_skin.apply(material=name) == {"FINISHED"}
+        assert stored_work(bpy.data.materials[name]) == sidecar[name]["work"], name
         # The operator reads the parameters from the material's float32 properties, the batch from the preset: the
         # decisions are identical, the figures equal to float32 precision.
         operator = stored_effects(bpy.data.materials[name])

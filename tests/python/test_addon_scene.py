@@ -360,15 +360,26 @@ def test_dropped_effects_are_not_computed():
         forced["effects"], "subsurface")["reason"]
 
 
-def test_dropped_effects_with_maps_are_not_kept(tmp_path):
-    """With maps the core computes every output (spectral_skin.maps has no output choice yet); the plan keeps no
-    radius and no specular texture when both are dropped, and records the core's work."""
-    hemoglobin = core.ParameterMap(np.linspace(0.001, 0.05, 16, dtype=np.float32).reshape(4, 4), False)
+@pytest.mark.parametrize("method", ["BURLEY", "RANDOM_WALK"])
+def test_dropped_effects_with_maps_are_not_kept(tmp_path, method):
+    """With maps, effects dropped before computing are not computed: a far map-based material gets no radius fit and
+    no specular input from the core (``spectral_skin.maps(outputs=["albedo"])``), keeps no radius and no specular
+    texture, and its Base Color texture is the albedo whatever the method (evaluate()'s, texel by texel)."""
+    levels = np.linspace(0.001, 0.05, 16, dtype=np.float32).reshape(4, 4)
+    hemoglobin = core.ParameterMap(levels, False)
     settings = core.SkinSettings.from_preset("caucasian", maps={"hemoglobin": hemoglobin}, oiliness=0.0,
-                                             output_dir=str(tmp_path))
+                                             output_dir=str(tmp_path), method=method)
     plan = scene.scene_plan(settings, _facts(1e4))
     assert set(plan["textures"]) == {"albedo"} and plan["radius"] is None
-    assert plan["work"]["texels"] == 16 and plan["work"]["evaluations"] == 16
+    work = plan["work"]
+    assert work["texels"] == 16 and work["evaluations"] == 16
+    assert work["radius_fits"] == 0 and work["specular_evaluations"] == 0, work
+    assert work["outputs"] == {"base_color": 16, "radius": 0, "specular": 0}, work
+    assert plan["specular_ior_level"] == 0.0 and plan["roughness"] > 0.0
+    c = settings.constants()
+    albedo = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], float(levels.flat[5]), 0.0,
+                                    outputs=("albedo",))["diffuse_reflectance_rgb"]
+    np.testing.assert_array_equal(np.asarray(plan["images"]["albedo"]).reshape(-1, 3)[5], np.float32(albedo))
 
 
 def test_thin_parts_of_a_thick_object_by_area():

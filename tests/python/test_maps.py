@@ -332,3 +332,38 @@ def test_table_cache_is_reused(tmp_path, monkeypatch):
     np.testing.assert_array_equal(first["base_color"], second["base_color"])
     fresh = spectral_skin.maps(params, table_resolution=small, table_cache=False)
     assert fresh["report"]["strategy"]["from_cache"] is False
+
+
+@pytest.mark.parametrize("exact", [True, False])
+def test_outputs_choice_computes_only_what_is_asked(exact):
+    """outputs=...: without "radius" no radius fit (report["work"]) and Base Color is evaluate()'s albedo, whatever the
+    method; without "specular" no specular input; what is kept equals the full run's."""
+    size = 6 if exact else 48  # 48 x 48 random texels: more distinct tuples than the core evaluates one by one
+    params = random_params(size, size, seed=3)
+    kwargs = {"exact": exact, "table_cache": False, "method": "random_walk"}
+    full = spectral_skin.maps(params, **kwargs)
+    assert full["report"]["work"]["radius_fits"] > 0
+    no_radius = spectral_skin.maps(params, outputs=("albedo", "specular"), **kwargs)
+    work = no_radius["report"]["work"]
+    assert work["radius_fits"] == 0 and work["outputs"]["radius"] == 0, work
+    assert "radius_mm" not in no_radius
+    np.testing.assert_array_equal(no_radius["specular_ior_level"], full["specular_ior_level"])
+    if exact:
+        for y, x in [(0, 0), (2, 5), (5, 3)]:
+            m, b, h, o = (float(v) for v in params[y, x])
+            albedo = spectral_skin.evaluate(m, b, h, o, outputs=("albedo",))["diffuse_reflectance_rgb"]
+            np.testing.assert_array_equal(no_radius["base_color"][y, x], np.float32(albedo))
+    else:
+        assert no_radius["report"]["strategy"]["name"] == "table"
+        assert work["table_nodes_built"] == full["report"]["work"]["table_nodes_built"] > 0
+    no_specular = spectral_skin.maps(params, outputs=("albedo", "radius"), **kwargs)
+    assert no_specular["report"]["work"]["specular_evaluations"] == 0
+    assert "specular" not in no_specular and "specular_ior_level" not in no_specular
+    np.testing.assert_array_equal(no_specular["base_color"], full["base_color"])
+    np.testing.assert_array_equal(no_specular["radius_mm"], full["radius_mm"])
+
+
+@pytest.mark.parametrize("outputs", [(), ("profile_rgb",), ("albedo", "spectrum")])
+def test_outputs_choice_rejects_what_maps_do_not_compute(outputs):
+    with pytest.raises(SpectralSkinError, match="maps computes albedo, radius, specular"):
+        spectral_skin.maps(random_params(2, 2), outputs=outputs)
