@@ -17,6 +17,7 @@ artist keys the group node's input sockets instead, which the shader follows.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 from typing import Any
 
 from .settings import ACCURACY_LEVELS, SkinSettings
@@ -34,11 +35,23 @@ def table_method(settings: SkinSettings, overrides: dict[str, str] | None) -> st
     return method_name(settings.method if kept(overrides, "subsurface") else "BURLEY")
 
 
+# Blender before 5.0 cuts ID names at 63 bytes; the group's images add " Base Color" (live.build_group).
+MAX_NAME = 63 - len(" Base Color")
+
+
 def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
     """The name of the node group (and the prefix of its two images) for the table a material needs: one per table
-    key (Blender version, engine, method, accuracy, working space), shared by the materials that need the same."""
-    return (f"Spectral Skin {settings.blender or 'current'} {settings.engine} {table_method(settings, overrides)} "
-            f"{settings.accuracy.lower()} {settings.working_space}")
+    key (Blender version, engine, method, accuracy, working space; the default accuracy and Linear Rec.709 left out),
+    shared by the materials that need the same. A name too long for Blender ends in a hash of the whole key."""
+    parts = [settings.blender or "current", settings.engine, table_method(settings, overrides)]
+    if settings.accuracy != "DEFAULT":
+        parts.append(settings.accuracy.lower())
+    if settings.working_space != "Linear Rec.709":
+        parts.append(settings.working_space.removeprefix("Linear "))
+    name = "Spectral Skin " + " ".join(parts)
+    if len(name) > MAX_NAME:
+        name = f"{name[:MAX_NAME - 7]} {hashlib.sha1(name.encode()).hexdigest()[:6]}"
+    return name
 
 
 def shader_table(settings: SkinSettings, overrides: dict[str, str] | None) -> dict[str, Any]:

@@ -75,11 +75,11 @@ def _centre(img: np.ndarray) -> np.ndarray:
     return img[16:48, 16:48].reshape(-1, 3).mean(axis=0)
 
 
-def _check(what: str, got: np.ndarray, expected: np.ndarray) -> float:
+def _check(what: str, got: np.ndarray, expected: np.ndarray, rtol: float = BOUND) -> float:
     rel = got / expected - 1.0
     print(f"\n[live] {what}: rendered {np.array2string(got, precision=6)} core "
           f"{np.array2string(expected, precision=6)} rel.err {np.array2string(rel * 100, precision=4)} %")
-    np.testing.assert_allclose(got, expected, rtol=BOUND, err_msg=what)
+    np.testing.assert_allclose(got, expected, rtol=rtol, err_msg=what)
     return float(np.abs(rel).max())
 
 
@@ -132,6 +132,18 @@ def _params() -> np.ndarray:
     return params
 
 
+def _painted(hemoglobin: np.ndarray, image=None):
+    """A float image Blender holds in memory only (as after painting), one row of haemoglobin values; or those values
+    painted over ``image``."""
+    if image is None:
+        image = bpy.data.images.new("Painted", width=len(hemoglobin), height=1, float_buffer=True)
+    rgba = np.ones((1, len(hemoglobin), 4), dtype=np.float32)
+    rgba[..., :3] = hemoglobin[None, :, None]
+    image.pixels.foreach_set(rgba.ravel())
+    image.update()
+    return image
+
+
 def _uv_slab():
     """The slab with a UV map putting the 4 texels across TEXEL_SPAN_M of its top (u = x / span + 1/2)."""
     slab = add_slab()
@@ -158,7 +170,7 @@ def _texels(scene, material) -> np.ndarray:
     return np.array([img[2:-2, k * 16 + 3 : (k + 1) * 16 - 3].reshape(-1, 3).mean(axis=0) for k in range(4)])
 
 
-@pytest.mark.parametrize("source", ["parameter exr", "painted haemoglobin"])
+@pytest.mark.parametrize("source", ["parameter exr", "painted haemoglobin", "png haemoglobin"])
 def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, source):
     scene = blender_scenes.reset_scene()
     set_world(scene, strength=1.0)
@@ -174,12 +186,20 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
         assert out.write_image(params), out.geterror()
         out.close()
         image = bpy.data.images.load(str(path))
+    elif source == "png haemoglobin":
+        # 8-bit greyscale: 0..255 onto [0, 0.1] (the core's reading; Blender's goes through the group's Math node).
+        params[0, :, 0], params[0, :, 1] = 0.05, 0.7
+        grey = np.array([[13, 51, 128, 255]], dtype=np.uint8)
+        params[0, :, 2] = grey[0] / 255.0 * 0.1
+        path = tmp_path / "hemoglobin.png"
+        out = oiio.ImageOutput.create(str(path))
+        assert out is not None and out.open(str(path), oiio.ImageSpec(4, 1, 1, "uint8")), oiio.geterror()
+        assert out.write_image(grey[:, :, None]), out.geterror()
+        out.close()
+        image = bpy.data.images.load(str(path))
     else:
         params[0, :, 0], params[0, :, 1] = 0.05, 0.7
-        image = bpy.data.images.new("Painted", width=4, height=1, float_buffer=True)
-        rgba = np.ones((1, 4, 4), dtype=np.float32)
-        rgba[..., :3] = params[0, :, 2][None, :, None]
-        image.pixels.foreach_set(rgba.ravel())
+        image = _painted(params[0, :, 2])
     materials = []
     for mode in ("LIVE", "BAKED"):
         material = _skin(mode.title(), mode, melanin=0.05, melanin_blend=0.7)
@@ -206,3 +226,76 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
         worst["live vs baked"] = max(worst["live vs baked"],
                                      _check(f"{source} texel {k} live vs baked", live[k], baked[k]))
     print(f"[live] {source}: worst |rel.err| " + ", ".join(f"{k} {v * 100:.3f} %" for k, v in worst.items()))
+    if source == "painted haemoglobin":
+        # Paint again, no Apply: the live material follows (the panel's acceptance path: paint, see).
+        params[0, :, 2] = params[0, ::-1, 2]
+        _painted(params[0, :, 2], image)
+        core = np.asarray(spectral_skin.maps(params, blender=tuple(bpy.app.version), engine="cycles",
+                                             method="burley")["base_color"], dtype=np.float64)[0]
+        repainted = _texels(scene, live_material)
+        for k in range(4):
+            _check(f"repainted texel {k} live, no Apply", repainted[k], core[k])
+
+
+def test_remove_restores_the_previous_shader_and_drops_the_packed_copies(addon, tmp_path):
+    scene = blender_scenes.reset_scene()
+    material = _skin("Skin", "LIVE")
+    tree = material.node_tree
+    tree.nodes.clear()
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    tree.links.new(diffuse.outputs["BSDF"], output.inputs["Surface"])
+    path = tmp_path / "params.exr"
+    spec = oiio.ImageSpec(4, 1, 4, "float")
+    spec.channelnames = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
+    out = oiio.ImageOutput.create(str(path))
+    assert out is not None and out.open(str(path), spec), oiio.geterror()
+    assert out.write_image(_params()), out.geterror()
+    out.close()
+    material.spectral_skin.params_map = bpy.data.images.load(str(path))
+    _apply(scene, material)
+    copies = [f"SpectralSkin Skin {p}" for p in ("melanin", "melanin_blend", "hemoglobin", "oiliness")]
+    assert all(bpy.data.images[name].packed_file is not None for name in copies)
+    assert bpy.ops.spectral_skin.remove(material="Skin") == {"FINISHED"}
+    assert not addon_nodes.tagged_nodes(tree)
+    assert output.inputs["Surface"].links[0].from_node == diffuse
+    assert not any(name in bpy.data.images for name in copies)
+
+
+def _eevee_id() -> str:
+    """This Blender's EEVEE engine id (test_eevee_edge.py)."""
+    ids = [i.identifier for i in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items]
+    return [i for i in ids if "EEVEE" in i][-1]
+
+
+@pytest.mark.skipif(tuple(bpy.app.version[:2]) < (4, 5), reason="bpy 4.2's EEVEE subsurface is not repeatable under "
+                    "Mesa llvmpipe (docs/blender-render-tests.md, EEVEE edge)")
+def test_live_in_eevee_renders_as_baked(addon):
+    """EEVEE: the group compiles and evaluates there; Live and Baked (each for EEVEE's target) render the same slab."""
+    scene = blender_scenes.reset_scene()
+    scene.render.engine = _eevee_id()
+    scene.eevee.taa_render_samples = 16
+    live_material = _skin("Live", "LIVE", melanin=0.05, hemoglobin=0.02)
+    baked_material = _skin("Baked", "BAKED", melanin=0.05, hemoglobin=0.02)
+    set_world(scene, strength=1.0)
+    # Two slabs side by side in one render (x < 0 live, x > 0 baked), measured 16 pixels (24 mm) from the seam.
+    assign(blender_scenes.add_box("Live", -0.5, 0.0, -0.5, 0.5, -0.2, 0.0), live_material)
+    assign(blender_scenes.add_box("Baked", 0.0, 0.5, -0.5, 0.5, -0.2, 0.0), baked_material)
+    add_top_camera(scene, ortho_scale=0.2, width=128, height=64)
+    plans = _apply(scene, live_material, baked_material)
+    assert " eevee" in plans[0]["live"]["group"]
+    img = render(scene, samples=1)
+    live, baked = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
+    # (EEVEE keeps the surface colour in its g-buffer at 8-10 bits: the two may agree to the last bit.)
+    _check("EEVEE live vs baked", live, baked)
+    # The group is evaluated in EEVEE: its input changes the live half only.
+    (group_node,) = addon_nodes.tagged_nodes(live_material.node_tree, "live")
+    group_node.inputs["Hemoglobin"].default_value = 0.06
+    img = render(scene, samples=1)
+    live_high, baked_again = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
+    np.testing.assert_array_equal(baked_again, baked)
+    assert np.abs(live_high / live - 1.0).max() > 0.01
+    expected = _core_albedo(0.05, 0.7, 0.06) / _core_albedo(0.05, 0.7, 0.02)
+    # 1 %: EEVEE's own error (its world lighting is approximate: the slab renders 0.9 % below the core's albedo in red
+    # here, Baked as Live), not the group's; the ratio came out within 0.64 % in 5.0.
+    _check("EEVEE live, haemoglobin 0.02 -> 0.06, ratio", live_high / live, expected, rtol=0.01)

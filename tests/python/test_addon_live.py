@@ -25,6 +25,11 @@ def test_table_name_follows_the_table_key():
     assert len(names) == 8
     assert live.table_name(_settings(method="RANDOM_WALK"), {"subsurface": "OFF"}) == live.table_name(_settings(), {})
     assert live.table_method(_settings(method="RANDOM_WALK"), {"subsurface": "AUTO"}) == "random_walk"
+    assert live.table_name(_settings(), {}) == "Spectral Skin 5.0 cycles burley"
+    # Blender 4.x cuts ID names at 63 bytes: the longest key still gives distinct names that fit with " Base Color".
+    longest = [live.table_name(_settings(method=m, accuracy="REFERENCE", working_space="Linear Rec.2020"), {})
+               for m in ("RANDOM_WALK", "RANDOM_WALK_SKIN")]
+    assert len(set(longest)) == 2 and all(len(n + " Base Color") <= 63 for n in longest)
 
 
 def test_effects_kept_unless_off():
