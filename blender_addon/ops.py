@@ -4,7 +4,8 @@
 Apply with parameter maps, started from the UI, runs the computing step in a worker thread (the core releases the
 GIL) while a modal timer shows the progress and Esc cancels with nothing changed; the material is edited on Blender's
 main thread once everything is computed and written. From a script (or without maps) it runs synchronously, the same
-steps.
+steps. In Live mode (core/live.py, live.py) the computing step is the plan of the panel's constants and, unless the
+blend file has it, the shader table; the last step wires the live node group.
 """
 
 from __future__ import annotations

@@ -42,6 +42,9 @@ TEXEL_SPP = 1024  # test_renders.py: the 4-texel image
 TEXEL_SPAN_M = 0.0256  # test_renders.py: 0.4 mm per pixel, every radius above a quarter pixel in 4.2
 
 
+EEVEE_STEP = 1.0 / 1024  # EEVEE's colour step in these renders (test_live_in_eevee_renders_as_baked)
+
+
 def _core_albedo(melanin: float, melanin_blend: float, hemoglobin: float) -> np.ndarray:
     ev = spectral_skin.evaluate(melanin, melanin_blend, hemoglobin, 0.0, outputs=("albedo",),
                                 blender=tuple(bpy.app.version), engine="cycles")
@@ -75,11 +78,11 @@ def _centre(img: np.ndarray) -> np.ndarray:
     return img[16:48, 16:48].reshape(-1, 3).mean(axis=0)
 
 
-def _check(what: str, got: np.ndarray, expected: np.ndarray, rtol: float = BOUND) -> float:
+def _check(what: str, got: np.ndarray, expected: np.ndarray, rtol: float = BOUND, atol: float = 0.0) -> float:
     rel = got / expected - 1.0
     print(f"\n[live] {what}: rendered {np.array2string(got, precision=6)} core "
           f"{np.array2string(expected, precision=6)} rel.err {np.array2string(rel * 100, precision=4)} %")
-    np.testing.assert_allclose(got, expected, rtol=rtol, err_msg=what)
+    np.testing.assert_allclose(got, expected, rtol=rtol, atol=atol, err_msg=what)
     return float(np.abs(rel).max())
 
 
@@ -296,16 +299,16 @@ def test_live_in_eevee_renders_as_baked(addon):
     assert " eevee" in plans[0]["live"]["group"]
     img = render(scene, samples=1)
     live, baked = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
-    # (EEVEE keeps the surface colour in its g-buffer at 8-10 bits: the two may agree to the last bit.)
-    _check("EEVEE live vs baked", live, baked)
-    # The group is evaluated in EEVEE: its input changes the live half only.
+    # EEVEE keeps the surface colour in its g-buffer at about 10 bits: its renders here come in steps of 1/1024
+    # (0.8 % of the blue 0.12), so the two agree to the bit or one step apart (measured in 5.0 and 5.3).
+    _check("EEVEE live vs baked", live, baked, atol=EEVEE_STEP)
+    # The group is evaluated in EEVEE: its input (haemoglobin 0.02 -> 0.06, no Apply) changes the live half as
+    # applying Baked at 0.06 changes the baked one.
     (group_node,) = addon_nodes.tagged_nodes(live_material.node_tree, "live")
     group_node.inputs["Hemoglobin"].default_value = 0.06
+    baked_material.spectral_skin.hemoglobin = 0.06
+    _apply(scene, baked_material)
     img = render(scene, samples=1)
-    live_high, baked_again = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
-    np.testing.assert_array_equal(baked_again, baked)
+    live_high, baked_high = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
     assert np.abs(live_high / live - 1.0).max() > 0.01
-    expected = _core_albedo(0.05, 0.7, 0.06) / _core_albedo(0.05, 0.7, 0.02)
-    # 1 %: EEVEE's own error (its world lighting is approximate: the slab renders 0.9 % below the core's albedo in red
-    # here, Baked as Live), not the group's; the ratio came out within 0.64 % in 5.0.
-    _check("EEVEE live, haemoglobin 0.02 -> 0.06, ratio", live_high / live, expected, rtol=0.01)
+    _check("EEVEE live vs baked at haemoglobin 0.06", live_high, baked_high, atol=EEVEE_STEP)
