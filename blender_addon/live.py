@@ -9,16 +9,24 @@ haemoglobin in each, ln of the output per texel. The lookups of the two slices a
 linearly and exponentiated: the core's trilinear table lookup, whose error against direct evaluation is in
 docs/shader-table.md. The Specular IOR Level is exact: 0.5 * clamp(oiliness, 0, 1).
 
-Not yet wired into the add-on's panel and Apply operator (issue 14, items 2-4): :func:`build_group` is the building
-block they will use.
+Apply in Live mode (core/live.py decides, :func:`wire` edits the material) puts the group node (tagged, as the
+add-on's other nodes: nodes.py) between the four inputs and the tagged Principled BSDF. Its inputs get the panel's
+constants, or an Image Texture of the parameter's map: the image itself where Blender reads it as the core does
+(PNG/TIFF files, painted or generated images; 8/16-bit values scaled onto the parameter's range by a Math node), else
+a float copy of the core's reading packed into the .blend (EXR files: Blender reads an EXR channel named ``melanin``
+as zeros). Anything else can drive the inputs: colour attributes, drivers and keyframes on the group node's sockets.
 """
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import bpy
 import numpy as np
+
+from . import nodes
+from .core import PARAMETER_INFO, PARAMETERS
 
 GROUP_NAME = "Spectral Skin"
 INPUTS = ("Melanin", "Melanin Blend", "Hemoglobin", "Oiliness")
@@ -127,3 +135,139 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME) -> Any:
     oiliness = math("MULTIPLY", group_in.outputs["Oiliness"], 1.0, clamp=True)
     links.new(math("MULTIPLY", oiliness, 0.5), group_out.inputs["Specular IOR Level"])
     return group
+
+
+def has_group(name: str) -> bool:
+    """Whether the blend file has the node group ``name`` and both its table images, packed (then Apply reuses
+    them)."""
+    group = bpy.data.node_groups.get(name)
+    images = [bpy.data.images.get(f"{name} {kind}") for kind in ("Base Color", "Radius")]
+    return group is not None and all(i is not None and i.packed_file is not None for i in images)
+
+
+def _packed(image: Any) -> Any:
+    """Pack a generated float image into the .blend (so nothing depends on a temporary file)."""
+    image.pack()
+    image.colorspace_settings.name = "Non-Color"
+    return image
+
+
+def _non_color(image: Any) -> None:
+    """Tag a parameter image Non-Color (raw values), keeping the pixels of one Blender holds only in memory
+    (generated, or painted and not saved), which a colour space change would regenerate or reload."""
+    if image.colorspace_settings.name == "Non-Color":
+        return
+    keep = None
+    if image.source == "GENERATED" or image.is_dirty:
+        keep = np.empty(len(image.pixels), dtype=np.float32)
+        image.pixels.foreach_get(keep)
+    image.colorspace_settings.name = "Non-Color"
+    if keep is not None:
+        image.pixels.foreach_set(keep)
+        image.update()
+
+
+def _roles(param: str) -> tuple[str, str, str]:
+    return f"live {param}", f"live {param} channel", f"live {param} range"
+
+
+def remove_nodes(tree: Any) -> None:
+    """Delete the live nodes (group node, parameter textures) from a material's tree: Apply in Baked mode."""
+    for node in nodes.tagged_nodes(tree):
+        if str(node[nodes.TAG]).startswith("live"):
+            tree.nodes.remove(node)
+
+
+def _direct(image: Any) -> bool | None:
+    """How the group reads a parameter image itself: None when it cannot (an EXR file: Blender does not read it as
+    the core does), else whether its values are normalized (8/16-bit: 0..1 onto the parameter's range), as the baked
+    path reads it (props._image_parameter_maps)."""
+    if image.source == "GENERATED" or image.is_dirty:
+        return not image.is_float
+    if image.source == "FILE" and os.path.splitext(image.filepath)[1].lower() != ".exr":
+        return True
+    return None
+
+
+def _parameter_image(material: Any, param: str, maps: dict[str, Any]) -> tuple[Any, bool] | None:
+    """The image a parameter's input reads and whether its values are normalized; None for the constant. The
+    material's own image where Blender reads it as the core does, else (an EXR file, or maps a batch script gave) a
+    packed float copy of the core's reading ``maps[param]``."""
+    own = getattr(material.spectral_skin, f"{param}_map")
+    if own is not None:
+        normalized = _direct(own)
+        if normalized is not None:
+            return own, normalized
+    pmap = maps.get(param)
+    if pmap is None:
+        return None
+    pixels = np.asarray(pmap.pixels, dtype=np.float32)
+    copy = table_image(f"SpectralSkin {material.name} {param}", np.repeat(pixels[:, :, None], 3, axis=2))
+    return _packed(copy), bool(pmap.normalized)
+
+
+def wire(material: Any, plan: dict[str, Any]) -> Any:
+    """Live mode's last step (main thread): the group (built from ``plan["live"]["table"]``, its images packed, or
+    the blend file's), its node wired into the tagged Principled BSDF, its inputs set (see the module's docstring).
+    Returns the group node."""
+    info = plan["live"]
+    tree = material.node_tree
+    principled = nodes.tagged_nodes(tree, "principled")[0]
+    name = info["group"]
+    if info["table"] is not None:
+        group = build_group(info["table"], name)
+        for kind in ("Base Color", "Radius"):
+            _packed(bpy.data.images[f"{name} {kind}"])
+    elif has_group(name):
+        group = bpy.data.node_groups[name]
+    else:
+        raise ValueError(f"the node group {name!r} is gone from the blend file: apply again")
+    found = nodes.tagged_nodes(tree, "live")
+    node = found[0] if found else tree.nodes.new("ShaderNodeGroup")
+    if not found:
+        nodes._tag(node, "live")
+        node.location = (principled.location.x - 260, principled.location.y)
+    node.node_tree = group
+    node.width = 200
+    for index, (param, socket_name) in enumerate(zip(PARAMETERS, INPUTS, strict=True)):
+        socket = node.inputs[socket_name]
+        socket.default_value = float(info["constants"][param])
+        for role in _roles(param):
+            for stale in nodes.tagged_nodes(tree, role):
+                tree.nodes.remove(stale)
+        source = _parameter_image(material, param, info["maps"])
+        if source is None:
+            continue
+        image, normalized = source
+        _non_color(image)
+        role, channel_role, range_role = _roles(param)
+        y = node.location.y - 260 * index
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        nodes._tag(tex, role)
+        tex.image = image
+        tex.interpolation = "Linear"
+        tex.extension = "EXTEND"
+        tex.location = (node.location.x - 620, y)
+        channel = tree.nodes.new("ShaderNodeSeparateColor")
+        nodes._tag(channel, channel_role)
+        channel.location = (node.location.x - 340, y)
+        tree.links.new(tex.outputs["Color"], channel.inputs["Color"])
+        value = channel.outputs[0]  # the first channel, as the baked path reads it
+        if normalized:
+            low, high = PARAMETER_INFO[param][:2]
+            scale = tree.nodes.new("ShaderNodeMath")
+            nodes._tag(scale, range_role)
+            scale.operation = "MULTIPLY_ADD"
+            scale.inputs[1].default_value = high - low
+            scale.inputs[2].default_value = low
+            scale.location = (node.location.x - 180, y)
+            tree.links.new(value, scale.inputs[0])
+            value = scale.outputs[0]
+        tree.links.new(value, socket)
+    outputs = [("Base Color", True), ("Subsurface Radius", info["subsurface"]),
+               ("Specular IOR Level", info["specular"])]
+    for output, used in outputs:
+        target = nodes._socket(principled.inputs, output)
+        if used:
+            tree.links.new(node.outputs[output], target)
+    return node

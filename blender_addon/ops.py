@@ -4,7 +4,8 @@
 Apply with parameter maps, started from the UI, runs the computing step in a worker thread (the core releases the
 GIL) while a modal timer shows the progress and Esc cancels with nothing changed; the material is edited on Blender's
 main thread once everything is computed and written. From a script (or without maps) it runs synchronously, the same
-steps.
+steps. In Live mode (core/live.py, live.py) the computing step is the plan of the panel's constants and, unless the
+blend file has it, the shader table; the last step wires the live node group.
 """
 
 from __future__ import annotations
@@ -17,8 +18,9 @@ from typing import Any
 import bpy
 import spectral_skin
 
-from . import nodes, props, scene_facts
+from . import live, nodes, props, scene_facts
 from .core import SkinSettings, describe_error, write_textures
+from .core import live as core_live
 from .core import scene as analysis
 from .nodes import scene_target, scene_working_space
 
@@ -33,14 +35,18 @@ class Job:
     settings: SkinSettings
     facts: analysis.SceneFacts | None
     overrides: dict[str, str]
+    # Live mode: whether the shader table must be computed (the blend file has no node group for its key).
+    table_needed: bool = True
 
 
 def prepare(material: bpy.types.Material, settings: SkinSettings, scene: bpy.types.Scene) -> Job:
     """Apply's first step (main thread): the plan is computed in the scene's working space
     (:func:`scene_working_space`) and for the running Blender and the scene's engine (:func:`scene_target`), whatever
     ``settings`` says."""
-    return Job(settings.replace(working_space=scene_working_space(), **scene_target(scene)),
-               scene_facts.gather(scene, material), scene_facts.overrides(material))
+    settings = settings.replace(working_space=scene_working_space(), **scene_target(scene))
+    overrides = scene_facts.overrides(material)
+    needed = settings.mode != "LIVE" or not live.has_group(core_live.table_name(settings, overrides))
+    return Job(settings, scene_facts.gather(scene, material), overrides, needed)
 
 
 def compute(jobs: Sequence[Job], progress: Any = None, before_write: Callable[[], bool] | None = None) -> list[dict]:
@@ -49,7 +55,9 @@ def compute(jobs: Sequence[Job], progress: Any = None, before_write: Callable[[]
 
     ``progress(done, total)`` is the core's callback (False cancels). ``before_write()`` is called between the two;
     when it returns False nothing is written and the result is empty (a cancel)."""
-    plans = [analysis.scene_plan(job.settings, job.facts, job.overrides, progress) for job in jobs]
+    plans = [core_live.live_plan(job.settings, job.facts, job.overrides, job.table_needed, progress)
+             if job.settings.mode == "LIVE" else analysis.scene_plan(job.settings, job.facts, job.overrides, progress)
+             for job in jobs]
     if before_write is not None and not before_write():
         return []
     for plan in plans:
@@ -58,8 +66,13 @@ def compute(jobs: Sequence[Job], progress: Any = None, before_write: Callable[[]
 
 
 def finish(material: bpy.types.Material, plan: dict) -> None:
-    """Apply's last step, on Blender's data (main thread only): the material's nodes, then the plan stored on it."""
+    """Apply's last step, on Blender's data (main thread only): the material's nodes (in Live mode with the live
+    node group wired in: live.py; in Baked mode without it), then the plan stored on it."""
     nodes.apply_plan(material, plan)
+    if "live" in plan:
+        live.wire(material, plan)
+    else:
+        live.remove_nodes(material.node_tree)
     props.store_result(material, plan)
 
 
@@ -175,8 +188,8 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
         material, settings = self._settings(context)
         if material is None or settings is None:
             return {"CANCELLED"}
-        if not settings.maps or context.window is None:
-            return self.execute(context)  # one evaluation: no time to show
+        if (not settings.maps and settings.mode != "LIVE") or context.window is None:
+            return self.execute(context)  # one evaluation: no time to show (Live mode may build its shader table)
         self._material_name = material.name
         self._work = _Work(prepare(material, settings, context.scene))
         self._work.thread.start()

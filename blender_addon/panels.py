@@ -24,6 +24,7 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         layout.use_property_split = True
         material = context.material
         props = material.spectral_skin
+        layout.row().prop(props, "mode", expand=True)
         layout.prop(props, "preset")
         for name in PARAMETERS:
             row = layout.row(align=True)
@@ -37,12 +38,16 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         box.prop(props, "clamp")
         layout.prop(props, "method")
         layout.prop(props, "accuracy")
-        layout.prop(props, "output_dir")
+        row = layout.row()
+        row.active = props.mode == "BAKED"  # Live mode writes no texture maps
+        row.prop(props, "output_dir")
         overrides = layout.box()
         overrides.label(text="Effects (Auto: decided from the scene's cameras and maps)")
         overrides.prop(props, "override_subsurface")
         overrides.prop(props, "override_specular")
         overrides.prop(props, "override_constant_maps")
+        if props.mode == "LIVE":
+            overrides.label(text="Live: subsurface and specular are kept unless Off", icon="INFO")
         row = layout.row(align=True)
         row.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
         row.operator("spectral_skin.remove", icon="X", text="Remove").material = material.name

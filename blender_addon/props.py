@@ -99,7 +99,18 @@ def _parameter_map(name: str) -> bpy.props.PointerProperty:
         "onto the parameter's range")
 
 
+MODE_ITEMS = [
+    ("BAKED", "Baked", "Apply computes Base Color, Subsurface Radius and Specular IOR Level (texture maps from parameter "
+     "maps, written to the Texture Folder): for export and render farms; a change needs another Apply"),
+    ("LIVE", "Live", "Apply wires the 'Spectral Skin' node group, which computes them in the shader from its inputs "
+     "(the constants, the parameter maps, or anything linked, keyed or driven on the group node's sockets): painted "
+     "textures and keyframes show without another Apply (docs/shader-table.md)"),
+]
+
+
 class SpectralSkinSettings(bpy.types.PropertyGroup):
+    mode: bpy.props.EnumProperty(
+        name="Mode", description="How Apply sets up the material", items=MODE_ITEMS, default="BAKED")
     preset: bpy.props.EnumProperty(
         name="Preset", description="Skin type from the Donner & Jensen 2006 sketch; sets the four parameters",
         items=PRESET_ITEMS, default=_DEFAULT_PRESET.upper(), update=_apply_preset)
@@ -233,13 +244,13 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
     spectral_skin.SpectralSkinIOError, an OSError, for files the core cannot read)."""
     props = material.spectral_skin
     maps = material_maps(material)
-    output_dir = texture_folder(props) if maps else ""
+    output_dir = texture_folder(props) if maps and props.mode == "BAKED" else ""
     target = scene_target(scene)
     return SkinSettings(
         **{name: getattr(props, name) for name in PARAMETERS}, method=props.method, accuracy=props.accuracy, maps=maps,
         clamp=props.clamp, output_dir=output_dir, file_prefix=texture_prefix(bpy.data.filepath, material.name),
         scale_length=scene.unit_settings.scale_length, working_space=scene_working_space(),
-        blender=target["blender"], engine=target["engine"])
+        blender=target["blender"], engine=target["engine"], mode=props.mode)
 
 
 def store_result(material: bpy.types.Material, plan: dict) -> None:

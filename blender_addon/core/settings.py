@@ -28,6 +28,12 @@ PARAMETERS = tuple(p["name"] for p in _SPECS)
 WORKING_SPACES = ("Linear Rec.709", "Linear Rec.2020", "ACEScg")
 DEFAULT_WORKING_SPACE = "Linear Rec.709"
 
+# How Apply sets up the material: "BAKED" computes Base Color, Subsurface Radius and Specular IOR Level (values, or
+# texture maps from parameter maps) with the core; "LIVE" wires the "Spectral Skin" node group (blender_addon/live.py),
+# which computes them in the shader from its four inputs by looking them up in the core's shader table
+# (docs/shader-table.md), so painted textures, drivers and keyframes show without another Apply.
+MODES = ("BAKED", "LIVE")
+
 # The core's named accuracy levels, cheapest first (``spectral_skin.accuracy_levels()``; docs/accuracy-vs-time.md):
 # Blender's enum identifier -> the core's name; ACCURACY_DESCRIPTIONS: the core's one-line description of each.
 ACCURACY_LEVELS = {a["name"].upper(): a["name"] for a in spectral_skin.accuracy_levels()}
@@ -112,6 +118,8 @@ class SkinSettings:
     # The blend file's scene-linear working space (bpy.data.colorspace.working_space in Blender 5.0): the space of
     # Base Color and of the albedo texture.
     working_space: str = DEFAULT_WORKING_SPACE
+    # "BAKED" or "LIVE" (MODES).
+    mode: str = "BAKED"
 
     @classmethod
     def from_preset(cls, name: str, **overrides: object) -> SkinSettings:
@@ -149,10 +157,12 @@ def check(settings: SkinSettings) -> None:
     if settings.working_space not in WORKING_SPACES:
         raise spectral_skin.SpectralSkinError(
             f"working space must be one of {', '.join(WORKING_SPACES)}; got {settings.working_space!r}")
+    if settings.mode not in MODES:
+        raise spectral_skin.SpectralSkinError(f"mode must be one of {', '.join(MODES)}; got {settings.mode!r}")
     unknown = set(settings.maps) - set(PARAMETERS)
     if unknown:
         raise spectral_skin.SpectralSkinError(
             f"parameter maps must be among {', '.join(PARAMETERS)}; got {', '.join(sorted(unknown))}")
-    if settings.maps and not settings.output_dir:
+    if settings.maps and not settings.output_dir and settings.mode == "BAKED":
         raise spectral_skin.SpectralSkinError("an output folder for the texture maps is required with parameter maps")
     # The parameter values themselves are validated by the core when the plan is computed.

@@ -1,0 +1,90 @@
+"""Live mode's decisions, without bpy: which shader table a material's target needs, what its plan is computed from,
+and which effects the live node group keeps (the bpy glue is blender_addon/live.py).
+
+In Live mode the Principled BSDF's Base Color, Subsurface Radius and Specular IOR Level come from the "Spectral Skin"
+node group, which looks its four inputs up in the core's shader table (``spectral_skin.shader_table``,
+docs/shader-table.md) in the shader: parameter maps, painted textures, drivers and keyframes change the skin without
+another Apply. Apply computes the table for the material's target (Blender version, engine, subsurface method:
+chosen as the baked path chooses them) and the plan of the panel's constants, which gives everything else (Subsurface
+Scale, IOR, Roughness, the scene analysis).
+
+Subsurface and specular are kept in Live mode unless forced off: the inputs can change per texel and per frame with no
+Apply, so neither the scene analysis's radius bound nor "oiliness zero everywhere" can be decided from the constants.
+Animated panel parameters are not evaluated per frame (the frame-change values of the baked path): in Live mode an
+artist keys the group node's input sockets instead, which the shader follows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from typing import Any
+
+from .settings import ACCURACY_LEVELS, SkinSettings
+from .targets import method_name
+
+
+def kept(overrides: dict[str, str] | None, effect: str) -> bool:
+    """Whether Live mode keeps ``effect`` ("subsurface" or "specular"): yes unless its override is Off."""
+    return (overrides or {}).get(effect, "AUTO") != "OFF"
+
+
+def table_method(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
+    """The core's method name the table is built for: the material's, or Burley (whose Base Color is the albedo) when
+    subsurface is off, as the baked path does."""
+    return method_name(settings.method if kept(overrides, "subsurface") else "BURLEY")
+
+
+# Blender before 5.0 cuts ID names at 63 bytes; the group's images add " Base Color" (live.build_group).
+MAX_NAME = 63 - len(" Base Color")
+
+
+def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
+    """The name of the node group (and the prefix of its two images) for the table a material needs: one per table
+    key (Blender version, engine, method, accuracy, working space; the default accuracy and Linear Rec.709 left out),
+    shared by the materials that need the same. A name too long for Blender ends in a hash of the whole key."""
+    parts = [settings.blender or "current", settings.engine, table_method(settings, overrides)]
+    if settings.accuracy != "DEFAULT":
+        parts.append(settings.accuracy.lower())
+    if settings.working_space != "Linear Rec.709":
+        parts.append(settings.working_space.removeprefix("Linear "))
+    name = "Spectral Skin " + " ".join(parts)
+    if len(name) > MAX_NAME:
+        name = f"{name[:MAX_NAME - 7]} {hashlib.sha1(name.encode()).hexdigest()[:6]}"
+    return name
+
+
+def shader_table(settings: SkinSettings, overrides: dict[str, str] | None) -> dict[str, Any]:
+    """The core's shader table for the material's target (``spectral_skin.shader_table``, default resolution)."""
+    import spectral_skin
+
+    return dict(spectral_skin.shader_table(method=table_method(settings, overrides), blender=settings.blender,
+                                           engine=settings.engine, accuracy=ACCURACY_LEVELS[settings.accuracy],
+                                           working_space=settings.working_space))
+
+
+def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | None, table_needed: bool,
+              progress: Any = None) -> dict[str, Any]:
+    """The plan of a Live material: the scene plan of the panel's constants (no maps, no per-frame values, subsurface
+    and specular kept unless forced off), plus ``plan["live"]``: {"group": the node group's name, "table": the
+    shader table, or None when ``table_needed`` is False (the blend file has it), "maps": the parameter maps as the
+    core read them (for the files Blender cannot read), "constants", "subsurface", "specular"}."""
+    from .scene import scene_plan
+
+    forced = {**(overrides or {}),
+              "subsurface": "ON" if kept(overrides, "subsurface") else "OFF",
+              "specular": "ON" if kept(overrides, "specular") else "OFF"}
+    if facts is not None and getattr(facts, "animation", None) is not None:
+        facts = dataclasses.replace(facts, animation=None)
+    plan = scene_plan(settings.replace(maps={}, output_dir=""), facts, forced, progress)
+    plan["live"] = {
+        "group": table_name(settings, overrides),
+        "table": shader_table(settings, overrides) if table_needed else None,
+        "maps": dict(settings.maps),
+        "constants": settings.constants(),
+        "subsurface": kept(overrides, "subsurface"),
+        "specular": kept(overrides, "specular"),
+    }
+    plan["summary"]["computed"] += ("; live node group, shader table " +
+                                    ("computed" if table_needed else "reused from the blend file"))
+    return plan
