@@ -13,9 +13,10 @@ use std::time::Instant;
 
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::fit::SubsurfaceMethod;
-use spectral_skin::maps::io::ExrOptions;
 use spectral_skin::maps::lut::{check_point_params, check_points, MaterialTable, TableResolution};
-use spectral_skin::maps::shader_table::{measure_shader_error, ShaderTable, DEFAULT_SHADER_TABLE_RESOLUTION};
+use spectral_skin::maps::shader_table::{
+    measure_shader_error, ShaderTable, DEFAULT_SHADER_TABLE_RESOLUTION, SHADER_TABLE_EXR,
+};
 use spectral_skin::{Outputs, Request};
 
 const SAMPLES: usize = 2000;
@@ -62,7 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let shader = ShaderTable::from_table(&table, &prepared)?;
             let build_s = start.elapsed().as_secs_f64();
             let dir = tempfile::tempdir()?;
-            let paths = shader.write(dir.path(), None, ExrOptions::default())?;
+            let paths = shader.write(dir.path(), None, SHADER_TABLE_EXR)?;
             let exr_bytes: u64 = paths[..2].iter().map(|p| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0)).sum();
             let error = measure_shader_error(&shader, &prepared, SAMPLES)?;
             let mut vs_table = 0.0f64;

@@ -8,7 +8,7 @@ use spectral_skin::maps::io::{read_exr_channels, ExrOptions};
 use spectral_skin::maps::lut::{MaterialTable, TableResolution};
 use spectral_skin::maps::shader_table::{
     measure_shader_error, ShaderTable, ShaderTableMeta, DEFAULT_SHADER_TABLE_RESOLUTION, SHADER_BASE_COLOR_FILE,
-    SHADER_RADIUS_FILE, SHADER_SIDECAR_FILE,
+    SHADER_RADIUS_FILE, SHADER_SIDECAR_FILE, SHADER_TABLE_EXR,
 };
 use spectral_skin::{Outputs, Request};
 
@@ -107,7 +107,7 @@ fn files_read_back_as_written_with_their_metadata() {
     let table = MaterialTable::build(&prepared, SubsurfaceMethod::Burley, SMALL).unwrap();
     let shader = ShaderTable::from_table(&table, &prepared).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let paths = shader.write(dir.path(), Some("face"), ExrOptions::default()).unwrap();
+    let paths = shader.write(dir.path(), Some("face"), SHADER_TABLE_EXR).unwrap();
     assert_eq!(paths.len(), 3);
     for (file, planes) in [(SHADER_BASE_COLOR_FILE, shader.base_color_log()), (SHADER_RADIUS_FILE, shader.radius_log())]
     {

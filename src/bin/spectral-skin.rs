@@ -541,7 +541,7 @@ struct ShaderTableArgs {
 
 fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Error>> {
     use spectral_skin::maps::lut::TableResolution;
-    use spectral_skin::maps::shader_table::{ShaderTable, DEFAULT_SHADER_TABLE_RESOLUTION};
+    use spectral_skin::maps::shader_table::{ShaderTable, DEFAULT_SHADER_TABLE_RESOLUTION, SHADER_TABLE_EXR};
     let target = args.target.target();
     target.method_entry(args.method)?;
     let resolution = match args.resolution.as_deref() {
@@ -560,7 +560,7 @@ fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Err
         cache.as_deref(),
         &ctrl_c::INTERRUPTED,
     )?;
-    let paths = table.write(&args.out, args.prefix.as_deref(), ExrOptions::default())?;
+    let paths = table.write(&args.out, args.prefix.as_deref(), SHADER_TABLE_EXR)?;
     let m = table.meta();
     println!(
         "{}x{}x{} nodes as {}x{} texels, {:.2} s; wrote {}",

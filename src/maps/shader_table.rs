@@ -42,6 +42,11 @@ use crate::fit::SubsurfaceMethod;
 use crate::skin::params::{HEMOGLOBIN, MELANIN, MELANIN_BLEND};
 
 /// The `format` of a shader table's metadata (changes when the layout does).
+/// How the table's images are written: 32-bit float (PIZ). The images hold logarithms; half floats would round ln
+/// values of a few units by up to 2^-11 of them (0.1 % and more in the outputs, a quarter of the table's own error),
+/// where float adds 1e-7.
+pub const SHADER_TABLE_EXR: ExrOptions = ExrOptions::FLOAT_PIZ;
+
 pub const SHADER_TABLE_FORMAT: &str = "spectral-skin shader table v1";
 /// File of ln Base Color (RGB), beside [`SHADER_RADIUS_FILE`] and [`SHADER_SIDECAR_FILE`].
 pub const SHADER_BASE_COLOR_FILE: &str = "shader_base_color.exr";
@@ -306,7 +311,7 @@ impl ShaderTable {
         })
     }
 
-    /// Stage the two EXRs (float32 unless `exr` says otherwise) and the sidecar in `out_dir` (created if missing),
+    /// Stage the two EXRs ([`SHADER_TABLE_EXR`] unless `exr` says otherwise) and the sidecar in `out_dir` (created if missing),
     /// named with `prefix` as `pipeline::output_name` does; dropping the result deletes them.
     pub fn stage_files(&self, out_dir: &Path, prefix: Option<&str>, exr: ExrOptions) -> Result<Vec<Staged>, SkinError> {
         if let Some(p) = prefix {

@@ -6,8 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::fit::SubsurfaceMethod;
-use crate::maps::io::ExrOptions;
-use crate::maps::shader_table::{ShaderTable, ShaderTableMeta, DEFAULT_SHADER_TABLE_RESOLUTION};
+use crate::maps::shader_table::{ShaderTable, ShaderTableMeta, DEFAULT_SHADER_TABLE_RESOLUTION, SHADER_TABLE_EXR};
 use crate::Outputs;
 
 use super::convert::{json_to_py, target_from, type_name, Knobs};
@@ -165,7 +164,7 @@ pub(super) fn write_shader_table_py<'py>(
     }
     let paths = detached(py, || {
         let table = ShaderTable::from_parts(meta, base_color_log, radius_log)?;
-        table.write(&folder, prefix, ExrOptions::default())
+        table.write(&folder, prefix, SHADER_TABLE_EXR)
     })?;
     let dict = PyDict::new(py);
     for (key, path) in ["base_color", "radius", "metadata"].into_iter().zip(paths) {
