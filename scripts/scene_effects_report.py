@@ -134,6 +134,14 @@ def object_differences(a: np.ndarray, b: np.ndarray) -> dict[str, float]:
     return result
 
 
+def _radius_px(figures: dict) -> str:
+    """The largest radius in pixels as the decision saw it: the material's own, or (when subsurface was dropped
+    before computing the radius) "≤" the bound of any skin's."""
+    if figures.get("largest_radius_px") is not None:
+        return f"{figures['largest_radius_px']:.3g}"
+    return f"≤ {figures['largest_radius_bound_px']:.3g}"
+
+
 def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_samples: int, repeats: int,
               map_path: Path, maps_dir: Path) -> list[dict]:
     """Per (shape, camera distance): the subsurface decision of the add-on's Apply (the example face map on a
@@ -176,12 +184,12 @@ def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_s
         noise = blender_scenes.render(scene, samples=spp, seed=2, alpha=True)
         dropped = not decision["enabled"]
         assert decided_weight == (0.0 if dropped else 1.0), (distance, decided_weight)
-        row = {"shape": shape, "distance_m": distance, "radius_px": decision["figures"].get("largest_radius_px"), "dropped": dropped,
+        row = {"shape": shape, "distance_m": distance, "radius_px": _radius_px(decision["figures"]), "dropped": dropped,
                "reason": decision["reason"], "samples": spp, "t_full": times["ON"], "t_plain": times["OFF"],
                "plain": object_differences(images["ON"], images["OFF"]),
                "noise": object_differences(images["ON"], noise)}
         rows.append(row)
-        print(f"{shape.lower():8s} {distance:5.1f} m  radius {row['radius_px']:.3g} px  {'dropped' if dropped else 'kept'}  "
+        print(f"{shape.lower():8s} {distance:5.1f} m  radius {row['radius_px']} px  {'dropped' if dropped else 'kept'}  "
               f"{row['plain']['pixels']:.0f} px  spp {spp}  mean {row['plain']['mean']:.4f} (noise "
               f"{row['noise']['mean']:.4f})  dE00 {row['plain']['de_object']:.3f}  {times['ON']:.2f} s vs "
               f"{times['OFF']:.2f} s", flush=True)
@@ -409,7 +417,7 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         d, n = r["plain"], r["noise"]
         saved = f"{r['t_full'] - r['t_plain']:.2f} s" if r["dropped"] else "– (kept)"
         lines.append(
-            f"| {r['shape'].lower()} | {r['distance_m']:g} | {r['radius_px']:.3g} | "
+            f"| {r['shape'].lower()} | {r['distance_m']:g} | {r['radius_px']} | "
             f"{'dropped' if r['dropped'] else 'kept'} | {d['pixels']:.1f} | {r['samples']} | {r['t_full']:.2f} | "
             f"{r['t_plain']:.2f} | {saved} | {_pct(d['mean'])} | {_pct(d['max'])} | {_de(d['de_mean'])} | "
             f"{_de(d['de_max'])} | {_de(d['de_object'])} | {_pct(n['mean'])}, {_de(n['de_object'])} | "
@@ -466,10 +474,11 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
                      f"{t['gather']:.4f} | {t['decide']:.4f} | {100 * (t['gather'] + t['decide']) / t['with']:.0f} % |")
     lines += [
         "",
-        f"The analysis takes {min(analysis_s):.3f} to {max(analysis_s):.3f} s (gathering the scene's facts about a "
-        "millisecond; nearly all of *decide* is its check for maps of one value, a pass over every texel of each "
-        f"map), {min(shares):.0f} to {max(shares):.0f} % of this apply of a small map; the totals with and without "
-        "it differ by about their run-to-run variation on the shared machine. Most of the apply is writing the maps "
+        f"The analysis takes {min(analysis_s):.3f} to {max(analysis_s):.3f} s (*gather* is mostly the per-part "
+        "thickness: a BVH tree of the mesh and 2048 ray casts per object, *Thin and open geometry* below; nearly all "
+        "of *decide* is its check for maps of one value, a pass over every texel of each "
+        f"map), {min(shares):.0f} to {max(shares):.0f} % of this apply of a small map: a fixed cost per object of "
+        "a few hundredths of a second, which a large map's apply dwarfs. Most of the apply is writing the maps "
         "and Blender loading them (the plan itself, with the lookup table cached, is the *plan* column); far away, "
         "where subsurface is dropped, the apply with the analysis writes one map fewer. Larger maps cost the "
         "apply more (a 2048² pair: seconds, README) and *decide* proportionally to their texels.",
