@@ -344,6 +344,12 @@ albedo (+22 %, +33 %, +9 %).
 """
 
 
+def _span(values: Sequence[float], fmt: str) -> str:
+    """"a to b", or "a" when both print alike."""
+    lo, hi = fmt.format(min(values)), fmt.format(max(values))
+    return lo if lo == hi else f"{lo} to {hi}"
+
+
 def _pct(value: float) -> str:
     return "–" if value != value else f"{100 * value:.2f} %"
 
@@ -477,7 +483,7 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         f"The analysis takes {min(analysis_s):.3f} to {max(analysis_s):.3f} s (*gather* is mostly the per-part "
         "thickness: a BVH tree of the mesh and 2048 ray casts per object, *Thin and open geometry* below; nearly all "
         "of *decide* is its check for maps of one value, a pass over every texel of each "
-        f"map), {min(shares):.0f} to {max(shares):.0f} % of this apply of a small map: a fixed cost per object of "
+        f"map), {_span(shares, '{:.0f}')} % of this apply of a small map: a fixed cost per object of "
         "a few hundredths of a second, which a large map's apply dwarfs. Most of the apply is writing the maps "
         "and Blender loading them (the plan itself, with the lookup table cached, is the *plan* column); far away, "
         "where subsurface is dropped, the apply with the analysis writes one map fewer. Larger maps cost the "
