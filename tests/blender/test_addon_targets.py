@@ -83,7 +83,9 @@ def test_eevee_radius_map_is_compensated_per_texel(addon, tmp_path):
         assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
         radius[engine] = read_exr(str(tmp_path / "maps" / "Skin_radius.exr"))[:, :, :3]
         albedo = read_exr(str(tmp_path / "maps" / "Skin_albedo.exr"))[:, :, :3]
-    np.testing.assert_allclose(radius[_eevee_id()], radius["CYCLES"] * _s(albedo.astype(np.float64)), rtol=1e-5)
+    # Both radius maps and the albedo are written as half floats (within 2^-11 each): rtol 2e-3, against
+    # compensation factors s(A_n) of 1.0 to 2.1 here.
+    np.testing.assert_allclose(radius[_eevee_id()], radius["CYCLES"] * _s(albedo.astype(np.float64)), rtol=2e-3)
 
 
 def test_method_menu_is_this_blenders(addon):
