@@ -134,12 +134,16 @@ def object_differences(a: np.ndarray, b: np.ndarray) -> dict[str, float]:
     return result
 
 
-def _radius_px(figures: dict) -> str:
+def _radius_px(figures: dict) -> float:
     """The largest radius in pixels as the decision saw it: the material's own, or (when subsurface was dropped
-    before computing the radius) "≤" the bound of any skin's."""
+    before computing the radius) the bound of any skin's (:func:`_radius_text` marks it)."""
     if figures.get("largest_radius_px") is not None:
-        return f"{figures['largest_radius_px']:.3g}"
-    return f"≤ {figures['largest_radius_bound_px']:.3g}"
+        return float(figures["largest_radius_px"])
+    return float(figures["largest_radius_bound_px"])
+
+
+def _radius_text(row: dict) -> str:
+    return f"{'≤ ' if row['radius_is_bound'] else ''}{row['radius_px']:.3g}"
 
 
 def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_samples: int, repeats: int,
@@ -184,12 +188,13 @@ def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_s
         noise = blender_scenes.render(scene, samples=spp, seed=2, alpha=True)
         dropped = not decision["enabled"]
         assert decided_weight == (0.0 if dropped else 1.0), (distance, decided_weight)
-        row = {"shape": shape, "distance_m": distance, "radius_px": _radius_px(decision["figures"]), "dropped": dropped,
+        row = {"shape": shape, "distance_m": distance, "radius_px": _radius_px(decision["figures"]),
+               "radius_is_bound": decision["figures"].get("largest_radius_px") is None, "dropped": dropped,
                "reason": decision["reason"], "samples": spp, "t_full": times["ON"], "t_plain": times["OFF"],
                "plain": object_differences(images["ON"], images["OFF"]),
                "noise": object_differences(images["ON"], noise)}
         rows.append(row)
-        print(f"{shape.lower():8s} {distance:5.1f} m  radius {row['radius_px']} px  {'dropped' if dropped else 'kept'}  "
+        print(f"{shape.lower():8s} {distance:5.1f} m  radius {_radius_text(row)} px  {'dropped' if dropped else 'kept'}  "
               f"{row['plain']['pixels']:.0f} px  spp {spp}  mean {row['plain']['mean']:.4f} (noise "
               f"{row['noise']['mean']:.4f})  dE00 {row['plain']['de_object']:.3f}  {times['ON']:.2f} s vs "
               f"{times['OFF']:.2f} s", flush=True)
@@ -423,7 +428,7 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         d, n = r["plain"], r["noise"]
         saved = f"{r['t_full'] - r['t_plain']:.2f} s" if r["dropped"] else "– (kept)"
         lines.append(
-            f"| {r['shape'].lower()} | {r['distance_m']:g} | {r['radius_px']} | "
+            f"| {r['shape'].lower()} | {r['distance_m']:g} | {_radius_text(r)} | "
             f"{'dropped' if r['dropped'] else 'kept'} | {d['pixels']:.1f} | {r['samples']} | {r['t_full']:.2f} | "
             f"{r['t_plain']:.2f} | {saved} | {_pct(d['mean'])} | {_pct(d['max'])} | {_de(d['de_mean'])} | "
             f"{_de(d['de_max'])} | {_de(d['de_object'])} | {_pct(n['mean'])}, {_de(n['de_object'])} | "
