@@ -252,8 +252,8 @@ def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: fl
     radius_px = largest_mm / best["footprint_mm"]
     figures.update(best, largest_radius_px=radius_px)
     where = f"at frame {best['frame']}, camera {best['camera']}, object {best['object']}"
-    thin = thin_objects(facts, largest_mm)
-    if radius_px < threshold_px and thin:
+    thin = thin_objects(facts, largest_mm) if radius_px < threshold_px else []
+    if thin:
         figures["thin_objects"] = thin
         return _entry("subsurface", True, f"kept: {', '.join(thin)} {'has' if len(thin) == 1 else 'have'} parts "
                       f"thinner than {THIN_RADII:g} radii, through which subsurface scattering carries light (plain "
@@ -368,11 +368,12 @@ def _engine(plan: dict[str, Any]) -> dict[str, Any]:
                   f"{tested}", dict(target))
 
 
-def is_thin(shape: ShapeFacts, largest_mm: float) -> bool:
+def is_thin(shape: ShapeFacts, largest_mm: float, parts: dict[str, Any] | None = None) -> bool:
     """Whether ``shape`` has parts thinner than :data:`THIN_RADII` × ``largest_mm``: measured part by part when the
     object has such samples (at least :data:`THIN_AREA_FRACTION` of its surface), else by the smallest dimension of
-    its bounds."""
-    parts = thin_parts(shape, THIN_RADII * largest_mm)
+    its bounds. ``parts``: :func:`thin_parts` of the shape against that thickness, when the caller has it."""
+    if parts is None:
+        parts = thin_parts(shape, THIN_RADII * largest_mm)
     if parts is not None:
         return bool(parts["thin_area_fraction"] >= THIN_AREA_FRACTION)
     return shape.thickness_mm < THIN_RADII * largest_mm
@@ -385,12 +386,12 @@ def thin_objects(facts: SceneFacts | None, largest_mm: float) -> list[str]:
     return [shape.object_name for shape in facts.shapes if is_thin(shape, largest_mm)]
 
 
-def _shape_advice(shape: ShapeFacts, largest_mm: float) -> tuple[str | None, str]:
-    """The method recommended for one object (None: any) and why (thin: :func:`is_thin`)."""
+def _shape_advice(shape: ShapeFacts, largest_mm: float, parts: dict[str, Any] | None) -> tuple[str | None, str]:
+    """The method recommended for one object (None: any) and why (thin: :func:`is_thin`; ``parts`` its
+    :func:`thin_parts` against :data:`THIN_RADII` × ``largest_mm``)."""
     radii = shape.thickness_mm / largest_mm if largest_mm > 0.0 else float("inf")
     size = f"{shape.object_name}: {shape.thickness_mm:.3g} mm thick ({radii:.3g} × the largest radius)"
-    thin = is_thin(shape, largest_mm)
-    parts = thin_parts(shape, THIN_RADII * largest_mm)
+    thin = is_thin(shape, largest_mm, parts)
     if parts is not None:
         fraction = parts["thin_area_fraction"]
         if thin:
@@ -430,11 +431,12 @@ def _method(plan: dict[str, Any], settings: Any, facts: SceneFacts | None, subsu
                       figures)
     wrong = []
     for shape in facts.shapes:
-        recommended, reason = _shape_advice(shape, largest_mm)
+        parts = thin_parts(shape, THIN_RADII * largest_mm)
+        recommended, reason = _shape_advice(shape, largest_mm, parts)
         figures["objects"][shape.object_name] = {
             "thickness_mm": shape.thickness_mm, "thickness_radii": shape.thickness_mm / largest_mm,
             "closed": shape.closed, "open_edges": shape.open_edges, "recommended": recommended, "reason": reason,
-            "parts": thin_parts(shape, THIN_RADII * largest_mm)}
+            "parts": parts}
         if recommended is not None and (recommended == "BURLEY") != (method == "BURLEY"):
             wrong.append(f"{reason} (the material uses {method})")
     if wrong:
