@@ -601,6 +601,16 @@ pub struct MapFiles<'a> {
     pub specular_ior_level: Option<&'a [f32]>,
 }
 
+/// A file-name prefix for [`output_name`]: a non-empty file name part, no path separator, not "." or "..".
+pub fn check_prefix(prefix: Option<&str>) -> Result<(), SkinError> {
+    match prefix {
+        Some(p) if p.is_empty() || p.contains(['/', '\\']) || p == "." || p == ".." => {
+            Err(SkinError::invalid("prefix", format!("must be a non-empty file name part without / or \\; got {p:?}")))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The name of output `file` (one of the `*_FILE` names) with `prefix`: `<prefix>_albedo.exr`; without, `albedo.exr`.
 pub fn output_name(prefix: Option<&str>, file: &str) -> String {
     match prefix {

@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use super::io::{commit_all, stage_bytes, stage_rgb_exr, ExrOptions, Staged};
 use super::lut::{check_point_params, check_points, MaterialTable, TableResolution, TexelMaterial};
-use super::pipeline::output_name;
+use super::pipeline::{check_prefix, output_name};
 use crate::error::SkinError;
 use crate::evaluate::Prepared;
 use crate::fit::SubsurfaceMethod;
@@ -314,14 +314,7 @@ impl ShaderTable {
     /// Stage the two EXRs ([`SHADER_TABLE_EXR`] unless `exr` says otherwise) and the sidecar in `out_dir` (created if missing),
     /// named with `prefix` as `pipeline::output_name` does; dropping the result deletes them.
     pub fn stage_files(&self, out_dir: &Path, prefix: Option<&str>, exr: ExrOptions) -> Result<Vec<Staged>, SkinError> {
-        if let Some(p) = prefix {
-            if p.is_empty() || p.contains(['/', '\\']) || p == "." || p == ".." {
-                return Err(SkinError::invalid(
-                    "prefix",
-                    format!("must be a non-empty file name part without / or \\; got {p:?}"),
-                ));
-            }
-        }
+        check_prefix(prefix)?;
         std::fs::create_dir_all(out_dir)
             .map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
         let path = |file: &str| out_dir.join(output_name(prefix, file));

@@ -18,8 +18,8 @@ use crate::maps::io::{
 };
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
-    check_planes, commit_map_files, compute_maps_cancellable, output_name, stage_map_files, MapFiles, MapSettings,
-    SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
+    check_planes, check_prefix, commit_map_files, compute_maps_cancellable, output_name, stage_map_files, MapFiles,
+    MapSettings, SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
 };
 use crate::Outputs;
 
@@ -630,14 +630,7 @@ pub(super) fn write_maps_py<'py>(
         precision: by_name("precision", precision, &ALL_PRECISIONS)?,
         compression: by_name("compression", compression, &ALL_COMPRESSIONS)?,
     };
-    if let Some(prefix) = prefix {
-        if prefix.is_empty() || prefix.contains(['/', '\\']) || prefix == "." || prefix == ".." {
-            return Err(invalid(
-                "prefix",
-                format!("must be a non-empty file name part without / or \\; got {prefix:?}"),
-            ));
-        }
-    }
+    check_prefix(prefix)?;
     let base_color = result_planes(result, "base_color", 3)?;
     let radius_mm = result_planes(result, "radius_mm", 3)?;
     let specular = result_planes(result, "specular_ior_level", 1)?;
