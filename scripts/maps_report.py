@@ -151,6 +151,13 @@ def main() -> None:
                     capture_output=True,
                 )
                 inputs[kind] = path
+            # The face example as float samples (the example files are half floats): what a float input costs.
+            inputs["face (float)"] = tmp / f"face-float-{size}.exr"
+            subprocess.run(
+                [str(CLI), "example", "--size", str(size), "--precision", "float", "--out", str(inputs["face (float)"])],
+                check=True,
+                capture_output=True,
+            )
             inputs["noise"] = tmp / f"noise-{size}.exr"
             write_noise_params(inputs["noise"], size)
             # (row name, input, options, environment): the default encoding (half, auto compression) first, then the
@@ -160,6 +167,7 @@ def main() -> None:
                 ("constant", "uniform", [], env),
                 ("distinct tuples", "mask", [], env),
                 ("table (cached)", "face", [], env),
+                ("table (cached)", "face (float)", [], env),
                 ("table (cached)", "face", ["--compression", "piz"], env),
                 ("table (cached)", "face", ["--precision", "float"], env),
                 ("table (cached)", "face", float_piz, env),
@@ -172,13 +180,13 @@ def main() -> None:
                 cases = []
             if size == max(sizes):
                 # Cold: an empty cache folder, so the table is built and checked as on a first run.
-                for kind in ("face", "noise"):
+                for kind in ("face", "face (float)", "noise"):
                     cold_env = dict(env, SPECTRAL_SKIN_CACHE_DIR=str(tmp / f"cold-{size}-{kind}"))
                     cases.append(("table (built)", kind, [], cold_env))
             if size == exact_size:
                 cases.append(("exact", "face", ["--exact"], env))
             for name, kind, extra, case_env in cases:
-                out = tmp / f"out-{size}-{kind}"
+                out = tmp / f"out-{size}-{kind.replace(' (float)', '-float')}"
                 once = name in ("exact", "table (built)")
                 results = [
                     run(["maps", "--params", str(inputs[kind]), "--out", str(out), *extra], case_env)

@@ -11,7 +11,7 @@ use spectral_skin::diffusion::{Boundaries, Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use spectral_skin::fit::{SubsurfaceMethod, DEFAULT_METHOD};
-use spectral_skin::maps::example::{write_example_params, ExampleKind};
+use spectral_skin::maps::example::{write_example_params_encoded, ExampleKind, EXAMPLE_EXR};
 use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource, Precision};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
 use spectral_skin::skin::params::{ParamSpec, HEMOGLOBIN, MELANIN, MELANIN_BLEND, OILINESS, PARAMS};
@@ -93,7 +93,8 @@ enum Command {
     /// The lookup table as images for the add-on's live node group: shader_base_color.exr, shader_radius.exr (ln of
     /// Base Color and radius, float32) and shader_table.json (layout and axes).
     ShaderTable(ShaderTableArgs),
-    /// Write the built-in example parameter map (a face-like test card) as one four-channel EXR.
+    /// Write the built-in example parameter map (a face-like test card) as one four-channel EXR (PIZ, half floats
+    /// unless --precision float).
     #[command(allow_negative_numbers = true)]
     Example {
         /// Output file.
@@ -105,6 +106,9 @@ enum Command {
         /// Which map: the face-like test card, a 16-tuple mask, or one value everywhere.
         #[arg(long, value_enum, default_value_t = ExampleKind::Face)]
         kind: ExampleKind,
+        /// Sample precision of the file: half (the parameters rounded to 11 significant bits) or float (exact).
+        #[arg(long, value_enum, default_value_t = Precision::Half)]
+        precision: Precision,
     },
 }
 
@@ -330,8 +334,8 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         }
         Command::Maps(args) => run_maps(args)?,
         Command::ShaderTable(args) => run_shader_table(args)?,
-        Command::Example { out, size, kind } => {
-            write_example_params(&out, kind, size)?;
+        Command::Example { out, size, kind, precision } => {
+            write_example_params_encoded(&out, kind, size, ExrOptions { precision, ..EXAMPLE_EXR })?;
             println!("wrote {} ({size}x{size}, channels melanin, melanin_blend, hemoglobin, oiliness)", out.display());
         }
         Command::Presets => {

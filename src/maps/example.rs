@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::io::{write_channels_exr, ExrOptions, ParamImage, Plane, PARAM_CHANNELS};
+use super::io::{write_channels_exr, Compression, ExrOptions, ParamImage, Plane, Precision, PARAM_CHANNELS};
 use crate::error::SkinError;
 
 /// Squared elliptical distance of (x, y) from a centre with radii (rx, ry), all in [0, 1] image units.
@@ -123,8 +123,24 @@ pub fn check_example_size(size: usize) -> Result<usize, SkinError> {
     }
 }
 
-/// Write an example map as one EXR with the four parameter channels.
+/// The encoding of the example files: half floats (each parameter rounded to 11 significant bits, a relative error
+/// of at most 2^-11 = 0.049 %, far below what changes a material visibly), PIZ. On the 4096² face this is a 6.5 MB
+/// file instead of 44.5 MB in float, and reading it in `maps` costs a fifth of the float file's CPU time (its PIZ
+/// decode is most of that; docs/maps-performance.md has both inputs' figures).
+pub const EXAMPLE_EXR: ExrOptions = ExrOptions { precision: Precision::Half, compression: Compression::Piz };
+
+/// Write an example map as one EXR with the four parameter channels ([`EXAMPLE_EXR`]).
 pub fn write_example_params(path: &Path, kind: ExampleKind, size: usize) -> Result<(), SkinError> {
+    write_example_params_encoded(path, kind, size, EXAMPLE_EXR)
+}
+
+/// [`write_example_params`] in another encoding (float samples keep the computed parameters exactly).
+pub fn write_example_params_encoded(
+    path: &Path,
+    kind: ExampleKind,
+    size: usize,
+    encoding: ExrOptions,
+) -> Result<(), SkinError> {
     let image = example_params(kind, check_example_size(size)?);
     let planes: Vec<&[f32]> = image
         .planes
@@ -135,5 +151,5 @@ pub fn write_example_params(path: &Path, kind: ExampleKind, size: usize) -> Resu
         })
         .collect();
     let channels: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().cloned().zip(planes).collect();
-    write_channels_exr(path, image.width, image.height, &channels, ExrOptions::FLOAT_PIZ)
+    write_channels_exr(path, image.width, image.height, &channels, encoding)
 }

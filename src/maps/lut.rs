@@ -132,6 +132,13 @@ fn cbrt_unit(x: f64) -> f64 {
     if x.is_nan() || x < f64::MIN_POSITIVE {
         return x.cbrt(); // zero, subnormals, NaN
     }
+    cbrt_normal(x)
+}
+
+/// [`cbrt_unit`] of a positive normal `x`, without the branch, so that [`MaterialTable::lookup_method_rows`]'s loop
+/// over a run of texels vectorises (any other input gives some finite or NaN value, never a trap).
+#[inline]
+fn cbrt_normal(x: f64) -> f64 {
     let mut y = f64::from_bits(x.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
     for _ in 0..3 {
         let y3 = y * y * y;
@@ -139,6 +146,9 @@ fn cbrt_unit(x: f64) -> f64 {
     }
     y
 }
+
+/// Texels [`MaterialTable::lookup_method_rows`] works on at once (its scratch lives on the stack: 4 KiB).
+const RUN: usize = 64;
 
 /// e^x for the interpolated logarithms, x in [ln 1e-30, ln 1e30] (weighted means of stored values), within 2 ulps
 /// of `f32::exp` there (unit test below); NaN passes through. Cephes' `expf`: x = n ln 2 + r with n the nearest
@@ -302,6 +312,129 @@ impl MaterialTable {
         ([e[0], e[1], e[2]], [e[3], e[4], e[5]])
     }
 
+    /// [`MaterialTable::lookup_method`] of a row of texels: the parameters in `melanin`, `melanin_blend`,
+    /// `hemoglobin`, Base Color written into `base_color`'s three slices and the radius (mm) into `radius_mm`'s (all
+    /// the same length; empty radius slices: not written). Bit for bit the same values, faster: the axis warps (the
+    /// two cube roots), the interpolation and the exponentials each run as a loop over a run of texels, which the
+    /// compiler vectorises (the texels' divisions overlap instead of waiting on each other), and a texel equal to its
+    /// left neighbour is not looked up again.
+    pub fn lookup_method_rows(
+        &self,
+        melanin: &[f32],
+        melanin_blend: &[f32],
+        hemoglobin: &[f32],
+        base_color: [&mut [f32]; 3],
+        radius_mm: [&mut [f32]; 3],
+    ) {
+        let n = melanin.len();
+        assert!(melanin_blend.len() == n && hemoglobin.len() == n && base_color.iter().all(|c| c.len() == n));
+        let with_radius = !radius_mm[0].is_empty();
+        assert!(!with_radius || radius_mm.iter().all(|r| r.len() == n));
+        let [c0, c1, c2] = base_color;
+        let [r0, r1, r2] = radius_mm;
+        let mut outputs: [&mut [f32]; 6] = [c0, c1, c2, r0, r1, r2];
+        let planes = if with_radius { 6 } else { 3 };
+        let mut logs = [[0f32; 8]; RUN];
+        let same = |i: usize, j: usize| {
+            (melanin[i].to_bits() == melanin[j].to_bits())
+                & (melanin_blend[i].to_bits() == melanin_blend[j].to_bits())
+                & (hemoglobin[i].to_bits() == hemoglobin[j].to_bits())
+        };
+        let repeats = (1..n).map(|i| usize::from(same(i, i - 1))).sum::<usize>();
+        if repeats * 4 < n {
+            // Few repeats: every texel looked up.
+            for start in (0..n).step_by(RUN) {
+                let end = n.min(start + RUN);
+                self.lookup_run(&melanin[start..end], &melanin_blend[start..end], &hemoglobin[start..end], &mut logs);
+                for (q, plane) in outputs.iter_mut().enumerate().take(planes) {
+                    for (o, e) in plane[start..end].iter_mut().zip(&logs) {
+                        *o = e[q];
+                    }
+                }
+            }
+            return;
+        }
+        // Each texel that repeats its left neighbour's (C_m, beta_m, C_h) exactly (smooth maps stored at a coarse
+        // precision have runs of them) is not looked up again: runs of equal tuples are found first, and the values
+        // of each run's first texel filled in over the run.
+        let (mut m, mut b, mut h) = ([0f32; RUN], [0f32; RUN], [0f32; RUN]);
+        let mut runs = [(0usize, 0usize); RUN];
+        let mut next = 0;
+        while next < n {
+            let mut len = 0;
+            while len < RUN && next < n {
+                let mut end = next + 1;
+                while end < n && same(end, next) {
+                    end += 1;
+                }
+                (m[len], b[len], h[len]) = (melanin[next], melanin_blend[next], hemoglobin[next]);
+                runs[len] = (next, end);
+                len += 1;
+                next = end;
+            }
+            self.lookup_run(&m[..len], &b[..len], &h[..len], &mut logs);
+            for (q, plane) in outputs.iter_mut().enumerate().take(planes) {
+                for (&(first, end), e) in runs[..len].iter().zip(&logs[..len]) {
+                    plane[first..end].fill(e[q]);
+                }
+            }
+        }
+    }
+
+    /// The exponentials of the interpolated logarithms (Base Color in lanes 0..3, radius in 3..6) of up to [`RUN`]
+    /// texels into `logs`, as [`MaterialTable::lookup_method`] computes them.
+    #[inline]
+    fn lookup_run(&self, m: &[f32], b: &[f32], h: &[f32], logs: &mut [[f32; 8]; RUN]) {
+        let len = m.len();
+        assert!(len <= RUN && b.len() == len && h.len() == len);
+        let r = self.resolution;
+        let (di, dj) = (r.melanin_blend * r.hemoglobin, r.hemoglobin);
+        let v = &self.method_logs;
+        let (mut q_m, mut u_m) = ([0f64; RUN], [0f64; RUN]);
+        let (mut q_h, mut u_h) = ([0f64; RUN], [0f64; RUN]);
+        // The warps, as `warp` computes them: cube roots of the clamped shares of the maximum.
+        for x in 0..len {
+            q_m[x] = (m[x] as f64 / MELANIN.max).clamp(0.0, 1.0);
+            q_h[x] = (h[x] as f64 / HEMOGLOBIN.max).clamp(0.0, 1.0);
+        }
+        for x in 0..len {
+            u_m[x] = cbrt_normal(q_m[x]);
+            u_h[x] = cbrt_normal(q_h[x]);
+        }
+        for x in 0..len {
+            if !(q_m[x] >= f64::MIN_POSITIVE) {
+                u_m[x] = cbrt_unit(q_m[x]);
+            }
+            if !(q_h[x] >= f64::MIN_POSITIVE) {
+                u_h[x] = cbrt_unit(q_h[x]);
+            }
+        }
+        for x in 0..len {
+            let (corner, [ti, tj, tk]) =
+                self.cell_of_warped(u_m[x], (b[x] as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, u_h[x]);
+            let mut out = [0.0f32; 8];
+            for (offset, w) in [
+                (0, (1.0 - ti) * (1.0 - tj) * (1.0 - tk)),
+                (1, (1.0 - ti) * (1.0 - tj) * tk),
+                (dj, (1.0 - ti) * tj * (1.0 - tk)),
+                (dj + 1, (1.0 - ti) * tj * tk),
+                (di, ti * (1.0 - tj) * (1.0 - tk)),
+                (di + 1, ti * (1.0 - tj) * tk),
+                (di + dj, ti * tj * (1.0 - tk)),
+                (di + dj + 1, ti * tj * tk),
+            ] {
+                let node = &v[corner + offset];
+                for q in 0..8 {
+                    out[q] += w * node[q];
+                }
+            }
+            // All eight lanes (two of them padding), so that the sums and the exponentials stay vector code.
+            for q in 0..8 {
+                logs[x][q] = exp_stored(out[q]);
+            }
+        }
+    }
+
     /// Trilinear interpolation in the warped coordinates of the logarithms. Inputs are clamped to the domain.
     pub fn lookup(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> TexelMaterial {
         let mut out = [0.0f32; STORED];
@@ -332,15 +465,25 @@ impl MaterialTable {
     /// in the cell, 0..1 per axis, in the warped coordinates. Inputs are clamped to the domain.
     #[inline]
     fn cell(&self, melanin: f32, melanin_blend: f32, hemoglobin: f32) -> (usize, [f32; 3]) {
+        self.cell_of_warped(
+            warp(melanin as f64, MELANIN.max),
+            (melanin_blend as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max,
+            warp(hemoglobin as f64, HEMOGLOBIN.max),
+        )
+    }
+
+    /// [`MaterialTable::cell`] from the warped coordinates (u_m, beta_m share, u_h), each clamped to [0, 1].
+    #[inline]
+    fn cell_of_warped(&self, u_m: f64, u_b: f64, u_h: f64) -> (usize, [f32; 3]) {
         let r = self.resolution;
         let axis = |u: f64, n: usize| {
             let x = u.clamp(0.0, 1.0) * (n - 1) as f64;
             let i = (x as usize).min(n - 2); // x >= 0: truncation is floor, without a libm call
             (i, (x - i as f64) as f32)
         };
-        let (i, ti) = axis(warp(melanin as f64, MELANIN.max), r.melanin);
-        let (j, tj) = axis((melanin_blend as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, r.melanin_blend);
-        let (k, tk) = axis(warp(hemoglobin as f64, HEMOGLOBIN.max), r.hemoglobin);
+        let (i, ti) = axis(u_m, r.melanin);
+        let (j, tj) = axis(u_b, r.melanin_blend);
+        let (k, tk) = axis(u_h, r.hemoglobin);
         ((i * r.melanin_blend + j) * r.hemoglobin + k, [ti, tj, tk])
     }
 

@@ -224,11 +224,28 @@ pub fn check_planes(image: &mut ParamImage, clamp: bool) -> Result<Vec<BadTexels
                 }
             }
             Plane::Texels(values) => {
-                for (i, v) in values.iter_mut().enumerate() {
-                    if !(*v >= lo && *v <= hi) {
-                        note(i, *v, &mut bad);
-                        *v = fix(*v);
-                    }
+                // In parallel, a chunk at a time; each chunk's counts and first bad texels, merged in order.
+                const CHUNK: usize = 1 << 16;
+                let chunks: Vec<BadTexels> = values
+                    .par_chunks_mut(CHUNK)
+                    .enumerate()
+                    .map(|(c, chunk)| {
+                        let mut bad = BadTexels::default();
+                        for (i, v) in chunk.iter_mut().enumerate() {
+                            if !(*v >= lo && *v <= hi) {
+                                note(c * CHUNK + i, *v, &mut bad);
+                                *v = fix(*v);
+                            }
+                        }
+                        bad
+                    })
+                    .collect();
+                for chunk in chunks {
+                    bad.nan += chunk.nan;
+                    bad.infinite += chunk.infinite;
+                    bad.out_of_range += chunk.out_of_range;
+                    let room = LISTED_BAD_TEXELS - bad.first.len();
+                    bad.first.extend(chunk.first.into_iter().take(room));
                 }
             }
         }
@@ -381,9 +398,21 @@ pub fn compute_maps_cancellable(
         } else {
             Some(measure_error_cancellable(&table, &prepared, settings.table_check_samples, cancel)?)
         };
-        fill_rows(w, &mut base_color, &mut radius, progress, cancel, |i| {
-            let t = tuple(i);
-            table.lookup_method(t[0], t[1], t[2])
+        // Constant planes become one shared row.
+        let rows_of = |plane: &Plane| match plane {
+            Plane::Texels(_) => None,
+            Plane::Constant(v) => Some(vec![*v; w]),
+        };
+        let constant_rows = [rows_of(m), rows_of(b), rows_of(hb)];
+        let row = |k: usize, y: usize| -> &[f32] {
+            match (&image.planes[k], &constant_rows[k]) {
+                (Plane::Texels(values), _) => &values[y * w..(y + 1) * w],
+                (Plane::Constant(_), Some(row)) => row,
+                (Plane::Constant(_), None) => unreachable!("constant planes have a row"),
+            }
+        };
+        fill_rows_with(w, &mut base_color, &mut radius, progress, cancel, |y, c, r| {
+            table.lookup_method_rows(row(0, y), row(1, y), row(2, y), c, r)
         });
         let (resolution, nodes) = (settings.table, settings.table.node_count());
         work.evaluations = measured_error.as_ref().map_or(0, |_| settings.table_check_samples);
@@ -477,11 +506,32 @@ fn fill_rows(
     cancel: &AtomicBool,
     texel: impl Fn(usize) -> ([f32; 3], [f32; 3]) + Sync,
 ) {
+    fill_rows_with(width, base_color, radius, progress, cancel, |y, [c0, c1, c2], [r0, r1, r2]| {
+        let with_radius = !r0.is_empty();
+        for x in 0..width {
+            let (c, r) = texel(y * width + x);
+            (c0[x], c1[x], c2[x]) = (c[0], c[1], c[2]);
+            if with_radius {
+                (r0[x], r1[x], r2[x]) = (r[0], r[1], r[2]);
+            }
+        }
+    });
+}
+
+/// Fill the output planes row by row in parallel: `row(y, base_color, radius)` writes row `y` of each plane (the
+/// radius slices are empty when the radius is not asked for). Rows not started when `cancel` is set are skipped.
+fn fill_rows_with(
+    width: usize,
+    base_color: &mut [Vec<f32>; 3],
+    radius: &mut [Vec<f32>; 3],
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    cancel: &AtomicBool,
+    row: impl Fn(usize, [&mut [f32]; 3], [&mut [f32]; 3]) + Sync,
+) {
     let total = base_color[0].len();
     let [c0, c1, c2] = base_color;
     let [r0, r1, r2] = radius;
     // Without the radius its rows are empty slices, one per row of Base Color.
-    let with_radius = !r0.is_empty();
     fn rows(plane: &mut [f32], width: usize, count: usize) -> Vec<&mut [f32]> {
         if plane.is_empty() {
             (0..count).map(|_| &mut [][..]).collect()
@@ -500,13 +550,7 @@ fn fill_rows(
             if cancel.load(Ordering::Relaxed) {
                 return;
             }
-            for x in 0..width {
-                let (c, r) = texel(y * width + x);
-                (c0[x], c1[x], c2[x]) = (c[0], c[1], c[2]);
-                if with_radius {
-                    (r0[x], r1[x], r2[x]) = (r[0], r[1], r[2]);
-                }
-            }
+            row(y, [c0, c1, c2], [r0, r1, r2]);
             if let Some(p) = progress {
                 p(width, total);
             }

@@ -107,6 +107,25 @@ pub fn resolve_compression(
     } else {
         (0..AUTO_SAMPLE_BLOCKS).map(|i| (2 * i + 1) * blocks / (2 * AUTO_SAMPLE_BLOCKS)).collect()
     };
+    if matches!(candidate, Compression::Zip | Compression::Zips) {
+        // The writer's own ZIP blocks (`zip_block`), as the file would hold them.
+        let sizes = guard(|| {
+            use rayon::prelude::*;
+            picked
+                .par_iter()
+                .map(|&b| {
+                    let y = b * lines;
+                    let n = lines.min(height - y);
+                    (
+                        n * width * header.channels.bytes_per_pixel,
+                        zip_block(y, n, width, &sources, options.precision).len(),
+                    )
+                })
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+        })?;
+        let (raw, packed) = sizes;
+        return Ok(if (packed as f64) <= (1.0 - AUTO_MIN_SAVING) * raw as f64 { candidate } else { Compression::None });
+    }
     let headers = [header];
     let failed = Cell::new(false);
     let sizes = guard(|| {
@@ -228,6 +247,19 @@ fn write_exr_to<W: std::io::Write + std::io::Seek>(
     let sources = sorted_sources(channels);
     let failed = Cell::new(false);
 
+    if matches!(compression, Compression::Zip | Compression::Zips) {
+        let lines = header.compression.scan_lines_per_block();
+        let written = guard(|| {
+            exr::block::write(out, std::iter::once(header).collect(), true, |_, chunk_writer| {
+                write_zip_chunks(chunk_writer, width, height, lines, &sources, precision)
+            })
+        });
+        return match written {
+            Ok(Ok(())) => Ok(()),
+            Ok(Err(e)) => Err(e.to_string()),
+            Err(panic) => Err(panic),
+        };
+    }
     let written = guard(|| {
         exr::block::write(out, std::iter::once(header).collect(), true, |meta, chunk_writer| {
             let header = &meta.headers[0];
@@ -244,6 +276,134 @@ fn write_exr_to<W: std::io::Write + std::io::Seek>(
         Ok(Err(e)) => Err(e.to_string()),
         Err(panic) => Err(panic),
     }
+}
+
+/// Deflate level of ZIP and ZIPS blocks (zlib-rs levels, 1 to 9). On the 4096² face example's half-float maps
+/// (docs/maps-performance.md) level 4 gives files about 9 % larger than the exr crate's miniz_oxide at its level 4
+/// in half its CPU time; level 1 would be a third faster again but 45 % larger.
+const ZIP_LEVEL: u32 = 4;
+
+/// Scan lines whose blocks are compressed together before they are written in order (bounds the compressed data
+/// held at once: at most the raw size of this many lines).
+const ZIP_BATCH_LINES: usize = 256;
+
+/// One thread's ZIP working state: the deflate stream (reset per block) and the block buffers.
+struct ZipState {
+    compress: flate2::Compress,
+    separated: Vec<u8>,
+    predicted: Vec<u8>,
+    halves: Vec<f16>,
+}
+
+thread_local! {
+    static ZIP_STATE: std::cell::RefCell<Option<ZipState>> = const { std::cell::RefCell::new(None) };
+}
+
+/// The raw little-endian data of the scan lines `y0..y0 + lines`: line by line, each channel's samples in stored
+/// order.
+fn raw_lines(y0: usize, lines: usize, width: usize, sources: &[&[f32]], precision: Precision) -> Vec<u8> {
+    let mut raw = Vec::new();
+    for y in y0..y0 + lines {
+        for plane in sources {
+            let row = &plane[y * width..(y + 1) * width];
+            match precision {
+                Precision::Half => raw.extend(row.iter().flat_map(|&v| f16::from_f32(v).to_bits().to_le_bytes())),
+                Precision::Float => raw.extend(row.iter().flat_map(|v| v.to_le_bytes())),
+            }
+        }
+    }
+    raw
+}
+
+/// The stored bytes of the ZIP (or ZIPS) scan-line block of `lines` lines from row `y0`, as OpenEXR's zip
+/// compressor makes them (ImfZip.cpp; the exr crate's `compression::zip` does the same): the block's raw data
+/// ([`raw_lines`]), its bytes split into those at even and those at odd positions, a byte-wise difference predictor
+/// (`d[i] = t[i] - t[i - 1] + 128`, wrapping), then zlib. A block that does not shrink is stored raw, as the format
+/// allows and OpenEXR does.
+fn zip_block(y0: usize, lines: usize, width: usize, sources: &[&[f32]], precision: Precision) -> Vec<u8> {
+    use half::slice::HalfFloatSliceExt;
+    ZIP_STATE.with(|cell| {
+        let mut slot = cell.borrow_mut();
+        let state = slot.get_or_insert_with(|| ZipState {
+            compress: flate2::Compress::new(flate2::Compression::new(ZIP_LEVEL), true),
+            separated: Vec::new(),
+            predicted: Vec::new(),
+            halves: Vec::new(),
+        });
+        let ZipState { compress, separated, predicted, halves } = state;
+        let samples = lines * width * sources.len();
+        let n = samples * if precision == Precision::Half { 2 } else { 4 };
+        separated.resize(n, 0);
+        match precision {
+            // A half sample's two little-endian bytes sit at an even and an odd position: its low byte goes to the
+            // first half, its high byte to the second, in sample order.
+            Precision::Half => {
+                let (low, high) = separated.split_at_mut(samples);
+                let mut at = 0;
+                for y in y0..y0 + lines {
+                    for plane in sources {
+                        halves.resize(width, f16::ZERO);
+                        halves.convert_from_f32_slice(&plane[y * width..(y + 1) * width]);
+                        for ((l, h), v) in low[at..at + width].iter_mut().zip(&mut high[at..at + width]).zip(&*halves) {
+                            [*l, *h] = v.to_bits().to_le_bytes();
+                        }
+                        at += width;
+                    }
+                }
+            }
+            Precision::Float => {
+                let raw = raw_lines(y0, lines, width, sources, precision);
+                let (even, odd) = separated.split_at_mut(n / 2);
+                for ((e, o), pair) in even.iter_mut().zip(odd.iter_mut()).zip(raw.chunks_exact(2)) {
+                    (*e, *o) = (pair[0], pair[1]);
+                }
+            }
+        }
+        predicted.resize(n, 0);
+        if n > 0 {
+            predicted[0] = separated[0];
+            for ((d, t), before) in predicted[1..].iter_mut().zip(&separated[1..]).zip(&separated[..n - 1]) {
+                *d = t.wrapping_sub(*before).wrapping_add(128);
+            }
+        }
+        compress.reset();
+        // Room for the raw size only: a stream that does not end within it is no smaller, and the block is stored raw.
+        let mut packed = Vec::with_capacity(n);
+        match compress.compress_vec(predicted, &mut packed, flate2::FlushCompress::Finish) {
+            Ok(flate2::Status::StreamEnd) if packed.len() < n => packed,
+            _ => raw_lines(y0, lines, width, sources, precision),
+        }
+    })
+}
+
+/// Write every block of a ZIP or ZIPS file (`lines` per block) in increasing order, compressing a batch of blocks
+/// in parallel at a time.
+fn write_zip_chunks(
+    chunk_writer: &mut impl ChunksWriter,
+    width: usize,
+    height: usize,
+    lines: usize,
+    sources: &[&[f32]],
+    precision: Precision,
+) -> exr::error::UnitResult {
+    use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
+    use rayon::prelude::*;
+    let blocks = height.div_ceil(lines);
+    let batch = (ZIP_BATCH_LINES / lines).max(1);
+    for first in (0..blocks).step_by(batch) {
+        let packed: Vec<Vec<u8>> = (first..blocks.min(first + batch))
+            .into_par_iter()
+            .map(|b| zip_block(b * lines, lines.min(height - b * lines), width, sources, precision))
+            .collect();
+        for (b, bytes) in (first..).zip(packed) {
+            let y_coordinate =
+                i32::try_from(b * lines).map_err(|_| exr::error::Error::Invalid("image height".into()))?;
+            let block = CompressedScanLineBlock { y_coordinate, compressed_pixels_le: bytes };
+            chunk_writer
+                .write_chunk(b, Chunk { layer_index: 0, compressed_block: CompressedBlock::ScanLine(block) })?;
+        }
+    }
+    Ok(())
 }
 
 /// Write an RGB EXR (channels R, G, B) from three row-major planes, atomically (temp file in the same directory,

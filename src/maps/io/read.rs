@@ -540,6 +540,8 @@ fn read_exr_planes(
             return Ok(planes);
         }
 
+        // One line of half samples at a time, converted to f32 as a slice (F16C where the CPU has it).
+        let mut halves: Vec<f16> = Vec::new();
         let chunks = reader
             .filter_chunks(false, |_, tile, block| block.layer == 0 && tile.is_largest_resolution_level())
             .map_err(ReadFailure::Exr)?;
@@ -559,9 +561,10 @@ fn read_exr_planes(
                     match types[line.location.channel] {
                         SampleType::F32 => line.read_samples_into_slice(dst)?,
                         SampleType::F16 => {
-                            for (d, s) in dst.iter_mut().zip(line.read_samples::<f16>()) {
-                                *d = s?.to_f32();
-                            }
+                            use half::slice::HalfFloatSliceExt;
+                            halves.resize(n, f16::ZERO);
+                            line.read_samples_into_slice(&mut halves)?;
+                            halves.convert_to_f32_slice(dst);
                         }
                         SampleType::U32 => {
                             for (d, s) in dst.iter_mut().zip(line.read_samples::<u32>()) {
