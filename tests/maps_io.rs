@@ -581,6 +581,23 @@ fn auto_compression_compresses_where_it_pays_and_not_where_it_does_not() {
     assert_eq!(staged.compression(), Some(Compression::Rle));
     staged.commit().unwrap();
     assert_eq!(compression_on_disk(&path), exr::compression::Compression::RLE);
+    // ZIP and ZIPS on noise: blocks that deflate does not shrink are stored raw, and read back exactly.
+    for precision in ALL_PRECISIONS {
+        let noise = if precision == Precision::Half { &half_noise } else { &float_noise };
+        for (compression, on_disk) in [
+            (Compression::Zips, exr::compression::Compression::ZIP1),
+            (Compression::Zip, exr::compression::Compression::ZIP16),
+        ] {
+            let path = dir.path().join("forced-zip.exr");
+            let planes = [noise[0].as_slice(), noise[1].as_slice(), noise[2].as_slice()];
+            write_rgb_exr(&path, w, h, planes, ExrOptions { precision, compression }).unwrap();
+            assert_eq!(compression_on_disk(&path), on_disk);
+            let (_, _, chans) = read_exr_channels(&path).unwrap();
+            for (c, plane) in chans.iter().rev().zip(planes) {
+                assert_eq!(c.1, as_stored(plane, precision), "{compression:?} {precision:?} {}", c.0);
+            }
+        }
+    }
 }
 
 #[test]

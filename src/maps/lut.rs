@@ -402,10 +402,10 @@ impl MaterialTable {
             u_h[x] = cbrt_normal(q_h[x]);
         }
         for x in 0..len {
-            if !(q_m[x] >= f64::MIN_POSITIVE) {
+            if q_m[x].is_nan() || q_m[x] < f64::MIN_POSITIVE {
                 u_m[x] = cbrt_unit(q_m[x]);
             }
-            if !(q_h[x] >= f64::MIN_POSITIVE) {
+            if q_h[x].is_nan() || q_h[x] < f64::MIN_POSITIVE {
                 u_h[x] = cbrt_unit(q_h[x]);
             }
         }
