@@ -154,7 +154,16 @@ def main() -> None:
             # The face example as float samples (the example files are half floats): what a float input costs.
             inputs["face (float)"] = tmp / f"face-float-{size}.exr"
             subprocess.run(
-                [str(CLI), "example", "--size", str(size), "--precision", "float", "--out", str(inputs["face (float)"])],
+                [
+                    str(CLI),
+                    "example",
+                    "--size",
+                    str(size),
+                    "--precision",
+                    "float",
+                    "--out",
+                    str(inputs["face (float)"]),
+                ],
                 check=True,
                 capture_output=True,
             )
@@ -222,7 +231,8 @@ def main() -> None:
         f"Regenerate: `.venv/bin/python scripts/maps_report.py` (after `cargo build --release`). Generated {time.strftime('%Y-%m-%d')} "
         f"on {os.cpu_count()} cores, load average {load_before:.1f} before and {load_after:.1f} after (other jobs share the "
         f"machine: CPU seconds, user + system, are steadier than wall times); medians of {repeats} runs of `spectral-skin "
-        "maps` on the built-in examples (`spectral-skin example --kind uniform|mask|face`) and on a noise map (all four "
+        "maps` on the built-in examples (`spectral-skin example --kind uniform|mask|face`: half-float PIZ files), on the "
+        "face example in float samples (`--precision float`, input `face (float)`) and on a noise map (all four "
         "parameters uniform random over their ranges, written by this script: nothing to compress, no two texels alike), "
         "wall time, CPU time and peak resident memory of the whole process, total size of the written EXRs.",
         "",
@@ -247,6 +257,7 @@ def main() -> None:
     res = cold["resolution"]
     big = max(sizes)
     face, noise = find(big, "face", "table (cached)", "auto"), find(big, "noise", "table (cached)", "auto")
+    face_float = find(big, "face (float)", "table (cached)", "auto")
     face_old = find(big, "face", "table (cached)", "PIZ, float")
     noise_old = find(big, "noise", "table (cached)", "PIZ, float")
     face_piz = find(big, "face", "table (cached)", "PIZ, half")
@@ -268,8 +279,11 @@ def main() -> None:
         "ZIPS for half and PIZ for float; the file is written with it if the sample shrinks by at least 25 %, else "
         "uncompressed. The sidecar records the choice per file (`outputs.<file>.compression`).",
         "",
-        f"At {big}²: the face example now takes {face[4]:.2f} s wall ({face[5]:.2f} s CPU) and {face[8]:.1f} MB, against "
-        f"{face_old[4]:.2f} s ({face_old[5]:.2f} s CPU) and {face_old[8]:.1f} MB for float PIZ, the previous default; "
+        f"At {big}²: the face example (a half-float PIZ file, as `spectral-skin example` writes it) takes {face[4]:.2f} s "
+        f"wall ({face[5]:.2f} s CPU) with the table cached and {face[8]:.1f} MB of maps; the same map in float samples "
+        f"(`example --precision float`, the `face (float)` rows) takes {face_float[4]:.2f} s ({face_float[5]:.2f} s CPU), "
+        f"its PIZ decode and its lookup of every texel being the difference; float PIZ output, the previous default, "
+        f"{face_old[4]:.2f} s ({face_old[5]:.2f} s CPU) and {face_old[8]:.1f} MB; "
         f"PIZ on half samples gives {face_piz[8]:.1f} MB in {face_piz[5]:.2f} s CPU ({zips_vs_piz}). Noise takes {noise[4]:.2f} s wall ({noise[5]:.2f} s CPU) and {noise[8]:.1f} MB, written uncompressed, "
         f"against {noise_old[4]:.2f} s ({noise_old[5]:.2f} s CPU) and {noise_old[8]:.1f} MB for float PIZ; PIZ on its "
         f"half samples would save {100 * (1 - noise_piz[8] / noise[8]):.0f} % of the size for "
@@ -277,14 +291,21 @@ def main() -> None:
         "a quarter of the 0.2 % the Blender render tests allow and 8 times below the table's own error; float remains "
         "for pipelines that post-process the maps.",
         "",
-        "Where the time goes (`perf record -g target/release/spectral-skin maps --params face.exr --out out` on the "
-        "4096² face, 2026-12-01; the read / compute / write column above gives the phases of every run): with float PIZ "
-        "output, the previous default, PIZ's Huffman coder and wavelet took 45 % of the CPU time, the table lookup 21 % "
-        "(its six libm exp calls 4 %), decoding the PIZ input 13 %, page faults and copies most of the rest. With half "
-        "output and a cheap codec the lookup took 38 % and the input decode 22 %. The lookup now keeps the method's six "
-        "logarithms in one 8-lane row per node and uses a branch-free exp that the compiler vectorises: 120 -> 80 ns "
-        "of CPU per texel on one thread (the cube roots of the two warped axes are most of the rest). What remains is "
-        "the input decode (the face example is a float PIZ EXR), the lookup, and writing the bytes.",
+        "Where the time goes (`perf record -F 999 target/release/spectral-skin maps --params face.exr --out out` on the "
+        "4096² face with the table cached, 2026-12-01, on the shared machine: CPU shares, not times; the read / compute / "
+        "write column above gives the phases of every run). Before this round (float example, the exr crate's ZIPS "
+        "encoder) a run took 6.6 s of CPU: decoding the float PIZ input 23 %, the lookup 27 %, ZIPS's deflate "
+        "(miniz_oxide, level 4) 18 %, building the blocks for it (f16 conversion, copies) 13 %. What changed: ZIP and "
+        "ZIPS blocks are built straight from the planes (f16 a row at a time) and deflated with zlib-rs at level 4 "
+        "(`encode.rs`, `zip_block`: half the CPU of miniz_oxide's level 4 for about 8 % more bytes; level 1 would be a "
+        "third faster again but 45 % larger); the lookup works on 64 texels of a row at a time, so the cube roots, the "
+        "interpolation and the exponentials are vector loops, and a texel equal to its left neighbour is not looked up "
+        "again (the same values, bit for bit: `tests/maps_lookup_rows.rs`); the parameter check runs in parallel; half "
+        "input is converted a row at a time; and the example is written in half floats: its PIZ decode is a fifth of "
+        "the float file's (the float samples' low mantissa bits are noise to PIZ's Huffman coder) and its rows repeat "
+        "each tuple over about a dozen texels, so the lookup runs on a fraction of them. Now the half example takes "
+        "2.3 s of CPU: deflate 25 %, the PIZ decode 21 %, page faults and other kernel work (the ~700 MB of planes) "
+        "21 %, the lookup 14 %; the float input 4.4 s: PIZ decode 34 %, lookup 24 %, kernel 14 %, deflate 13 %.",
     ]
     lines += [
         "",
