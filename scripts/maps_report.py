@@ -294,18 +294,18 @@ def main() -> None:
         "Where the time goes (`perf record -F 999 target/release/spectral-skin maps --params face.exr --out out` on the "
         "4096² face with the table cached, 2026-12-01, on the shared machine: CPU shares, not times; the read / compute / "
         "write column above gives the phases of every run). Before this round (float example, the exr crate's ZIPS "
-        "encoder) a run took 6.6 s of CPU: decoding the float PIZ input 23 %, the lookup 27 %, ZIPS's deflate "
+        "encoder; 7.04 s of CPU in the previous report): decoding the float PIZ input 23 %, the lookup 27 %, ZIPS's deflate "
         "(miniz_oxide, level 4) 18 %, building the blocks for it (f16 conversion, copies) 13 %. What changed: ZIP and "
         "ZIPS blocks are built straight from the planes (f16 a row at a time) and deflated with zlib-rs at level 4 "
         "(`encode.rs`, `zip_block`: half the CPU of miniz_oxide's level 4 for about 8 % more bytes; level 1 would be a "
         "third faster again but 45 % larger); the lookup works on 64 texels of a row at a time, so the cube roots, the "
         "interpolation and the exponentials are vector loops, and a texel equal to its left neighbour is not looked up "
         "again (the same values, bit for bit: `tests/maps_lookup_rows.rs`); the parameter check runs in parallel; half "
-        "input is converted a row at a time; and the example is written in half floats: its PIZ decode is a fifth of "
-        "the float file's (the float samples' low mantissa bits are noise to PIZ's Huffman coder) and its rows repeat "
-        "each tuple over about a dozen texels, so the lookup runs on a fraction of them. Now the half example takes "
-        "2.3 s of CPU: deflate 25 %, the PIZ decode 21 %, page faults and other kernel work (the ~700 MB of planes) "
-        "21 %, the lookup 14 %; the float input 4.4 s: PIZ decode 34 %, lookup 24 %, kernel 14 %, deflate 13 %.",
+        "input is converted a row at a time; and the example is written in half floats: its PIZ decode takes about a third "
+        "of the float file's CPU (the float samples' low mantissa bits are noise to PIZ's Huffman coder) and its rows repeat "
+        "each tuple over about a dozen texels, so the lookup runs on a fraction of them. Now the half example's CPU goes "
+        "to deflate 25 %, the PIZ decode 21 %, page faults and other kernel work (the ~700 MB of planes) 21 %, the "
+        "lookup 14 %; the float input's to the PIZ decode 34 %, the lookup 24 %, the kernel 14 %, deflate 13 %.",
     ]
     lines += [
         "",

@@ -125,8 +125,9 @@ pub fn check_example_size(size: usize) -> Result<usize, SkinError> {
 
 /// The encoding of the example files: half floats (each parameter rounded to 11 significant bits, a relative error
 /// of at most 2^-11 = 0.049 %, far below what changes a material visibly), PIZ. On the 4096² face this is a 6.5 MB
-/// file instead of 44.5 MB in float, and reading it in `maps` costs a fifth of the float file's CPU time (its PIZ
-/// decode is most of that; docs/maps-performance.md has both inputs' figures).
+/// file instead of 44.5 MB in float, its PIZ decode in `maps` takes about a third of the float file's CPU time, and its
+/// rows repeat each parameter tuple over about a dozen texels, which the lookup skips (docs/maps-performance.md has
+/// both inputs' figures).
 pub const EXAMPLE_EXR: ExrOptions = ExrOptions { precision: Precision::Half, compression: Compression::Piz };
 
 /// Write an example map as one EXR with the four parameter channels ([`EXAMPLE_EXR`]).
