@@ -20,8 +20,11 @@ if TYPE_CHECKING:
 # The model's parameters, from the core's parameter table (src/skin/params.rs, ``spectral_skin.parameters()``): names,
 # ranges, labels and meanings, for the UI (slider limits and tooltips) and for scaling 8/16-bit parameter images onto
 # the range (as `spectral-skin maps` does). The core validates every value itself.
+# PARAMETERS: the paper's four (no default: every material gives them), one per slider, Live-group input and
+# parameter-map channel; EXTENDED_PARAMETERS: the extended physiology (each with the paper's value as its default).
 _SPECS = spectral_skin.parameters()
-PARAMETERS = tuple(p["name"] for p in _SPECS)
+PARAMETERS = tuple(p["name"] for p in _SPECS if p["default"] is None)
+EXTENDED_PARAMETERS = tuple(p["name"] for p in _SPECS if p["default"] is not None)
 
 # Blender 5.0's scene-linear working spaces (``bpy.data.colorspace.working_space``), which are also the names of
 # their OCIO colour spaces and the core's ``working_space`` names. Blender before 5.0 has only Linear Rec.709.

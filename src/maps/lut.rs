@@ -511,12 +511,12 @@ fn node_params(r: TableResolution, n: usize) -> SkinParams {
     let j = (n / r.hemoglobin) % r.melanin_blend;
     let i = n / (r.hemoglobin * r.melanin_blend);
     let at = |idx: usize, count: usize| idx as f64 / (count - 1) as f64;
-    SkinParams {
-        melanin: unwarp(at(i, r.melanin), MELANIN.max),
-        melanin_blend: MELANIN_BLEND.min + at(j, r.melanin_blend) * (MELANIN_BLEND.max - MELANIN_BLEND.min),
-        hemoglobin: unwarp(at(k, r.hemoglobin), HEMOGLOBIN.max),
-        oiliness: 0.0,
-    }
+    SkinParams::paper(
+        unwarp(at(i, r.melanin), MELANIN.max),
+        MELANIN_BLEND.min + at(j, r.melanin_blend) * (MELANIN_BLEND.max - MELANIN_BLEND.min),
+        unwarp(at(k, r.hemoglobin), HEMOGLOBIN.max),
+        0.0,
+    )
 }
 
 /// Worst relative error of the table against direct evaluation (an albedo-only table's radius error is 0: it has
@@ -553,12 +553,12 @@ pub fn check_points(r: TableResolution, samples: usize) -> Vec<[f64; 3]> {
 
 /// The parameters at warped point `u` of [`check_points`] (oiliness 0: it does not enter the table).
 pub fn check_point_params(u: [f64; 3]) -> SkinParams {
-    SkinParams {
-        melanin: unwarp(u[0], MELANIN.max),
-        melanin_blend: MELANIN_BLEND.min + u[1] * (MELANIN_BLEND.max - MELANIN_BLEND.min),
-        hemoglobin: unwarp(u[2], HEMOGLOBIN.max),
-        oiliness: 0.0,
-    }
+    SkinParams::paper(
+        unwarp(u[0], MELANIN.max),
+        MELANIN_BLEND.min + u[1] * (MELANIN_BLEND.max - MELANIN_BLEND.min),
+        unwarp(u[2], HEMOGLOBIN.max),
+        0.0,
+    )
 }
 
 /// Measure the table's error at `samples` points: cell centres (where trilinear error peaks) and pseudo-random points

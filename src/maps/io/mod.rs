@@ -27,7 +27,7 @@ pub use encode::{resolve_compression, stage_channels_exr, stage_rgb_exr, write_c
 pub use read::{read_exr_channels, read_params, read_params_from_bytes};
 pub use staging::{commit_all, stage_bytes, write_atomic, Staged};
 
-use crate::skin::params::PARAMS;
+use crate::skin::params::PAPER_PARAMS as PARAMS;
 
 /// The names of the four parameters ([`PARAMS`]: melanin, melanin_blend, hemoglobin, oiliness). These are also the channel names
 /// a multi-channel parameter EXR must use (exact, case-sensitive).
