@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bpy
 
-from .core import PARAMETERS
+from .core import EXTENDED_PARAMETERS, PARAMETERS
 from .props import stored_effects
 
 
@@ -30,6 +30,8 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
             row = layout.row(align=True)
             row.active = getattr(props, f"{name}_map") is None and props.params_map is None
             row.prop(props, name, slider=True)
+        # The albedo of the constant values, as the sliders move (props.update_swatch; read-only).
+        layout.prop(props, "swatch")
         box = layout.box()
         box.label(text="Parameter Maps (optional)")
         box.template_ID(props, "params_map", open="image.open")
@@ -65,4 +67,29 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
                 result.label(text=f"{effect['effect']}: {effect['reason']}", icon=icon)
 
 
-classes = (SPECTRAL_SKIN_PT_material,)
+class SPECTRAL_SKIN_PT_advanced(bpy.types.Panel):
+    """The extended physiology (core.EXTENDED_PARAMETERS: sliders from the core's table), closed by default: the
+    paper's values unless changed; one value per material."""
+
+    bl_label = "Advanced"
+    bl_idname = "SPECTRAL_SKIN_PT_advanced"
+    bl_parent_id = "SPECTRAL_SKIN_PT_material"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context: bpy.types.Context) -> bool:
+        return getattr(context, "material", None) is not None
+
+    def draw(self, context: bpy.types.Context) -> None:
+        layout = self.layout
+        layout.use_property_split = True
+        props = context.material.spectral_skin
+        for name in EXTENDED_PARAMETERS:
+            layout.prop(props, name, slider=True)
+        layout.label(text="Extended physiology: the defaults are the paper's model", icon="INFO")
+
+
+classes = (SPECTRAL_SKIN_PT_material, SPECTRAL_SKIN_PT_advanced)
