@@ -1,0 +1,129 @@
+"""The add-on's extended physiology in Blender: the Advanced sliders from the core's table, Apply with a non-default
+epidermis thickness against evaluate(), presets setting the extended sliders, the albedo swatch following the sliders,
+the batch flags.
+
+Headless, no rendering. Run: .venv-blender/5.0/bin/python -m pytest tests/blender/test_addon_extended.py
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+import numpy as np  # noqa: E402
+import spectral_skin  # noqa: E402
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+from blender_addon import nodes as addon_nodes  # noqa: E402
+
+SPECS = {p["name"]: p for p in spectral_skin.parameters()}
+EXTENDED = [n for n, p in SPECS.items() if p["default"] is not None]
+
+
+def _principled(material):
+    found = addon_nodes.tagged_nodes(material.node_tree, "principled")
+    assert len(found) == 1, [n.name for n in material.node_tree.nodes]
+    return found[0]
+
+
+def test_advanced_sliders_are_the_cores_parameters(addon):
+    assert len(EXTENDED) == 3
+    rna = bpy.types.Material.bl_rna.properties["spectral_skin"].fixed_type.bl_rna.properties
+    material = bpy.data.materials.new("Skin")
+    for name in EXTENDED:
+        prop = rna[name]
+        assert (prop.hard_min, prop.hard_max) == pytest.approx((SPECS[name]["min"], SPECS[name]["max"]), rel=1e-6)
+        assert prop.default == pytest.approx(SPECS[name]["default"], rel=1e-6)
+        assert getattr(material.spectral_skin, name) == pytest.approx(SPECS[name]["default"], rel=1e-6)
+        assert prop.name.startswith(SPECS[name]["label"])
+    assert bpy.types.SPECTRAL_SKIN_PT_advanced.bl_parent_id == "SPECTRAL_SKIN_PT_material"
+    assert "DEFAULT_CLOSED" in bpy.types.SPECTRAL_SKIN_PT_advanced.bl_options
+
+
+def test_apply_with_a_thin_epidermis_gives_evaluates_base_color(addon):
+    bpy.context.scene.render.engine = "CYCLES"
+    material = bpy.data.materials.new("Skin")
+    props = material.spectral_skin
+    props.epidermis_thickness_mm = 0.08
+    props.blood_oxygenation = 0.6
+    props.method = "RANDOM_WALK"
+    assert props.preset == "CUSTOM"
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    node = _principled(material)
+    values = {"epidermis_thickness_mm": props.epidermis_thickness_mm, "blood_oxygenation": props.blood_oxygenation}
+    expected = spectral_skin.evaluate(preset="caucasian", blender=bpy.app.version, **values)["methods"]["random_walk"]
+    np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], expected["base_color"], rtol=1e-6)
+    paper = spectral_skin.evaluate(preset="caucasian", blender=bpy.app.version)["methods"]["random_walk"]
+    assert np.max(np.abs(np.subtract(expected["base_color"], paper["base_color"]))) > 0.01
+    np.testing.assert_allclose(props.result_radius_mm, expected["subsurface_radius_mm"], rtol=1e-6)
+
+
+def test_presets_set_the_extended_sliders(addon):
+    material = bpy.data.materials.new("Skin")
+    props = material.spectral_skin
+    for name, preset in spectral_skin.presets().items():
+        for extended in EXTENDED:  # off the preset's values first
+            setattr(props, extended, SPECS[extended]["min"])
+        assert props.preset == "CUSTOM"
+        props.preset = name.upper()
+        assert props.preset == name.upper()  # setting the sliders did not switch the menu to Custom
+        for param in (*[n for n in SPECS if n not in EXTENDED], *EXTENDED):
+            assert getattr(props, param) == pytest.approx(preset.get(param, SPECS[param]["default"]), rel=1e-6), (
+                name, param)
+
+
+def test_swatch_follows_the_sliders(addon):
+    material = bpy.data.materials.new("Skin")
+    props = material.spectral_skin
+    space = addon_nodes.scene_working_space()
+
+    def albedo(p):
+        values = {n: getattr(p, n) for n in SPECS}
+        return spectral_skin.evaluate(outputs=["albedo"], working_space=space, **values)["diffuse_reflectance_rgb"]
+
+    np.testing.assert_allclose(props.swatch, albedo(props), rtol=1e-5)  # a new material: the default preset's
+    before = tuple(props.swatch)
+    props.epidermis_thickness_mm = 0.05
+    assert tuple(props.swatch) != pytest.approx(before, abs=1e-3)
+    np.testing.assert_allclose(props.swatch, albedo(props), rtol=1e-5)
+    props.hemoglobin = 0.06
+    np.testing.assert_allclose(props.swatch, albedo(props), rtol=1e-5)
+    props.preset = "AFRICAN"
+    np.testing.assert_allclose(props.swatch, albedo(props), rtol=1e-5)
+    with pytest.raises(AttributeError):
+        props.swatch = (1.0, 0.0, 0.0)  # read-only: it shows the model's colour
+
+
+def test_batch_flags_and_sidecar_carry_the_extended_values(tmp_path):
+    """The headless batch apply (blender_addon/batch.py, its own process as a farm runs it): one flag per extended
+    parameter of the core's table; the sidecar records the values; Base Color is evaluate's for them."""
+    blend = tmp_path / "in.blend"
+    script = ("import bpy; bpy.ops.wm.read_factory_settings(use_empty=True); bpy.data.materials.new('Skin').use_fake_user = True; "
+              "bpy.context.scene.render.engine = 'CYCLES'; "
+              f"bpy.ops.wm.save_as_mainfile(filepath={str(blend)!r})")
+    subprocess.run([sys.executable, "-c", script], check=True, capture_output=True)
+    out = tmp_path / "out.blend"
+    run = subprocess.run([sys.executable, str(REPO / "blender_addon" / "batch.py"), "apply", str(blend), str(out),
+                          "--material", "Skin", "--preset", "asian", "--epidermis-thickness-mm", "0.1",
+                          "--baseline-absorption-scale", "2"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    sidecar = json.loads((tmp_path / "out.spectral_skin.json").read_text())
+    extended = {"epidermis_thickness_mm": 0.1, "baseline_absorption_scale": 2.0,
+                "blood_oxygenation": SPECS["blood_oxygenation"]["default"]}
+    assert sidecar["Skin"]["extended"] == extended
+    check = (f"import bpy, json; bpy.ops.wm.open_mainfile(filepath={str(out)!r}); m = bpy.data.materials['Skin']; "
+             "n = [n for n in m.node_tree.nodes if n.get('spectral_skin') == 'principled'][0]; "
+             "print(json.dumps(list(n.inputs['Base Color'].default_value[:3])))")
+    base_color = json.loads(subprocess.run([sys.executable, "-c", check], check=True, capture_output=True,
+                                           text=True).stdout.strip().splitlines()[-1])
+    expected = spectral_skin.evaluate(preset="asian", blender=bpy.app.version, **extended)["methods"]["burley"]
+    np.testing.assert_allclose(base_color, expected["base_color"], rtol=1e-6)
