@@ -127,3 +127,65 @@ def test_batch_flags_and_sidecar_carry_the_extended_values(tmp_path):
                                            text=True).stdout.strip().splitlines()[-1])
     expected = spectral_skin.evaluate(preset="asian", blender=bpy.app.version, **extended)["methods"]["burley"]
     np.testing.assert_allclose(base_color, expected["base_color"], rtol=1e-6)
+
+
+def _albedo_material(tmp_path, codes):
+    """A saved .blend with a material whose Principled Base Color is an 8-bit sRGB PNG of ``codes`` (H, W, 3 bytes,
+    row 0 at the top)."""
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "head.blend"))
+    h, w, _ = codes.shape
+    image = bpy.data.images.new("Albedo", w, h, alpha=False, float_buffer=False)
+    rgba = np.ones((h, w, 4), dtype=np.float32)
+    rgba[:, :, :3] = codes[::-1] / 255.0
+    image.pixels.foreach_set(rgba.ravel())
+    image.filepath_raw = str(tmp_path / "albedo.png")
+    image.file_format = "PNG"
+    image.save()
+    material = bpy.data.materials.new("Skin")
+    material.use_nodes = True
+    tree = material.node_tree
+    principled = next(n for n in tree.nodes if n.type == "BSDF_PRINCIPLED")
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    tree.links.new(tex.outputs["Color"], principled.inputs["Base Color"])
+    return material
+
+
+def test_from_albedo_texture_is_disabled_without_the_cores_fit(addon, monkeypatch):
+    monkeypatch.delattr(spectral_skin, "fit_albedo_map", raising=False)
+    bpy.data.materials.new("Skin")
+    assert not bpy.ops.spectral_skin.from_albedo_texture.poll()
+
+
+def test_from_albedo_texture_sets_the_parameter_map(addon, tmp_path, monkeypatch):
+    """The operator's glue, with a stand-in for the core's fit where this spectral_skin lacks it: the fit gets the
+    PNG's sRGB codes decoded (IEC 61966-2-1) as Linear Rec.709; its parameters come back as the material's
+    Parameter Map, a file beside the .blend the core reads; the fit's thickness goes to the Advanced slider."""
+    codes = np.array([[[200, 150, 120], [90, 60, 40]], [[255, 0, 10], [128, 128, 128]]], dtype=np.uint8)
+    material = _albedo_material(tmp_path, codes)
+    calls = []
+    params = np.float32([[[0.01, 0.7, 0.01, 0.3], [0.3, 0.6, 0.02, 0.2]], [[0.0, 0.0, 0.1, 1.0], [0.1, 0.5, 0.05, 0.4]]])
+
+    def fit_albedo_map(rgb, *, working_space, epidermis_thickness_mm=None):
+        calls.append((rgb.copy(), working_space, epidermis_thickness_mm))
+        return {"params": params, "residual_delta_e00": np.float32([[0.1, 0.2], [9.0, 0.3]]),
+                "epidermis_thickness_mm": 0.12}
+
+    monkeypatch.setattr(spectral_skin, "fit_albedo_map", fit_albedo_map, raising=False)
+    assert bpy.ops.spectral_skin.from_albedo_texture(material="Skin") == {"FINISHED"}
+    rgb, space, thickness = calls[0]
+    c = codes / 255.0
+    np.testing.assert_allclose(rgb, np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4), rtol=1e-5,
+                               atol=1e-7)
+    assert space == "Linear Rec.709" and thickness is None
+    props = material.spectral_skin
+    path = tmp_path / "head_Skin_params.exr"
+    assert props.params_map is not None and pathlib.Path(bpy.path.abspath(props.params_map.filepath)) == path
+    planes = spectral_skin.read_parameter_map(str(path))
+    np.testing.assert_array_equal(np.stack([planes[n] for n in ("melanin", "melanin_blend", "hemoglobin",
+                                                                 "oiliness")], axis=-1), params)
+    assert props.epidermis_thickness_mm == pytest.approx(0.12, rel=1e-6)
+    # A thickness the artist set is the fit's.
+    props.epidermis_thickness_mm = 0.08
+    assert bpy.ops.spectral_skin.from_albedo_texture(material="Skin") == {"FINISHED"}
+    assert calls[1][2] == pytest.approx(0.08, rel=1e-6)
