@@ -142,7 +142,8 @@ def _albedo_material(tmp_path, codes):
     image.file_format = "PNG"
     image.save()
     material = bpy.data.materials.new("Skin")
-    material.use_nodes = True
+    if material.node_tree is None:  # Blender < 5.0 (use_nodes is deprecated in 5.0, where node trees always exist)
+        material.use_nodes = True
     tree = material.node_tree
     principled = next(n for n in tree.nodes if n.type == "BSDF_PRINCIPLED")
     tex = tree.nodes.new("ShaderNodeTexImage")
