@@ -1,5 +1,7 @@
 """Apply (compute the material plan with the core, write its maps, then edit the material and store the plan:
-:func:`apply_skins`, the one path of the operator and of ``batch.py apply``) and the operators Apply and Remove.
+:func:`apply_skins`, the one path of the operator and of ``batch.py apply``), the operators Apply and Remove, and
+From Albedo Texture (:func:`from_albedo_texture`: a parameter map fitted to the material's Base Color image by the
+core, core/albedo.py).
 
 Apply with parameter maps, started from the UI, runs the computing step in a worker thread (the core releases the
 GIL) while a modal timer shows the progress and Esc cancels with nothing changed; the material is edited on Blender's

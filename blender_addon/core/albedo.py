@@ -100,7 +100,8 @@ def write_parameter_map(path: str, params: Any) -> None:
     try:
         import OpenImageIO as oiio
     except ImportError as error:
-        raise OSError(f"{path}: writing the parameter EXR needs OpenImageIO (bundled with Blender)") from error
+        raise OSError(f"{path}: writing the parameter EXR needs the OpenImageIO Python module, which this Python "
+                      "lacks") from error
     data = np.ascontiguousarray(params, dtype=np.float32)
     height, width, channels = data.shape
     spec = oiio.ImageSpec(width, height, channels, "float")
