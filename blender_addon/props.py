@@ -39,8 +39,8 @@ def _preset_tip(p: dict[str, Any]) -> str:
     """A preset's tooltip: its description, the four values and the extended ones it changes."""
     extended = "".join(f", {PARAMETER_INFO[n].label} {p[n]:g}" for n in EXTENDED_PARAMETERS
                        if p[n] != EXTENDED_DEFAULTS[n])
-    return (f"{p['description']}: C_m {p['melanin']:g}, β_m {p['melanin_blend']:g}, C_h {p['hemoglobin']:g}, "
-            f"oiliness {p['oiliness']:g}{extended}")
+    return (f"{p.get('description', 'Preset')}: C_m {p['melanin']:g}, β_m {p['melanin_blend']:g}, "
+            f"C_h {p['hemoglobin']:g}, oiliness {p['oiliness']:g}{extended}")
 
 
 PRESET_ITEMS = [("CUSTOM", "Custom", "Parameters as set below")] + [
