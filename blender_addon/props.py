@@ -319,6 +319,7 @@ def store_result(material: bpy.types.Material, plan: dict) -> None:
     props.result_target = f"Blender {target['blender']}, {target['engine'].upper()}"
     props.result_effects = json.dumps(plan.get("effects", []), default=float)
     props.result_work = json.dumps(plan.get("work", {}))
+    update_swatch(props)  # in the working space of this Apply (the blend file's may have changed since a slider moved)
 
 
 def stored_work(material: bpy.types.Material) -> dict:

@@ -101,6 +101,13 @@ def test_swatch_follows_the_sliders(addon):
     np.testing.assert_allclose(props.swatch, albedo(props), rtol=1e-5)
     with pytest.raises(AttributeError):
         props.swatch = (1.0, 0.0, 0.0)  # read-only: it shows the model's colour
+    if hasattr(bpy.data, "colorspace"):  # Blender 5.0 on: the swatch is in the blend file's working space
+        assert bpy.ops.wm.set_working_color_space(working_space="Linear Rec.2020", convert_colors=False) == {
+            "FINISHED"}
+        space = addon_nodes.scene_working_space()
+        assert space == "Linear Rec.2020"
+        props.blood_oxygenation = 0.3
+        np.testing.assert_allclose(props.swatch, albedo(props), rtol=1e-5)
 
 
 def test_batch_flags_and_sidecar_carry_the_extended_values(tmp_path):
