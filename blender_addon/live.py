@@ -206,6 +206,17 @@ def _parameter_image(material: Any, param: str, maps: dict[str, Any]) -> tuple[A
     return _packed(copy), bool(pmap.normalized)
 
 
+def chain_head(socket: Any) -> Any:
+    """The socket that takes a group input's constant or parameter map: the input itself, or, when masks
+    (masks.py) feed it, the Value input of the first mask of their chain."""
+    while socket.is_linked:
+        node = socket.links[0].from_node
+        if not str(node.get(nodes.TAG, "")).endswith(" mask"):
+            break
+        socket = node.inputs["Value"]
+    return socket
+
+
 def wire(material: Any, plan: dict[str, Any]) -> Any:
     """Live mode's last step (main thread): the group (built from ``plan["live"]["table"]``, its images packed, or
     the blend file's), its node wired into the tagged Principled BSDF, its inputs set (see the module's docstring).
@@ -230,11 +241,12 @@ def wire(material: Any, plan: dict[str, Any]) -> Any:
     node.node_tree = group
     node.width = 200
     for index, (param, socket_name) in enumerate(zip(PARAMETERS, INPUTS, strict=True)):
-        socket = node.inputs[socket_name]
-        socket.default_value = float(info["constants"][param])
+        node.inputs[socket_name].default_value = float(info["constants"][param])
         for role in _roles(param):
             for stale in nodes.tagged_nodes(tree, role):
                 tree.nodes.remove(stale)
+        socket = chain_head(node.inputs[socket_name])
+        socket.default_value = float(info["constants"][param])
         source = _parameter_image(material, param, info["maps"])
         if source is None:
             continue
