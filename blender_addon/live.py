@@ -15,6 +15,8 @@ constants, or an Image Texture of the parameter's map: the image itself where Bl
 (PNG/TIFF files, painted or generated images; 8/16-bit values scaled onto the parameter's range by a Math node), else
 a float copy of the core's reading packed into the .blend (EXR files: Blender reads an EXR channel named ``melanin``
 as zeros). Anything else can drive the inputs: colour attributes, drivers and keyframes on the group node's sockets.
+Masks (masks.py) sit between an input and what feeds it; Apply then sets the constant or map at the head of their
+chain (:func:`chain_head`).
 """
 
 from __future__ import annotations

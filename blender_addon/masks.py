@@ -164,6 +164,10 @@ class _AddMask:
     kind = "BLUSH"
     bl_options = {"REGISTER", "UNDO"}
 
+    def invoke(self, context: Any, _event: Any) -> set[str]:
+        """From the panel: a dialog to pick the mask's source and Strength first."""
+        return context.window_manager.invoke_props_dialog(self)  # type: ignore[no-any-return]
+
     def execute(self, context: Any) -> set[str]:
         material = _live_material(context, self.material)  # type: ignore[attr-defined]
         if material is None:
