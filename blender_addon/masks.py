@@ -117,6 +117,12 @@ def add_mask(material: Any, kind: str, source: str = "IMAGE", strength: float | 
                          "mode first")
     group_node = found[0]
     parameter = MASK_KINDS[kind].parameter
+    # The mask's data first: an error there leaves the material as it was.
+    image, attribute = None, ""
+    if source == "IMAGE":
+        image = _mask_image(material, kind)
+    else:
+        attribute = _mask_attribute(material, kind, list(objects if objects is not None else bpy.context.scene.objects))
     socket = group_node.inputs[live.INPUTS[PARAMETERS.index(parameter)]]
     chain = mask_nodes(tree, parameter)
     mask = tree.nodes.new("ShaderNodeGroup")
@@ -134,15 +140,13 @@ def add_mask(material: Any, kind: str, source: str = "IMAGE", strength: float | 
     mask.inputs["Strength"].default_value = strength
     if source == "IMAGE":
         reader = tree.nodes.new("ShaderNodeTexImage")
-        reader.image = _mask_image(material, kind)
+        reader.image = image
         reader.interpolation = "Linear"
         reader.extension = "EXTEND"
-        colour = reader.outputs["Color"]
     else:
         reader = tree.nodes.new("ShaderNodeVertexColor")
-        reader.layer_name = _mask_attribute(material, kind, list(objects if objects is not None
-                                                                 else bpy.context.scene.objects))
-        colour = reader.outputs["Color"]
+        reader.layer_name = attribute
+    colour = reader.outputs["Color"]
     nodes._tag(reader, f"live {parameter} mask source")
     reader.location = (x - 500, mask.location.y - 120)
     channel = tree.nodes.new("ShaderNodeSeparateColor")
@@ -151,6 +155,26 @@ def add_mask(material: Any, kind: str, source: str = "IMAGE", strength: float | 
     tree.links.new(colour, channel.inputs["Color"])
     tree.links.new(channel.outputs[0], mask.inputs["Mask"])  # the first channel, as parameter maps are read
     return mask
+
+
+def keyed_input(mask: Any) -> str | None:
+    """The name of the group input a new mask took over if that input is keyed or driven (its animation no longer
+    applies once the mask feeds it: key the mask's Value input instead); else None."""
+    tree = mask.id_data
+    socket = mask.outputs["Value"].links[0].to_socket
+    animation = tree.animation_data
+    if animation is None:
+        return None
+    path = socket.path_from_id("default_value")
+    curves = list(animation.drivers)
+    action = animation.action
+    if action is not None:
+        if hasattr(action, "layers"):  # Blender 4.4+: layered actions (the only kind from 5.0)
+            curves += [c for layer in action.layers for strip in layer.strips
+                       for bag in getattr(strip, "channelbags", ()) for c in bag.fcurves]
+        if hasattr(action, "fcurves"):  # Blender before 5.0
+            curves += list(action.fcurves)
+    return str(socket.name) if any(c.data_path == path for c in curves) else None
 
 
 def _live_material(context: Any, name: str) -> Any:
@@ -181,6 +205,10 @@ class _AddMask:
             return {"CANCELLED"}
         self.report({"INFO"}, f"Spectral Skin: added {mask.label} (Strength "  # type: ignore[attr-defined]
                     f"{mask.inputs['Strength'].default_value:g}): paint it white where it applies")
+        keyed = keyed_input(mask)
+        if keyed is not None:
+            self.report({"WARNING"}, f"Spectral Skin: the group's {keyed} input is keyed or driven; "  # type: ignore[attr-defined]
+                        "with the mask in front of it, key or drive the mask's Value input instead")
         return {"FINISHED"}
 
 

@@ -138,6 +138,23 @@ def test_colour_attribute_mask(addon):
         _check(f"attribute painted white, strength 0.03, {what}", got, _core_albedo(0.05, 0.7, 0.05))
 
 
+def test_mask_over_a_keyed_input_warns_and_a_failed_mask_changes_nothing(addon):
+    scene, material, slab = _scene(melanin=0.05, hemoglobin=0.02)
+    _apply(scene, material)
+    tree = material.node_tree
+    (group_node,) = addon_nodes.tagged_nodes(tree, "live")
+    group_node.inputs["Hemoglobin"].keyframe_insert("default_value", frame=1)
+    mask = masks.add_mask(material, "BLUSH")
+    assert masks.keyed_input(mask) == "Hemoglobin"
+    assert masks.keyed_input(masks.add_mask(material, "TAN")) is None
+    # A colour attribute mask with no mesh using the material: an error, and the tree and meshes as they were.
+    before = sorted(n.name for n in tree.nodes)
+    slab.data.materials.clear()
+    with pytest.raises(ValueError, match="no mesh uses the material"):
+        masks.add_mask(material, "BLUSH", source="ATTRIBUTE")
+    assert sorted(n.name for n in tree.nodes) == before and not slab.data.color_attributes
+
+
 def test_mask_needs_live_mode(addon):
     scene, material, _ = _scene(mode="BAKED")
     _apply(scene, material)
