@@ -32,6 +32,9 @@ from . import nodes
 from .core import PARAMETER_INFO, PARAMETERS
 
 GROUP_NAME = "Spectral Skin"
+# The group's layout version, stored on the group: a group of another version (such as an EEVEE group from before
+# the group computed its own bilinear weights) is rebuilt at the next Apply, not reused.
+LAYOUT_KEY, LAYOUT_VERSION = "spectral_skin_layout", 2
 INPUTS = ("Melanin", "Melanin Blend", "Hemoglobin", "Oiliness")
 OUTPUTS = (
     ("Base Color", "NodeSocketColor"),
@@ -76,6 +79,7 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | Non
     group = bpy.data.node_groups.get(name) or bpy.data.node_groups.new(name, "ShaderNodeTree")
     group.nodes.clear()
     group.interface.clear()
+    group[LAYOUT_KEY] = LAYOUT_VERSION
     for socket in INPUTS:
         group.interface.new_socket(name=socket, in_out="INPUT", socket_type="NodeSocketFloat")
     for socket, socket_type in OUTPUTS:
@@ -171,11 +175,12 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | Non
 
 
 def has_group(name: str) -> bool:
-    """Whether the blend file has the node group ``name`` and both its table images, packed (then Apply reuses
-    them)."""
+    """Whether the blend file has the node group ``name`` of this layout version and both its table images, packed
+    (then Apply reuses them)."""
     group = bpy.data.node_groups.get(name)
     images = [bpy.data.images.get(f"{name} {kind}") for kind in ("Base Color", "Radius")]
-    return group is not None and all(i is not None and i.packed_file is not None for i in images)
+    return (group is not None and group.get(LAYOUT_KEY) == LAYOUT_VERSION
+            and all(i is not None and i.packed_file is not None for i in images))
 
 
 def _packed(image: Any) -> Any:
