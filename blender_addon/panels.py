@@ -5,6 +5,7 @@ from __future__ import annotations
 import bpy
 
 from .core import EXTENDED_PARAMETERS, PARAMETERS
+from .masks import mask_nodes
 from .props import stored_effects
 
 
@@ -52,6 +53,8 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         overrides.prop(props, "override_constant_maps")
         if props.mode == "LIVE":
             overrides.label(text="Live: subsurface and specular are kept unless Off", icon="INFO")
+        if props.mode == "LIVE":
+            self._draw_masks(layout, material)
         row = layout.row(align=True)
         row.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
         row.operator("spectral_skin.remove", icon="X", text="Remove").material = material.name
@@ -67,6 +70,19 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
             for effect in stored_effects(material):
                 icon = "CHECKBOX_HLT" if effect["enabled"] else "CHECKBOX_DEHLT"
                 result.label(text=f"{effect['effect']}: {effect['reason']}", icon=icon)
+
+    @staticmethod
+    def _draw_masks(layout: bpy.types.UILayout, material: bpy.types.Material) -> None:
+        """Live mode: the mask operators and each mask's Strength (keyable here: hover, I)."""
+        box = layout.box()
+        box.label(text="Masks (Live: paint white where the parameter changes)")
+        row = box.row(align=True)
+        row.operator("spectral_skin.add_blush_mask", icon="BRUSH_DATA").material = material.name
+        row.operator("spectral_skin.add_tan_mask", icon="BRUSH_DATA").material = material.name
+        if material.node_tree is None:
+            return
+        for node in mask_nodes(material.node_tree):
+            box.prop(node.inputs["Strength"], "default_value", text=f"{node.label} Strength")
 
 
 class SPECTRAL_SKIN_PT_advanced(bpy.types.Panel):
