@@ -464,7 +464,7 @@ pub(super) fn maps_py<'py>(
         });
     }
     let planes: [Plane; 4] = planes.try_into().map_err(|_| internal("not four planes"))?;
-    let mut image = ParamImage { width, height, planes };
+    let mut image = ParamImage { width, height, planes, extended: default_extended() };
     drop(params);
     drop(inputs);
 
