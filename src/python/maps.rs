@@ -237,10 +237,12 @@ pub(super) fn read_parameter_map_py<'py>(
 ///
 /// The Python side of ``spectral-skin maps``, on numpy arrays instead of files. Row 0 is the top row, as numpy and
 /// EXR store images. Each texel is evaluated as :func:`evaluate` would, by the cheapest strategy that is exact enough:
-/// "constant" (one evaluation) when melanin, melanin_blend and hemoglobin each hold one value everywhere (floats, or
-/// arrays of one value); "distinct_tuples" (one evaluation per distinct (melanin, melanin_blend, hemoglobin)) when
-/// there are at most 2048 of them; otherwise "table": a lookup table built for the call and interpolated per texel,
-/// worst error below 0.5 % in albedo and 1 % in radius (its measured figures are in ``report["strategy"]``).
+/// "constant" (one evaluation) when melanin, melanin_blend and hemoglobin (and the extended physiology) each hold one
+/// value everywhere (floats, or arrays of one value); "distinct_tuples" (one evaluation per distinct (melanin,
+/// melanin_blend, hemoglobin), with the extended physiology when it varies) when there are at most 2048 of them;
+/// otherwise "table": a lookup table built for the call and interpolated per texel, worst error below 0.5 % in albedo
+/// and 1 % in radius at the paper's extended physiology (its measured figures are in ``report["strategy"]``), or
+/// "exact" when an extended parameter varies (the table is over the three concentrations only).
 /// ``exact=True`` evaluates every texel (or distinct tuple) directly instead of using the table: a few milliseconds
 /// of CPU per texel.
 ///
