@@ -458,4 +458,23 @@ fn extended_physiology_flags() {
     ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("epidermis_thickness_mm") && err.contains("--clamp"), "{err}");
+    // The shader table records the values it bakes in.
+    let table_dir = dir.path().join("table");
+    let out = run(&[
+        "shader-table",
+        "--out",
+        table_dir.to_str().unwrap(),
+        "--resolution",
+        "3",
+        "2",
+        "3",
+        "--no-cache",
+        "--baseline-absorption-scale",
+        "2",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(table_dir.join("shader_table.json")).unwrap()).unwrap();
+    assert_eq!(meta["extended"]["baseline_absorption_scale"], 2.0);
+    assert_eq!(meta["extended"]["epidermis_thickness_mm"], 0.25);
 }

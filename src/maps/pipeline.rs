@@ -439,7 +439,10 @@ pub fn compute_maps_cancellable(
     };
 
     let constant_values: std::collections::BTreeMap<&'static str, f64> = (0..ALL_CHANNELS.len())
-        .filter_map(|p| uniform_value(image.plane(p)).map(|v| (ALL_CHANNELS[p], v as f64)))
+        .filter_map(|p| {
+            // Widened and rounded into range as the evaluation does (0.01f32 is just below 0.01).
+            uniform_value(image.plane(p)).map(|v| (ALL_CHANNELS[p], (v as f64).clamp(ALL_RANGES[p].0, ALL_RANGES[p].1)))
+        })
         .collect();
     let constant_parameters =
         (0..ALL_CHANNELS.len()).map(|p| ALL_CHANNELS[p]).filter(|n| constant_values.contains_key(n)).collect();
