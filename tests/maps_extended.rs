@@ -160,6 +160,7 @@ fn a_constant_gives_evaluates_values() {
     let Strategy::Table { measured_error: Some(err), .. } = r.report.strategy else {
         panic!("{:?}", r.report.strategy)
     };
+    println!("table with extended {thin:?}: {err:?}");
     assert!(err.max_base_color_relative < 0.01 && err.max_radius_relative < 0.02, "{err:?}");
     let paper = compute_maps(&face_params(64), &settings, None).unwrap();
     let mut far = 0.0f32;
