@@ -5,7 +5,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::maps::example::face_params;
-use spectral_skin::maps::io::{ParamImage, Plane};
+use spectral_skin::maps::io::{default_extended, ParamImage, Plane};
 use spectral_skin::maps::lut::{MaterialTable, TableResolution};
 use spectral_skin::maps::{compute_maps, MapSettings};
 use spectral_skin::{Outputs, Request};
@@ -41,6 +41,7 @@ fn bench_maps(c: &mut Criterion) {
         width: 256,
         height: 256,
         planes: [Plane::Texels(mask), Plane::Constant(0.6), Plane::Constant(0.01), Plane::Constant(0.2)],
+        extended: default_extended(),
     };
     group.bench_function("pipeline_distinct_256", |b| {
         b.iter(|| compute_maps(&masked, &MapSettings::default(), None).unwrap())

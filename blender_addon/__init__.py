@@ -2,9 +2,9 @@
 
 import bpy
 
-from . import frame_values, ops, panels, props
+from . import frame_values, masks, ops, panels, props
 
-classes = (*props.classes, *ops.classes, *panels.classes)
+classes = (*props.classes, *ops.classes, *masks.classes, *panels.classes)
 
 
 def register() -> None:

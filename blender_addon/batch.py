@@ -9,7 +9,10 @@ From Python with bpy (``import bpy`` as a module, or Blender's own Python)::
 or as a script::
 
     python blender_addon/batch.py apply in.blend out.blend --material Skin --preset asian [--melanin-map m.exr]
-        [--params-map face.exr] [--clamp] [--pack]
+        [--params-map face.exr] [--epidermis-thickness-mm 0.1] [--clamp] [--pack]
+
+(one flag per parameter of the core's table: the four, each with a ``-map``, and the extended physiology, one value
+per material; a flag overrides the preset's value).
 
 (``batch.py in.blend out.blend --material ...`` without a subcommand still means ``apply``.)
 
@@ -107,12 +110,13 @@ def sidecar_path(out_blend: str) -> str:
 
 
 def _write_sidecar(out_blend: str, plans: dict[str, dict[str, Any]]) -> None:
-    """Per material: the target, the decisions (``effects``), the core's work (``work``: what was computed, the
-    counts the operator stores on the material), the texture files and the per-frame values of an animated constant
-    material (``animation``, or null), as JSON next to the .blend."""
+    """Per material: the target, the extended physiology computed with (``extended``), the decisions (``effects``),
+    the core's work (``work``: what was computed, the counts the operator stores on the material), the texture files
+    and the per-frame values of an animated constant material (``animation``, or null), as JSON next to the .blend."""
     import json
 
-    content = {name: {"target": plan["target"], "method": plan["method"], "effects": plan["effects"],
+    content = {name: {"target": plan["target"], "method": plan["method"], "extended": plan.get("extended"),
+                      "effects": plan["effects"],
                       "work": plan.get("work", {}), "textures": plan["textures"], "animation": plan.get("animation")}
                for name, plan in plans.items()}
     path = sidecar_path(out_blend)
@@ -149,6 +153,11 @@ def _apply_main(argv: list[str]) -> int:
         flag = name.replace("_", "-")
         parser.add_argument(f"--{flag}", type=float, help=f"{name} (overrides the preset)")
         parser.add_argument(f"--{flag}-map", help=f"image of {name} per texel")
+    for name in core.EXTENDED_PARAMETERS:
+        low, high, label, _ = core.PARAMETER_INFO[name]
+        parser.add_argument(f"--{name.replace('_', '-')}", type=float,
+                            help=f"{label}, {low:g} to {high:g}, one value per material (overrides the preset; "
+                            f"default {core.EXTENDED_DEFAULTS[name]:g}, the paper's)")
     parser.add_argument("--params-map", help="four-channel parameter EXR (channels melanin, melanin_blend, hemoglobin, "
                         "oiliness); a parameter's own map replaces its channel")
     parser.add_argument("--clamp", action="store_true", help="clamp out-of-range texels of the maps into range")
@@ -160,7 +169,8 @@ def _apply_main(argv: list[str]) -> int:
     parser.add_argument("--pack", action="store_true", help="pack the textures into the .blend")
     args = parser.parse_args(argv)
     try:
-        overrides = {n: getattr(args, n) for n in core.PARAMETERS if getattr(args, n) is not None}
+        overrides = {n: getattr(args, n) for n in (*core.PARAMETERS, *core.EXTENDED_PARAMETERS)
+                     if getattr(args, n) is not None}
         settings = core.SkinSettings.from_preset(args.preset, **overrides).replace(
             method=args.method, accuracy=args.accuracy, output_dir=args.out_dir, clamp=args.clamp)
         maps = _read_map(args.params_map, None) if args.params_map else {}

@@ -2,7 +2,8 @@
 shader from Melanin, Melanin Blend, Hemoglobin and Oiliness inputs (values, textures, drivers, keyframes), with no
 baking.
 
-Inside it there is only coordinate maths and, per output, two Image Texture lookups (Linear, Extend, Non-Color) in the
+Inside it there is only coordinate maths and, per output, two Image Texture lookups (Linear, Extend, Non-Color; for
+EEVEE, whose GPU filtering is not exact, four Closest lookups per slice with the bilinear weights computed here) in the
 core's shader table (``spectral_skin.shader_table``; layout and formulas in its docstring and in
 src/maps/shader_table.rs): slices over the melanin blend side by side, a grid over the cube-root warped melanin and
 haemoglobin in each, ln of the output per texel. The lookups of the two slices around the melanin blend are mixed
@@ -15,6 +16,8 @@ constants, or an Image Texture of the parameter's map: the image itself where Bl
 (PNG/TIFF files, painted or generated images; 8/16-bit values scaled onto the parameter's range by a Math node), else
 a float copy of the core's reading packed into the .blend (EXR files: Blender reads an EXR channel named ``melanin``
 as zeros). Anything else can drive the inputs: colour attributes, drivers and keyframes on the group node's sockets.
+Masks (masks.py) sit between an input and what feeds it; Apply then sets the constant or map at the head of their
+chain (:func:`chain_head`).
 """
 
 from __future__ import annotations
@@ -29,6 +32,9 @@ from . import nodes
 from .core import PARAMETER_INFO, PARAMETERS
 
 GROUP_NAME = "Spectral Skin"
+# The group's layout version, stored on the group: a group of another version (such as an EEVEE group from before
+# the group computed its own bilinear weights) is rebuilt at the next Apply, not reused.
+LAYOUT_KEY, LAYOUT_VERSION = "spectral_skin_layout", 2
 INPUTS = ("Melanin", "Melanin Blend", "Hemoglobin", "Oiliness")
 OUTPUTS = (
     ("Base Color", "NodeSocketColor"),
@@ -55,10 +61,15 @@ def table_image(name: str, log_rgb: np.ndarray) -> Any:
     return image
 
 
-def build_group(table: dict[str, Any], name: str = GROUP_NAME) -> Any:
+def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | None = None) -> Any:
     """The node group for a ``spectral_skin.shader_table`` result (created, or rebuilt in place if it exists).
-    Its images are named ``<name> Base Color`` and ``<name> Radius``."""
+    Its images are named ``<name> Base Color`` and ``<name> Radius``. ``exact``: bilinear weights computed in the
+    group from four Closest lookups per slice (8 texture reads per output instead of 2), as EEVEE needs (GPU
+    texture filtering is not exact); None: for EEVEE tables (the metadata's engine), not for Cycles, whose Linear
+    lookup is exact."""
     meta = table["metadata"]
+    if exact is None:
+        exact = meta.get("engine") == "eevee"
     n_m, n_b, n_h = (int(meta[a]["nodes"]) for a in ("melanin", "melanin_blend", "hemoglobin"))
     width, slice_width, gutter = int(meta["width"]), int(meta["slice_width"]), int(meta["gutter"])
     images = {
@@ -68,6 +79,7 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME) -> Any:
     group = bpy.data.node_groups.get(name) or bpy.data.node_groups.new(name, "ShaderNodeTree")
     group.nodes.clear()
     group.interface.clear()
+    group[LAYOUT_KEY] = LAYOUT_VERSION
     for socket in INPUTS:
         group.interface.new_socket(name=socket, in_out="INPUT", socket_type="NodeSocketFloat")
     for socket, socket_type in OUTPUTS:
@@ -99,33 +111,58 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME) -> Any:
     b = math("MULTIPLY", unit("Melanin Blend", float(meta["melanin_blend"]["max"])), float(n_b - 1))
     j = math("MINIMUM", math("FLOOR", b), float(n_b - 2))
     t = math("SUBTRACT", b, j)
-    # x(j) = (j * slice_width + gutter + u_m (n_m - 1) + 0.5) / width;  y = (u_h (n_h - 1) + 0.5) / n_h.
-    in_slice = math("MULTIPLY_ADD", u_m, float(n_m - 1), float(gutter) + 0.5)
-    x0 = math("DIVIDE", math("MULTIPLY_ADD", j, float(slice_width), in_slice), float(width))
-    x1 = math("ADD", x0, slice_width / width)
-    y = math("DIVIDE", math("MULTIPLY_ADD", u_h, float(n_h - 1), 0.5), float(n_h))
-    coords = []
-    for x in (x0, x1):
-        combine = nodes.new("ShaderNodeCombineXYZ")
-        links.new(x, combine.inputs["X"])
-        links.new(y, combine.inputs["Y"])
-        coords.append(combine.outputs["Vector"])
-    for key, output in (("base_color_log", "Base Color"), ("radius_log", "Subsurface Radius")):
+    def vector_mix(factor: Any, a: Any, b: Any) -> Any:
+        """(1 - factor) a + factor b of two vectors (the Mix node's visible vector sockets: they share names with
+        its float and colour ones)."""
         mix = nodes.new("ShaderNodeMix")
         mix.data_type = "VECTOR"
         mix.clamp_factor = False
-        links.new(t, mix.inputs["Factor"])
-        for coord, socket in zip(coords, ("A", "B"), strict=True):
-            tex = nodes.new("ShaderNodeTexImage")
-            tex.image = images[key]
-            tex.interpolation = "Linear"
-            tex.extension = "EXTEND"
-            links.new(coord, tex.inputs["Vector"])
-            # The Mix node's vector sockets share names with its float and colour ones: pick the visible vector one.
-            target = next(s for s in mix.inputs if s.name == socket and s.type == "VECTOR")
-            links.new(tex.outputs["Color"], target)
+        links.new(factor, mix.inputs["Factor"])
+        for value, socket in ((a, "A"), (b, "B")):
+            links.new(value, next(s for s in mix.inputs if s.name == socket and s.type == "VECTOR"))
+        return next(s for s in mix.outputs if s.type == "VECTOR")
+
+    def lookup(key: str, x: Any, y: Any, interpolation: str) -> Any:
+        combine = nodes.new("ShaderNodeCombineXYZ")
+        links.new(x, combine.inputs["X"])
+        links.new(y, combine.inputs["Y"])
+        tex = nodes.new("ShaderNodeTexImage")
+        tex.image = images[key]
+        tex.interpolation = interpolation
+        tex.extension = "EXTEND"
+        links.new(combine.outputs["Vector"], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+
+    # Texel coordinates (texel k's centre at k): p_x(j) = j * slice_width + gutter + u_m (n_m - 1), p_y = u_h (n_h - 1);
+    # image coordinates x = (p_x + 0.5) / width, y = (p_y + 0.5) / n_h.
+    p_m = math("MULTIPLY", u_m, float(n_m - 1))
+    p_y = math("MULTIPLY", u_h, float(n_h - 1))
+    slice_x = math("MULTIPLY_ADD", j, float(slice_width), float(gutter) + 0.5)  # + 0.5: to image coordinates
+    if exact:
+        # Bilinear weights computed here, four Closest lookups at texel centres per slice: GPU filtering is not
+        # exact (EEVEE under llvmpipe missed by up to 0.03 texel along x, several % where the table is steep).
+        i_m, i_y = math("FLOOR", p_m), math("FLOOR", p_y)
+        f_m, f_y = math("SUBTRACT", p_m, i_m), math("SUBTRACT", p_y, i_y)
+        ys = [math("DIVIDE", math("ADD", i_y, 0.5 + k), float(n_h)) for k in (0, 1)]
+        corners = []  # per slice: [(x_a, x_b)]
+        for s in (0, 1):
+            x_a = math("DIVIDE", math("ADD", math("ADD", slice_x, i_m), float(s * slice_width)), float(width))
+            corners.append((x_a, math("ADD", x_a, 1.0 / width)))
+    else:
+        x0 = math("DIVIDE", math("ADD", slice_x, p_m), float(width))
+        xs = (x0, math("ADD", x0, slice_width / width))
+        y = math("DIVIDE", math("ADD", p_y, 0.5), float(n_h))
+    for key, output in (("base_color_log", "Base Color"), ("radius_log", "Subsurface Radius")):
+        if exact:
+            slices = []
+            for x_a, x_b in corners:
+                rows = [vector_mix(f_m, lookup(key, x_a, y_k, "Closest"), lookup(key, x_b, y_k, "Closest"))
+                        for y_k in ys]
+                slices.append(vector_mix(f_y, rows[0], rows[1]))
+        else:
+            slices = [lookup(key, x, y, "Linear") for x in xs]
+        mix_out = vector_mix(t, slices[0], slices[1])
         separate = nodes.new("ShaderNodeSeparateXYZ")
-        mix_out = next(s for s in mix.outputs if s.type == "VECTOR")
         links.new(mix_out, separate.inputs["Vector"])
         combine = nodes.new("ShaderNodeCombineXYZ")
         for axis in "XYZ":
@@ -138,11 +175,12 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME) -> Any:
 
 
 def has_group(name: str) -> bool:
-    """Whether the blend file has the node group ``name`` and both its table images, packed (then Apply reuses
-    them)."""
+    """Whether the blend file has the node group ``name`` of this layout version and both its table images, packed
+    (then Apply reuses them)."""
     group = bpy.data.node_groups.get(name)
     images = [bpy.data.images.get(f"{name} {kind}") for kind in ("Base Color", "Radius")]
-    return group is not None and all(i is not None and i.packed_file is not None for i in images)
+    return (group is not None and group.get(LAYOUT_KEY) == LAYOUT_VERSION
+            and all(i is not None and i.packed_file is not None for i in images))
 
 
 def _packed(image: Any) -> Any:
@@ -206,6 +244,17 @@ def _parameter_image(material: Any, param: str, maps: dict[str, Any]) -> tuple[A
     return _packed(copy), bool(pmap.normalized)
 
 
+def chain_head(socket: Any) -> Any:
+    """The socket that takes a group input's constant or parameter map: the input itself, or, when masks
+    (masks.py) feed it, the Value input of the first mask of their chain."""
+    while socket.is_linked:
+        node = socket.links[0].from_node
+        if not str(node.get(nodes.TAG, "")).endswith(" mask"):
+            break
+        socket = node.inputs["Value"]
+    return socket
+
+
 def wire(material: Any, plan: dict[str, Any]) -> Any:
     """Live mode's last step (main thread): the group (built from ``plan["live"]["table"]``, its images packed, or
     the blend file's), its node wired into the tagged Principled BSDF, its inputs set (see the module's docstring).
@@ -230,11 +279,12 @@ def wire(material: Any, plan: dict[str, Any]) -> Any:
     node.node_tree = group
     node.width = 200
     for index, (param, socket_name) in enumerate(zip(PARAMETERS, INPUTS, strict=True)):
-        socket = node.inputs[socket_name]
-        socket.default_value = float(info["constants"][param])
+        node.inputs[socket_name].default_value = float(info["constants"][param])
         for role in _roles(param):
             for stale in nodes.tagged_nodes(tree, role):
                 tree.nodes.remove(stale)
+        socket = chain_head(node.inputs[socket_name])
+        socket.default_value = float(info["constants"][param])
         source = _parameter_image(material, param, info["maps"])
         if source is None:
             continue

@@ -1,5 +1,7 @@
 """Apply (compute the material plan with the core, write its maps, then edit the material and store the plan:
-:func:`apply_skins`, the one path of the operator and of ``batch.py apply``) and the operators Apply and Remove.
+:func:`apply_skins`, the one path of the operator and of ``batch.py apply``), the operators Apply and Remove, and
+From Albedo Texture (:func:`from_albedo_texture`: a parameter map fitted to the material's Base Color image by the
+core, core/albedo.py).
 
 Apply with parameter maps, started from the UI, runs the computing step in a worker thread (the core releases the
 GIL) while a modal timer shows the progress and Esc cancels with nothing changed; the material is edited on Blender's
@@ -19,7 +21,8 @@ import bpy
 import spectral_skin
 
 from . import live, nodes, props, scene_facts
-from .core import SkinSettings, describe_error, write_textures
+from .core import EXTENDED_DEFAULTS, SkinSettings, describe_error, texture_prefix, write_textures
+from .core import albedo as core_albedo
 from .core import live as core_live
 from .core import scene as analysis
 from .nodes import scene_target, scene_working_space
@@ -264,4 +267,94 @@ class SPECTRAL_SKIN_OT_remove(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (SPECTRAL_SKIN_OT_apply, SPECTRAL_SKIN_OT_remove)
+def base_color_image(material: bpy.types.Material) -> bpy.types.Image:
+    """The image of the material's Base Color: an Image Texture (not one the add-on made) linked, directly or
+    through reroutes, to a Principled BSDF's Base Color; ValueError when there is none."""
+    tree = material.node_tree
+    for node in (tree.nodes if tree is not None else ()):
+        if node.type != "BSDF_PRINCIPLED":
+            continue
+        socket = nodes._socket(node.inputs, "Base Color")
+        while socket.is_linked:
+            source = socket.links[0].from_node
+            if source.type == "REROUTE":
+                socket = source.inputs[0]
+                continue
+            if source.type == "TEX_IMAGE" and source.image is not None and nodes.TAG not in source:
+                return source.image
+            break
+    raise ValueError(f"the material {material.name!r} has no image linked to a Principled BSDF's Base Color")
+
+
+def image_pixels(image: bpy.types.Image) -> Any:
+    """An image's pixels as Blender holds them: (H, W, channels) float32, row 0 at the top."""
+    import numpy as np
+
+    width, height = image.size
+    if width == 0 or height == 0 or image.channels < 3:
+        raise ValueError(f"the Base Color image {image.name!r} has no RGB pixels (is its file missing?)")
+    flat = np.empty(width * height * image.channels, dtype=np.float32)
+    image.pixels.foreach_get(flat)
+    return flat.reshape(height, width, image.channels)[::-1]
+
+
+def from_albedo_texture(material: bpy.types.Material) -> dict[str, Any]:
+    """From Albedo Texture: the material's Base Color image fitted per texel by the core (core/albedo.py), the
+    parameter EXR written beside the .blend and set as the material's Parameter Map (a Non-Color image), the
+    Advanced sliders set to the extended physiology the fit holds for. Returns the fit's summary (core.albedo.fit
+    without the arrays, plus "path"). Raises ValueError / OSError / spectral_skin.SpectralSkinError; the material
+    is then unchanged."""
+    image = base_color_image(material)
+    pixels, space = core_albedo.linear_albedo(image_pixels(image), image.colorspace_settings.name, image.is_float,
+                                              scene_working_space())
+    settings = material.spectral_skin
+    # The material's epidermis thickness when the artist set one, else the fit's choice.
+    chosen = float(settings.epidermis_thickness_mm)
+    result = core_albedo.fit(pixels, space, None if chosen == EXTENDED_DEFAULTS["epidermis_thickness_mm"] else chosen)
+    path = core_albedo.parameter_map_path(bpy.data.filepath, texture_prefix(bpy.data.filepath, material.name))
+    core_albedo.write_parameter_map(path, result["params"])
+    loaded = bpy.data.images.load(path, check_existing=True)
+    loaded.reload()
+    loaded.colorspace_settings.name = "Non-Color"
+    settings.params_map = loaded
+    for name, value in result["extended"].items():
+        setattr(settings, name, value)
+    return {key: value for key, value in result.items() if key not in ("params", "residual_delta_e00")} | {
+        "path": path, "image": image.name, "working_space": space}
+
+
+class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
+    """Fit the skin parameters per texel to the material's Base Color image (the core's albedo fit) and set the
+    result, a parameter EXR written beside the .blend, as the material's Parameter Map"""
+
+    bl_idname = "spectral_skin.from_albedo_texture"
+    bl_label = "From Albedo Texture"
+    bl_options = {"REGISTER", "UNDO"}
+
+    material: bpy.props.StringProperty(
+        name="Material", description="Name of the material; empty: the active material")
+
+    @classmethod
+    def poll(cls, context: bpy.types.Context) -> bool:
+        if not core_albedo.available():
+            cls.poll_message_set(f"From Albedo Texture {core_albedo.UNAVAILABLE}")
+            return False
+        return True
+
+    def execute(self, context: bpy.types.Context) -> set[str]:
+        material = _find_material(self.material, context)
+        if material is None:
+            self.report({"ERROR"}, f"no material {self.material!r}" if self.material else "no active material")
+            return {"CANCELLED"}
+        try:
+            summary = from_albedo_texture(material)
+        except ERRORS as error:
+            self.report({"ERROR"}, f"Spectral Skin: From Albedo Texture: {describe_error(error)}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Spectral Skin: fitted {summary['image']!r} ({summary['working_space']}): ΔE00 median "
+                    f"{summary['median_delta_e00']:.2f}, max {summary['max_delta_e00']:.2f}; parameter map "
+                    f"{summary['path']} set (Apply to use it)")
+        return {"FINISHED"}
+
+
+classes = (SPECTRAL_SKIN_OT_apply, SPECTRAL_SKIN_OT_remove, SPECTRAL_SKIN_OT_from_albedo_texture)

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import bpy
 
-from .core import PARAMETERS
+from .core import EXTENDED_PARAMETERS, PARAMETERS
+from .masks import mask_nodes
 from .props import stored_effects
 
 
@@ -30,9 +31,13 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
             row = layout.row(align=True)
             row.active = getattr(props, f"{name}_map") is None and props.params_map is None
             row.prop(props, name, slider=True)
+        # The albedo of the constant values, as the sliders move (props.update_swatch; read-only).
+        layout.prop(props, "swatch")
         box = layout.box()
         box.label(text="Parameter Maps (optional)")
         box.template_ID(props, "params_map", open="image.open")
+        # Disabled, with the reason as its tooltip, where this spectral_skin has no albedo fit.
+        box.operator("spectral_skin.from_albedo_texture", icon="IMAGE_RGB").material = material.name
         for name in PARAMETERS:
             box.template_ID(props, f"{name}_map", open="image.open")
         box.prop(props, "clamp")
@@ -48,6 +53,8 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         overrides.prop(props, "override_constant_maps")
         if props.mode == "LIVE":
             overrides.label(text="Live: subsurface and specular are kept unless Off", icon="INFO")
+        if props.mode == "LIVE":
+            self._draw_masks(layout, material)
         row = layout.row(align=True)
         row.operator("spectral_skin.apply", icon="MATERIAL").material = material.name
         row.operator("spectral_skin.remove", icon="X", text="Remove").material = material.name
@@ -64,5 +71,43 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
                 icon = "CHECKBOX_HLT" if effect["enabled"] else "CHECKBOX_DEHLT"
                 result.label(text=f"{effect['effect']}: {effect['reason']}", icon=icon)
 
+    @staticmethod
+    def _draw_masks(layout: bpy.types.UILayout, material: bpy.types.Material) -> None:
+        """Live mode: the mask operators and each mask's Strength (keyable here: hover, I)."""
+        box = layout.box()
+        box.label(text="Masks (Live: paint white where the parameter changes)")
+        row = box.row(align=True)
+        row.operator("spectral_skin.add_blush_mask", icon="BRUSH_DATA").material = material.name
+        row.operator("spectral_skin.add_tan_mask", icon="BRUSH_DATA").material = material.name
+        if material.node_tree is None:
+            return
+        for node in mask_nodes(material.node_tree):
+            box.prop(node.inputs["Strength"], "default_value", text=f"{node.label} Strength")
 
-classes = (SPECTRAL_SKIN_PT_material,)
+
+class SPECTRAL_SKIN_PT_advanced(bpy.types.Panel):
+    """The extended physiology (core.EXTENDED_PARAMETERS: sliders from the core's table), closed by default: the
+    paper's values unless changed; one value per material."""
+
+    bl_label = "Advanced"
+    bl_idname = "SPECTRAL_SKIN_PT_advanced"
+    bl_parent_id = "SPECTRAL_SKIN_PT_material"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context: bpy.types.Context) -> bool:
+        return getattr(context, "material", None) is not None
+
+    def draw(self, context: bpy.types.Context) -> None:
+        layout = self.layout
+        layout.use_property_split = True
+        props = context.material.spectral_skin
+        for name in EXTENDED_PARAMETERS:
+            layout.prop(props, name, slider=True)
+        layout.label(text="Extended physiology: the defaults are the paper's model", icon="INFO")
+
+
+classes = (SPECTRAL_SKIN_PT_material, SPECTRAL_SKIN_PT_advanced)

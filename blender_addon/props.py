@@ -14,6 +14,9 @@ import spectral_skin
 from .core import (
     ACCURACY_DESCRIPTIONS,
     ACCURACY_LEVELS,
+    DEFAULT_WORKING_SPACE,
+    EXTENDED_DEFAULTS,
+    EXTENDED_PARAMETERS,
     PARAMETER_INFO,
     PARAMETERS,
     ParameterMap,
@@ -22,18 +25,30 @@ from .core import (
     texture_prefix,
 )
 from .core import methods as core_methods
+from .core.plan import swatch_albedo
 from .nodes import scene_target, scene_working_space
 from .scene_facts import OVERRIDE_ITEMS
 
-# Plain dicts (name -> value) for lookups by parameter name.
-_PRESETS: dict[str, dict[str, Any]] = {name: dict(p) for name, p in spectral_skin.presets().items()}
+# Plain dicts (name -> value) for lookups by parameter name; an extended parameter a preset leaves out is the default.
+_PRESETS: dict[str, dict[str, Any]] = {name: {**EXTENDED_DEFAULTS, **dict(p)}
+                                       for name, p in spectral_skin.presets().items()}
 _DEFAULT_PRESET = "caucasian" if "caucasian" in _PRESETS else next(iter(_PRESETS))
 
+
+def _preset_tip(p: dict[str, Any]) -> str:
+    """A preset's tooltip: its description, the four values and the extended ones it changes."""
+    extended = "".join(f", {PARAMETER_INFO[n].label} {p[n]:g}" for n in EXTENDED_PARAMETERS
+                       if p[n] != EXTENDED_DEFAULTS[n])
+    return (f"{p.get('description', 'Preset')}: C_m {p['melanin']:g}, β_m {p['melanin_blend']:g}, "
+            f"C_h {p['hemoglobin']:g}, oiliness {p['oiliness']:g}{extended}")
+
+
 PRESET_ITEMS = [("CUSTOM", "Custom", "Parameters as set below")] + [
-    (name.upper(), name.title(), f"{p['description']}: C_m {p['melanin']}, β_m {p['melanin_blend']}, "
-     f"C_h {p['hemoglobin']}, oiliness {p['oiliness']}")
-    for name, p in _PRESETS.items()
+    (name.upper(), name.replace("-", " ").replace("_", " ").title(), _preset_tip(p)) for name, p in _PRESETS.items()
 ]
+
+# The albedo swatch of a new material: the default preset's, in Blender's default working space.
+_DEFAULT_SWATCH = swatch_albedo(_PRESETS[_DEFAULT_PRESET], DEFAULT_WORKING_SPACE)
 
 # What each method does, for the menu's tooltips (the methods themselves, and which this Blender offers, come from the
 # core's target table: core/targets.py).
@@ -60,34 +75,60 @@ METHOD_ITEMS = [
 ACCURACY_ITEMS = [(key, name.title(), ACCURACY_DESCRIPTIONS[key]) for key, name in ACCURACY_LEVELS.items()]
 
 
-# True while a preset writes the four parameters, so that their update does not switch the menu to Custom.
+# True while a preset writes the parameters, so that their update does not switch the menu to Custom (nor compute the
+# swatch once per parameter).
 _setting_preset = False
 
 
+def update_swatch(props: SpectralSkinSettings) -> None:
+    """Compute the albedo swatch of the material's constant values (the four and the extended physiology; one
+    ``evaluate(outputs=["albedo"])``, about 0.1 ms) in the blend file's working space and keep it on the material
+    (``swatch_value``). Called by the parameters' update callbacks, never while drawing. Values the core refuses
+    leave the swatch as it was (Apply reports them)."""
+    values = {name: float(getattr(props, name)) for name in (*PARAMETERS, *EXTENDED_PARAMETERS)}
+    try:
+        props.swatch_value = swatch_albedo(values, scene_working_space())
+    except (spectral_skin.SpectralSkinError, ValueError):
+        pass
+
+
 def _apply_preset(self: SpectralSkinSettings, _context: bpy.types.Context) -> None:
+    """A preset chosen: its four parameters and its extended physiology set on the sliders."""
     global _setting_preset
     if self.preset == "CUSTOM":
         return
     values = _PRESETS[self.preset.lower()]
     _setting_preset = True
     try:
-        for name in PARAMETERS:
+        for name in (*PARAMETERS, *EXTENDED_PARAMETERS):
             setattr(self, name, values[name])
     finally:
         _setting_preset = False
+    update_swatch(self)
 
 
 def _parameter_edited(self: SpectralSkinSettings, _context: bpy.types.Context) -> None:
-    """A slider moved by hand: the parameters are no longer the preset's, so the menu shows Custom."""
-    if not _setting_preset and self.preset != "CUSTOM":
+    """A slider moved by hand: the parameters are no longer the preset's, so the menu shows Custom; the swatch
+    follows."""
+    if _setting_preset:
+        return
+    if self.preset != "CUSTOM":
         self.preset = "CUSTOM"
+    update_swatch(self)
 
 
 def _parameter(name: str) -> bpy.props.FloatProperty:
+    """A parameter's slider, from the core's table (range, label, tooltip); the default: the default preset's for the
+    four, the paper's for the extended physiology (the core's default)."""
     low, high, label, description = PARAMETER_INFO[name]
+    default = EXTENDED_DEFAULTS[name] if name in EXTENDED_DEFAULTS else _PRESETS[_DEFAULT_PRESET][name]
     return bpy.props.FloatProperty(
-        name=label, description=description, default=_PRESETS[_DEFAULT_PRESET][name], min=low, max=high,
+        name=label, description=description, default=default, min=low, max=high,
         precision=3, step=0.1 if high <= 0.1 else 1, subtype="FACTOR", update=_parameter_edited)
+
+
+def _swatch(self: SpectralSkinSettings) -> Any:
+    return self.swatch_value
 
 
 def _parameter_map(name: str) -> bpy.props.PointerProperty:
@@ -112,12 +153,24 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     mode: bpy.props.EnumProperty(
         name="Mode", description="How Apply sets up the material", items=MODE_ITEMS, default="BAKED")
     preset: bpy.props.EnumProperty(
-        name="Preset", description="Skin type from the Donner & Jensen 2006 sketch; sets the four parameters",
+        name="Preset", description="Skin type (the Donner & Jensen 2006 sketch's, or fitted to measured skin): sets "
+        "the four parameters and the Advanced ones",
         items=PRESET_ITEMS, default=_DEFAULT_PRESET.upper(), update=_apply_preset)
     melanin: _parameter("melanin")
     melanin_blend: _parameter("melanin_blend")
     hemoglobin: _parameter("hemoglobin")
     oiliness: _parameter("oiliness")
+    # The extended physiology (core.EXTENDED_PARAMETERS), in the panel's Advanced section: one value per material.
+    epidermis_thickness_mm: _parameter("epidermis_thickness_mm")
+    baseline_absorption_scale: _parameter("baseline_absorption_scale")
+    blood_oxygenation: _parameter("blood_oxygenation")
+    # The albedo swatch: kept up to date by the parameters' update callbacks (update_swatch), shown read-only.
+    swatch_value: bpy.props.FloatVectorProperty(
+        name="Albedo Swatch Value", size=3, subtype="COLOR", default=_DEFAULT_SWATCH, options={"HIDDEN"})
+    swatch: bpy.props.FloatVectorProperty(
+        name="Albedo", description="The skin's total diffuse reflectance for the constant values above (the four and "
+        "the Advanced ones; parameter maps not included), linear RGB of the working space: follows the sliders",
+        size=3, subtype="COLOR", get=_swatch)
     melanin_map: _parameter_map("melanin")
     melanin_blend_map: _parameter_map("melanin_blend")
     hemoglobin_map: _parameter_map("hemoglobin")
@@ -247,7 +300,7 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
     output_dir = texture_folder(props) if maps and props.mode == "BAKED" else ""
     target = scene_target(scene)
     return SkinSettings(
-        **{name: getattr(props, name) for name in PARAMETERS}, method=props.method, accuracy=props.accuracy, maps=maps,
+        **{name: getattr(props, name) for name in (*PARAMETERS, *EXTENDED_PARAMETERS)}, method=props.method, accuracy=props.accuracy, maps=maps,
         clamp=props.clamp, output_dir=output_dir, file_prefix=texture_prefix(bpy.data.filepath, material.name),
         scale_length=scene.unit_settings.scale_length, working_space=scene_working_space(),
         blender=target["blender"], engine=target["engine"], mode=props.mode)
@@ -266,6 +319,7 @@ def store_result(material: bpy.types.Material, plan: dict) -> None:
     props.result_target = f"Blender {target['blender']}, {target['engine'].upper()}"
     props.result_effects = json.dumps(plan.get("effects", []), default=float)
     props.result_work = json.dumps(plan.get("work", {}))
+    update_swatch(props)  # in the working space of this Apply (the blend file's may have changed since a slider moved)
 
 
 def stored_work(material: bpy.types.Material) -> dict:

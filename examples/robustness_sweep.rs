@@ -11,7 +11,7 @@ use spectral_skin::diffusion::{
 };
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::skin::skin_layers;
-use spectral_skin::{Outputs, Request, SkinModel, SkinParams};
+use spectral_skin::{Outputs, Request, SkinParams};
 
 const BOTH: [Boundaries; 2] = [Boundaries::Paper, Boundaries::Capped];
 
@@ -249,11 +249,10 @@ fn skin() {
     println!("|---|---|---|---|---|---|---|");
     let radii = log_radii(1e-3, 20.0, 30.0);
     for thickness in [0.25, 0.12, 0.08, 0.06] {
-        let mut request = Request::new(Outputs { albedo: true, ..Outputs::default() });
-        request.model = SkinModel { epidermis_thickness_mm: thickness, ..SkinModel::default() };
+        let request = Request::new(Outputs { albedo: true, ..Outputs::default() });
         let prepared = Prepared::new(&request).unwrap();
         for name in ["caucasian", "asian", "african"] {
-            let params = SkinParams::preset(name).unwrap();
+            let params = SkinParams { epidermis_thickness_mm: thickness, ..SkinParams::preset(name).unwrap() };
             let layers: Vec<[Layer; 2]> =
                 prepared.wavelengths_nm().iter().map(|&w| skin_layers(&params, &request.model, w)).collect();
             let past: Vec<f64> = prepared

@@ -25,6 +25,8 @@ stage blender; bash scripts/setup-blender.sh && bash scripts/test-blender.sh
 # The map performance report in its reduced form, so the report code cannot rot (the full one: see README).
 stage reports
 .venv/bin/python scripts/maps_report.py --quick --out "$run_tmp/maps-performance.md"
+# The Live-mode cost report, reduced (the full one: .venv-blender/5.0/bin/python scripts/live_mode_report.py).
+.venv-blender/5.0/bin/python scripts/live_mode_report.py --quick --out "$run_tmp/live-mode.md"
 # The accuracy-vs-time report, reduced (the full one: bash scripts/accuracy_report.sh).
 bash scripts/accuracy_report.sh --quick
 stage done

@@ -333,7 +333,7 @@ impl Prepared {
 pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, SkinError> {
     let start = Instant::now();
     let prepared = Prepared::new(request)?;
-    let params = SkinParams::new(params.melanin, params.melanin_blend, params.hemoglobin, params.oiliness)?;
+    let params = params.validated()?;
     let out = request.outputs;
     let acc = &request.accuracy;
 
@@ -423,7 +423,6 @@ fn methods_from(target: &Target, albedo: [f64; 3], fits: &[BurleyFit; 3]) -> Res
 
 fn validate_model(m: &SkinModel) -> Result<(), SkinError> {
     check_range("eumelanin_k_per_mm", "eumelanin constant K_em", m.eumelanin_k_per_mm, 0.0, 1e13)?;
-    check_range("epidermis_thickness_mm", "epidermis thickness", m.epidermis_thickness_mm, 1e-4, 10.0)?;
     if !(m.dermis_thickness_mm.is_infinite() && m.dermis_thickness_mm > 0.0) {
         check_range("dermis_thickness_mm", "dermis thickness (or infinity)", m.dermis_thickness_mm, 1e-3, 1e4)?;
     }

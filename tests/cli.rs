@@ -409,3 +409,72 @@ fn maps_outputs_choose_the_maps() {
     let bad = run(&["maps", "--params", params, "--out", out_dir.to_str().unwrap(), "--outputs", "profile_rgb"]);
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// The extended physiology's flags: eval takes them (over a preset's), its JSON prints them; a value out of range is
+/// an error naming the parameter; maps takes them as constants and records them in the sidecar.
+#[test]
+fn extended_physiology_flags() {
+    let out = run(&["eval", "--preset", "caucasian", "--epidermis-thickness-mm", "0.08", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["params"]["epidermis_thickness_mm"], 0.08);
+    assert_eq!(j["params"]["blood_oxygenation"], 0.75);
+    // Not the paper's albedo: the thickness reached the model.
+    let paper = eval_json("caucasian");
+    assert_ne!(j["diffuse_reflectance_rgb"], paper["diffuse_reflectance_rgb"]);
+    let out = run(&["eval", "--preset", "caucasian", "--blood-oxygenation", "1.5"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("blood_oxygenation") && err.contains("[0, 1]"), "{err}");
+    let help = String::from_utf8_lossy(&run(&["profile", "--help"]).stdout).to_string();
+    assert!(help.contains("--baseline-absorption-scale") && help.contains("0..10"), "{help}");
+
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("p.exr");
+    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8", "--kind", "mask"]).status.success());
+    let out_dir = dir.path().join("out");
+    let out = run(&[
+        "maps",
+        "--params",
+        params.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--blood-oxygenation",
+        "0.9",
+        "--no-cache",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["report"]["constant_values"]["blood_oxygenation"], 0.9f32 as f64);
+    assert_eq!(sidecar["inputs"]["extended"]["blood_oxygenation"]["constant"], 0.9);
+    let out = run(&[
+        "maps",
+        "--params",
+        params.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--epidermis-thickness-mm",
+        "0.6",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("epidermis_thickness_mm") && err.contains("--clamp"), "{err}");
+    // The shader table records the values it bakes in.
+    let table_dir = dir.path().join("table");
+    let out = run(&[
+        "shader-table",
+        "--out",
+        table_dir.to_str().unwrap(),
+        "--resolution",
+        "3",
+        "2",
+        "3",
+        "--no-cache",
+        "--baseline-absorption-scale",
+        "2",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(table_dir.join("shader_table.json")).unwrap()).unwrap();
+    assert_eq!(meta["extended"]["baseline_absorption_scale"], 2.0);
+    assert_eq!(meta["extended"]["epidermis_thickness_mm"], 0.25);
+}

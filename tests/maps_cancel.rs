@@ -89,7 +89,7 @@ fn cancel_stops_a_table_build() {
     // at its first call, which is a build tick.
     let n = 64 * 64;
     let ramp = |scale: f32| Plane::Texels((0..n).map(|i| scale * i as f32 / n as f32).collect());
-    let image = ParamImage { width: 64, height: 64, planes: [ramp(0.5), ramp(1.0), ramp(0.1), Plane::Constant(0.3)] };
+    let image = ParamImage::new(64, 64, [ramp(0.5), ramp(1.0), ramp(0.1), Plane::Constant(0.3)]);
     let settings = MapSettings { table: resolution, ..MapSettings::default() };
     let cancel = AtomicBool::new(false);
     let calls = AtomicUsize::new(0);

@@ -3,9 +3,9 @@
 use std::path::Path;
 
 use spectral_skin::maps::io::{
-    commit_all, read_exr_channels, read_params, read_params_from_bytes, stage_bytes, stage_rgb_exr, write_atomic,
-    write_channels_exr, write_rgb_exr, Compression, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, Precision,
-    ALL_COMPRESSIONS, ALL_PRECISIONS, PARAM_CHANNELS, PARAM_RANGES,
+    commit_all, default_extended, read_exr_channels, read_params, read_params_from_bytes, stage_bytes, stage_rgb_exr,
+    write_atomic, write_channels_exr, write_rgb_exr, Compression, ExrOptions, ParamImage, ParamInputs, ParamSource,
+    Plane, Precision, ALL_COMPRESSIONS, ALL_PRECISIONS, PARAM_CHANNELS, PARAM_RANGES,
 };
 
 /// Every precision with every compression.
@@ -621,6 +621,7 @@ fn param_image_helpers() {
             Plane::Constant(0.01),
             Plane::Texels(vec![0.3, 0.4]),
         ],
+        extended: default_extended(),
     };
     assert_eq!(img.texel_count(), 2);
     assert_eq!(img.texel(1), [0.2, 0.5, 0.01, 0.4]);

@@ -4,7 +4,7 @@
 
 use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::maps::example::face_params;
-use spectral_skin::maps::io::{ExrOptions, ParamImage, ParamInputs, ParamSource, Plane};
+use spectral_skin::maps::io::{default_extended, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane};
 use spectral_skin::maps::lut::TableResolution;
 use spectral_skin::maps::pipeline::{MapResult, SpecularOutput, Strategy, ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE};
 use spectral_skin::maps::{compute_maps, run_maps, MapSettings, StrategyChoice};
@@ -32,6 +32,7 @@ fn cases() -> Vec<(&'static str, ParamImage, StrategyChoice)> {
         width: 16,
         height: 8,
         planes: [Plane::Constant(0.1), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.3)],
+        extended: default_extended(),
     };
     let mask: Vec<f32> = (0..16 * 8).map(|i| [0.01, 0.2, 0.4][(i / 16) % 3]).collect();
     let oil: Vec<f32> = (0..16 * 8).map(|i| (i % 7) as f32 / 6.0).collect();
@@ -39,6 +40,7 @@ fn cases() -> Vec<(&'static str, ParamImage, StrategyChoice)> {
         width: 16,
         height: 8,
         planes: [Plane::Texels(mask), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Texels(oil)],
+        extended: default_extended(),
     };
     vec![
         ("constant", constant, StrategyChoice::Auto),

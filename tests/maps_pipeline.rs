@@ -16,7 +16,7 @@ use spectral_skin::maps::{compute_maps, run_maps, MapSettings, StrategyChoice};
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
 fn image(width: usize, height: usize, planes: [Plane; 4]) -> ParamImage {
-    ParamImage { width, height, planes }
+    ParamImage::new(width, height, planes)
 }
 
 /// The default table's worst error over the whole domain (2000 points: cell centres and a low-discrepancy sequence,

@@ -196,8 +196,8 @@ fn boundaries_against_monte_carlo() {
         ("0.1 mm slab alone, 0.01 / 10 per mm, n 1.4".into(), vec![layer(0.1, 0.01, 10.0, 1.4)]),
     ];
     for (name, w, d) in [("caucasian", 650.0, 0.25), ("caucasian", 750.0, 0.25), ("caucasian", 550.0, 0.08)] {
-        let model = SkinModel { epidermis_thickness_mm: d, ..SkinModel::default() };
-        let layers = skin_layers(&SkinParams::preset(name).unwrap(), &model, w).to_vec();
+        let params = SkinParams { epidermis_thickness_mm: d, ..SkinParams::preset(name).unwrap() };
+        let layers = skin_layers(&params, &SkinModel::default(), w).to_vec();
         cases.push((format!("{name} {w} nm, epidermis {d} mm"), layers));
     }
     println!("| stack | Monte Carlo (2e5 photons) | paper | capped |\n|---|---|---|---|");

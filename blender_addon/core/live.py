@@ -5,7 +5,8 @@ In Live mode the Principled BSDF's Base Color, Subsurface Radius and Specular IO
 node group, which looks its four inputs up in the core's shader table (``spectral_skin.shader_table``,
 docs/shader-table.md) in the shader: parameter maps, painted textures, drivers and keyframes change the skin without
 another Apply. Apply computes the table for the material's target (Blender version, engine, subsurface method:
-chosen as the baked path chooses them) and the plan of the panel's constants, which gives everything else (Subsurface
+chosen as the baked path chooses them) and extended physiology (baked into the table: one value per material) and the
+plan of the panel's constants, which gives everything else (Subsurface
 Scale, IOR, Roughness, the scene analysis).
 
 Subsurface and specular are kept in Live mode unless forced off: the inputs can change per texel and per frame with no
@@ -20,7 +21,8 @@ import dataclasses
 import hashlib
 from typing import Any
 
-from .settings import ACCURACY_LEVELS, SkinSettings
+from .plan import extended_keywords
+from .settings import ACCURACY_LEVELS, EXTENDED_PARAMETERS, PARAMETER_INFO, SkinSettings
 from .targets import method_name
 
 
@@ -41,13 +43,20 @@ MAX_NAME = 63 - len(" Base Color")
 
 def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
     """The name of the node group (and the prefix of its two images) for the table a material needs: one per table
-    key (Blender version, engine, method, accuracy, working space; the default accuracy and Linear Rec.709 left out),
-    shared by the materials that need the same. A name too long for Blender ends in a hash of the whole key."""
+    key (Blender version, engine, method, accuracy, working space, the extended physiology the table is baked with;
+    the default accuracy, Linear Rec.709 and the paper's extended values left out), shared by the materials that need
+    the same: changing an extended value gives another name, so Apply computes that table. A name too long for
+    Blender ends in a hash of the whole key."""
     parts = [settings.blender or "current", settings.engine, table_method(settings, overrides)]
     if settings.accuracy != "DEFAULT":
         parts.append(settings.accuracy.lower())
     if settings.working_space != "Linear Rec.709":
         parts.append(settings.working_space.removeprefix("Linear "))
+    changed = settings.changed_extended()
+    # The parameter's label's first word and its value to 7 significant digits (Blender's float properties hold
+    # about 7: two values a slider can tell apart get two names).
+    parts += [f"{PARAMETER_INFO[p].label.split()[0].lower()}={changed[p]:.7g}" for p in EXTENDED_PARAMETERS
+              if p in changed]
     name = "Spectral Skin " + " ".join(parts)
     if len(name) > MAX_NAME:
         name = f"{name[:MAX_NAME - 7]} {hashlib.sha1(name.encode()).hexdigest()[:6]}"
@@ -55,12 +64,14 @@ def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
 
 
 def shader_table(settings: SkinSettings, overrides: dict[str, str] | None) -> dict[str, Any]:
-    """The core's shader table for the material's target (``spectral_skin.shader_table``, default resolution)."""
+    """The core's shader table for the material's target (``spectral_skin.shader_table``, default resolution), baked
+    with the settings' extended physiology (one value per material: the group's inputs are the four)."""
     import spectral_skin
 
+    extended = extended_keywords(spectral_skin.shader_table, settings, "extended physiology in Live mode")
     return dict(spectral_skin.shader_table(method=table_method(settings, overrides), blender=settings.blender,
                                            engine=settings.engine, accuracy=ACCURACY_LEVELS[settings.accuracy],
-                                           working_space=settings.working_space))
+                                           working_space=settings.working_space, **extended))
 
 
 def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | None, table_needed: bool,

@@ -16,6 +16,8 @@
 - ``work``: what the core computed for this plan, as it reports it (``evaluate(...)["work"]``: wavelengths,
   transform samples, radial profiles, radius fits, specular evaluations; or ``maps(...)["report"]["work"]``: texels,
   evaluations, table nodes built, table lookups, radius fits, specular evaluations, texels per output);
+- ``extended``: the extended physiology the core computed with ({epidermis_thickness_mm, baseline_absorption_scale,
+  blood_oxygenation}: the settings', one value per material; the paper's values by default);
 - ``computed``: {"radius": bool, "specular": bool}: whether the core was asked for the radius and the specular inputs
   (the scene analysis asks for neither when it has dropped the effect before computing: core/scene.py);
 - ``summary``: what the panel shows: ``albedo`` (RGB), ``radius_mm`` (RGB), ``computed`` (a sentence),
@@ -28,15 +30,62 @@ failure leaves existing files as they were.
 
 from __future__ import annotations
 
+import inspect
 import os
 import re
 import time
+from collections.abc import Callable
 from typing import Any
 
-from .settings import ACCURACY_LEVELS, PARAMETER_INFO, PARAMETERS, SkinSettings, check
+from .settings import ACCURACY_LEVELS, EXTENDED_PARAMETERS, PARAMETER_INFO, PARAMETERS, SkinSettings, check
 from .targets import method_name
 
 METRES_PER_MM = 1e-3
+
+# Per core function: whether it takes the extended physiology as keywords (inspected once).
+_TAKES_EXTENDED: dict[Any, bool] = {}
+
+
+def _takes_extended(function: Callable[..., Any]) -> bool:
+    if function not in _TAKES_EXTENDED:
+        try:
+            params = inspect.signature(function).parameters
+        except (TypeError, ValueError):  # a builtin without a text signature: try the keywords
+            _TAKES_EXTENDED[function] = True
+        else:
+            _TAKES_EXTENDED[function] = all(name in params for name in EXTENDED_PARAMETERS) or any(
+                p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+    return _TAKES_EXTENDED[function]
+
+
+def extended_keywords(function: Callable[..., Any], settings: SkinSettings, what: str) -> dict[str, Any]:
+    """The keywords that give ``function`` (a core function: ``spectral_skin.maps``, ``shader_table``) the
+    settings' extended physiology: only the values that differ from the paper's, so that the defaults call the core
+    exactly as before. Raises ``spectral_skin.SpectralSkinError`` when a value differs and this ``spectral_skin``'s
+    ``function`` does not take the extended keywords (``what``: what needs them, for the message)."""
+    changed = settings.changed_extended()
+    if changed and not _takes_extended(function):
+        import spectral_skin
+
+        name = getattr(function, "__name__", "the core")
+        raise spectral_skin.SpectralSkinError(
+            f"{what} needs a spectral_skin whose {name}() takes "
+            f"{', '.join(EXTENDED_PARAMETERS)} (this is spectral_skin "
+            f"{getattr(spectral_skin, '__version__', '?')}); set {', '.join(sorted(changed))} back to the default or "
+            "install a newer Spectral Skin")
+    return changed
+
+
+def swatch_albedo(values: dict[str, float], working_space: str) -> list[float]:
+    """The panel's albedo swatch: the skin's total diffuse reflectance (``evaluate(outputs=["albedo"])``, linear RGB
+    in ``working_space``) of constant values (the four parameters and the extended physiology; an extended one left
+    out takes its default)."""
+    import spectral_skin
+
+    extended: dict[str, Any] = {p: values[p] for p in EXTENDED_PARAMETERS if p in values}
+    ev = spectral_skin.evaluate(*(values[p] for p in PARAMETERS), outputs=["albedo"], working_space=working_space,
+                                **extended)
+    return _rgb(ev["diffuse_reflectance_rgb"])
 
 def subsurface_scale(scale_length: float) -> float:
     """Principled Subsurface Scale for radii in mm: scene units per mm (scale_length is metres per scene unit)."""
@@ -88,6 +137,7 @@ def make_plan(settings: SkinSettings, progress: Any = None, *, radius: bool = Tr
     else:
         plan = _plan_from_constants(settings, radius, specular)
     plan["computed"] = {"radius": radius, "specular": specular}
+    plan["extended"] = settings.extended()
     plan["method"] = settings.method
     plan["working_space"] = settings.working_space
     plan["scale"] = subsurface_scale(settings.scale_length)
@@ -108,7 +158,7 @@ def _plan_from_constants(settings: SkinSettings, radius: bool, specular: bool) -
     outputs = ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]
     ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"], outputs=outputs,
                                 accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
-                                blender=settings.blender, engine=settings.engine)
+                                blender=settings.blender, engine=settings.engine, **settings.extended())
     albedo = _rgb(ev["diffuse_reflectance_rgb"])
     radius_mm: list[float] | None = None
     base_color = albedo
@@ -166,13 +216,14 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
     import spectral_skin
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
+    extended = extended_keywords(spectral_skin.maps, settings, "extended physiology with parameter maps")
     # Without subsurface the core fits no radius and Base Color is the albedo (Burley's Base Color), whatever the
     # material's method.
     outputs = ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]
     result = spectral_skin.maps(**inputs, method=method_name(settings.method if radius else "BURLEY"),
                                 outputs=outputs, accuracy=ACCURACY_LEVELS[settings.accuracy],
                                 working_space=settings.working_space, clamp=settings.clamp, progress=progress,
-                                blender=settings.blender, engine=settings.engine)
+                                blender=settings.blender, engine=settings.engine, **extended)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)

@@ -266,33 +266,45 @@ def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: fl
                   figures)
 
 
-# The least absorbing skin: no melanin (so its blend does not matter) and no blood. Every absorption coefficient of
-# the model grows with the melanin and haemoglobin fractions, and the largest radius with falling absorption: the
-# radius there bounds every parameter set's (checked over a grid of the parameter ranges for every method and
-# engine in tests/python/test_addon_scene.py::test_least_absorbing_skin_bounds_the_radius).
-LEAST_ABSORBING = {"melanin": 0.0, "melanin_blend": 0.0, "hemoglobin": 0.0, "oiliness": 0.0}
+# Where the largest radius of any skin is sought: a grid over melanin (dense at small fractions, as fractions of its
+# range), both melanin types and their mix, without blood (blood absorbs the deep, long paths: it only narrows the
+# profile). The radius is not monotone in melanin: for the random-walk methods and a thin epidermis a little melanin
+# (a filter on top, absorbing the short paths first) widens the fitted radius before more narrows it, so the least
+# absorbing skin alone is no bound. Checked on a denser, offset grid over all three fractions for every method and
+# engine, with the paper's and a widening extended physiology, by
+# tests/python/test_addon_scene.py::test_bound_grid_bounds_the_radius.
+BOUND_MELANIN_FRACTIONS = (0.0, 0.005, 0.01, 0.02, 0.04, 0.06, 0.09, 0.125, 0.17, 0.25, 0.35, 0.5, 0.7, 1.0)
+BOUND_MELANIN_BLENDS = (0.0, 0.5, 1.0)
 
 _BOUNDS: dict[tuple[Any, ...], tuple[float, dict[str, int]]] = {}
 
 
 def radius_bound_mm(settings: Any) -> tuple[float, dict[str, int]]:
     """The largest Subsurface Radius × Scale (mm) any skin parameters give for the settings' method, target,
-    accuracy and working space, and the core's work for it (one evaluation of :data:`LEAST_ABSORBING`, computed once
-    per process and key)."""
+    accuracy, working space and extended physiology (one value per material: a thinner epidermis or less baseline
+    absorption widens the radius): the largest over the grid of :data:`BOUND_MELANIN_FRACTIONS` ×
+    :data:`BOUND_MELANIN_BLENDS`, no blood; and the core's work for it (summed over the grid; computed once per
+    process and key)."""
     import spectral_skin
 
-    from .settings import ACCURACY_LEVELS
+    from .settings import ACCURACY_LEVELS, PARAMETER_INFO
     from .targets import method_name
 
-    key = (settings.method, settings.blender, settings.engine, settings.accuracy, settings.working_space)
+    extended = settings.changed_extended()
+    key = (settings.method, settings.blender, settings.engine, settings.accuracy, settings.working_space,
+           tuple(sorted(extended.items())))
     if key not in _BOUNDS:
-        p = LEAST_ABSORBING
-        ev = spectral_skin.evaluate(p["melanin"], p["melanin_blend"], p["hemoglobin"], p["oiliness"],
-                                    outputs=["radius"], accuracy=ACCURACY_LEVELS[settings.accuracy],
-                                    working_space=settings.working_space, blender=settings.blender,
-                                    engine=settings.engine)
-        radius = ev["methods"][method_name(settings.method)]["subsurface_radius_mm"]
-        _BOUNDS[key] = (_largest(radius), dict(ev["work"]))
+        melanin_max = PARAMETER_INFO["melanin"].high
+        largest, work = 0.0, {}
+        for fraction in BOUND_MELANIN_FRACTIONS:
+            for blend in BOUND_MELANIN_BLENDS if fraction > 0 else (0.0,):
+                ev = spectral_skin.evaluate(fraction * melanin_max, blend, 0.0, 0.0,
+                                            outputs=["radius"], accuracy=ACCURACY_LEVELS[settings.accuracy],
+                                            working_space=settings.working_space, blender=settings.blender,
+                                            engine=settings.engine, **extended)
+                largest = max(largest, _largest(ev["methods"][method_name(settings.method)]["subsurface_radius_mm"]))
+                work = {k: work.get(k, 0) + v for k, v in ev["work"].items()}
+        _BOUNDS[key] = (largest, work)
     return _BOUNDS[key]
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import spectral_skin
 
@@ -20,8 +20,13 @@ if TYPE_CHECKING:
 # The model's parameters, from the core's parameter table (src/skin/params.rs, ``spectral_skin.parameters()``): names,
 # ranges, labels and meanings, for the UI (slider limits and tooltips) and for scaling 8/16-bit parameter images onto
 # the range (as `spectral-skin maps` does). The core validates every value itself.
+# PARAMETERS: the paper's four (no default: every material gives them), one per slider, Live-group input and
+# parameter-map channel; EXTENDED_PARAMETERS: the extended physiology (each with the paper's value as its default).
 _SPECS = spectral_skin.parameters()
-PARAMETERS = tuple(p["name"] for p in _SPECS)
+PARAMETERS = tuple(p["name"] for p in _SPECS if p["default"] is None)
+EXTENDED_PARAMETERS = tuple(p["name"] for p in _SPECS if p["default"] is not None)
+# The extended parameters' defaults: the paper's values (the model of Donner & Jensen 2006 unless one is changed).
+EXTENDED_DEFAULTS: dict[str, float] = {p["name"]: float(p["default"]) for p in _SPECS if p["default"] is not None}
 
 # Blender 5.0's scene-linear working spaces (``bpy.data.colorspace.working_space``), which are also the names of
 # their OCIO colour spaces and the core's ``working_space`` names. Blender before 5.0 has only Linear Rec.709.
@@ -59,7 +64,8 @@ class ParameterInfo(NamedTuple):
 
 def _info(spec: _ParameterSpec) -> ParameterInfo:
     low, high, symbol, meaning = spec["min"], spec["max"], _symbol(spec["symbol"]), spec["description"]
-    return ParameterInfo(low, high, f"{spec['label']} ({symbol})",
+    unit = f", {spec['unit']}" if spec.get("unit") else ""
+    return ParameterInfo(low, high, f"{spec['label']} ({symbol}{unit})",
                          f"{meaning[:1].upper()}{meaning[1:]}, {symbol} ({low:g} to {high:g}): {spec['effect']}")
 
 
@@ -120,10 +126,16 @@ class SkinSettings:
     working_space: str = DEFAULT_WORKING_SPACE
     # "BAKED" or "LIVE" (MODES).
     mode: str = "BAKED"
+    # The extended physiology (EXTENDED_PARAMETERS: one value per material, never a map), the paper's values by
+    # default (the core's table).
+    epidermis_thickness_mm: float = EXTENDED_DEFAULTS["epidermis_thickness_mm"]
+    baseline_absorption_scale: float = EXTENDED_DEFAULTS["baseline_absorption_scale"]
+    blood_oxygenation: float = EXTENDED_DEFAULTS["blood_oxygenation"]
 
     @classmethod
     def from_preset(cls, name: str, **overrides: object) -> SkinSettings:
-        """Settings with a preset's parameters (``spectral_skin.presets()``), then ``overrides``."""
+        """Settings with a preset's parameters (``spectral_skin.presets()``: the four and the extended ones, the
+        default where a preset leaves one out), then ``overrides``."""
         import spectral_skin
 
         presets = spectral_skin.presets()
@@ -133,6 +145,7 @@ class SkinSettings:
                 f"unknown preset {name!r}; expected one of {', '.join(sorted(presets))}")
         preset: dict[str, object] = dict(presets[key])
         values = {p: preset[p] for p in PARAMETERS}
+        values.update({p: preset.get(p, EXTENDED_DEFAULTS[p]) for p in EXTENDED_PARAMETERS})
         values.update(overrides)
         return cls(**values)  # type: ignore[arg-type]
 
@@ -140,7 +153,16 @@ class SkinSettings:
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
     def constants(self) -> dict[str, float]:
+        """The paper's four parameters' constants (a parameter with a map ignores its constant)."""
         return {p: float(getattr(self, p)) for p in PARAMETERS}
+
+    def extended(self) -> dict[str, Any]:
+        """The extended physiology's values (EXTENDED_PARAMETERS), one per material."""
+        return {p: float(getattr(self, p)) for p in EXTENDED_PARAMETERS}
+
+    def changed_extended(self) -> dict[str, Any]:
+        """The extended values that differ from the paper's (the defaults): what a core call must be given."""
+        return {p: v for p, v in self.extended().items() if v != EXTENDED_DEFAULTS[p]}
 
 
 def check(settings: SkinSettings) -> None:

@@ -24,6 +24,9 @@ fuzz_target!(|data: &[u8]| {
         melanin_blend: b.linear(-0.1, 1.1),
         hemoglobin: b.linear(-0.01, 0.11),
         oiliness: b.linear(-0.1, 1.1),
+        epidermis_thickness_mm: b.log_value(-5.0, 2.0),
+        baseline_absorption_scale: b.linear(-1.0, 12.0),
+        blood_oxygenation: b.linear(-0.1, 1.1),
     };
     let flags = b.byte();
     let outputs = Outputs {
@@ -60,7 +63,6 @@ fuzz_target!(|data: &[u8]| {
     if knobs & 16 != 0 {
         request.model = SkinModel {
             eumelanin_k_per_mm: b.log_value(0.0, 14.0),
-            epidermis_thickness_mm: b.log_value(-5.0, 2.0),
             dermis_thickness_mm: if b.byte() % 2 == 0 { f64::INFINITY } else { b.log_value(-4.0, 5.0) },
         };
     }

@@ -50,6 +50,7 @@ _BlenderVersion = str | tuple[int, int] | tuple[int, int, int]
 _AccuracyLevel = Literal["draft", "default", "reference"]
 _WavelengthPlacement = Literal["uniform", "cmf_adapted", "rgb_shortcut"]
 _Parameter = Literal["melanin", "melanin_blend", "hemoglobin", "oiliness"]
+_ExtendedParameter = Literal["epidermis_thickness_mm", "baseline_absorption_scale", "blood_oxygenation"]
 _RgbMapping = Literal["linear", "non_negative"]
 _Boundaries = Literal["paper", "capped"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
@@ -93,6 +94,9 @@ def evaluate(
     hemoglobin: float | None = None,
     oiliness: float | None = None,
     *,
+    epidermis_thickness_mm: float | None = None,
+    baseline_absorption_scale: float | None = None,
+    blood_oxygenation: float | None = None,
     preset: str | None = None,
     outputs: Iterable[_OutputName | str] | None = None,
     accuracy: _AccuracyLevel | str = "default",
@@ -117,6 +121,9 @@ def profile(
     hemoglobin: float | None = None,
     oiliness: float | None = None,
     *,
+    epidermis_thickness_mm: float | None = None,
+    baseline_absorption_scale: float | None = None,
+    blood_oxygenation: float | None = None,
     preset: str | None = None,
     spectral: bool = False,
     accuracy: _AccuracyLevel | str = "default",
@@ -207,6 +214,9 @@ def maps(
     melanin_blend: _MapArray | float | None = None,
     hemoglobin: _MapArray | float | None = None,
     oiliness: _MapArray | float | None = None,
+    epidermis_thickness_mm: _MapArray | float | None = None,
+    baseline_absorption_scale: _MapArray | float | None = None,
+    blood_oxygenation: _MapArray | float | None = None,
     method: _Method | str = "burley",
     outputs: Iterable[_MapOutputName | str] | None = None,
     exact: bool = False,
@@ -255,6 +265,7 @@ class _ShaderTableMetadata(TypedDict):
     hemoglobin: _ShaderAxis
     stored: Literal["ln"]
     request: dict[str, Any]
+    extended: dict[_ExtendedParameter, float]
 
 class _ShaderTable(TypedDict):
     """The result of :func:`shader_table`."""
@@ -273,6 +284,9 @@ def shader_table(
     working_space: _WorkingSpace | str = "Linear Rec.709",
     boundaries: _Boundaries | str = "paper",
     table_cache: bool = True,
+    epidermis_thickness_mm: float | None = None,
+    baseline_absorption_scale: float | None = None,
+    blood_oxygenation: float | None = None,
 ) -> _ShaderTable:
     """Documented once, in the compiled module: ``help(spectral_skin.shader_table)``."""
 
@@ -281,7 +295,9 @@ def write_shader_table(
 ) -> dict[str, pathlib.Path]:
     """Documented once, in the compiled module: ``help(spectral_skin.write_shader_table)``."""
 
-def read_parameter_map(path: str | os.PathLike[str], name: _Parameter | str | None = None) -> dict[str, _Float32Array]:
+def read_parameter_map(
+    path: str | os.PathLike[str], name: _Parameter | _ExtendedParameter | str | None = None
+) -> dict[str, _Float32Array]:
     """Documented once, in the compiled module: ``help(spectral_skin.read_parameter_map)``."""
 
 def blender_targets() -> dict[str, Any]:

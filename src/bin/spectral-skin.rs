@@ -14,7 +14,10 @@ use spectral_skin::fit::{SubsurfaceMethod, DEFAULT_METHOD};
 use spectral_skin::maps::example::{write_example_params_encoded, ExampleKind, EXAMPLE_EXR};
 use spectral_skin::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource, Precision};
 use spectral_skin::maps::{MapSettings, StrategyChoice};
-use spectral_skin::skin::params::{ParamSpec, HEMOGLOBIN, MELANIN, MELANIN_BLEND, OILINESS, PARAMS};
+use spectral_skin::skin::params::{
+    ParamSpec, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN,
+    MELANIN_BLEND, OILINESS, PARAMS,
+};
 use spectral_skin::{
     evaluate, AccuracyLevel, Evaluation, MaterialOutput, Outputs, Request, SkinError, SkinParams, PRESETS,
 };
@@ -89,7 +92,7 @@ enum Command {
     Presets,
     /// Parameter maps in, Principled texture maps out: albedo.exr, radius.exr, specular.exr, skin_maps.json.
     #[command(allow_negative_numbers = true)]
-    Maps(MapsArgs),
+    Maps(Box<MapsArgs>),
     /// The lookup table as images for the add-on's live node group: shader_base_color.exr, shader_radius.exr (ln of
     /// Base Color and radius, float32) and shader_table.json (layout and axes).
     ShaderTable(ShaderTableArgs),
@@ -132,6 +135,14 @@ struct MapsArgs {
     hemoglobin: Option<f64>,
     #[arg(long, help = constant_help(&OILINESS))]
     oiliness: Option<f64>,
+    #[arg(long, help = extended_map_help(&EPIDERMIS_THICKNESS))]
+    epidermis_thickness_mm_map: Option<PathBuf>,
+    #[arg(long, help = extended_map_help(&BASELINE_ABSORPTION_SCALE))]
+    baseline_absorption_scale_map: Option<PathBuf>,
+    #[arg(long, help = extended_map_help(&BLOOD_OXYGENATION))]
+    blood_oxygenation_map: Option<PathBuf>,
+    #[command(flatten)]
+    extended: ExtendedArgs,
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
@@ -183,6 +194,27 @@ struct SkinArgs {
     hemoglobin: Option<f64>,
     #[arg(long, help = param_help(&OILINESS))]
     oiliness: Option<f64>,
+    #[command(flatten)]
+    extended: ExtendedArgs,
+}
+
+/// The extended physiology (`EXTENDED_PARAMS`), each optional: unset is the default (the paper's value), or for
+/// `maps` the channel of that name in `--params` if it has one.
+#[derive(Args)]
+struct ExtendedArgs {
+    #[arg(long, help = extended_help(&EPIDERMIS_THICKNESS))]
+    epidermis_thickness_mm: Option<f64>,
+    #[arg(long, help = extended_help(&BASELINE_ABSORPTION_SCALE))]
+    baseline_absorption_scale: Option<f64>,
+    #[arg(long, help = extended_help(&BLOOD_OXYGENATION))]
+    blood_oxygenation: Option<f64>,
+}
+
+impl ExtendedArgs {
+    /// The values given, in `EXTENDED_PARAMS` order.
+    fn values(&self) -> [Option<f64>; 3] {
+        [self.epidermis_thickness_mm, self.baseline_absorption_scale, self.blood_oxygenation]
+    }
 }
 
 #[derive(Args)]
@@ -221,12 +253,18 @@ impl SkinArgs {
                 reason: format!("give --preset or --{flag}"),
             })
         };
-        SkinParams::new(
+        // The extended physiology: the flag, else the preset's, else the default.
+        let extended = base.map_or(spectral_skin::skin::params::EXTENDED_DEFAULTS, |p| p.extended_values());
+        let e = |k: usize| self.extended.values()[k].unwrap_or(extended[k]);
+        SkinParams::from_values([
             pick(self.melanin, base.map(|p| p.melanin), &MELANIN)?,
             pick(self.melanin_blend, base.map(|p| p.melanin_blend), &MELANIN_BLEND)?,
             pick(self.hemoglobin, base.map(|p| p.hemoglobin), &HEMOGLOBIN)?,
             pick(self.oiliness, base.map(|p| p.oiliness), &OILINESS)?,
-        )
+            e(0),
+            e(1),
+            e(2),
+        ])
     }
 }
 
@@ -332,7 +370,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             }
             print_profile_csv(&ev);
         }
-        Command::Maps(args) => run_maps(args)?,
+        Command::Maps(args) => run_maps(*args)?,
         Command::ShaderTable(args) => run_shader_table(args)?,
         Command::Example { out, size, kind, precision } => {
             write_example_params_encoded(&out, kind, size, ExrOptions { precision, ..EXAMPLE_EXR })?;
@@ -372,6 +410,24 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
             }
             ParamInputs::Separate(sources.try_into().map_err(|_| "four sources")?)
         }
+    };
+    // The extended physiology: a map, a constant, or (neither) the channel of --params or the default.
+    let extended_files =
+        [&args.epidermis_thickness_mm_map, &args.baseline_absorption_scale_map, &args.blood_oxygenation_map];
+    let mut extended = Vec::new();
+    for (k, (file, constant)) in extended_files.iter().zip(args.extended.values()).enumerate() {
+        extended.push(match (file, constant) {
+            (Some(f), None) => Some(ParamSource::File(f.to_path_buf())),
+            (None, Some(v)) => Some(ParamSource::Constant(v)),
+            (Some(_), Some(_)) => {
+                return Err(format!("give either --{0}-map or --{0}, not both", flag(&EXTENDED_PARAMS[k])).into())
+            }
+            (None, None) => None,
+        });
+    }
+    let inputs = ParamInputs::Extended {
+        inputs: Box::new(inputs),
+        extended: extended.try_into().map_err(|_| "three extended sources")?,
     };
     let target = args.target.target();
     target.method_entry(args.method)?;
@@ -452,10 +508,26 @@ fn constant_help(spec: &ParamSpec) -> String {
     format!("Constant {}", spec.summary())
 }
 
+/// The help of an extended parameter's flag: its summary and default.
+fn extended_help(spec: &ParamSpec) -> String {
+    format!("{} [default: {}, the paper's]", param_help(spec), spec.default.unwrap_or(f64::NAN))
+}
+
 /// The help of `maps --params`.
 fn params_help() -> String {
-    let names: Vec<&str> = PARAMS.iter().map(|p| p.name).collect();
-    format!("One EXR with channels {}; a constant (--melanin etc.) fills a channel it lacks", names.join(", "))
+    let four: Vec<&str> = PARAMS.iter().filter(|p| p.default.is_none()).map(|p| p.name).collect();
+    let extended: Vec<&str> = EXTENDED_PARAMS.iter().map(|p| p.name).collect();
+    format!(
+        "One EXR with channels {} and optionally {}; a constant (--melanin etc.) fills a channel it lacks (an extended \
+         one it lacks is the default without)",
+        four.join(", "),
+        extended.join(", ")
+    )
+}
+
+/// The help of an extended parameter's map for `maps`.
+fn extended_map_help(spec: &ParamSpec) -> String {
+    format!("{}; without it and --{}: the channel of --params, else the default", map_help(spec), flag(spec))
 }
 
 /// The help of a parameter's map for `maps`.
@@ -539,6 +611,9 @@ struct ShaderTableArgs {
     /// Build the table afresh instead of reusing one kept in the cache folder (as for `maps`).
     #[arg(long)]
     no_cache: bool,
+    /// The extended physiology baked into the table (it is over melanin, melanin blend and haemoglobin only).
+    #[command(flatten)]
+    extended: ExtendedArgs,
     #[command(flatten)]
     accuracy: AccuracyArgs,
 }
@@ -561,6 +636,7 @@ fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Err
         &prepared,
         args.method,
         resolution,
+        std::array::from_fn(|k| args.extended.values()[k].unwrap_or(spectral_skin::skin::params::EXTENDED_DEFAULTS[k])),
         cache.as_deref(),
         &ctrl_c::INTERRUPTED,
     )?;

@@ -63,7 +63,7 @@ pub fn face_params(size: usize) -> ParamImage {
         }
     }
     let [a, b, c, d] = planes;
-    ParamImage { width: n, height: n, planes: [Plane::Texels(a), Plane::Texels(b), Plane::Texels(c), Plane::Texels(d)] }
+    ParamImage::new(n, n, [Plane::Texels(a), Plane::Texels(b), Plane::Texels(c), Plane::Texels(d)])
 }
 
 /// Which example map.
@@ -85,21 +85,19 @@ pub fn example_params(kind: ExampleKind, size: usize) -> ParamImage {
     let plane = |f: &dyn Fn(usize, usize) -> f32| Plane::Texels((0..n * n).map(|k| f(k % n, k / n)).collect());
     match kind {
         ExampleKind::Face => face_params(n),
-        ExampleKind::Mask => ParamImage {
-            width: n,
-            height: n,
-            planes: [
+        ExampleKind::Mask => ParamImage::new(
+            n,
+            n,
+            [
                 plane(&|i, j| 0.01 + 0.03 * (block(i, j) % 4) as f32),
                 plane(&|i, j| 0.25 * (block(i, j) / 4) as f32),
                 plane(&|_, _| 0.01),
                 plane(&|i, j| 0.1 + 0.05 * (block(i, j) % 4) as f32),
             ],
-        },
-        ExampleKind::Uniform => ParamImage {
-            width: n,
-            height: n,
-            planes: [plane(&|_, _| 0.05), plane(&|_, _| 0.7), plane(&|_, _| 0.01), plane(&|_, _| 0.3)],
-        },
+        ),
+        ExampleKind::Uniform => {
+            ParamImage::new(n, n, [plane(&|_, _| 0.05), plane(&|_, _| 0.7), plane(&|_, _| 0.01), plane(&|_, _| 0.3)])
+        }
     }
 }
 

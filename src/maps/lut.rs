@@ -16,7 +16,7 @@ use super::io::write_atomic;
 use crate::error::SkinError;
 use crate::evaluate::{Material, Prepared};
 use crate::fit::SubsurfaceMethod;
-use crate::skin::params::{HEMOGLOBIN, MELANIN, MELANIN_BLEND};
+use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN, MELANIN_BLEND};
 use crate::skin::SkinParams;
 
 /// Outputs per texel that depend on (C_m, beta_m, C_h), for one subsurface method on the request's target: the
@@ -188,6 +188,10 @@ pub struct MaterialTable {
     /// Whether the nodes hold the method's radius and Base Color; false: an albedo-only table (no radius fit at any
     /// node; Base Color is the albedo, the radius zero: [`TexelMaterial::albedo_only`]).
     radius: bool,
+    /// The extended physiology every node is evaluated with (epidermis thickness, baseline absorption scale, blood
+    /// oxygenation, `crate::skin::params::EXTENDED_PARAMS` order): the table is over the paper's three concentrations,
+    /// with these baked in.
+    extended: [f64; 3],
     /// ln of the 9 outputs per node; node (i, j, k) at ((i * nb) + j) * nh + k.
     log_values: Vec<[f32; STORED]>,
     /// The method's part of `log_values` (ln Base Color in lanes 0..3, ln radius in 3..6, two lanes of padding), laid
@@ -218,21 +222,26 @@ impl MaterialTable {
         cancel: &AtomicBool,
         tick: Option<&(dyn Fn() + Sync)>,
     ) -> Result<MaterialTable, SkinError> {
-        MaterialTable::build_outputs(prepared, method, resolution, true, cancel, tick)
+        MaterialTable::build_outputs(prepared, method, resolution, true, EXTENDED_DEFAULTS, cancel, tick)
     }
 
     /// [`MaterialTable::build_cancellable`] of a full table (`radius`) or of an albedo-only one, whose nodes cost
-    /// one transform value per wavelength each and no radius fit.
+    /// one transform value per wavelength each and no radius fit, with the extended physiology `extended`
+    /// (`EXTENDED_PARAMS` order, each checked against its range) at every node.
     pub fn build_outputs(
         prepared: &Prepared,
         method: SubsurfaceMethod,
         resolution: TableResolution,
         radius: bool,
+        extended: [f64; 3],
         cancel: &AtomicBool,
         tick: Option<&(dyn Fn() + Sync)>,
     ) -> Result<MaterialTable, SkinError> {
         resolution.validate()?;
         prepared.request().target.method_entry(method)?;
+        for (spec, value) in EXTENDED_PARAMS.iter().zip(extended) {
+            spec.check(value)?;
+        }
         let r = resolution;
         let nodes = r.node_count();
         let every = (nodes / 100).max(1);
@@ -245,22 +254,28 @@ impl MaterialTable {
                 if let Some(tick) = tick.filter(|_| n % every == 0) {
                     tick();
                 }
-                let p = node_params(r, n);
+                let p = with_extended(node_params(r, n), extended);
                 Ok(texel_material(prepared, &p, method, radius)?.to_array().map(stored_log))
             })
             .collect::<Result<Vec<_>, SkinError>>()?;
-        Ok(MaterialTable::new(resolution, method, radius, log_values))
+        Ok(MaterialTable::new(resolution, method, radius, extended, log_values))
     }
 
     fn new(
         resolution: TableResolution,
         method: SubsurfaceMethod,
         radius: bool,
+        extended: [f64; 3],
         log_values: Vec<[f32; STORED]>,
     ) -> MaterialTable {
         let method_logs =
             log_values.iter().map(|v| std::array::from_fn(|q| if q < 6 { v[3 + q] } else { 0.0 })).collect();
-        MaterialTable { resolution, method, radius, log_values, method_logs }
+        MaterialTable { resolution, method, radius, extended, log_values, method_logs }
+    }
+
+    /// The extended physiology baked into every node (`crate::skin::params::EXTENDED_PARAMS` order).
+    pub fn extended(&self) -> [f64; 3] {
+        self.extended
     }
 
     /// Whether the table holds the method's radius (false: an albedo-only table).
@@ -508,26 +523,38 @@ impl MaterialTable {
         cancel: &AtomicBool,
         tick: Option<&(dyn Fn() + Sync)>,
     ) -> Result<(MaterialTable, bool), SkinError> {
-        MaterialTable::load_or_build_outputs(prepared, method, resolution, true, cache_dir, cancel, tick)
+        MaterialTable::load_or_build_outputs(
+            prepared,
+            method,
+            resolution,
+            true,
+            EXTENDED_DEFAULTS,
+            cache_dir,
+            cancel,
+            tick,
+        )
     }
 
-    /// [`MaterialTable::load_or_build_cancellable`] of a full table (`radius`) or of an albedo-only one (see
-    /// [`MaterialTable::build_outputs`]; the two are cached under different keys).
+    /// [`MaterialTable::load_or_build_cancellable`] of a full table (`radius`) or of an albedo-only one, with the
+    /// extended physiology `extended` at every node (see [`MaterialTable::build_outputs`]; tables for other outputs
+    /// or other extended values are cached under other keys).
+    #[allow(clippy::too_many_arguments)]
     pub fn load_or_build_outputs(
         prepared: &Prepared,
         method: SubsurfaceMethod,
         resolution: TableResolution,
         radius: bool,
+        extended: [f64; 3],
         cache_dir: Option<&Path>,
         cancel: &AtomicBool,
         tick: Option<&(dyn Fn() + Sync)>,
     ) -> Result<(MaterialTable, bool), SkinError> {
-        let key = cache_key(prepared, method, resolution, radius);
+        let key = cache_key(prepared, method, resolution, radius, extended);
         let path = cache_dir.map(|d| d.join(format!("table-{key:016x}.bin")));
         if let Some(table) = path.as_deref().and_then(|p| MaterialTable::read(p, method, resolution)) {
-            return Ok((MaterialTable { radius, ..table }, true));
+            return Ok((MaterialTable { radius, extended, ..table }, true));
         }
-        let table = MaterialTable::build_outputs(prepared, method, resolution, radius, cancel, tick)?;
+        let table = MaterialTable::build_outputs(prepared, method, resolution, radius, extended, cancel, tick)?;
         if let Some(p) = &path {
             // A cache that cannot be written is no error: the table is still good.
             if std::fs::create_dir_all(p.parent().unwrap_or(Path::new("."))).is_ok() {
@@ -590,7 +617,7 @@ impl MaterialTable {
             return None;
         }
         let log_values = floats.chunks(STORED).map(|c| std::array::from_fn(|q| c[q])).collect();
-        Some(MaterialTable::new(resolution, method, true, log_values))
+        Some(MaterialTable::new(resolution, method, true, EXTENDED_DEFAULTS, log_values))
     }
 }
 
@@ -611,17 +638,39 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 /// FNV-1a hash of everything the table depends on: crate version, request (accuracy, model, working space, target),
-/// method (or "albedo only" for a table without radius, which no method changes) and resolution. Stable across runs
-/// and platforms.
-fn cache_key(prepared: &Prepared, method: SubsurfaceMethod, resolution: TableResolution, radius: bool) -> u64 {
-    let text = format!(
+/// method (or "albedo only" for a table without radius, which no method changes), resolution and, when any differs
+/// from its default, the extended physiology baked in (the paper's model keeps the key it had before the extended
+/// physiology existed, so such caches stay valid). Stable across runs and platforms.
+pub fn cache_key(
+    prepared: &Prepared,
+    method: SubsurfaceMethod,
+    resolution: TableResolution,
+    radius: bool,
+    extended: [f64; 3],
+) -> u64 {
+    let mut text = format!(
         "{}|{}|{}|{:?}",
         env!("CARGO_PKG_VERSION"),
         serde_json::to_string(prepared.request()).unwrap_or_default(),
         if radius { method.name() } else { "albedo only" },
         resolution
     );
+    if extended != EXTENDED_DEFAULTS {
+        // The exact bits: a table for 0.1 is not reused for the next double.
+        let bits: Vec<String> = extended.iter().map(|v| format!("{:016x}", v.to_bits())).collect();
+        text.push_str(&format!("|extended {}", bits.join(" ")));
+    }
     fnv1a(text.as_bytes())
+}
+
+/// `p` with the extended physiology `extended` (`EXTENDED_PARAMS` order).
+pub(crate) fn with_extended(p: SkinParams, extended: [f64; 3]) -> SkinParams {
+    SkinParams {
+        epidermis_thickness_mm: extended[0],
+        baseline_absorption_scale: extended[1],
+        blood_oxygenation: extended[2],
+        ..p
+    }
 }
 
 /// The material at `p` for a table of `method`: the full material (`radius`), or the albedo alone.
@@ -654,12 +703,12 @@ fn node_params(r: TableResolution, n: usize) -> SkinParams {
     let j = (n / r.hemoglobin) % r.melanin_blend;
     let i = n / (r.hemoglobin * r.melanin_blend);
     let at = |idx: usize, count: usize| idx as f64 / (count - 1) as f64;
-    SkinParams {
-        melanin: unwarp(at(i, r.melanin), MELANIN.max),
-        melanin_blend: MELANIN_BLEND.min + at(j, r.melanin_blend) * (MELANIN_BLEND.max - MELANIN_BLEND.min),
-        hemoglobin: unwarp(at(k, r.hemoglobin), HEMOGLOBIN.max),
-        oiliness: 0.0,
-    }
+    SkinParams::paper(
+        unwarp(at(i, r.melanin), MELANIN.max),
+        MELANIN_BLEND.min + at(j, r.melanin_blend) * (MELANIN_BLEND.max - MELANIN_BLEND.min),
+        unwarp(at(k, r.hemoglobin), HEMOGLOBIN.max),
+        0.0,
+    )
 }
 
 /// Worst relative error of the table against direct evaluation (an albedo-only table's radius error is 0: it has
@@ -696,12 +745,12 @@ pub fn check_points(r: TableResolution, samples: usize) -> Vec<[f64; 3]> {
 
 /// The parameters at warped point `u` of [`check_points`] (oiliness 0: it does not enter the table).
 pub fn check_point_params(u: [f64; 3]) -> SkinParams {
-    SkinParams {
-        melanin: unwarp(u[0], MELANIN.max),
-        melanin_blend: MELANIN_BLEND.min + u[1] * (MELANIN_BLEND.max - MELANIN_BLEND.min),
-        hemoglobin: unwarp(u[2], HEMOGLOBIN.max),
-        oiliness: 0.0,
-    }
+    SkinParams::paper(
+        unwarp(u[0], MELANIN.max),
+        MELANIN_BLEND.min + u[1] * (MELANIN_BLEND.max - MELANIN_BLEND.min),
+        unwarp(u[2], HEMOGLOBIN.max),
+        0.0,
+    )
 }
 
 /// Measure the table's error at `samples` points: cell centres (where trilinear error peaks) and pseudo-random points
@@ -730,7 +779,7 @@ pub fn measure_error_cancellable(
             if cancel.load(Ordering::Relaxed) {
                 return Err(interrupted("table check"));
             }
-            let p = check_point_params(*u);
+            let p = with_extended(check_point_params(*u), table.extended);
             let exact = texel_material(prepared, &p, table.method, table.radius)?;
             let approx = table.lookup(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
             let rel =

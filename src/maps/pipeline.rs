@@ -13,7 +13,7 @@ use serde::Serialize;
 
 use super::io::{
     commit_all, read_params, stage_bytes, stage_channels_exr, Compression, ExrOptions, ParamImage, ParamInputs, Plane,
-    Staged, PARAM_CHANNELS, PARAM_RANGES,
+    Staged, ALL_CHANNELS, ALL_RANGES, EXTENDED_CHANNELS, PARAM_CHANNELS,
 };
 use super::lut::{measure_error_cancellable, MaterialTable, TableError, TableResolution, TexelMaterial};
 use crate::error::SkinError;
@@ -23,7 +23,8 @@ use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams};
 use crate::fit::SubsurfaceMethod;
 use crate::skin::SkinParams;
 
-/// At most this many distinct (C_m, beta_m, C_h) tuples are evaluated one by one; more use the table.
+/// At most this many distinct (C_m, beta_m, C_h) tuples (with the extended physiology, when it varies) are evaluated
+/// one by one; more use the table (or, when an extended parameter varies, direct evaluation of every texel).
 pub const MAX_DISTINCT_TUPLES: usize = 2048;
 /// How many bad texels an error message lists by coordinate.
 const LISTED_BAD_TEXELS: usize = 5;
@@ -147,7 +148,11 @@ pub struct MapReport {
     pub color_space: &'static str,
     pub strategy: Strategy,
     pub clamped: Vec<BadTexels>,
+    /// The parameters that are one value everywhere (the paper's four and the extended physiology), by name.
     pub constant_parameters: Vec<&'static str>,
+    /// The value of each of `constant_parameters` (as used, after any clamping): the extended physiology the maps
+    /// were computed with when it is constant (its defaults unless a map or value gave others).
+    pub constant_values: std::collections::BTreeMap<&'static str, f64>,
     pub request: Request,
     /// What was computed, counted (so a front can show that an effect it dropped was not computed).
     pub work: MapWork,
@@ -200,9 +205,9 @@ pub struct Timings {
 pub fn check_planes(image: &mut ParamImage, clamp: bool) -> Result<Vec<BadTexels>, SkinError> {
     let width = image.width;
     let mut report = Vec::new();
-    for (p, plane) in image.planes.iter_mut().enumerate() {
-        let (lo, hi) = (PARAM_RANGES[p].0 as f32, PARAM_RANGES[p].1 as f32);
-        let mut bad = BadTexels { parameter: PARAM_CHANNELS[p].to_string(), ..BadTexels::default() };
+    for (p, plane) in image.planes.iter_mut().chain(image.extended.iter_mut()).enumerate() {
+        let (lo, hi) = (ALL_RANGES[p].0 as f32, ALL_RANGES[p].1 as f32);
+        let mut bad = BadTexels { parameter: ALL_CHANNELS[p].to_string(), ..BadTexels::default() };
         let note = |i: usize, v: f32, bad: &mut BadTexels| {
             if v.is_nan() {
                 bad.nan += 1;
@@ -300,19 +305,29 @@ pub fn compute_maps_cancellable(
     settings.request.target.method_entry(method)?;
     let n = image.texel_count();
     let [m, b, hb, oil] = &image.planes;
+    let [e0, e1, e2] = &image.extended;
     let wanted = settings.request.outputs;
     let fit_radius = wanted.radius;
-    let evaluate_one = |t: [f32; 3]| -> Result<TexelMaterial, SkinError> {
+    // Texel tuples: (C_m, beta_m, C_h) and the extended physiology; oiliness does not enter the material.
+    let range = |k: usize| if k < 3 { ALL_RANGES[k] } else { ALL_RANGES[k + 1] };
+    let evaluate_one = |t: [f32; 6]| -> Result<TexelMaterial, SkinError> {
         // Texels passed `check_planes` in f32; widening can step just past a bound (0.1f32 > 0.1), so round back in.
-        let v = |k: usize| (t[k] as f64).clamp(PARAM_RANGES[k].0, PARAM_RANGES[k].1);
-        let p = SkinParams::new(v(0), v(1), v(2), 0.0)?;
+        let v = |k: usize| (t[k] as f64).clamp(range(k).0, range(k).1);
+        let p = SkinParams::from_values([v(0), v(1), v(2), 0.0, v(3), v(4), v(5)])?;
         if fit_radius {
             TexelMaterial::of(&prepared.material(&p)?, method)
         } else {
             Ok(TexelMaterial::albedo_only(prepared.albedo(&p)?))
         }
     };
-    let tuple = |i: usize| [m.value(i), b.value(i), hb.value(i)];
+    let tuple = |i: usize| [m.value(i), b.value(i), hb.value(i), e0.value(i), e1.value(i), e2.value(i)];
+    // The extended physiology when it is one value everywhere (the table bakes it in), widened as `evaluate_one` does.
+    let extended_uniform: Option<[f64; 3]> = match [e0, e1, e2].map(uniform_value) {
+        [Some(x), Some(y), Some(z)] => {
+            Some(std::array::from_fn(|k| ([x, y, z][k] as f64).clamp(range(3 + k).0, range(3 + k).1)))
+        }
+        _ => None,
+    };
 
     // The radius plane is filled only when asked for; Base Color whenever a material is evaluated (the radius needs
     // the albedo) and kept only when asked for.
@@ -322,7 +337,10 @@ pub fn compute_maps_cancellable(
     let mut radius = planes(fit_radius);
     let select = |t: &TexelMaterial| (t.base_color, t.radius_mm);
 
-    let all_constant = uniform_value(m).is_some() && uniform_value(b).is_some() && uniform_value(hb).is_some();
+    let all_constant = uniform_value(m).is_some()
+        && uniform_value(b).is_some()
+        && uniform_value(hb).is_some()
+        && extended_uniform.is_some();
     let mut work = MapWork { texels: n, ..MapWork::default() };
     let strategy = if !needs_material {
         Strategy::None
@@ -337,56 +355,30 @@ pub fn compute_maps_cancellable(
         }
         Strategy::Constant
     } else if let Some(tuples) = distinct_tuples(image, MAX_DISTINCT_TUPLES) {
-        let keys: Vec<[u32; 3]> = tuples.keys().cloned().collect();
+        let keys: Vec<[u32; 6]> = tuples.keys().cloned().collect();
         let values = keys
             .par_iter()
             .map(|k| evaluate_one(k.map(f32::from_bits)).map(|t| select(&t)))
             .collect::<Result<Vec<_>, SkinError>>()?;
         work.evaluations = keys.len();
-        let index: HashMap<[u32; 3], usize> = keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
+        let index: HashMap<[u32; 6], usize> = keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
         fill_rows(w, &mut base_color, &mut radius, progress, cancel, |i| values[index[&tuple(i).map(f32::to_bits)]]);
         if settings.strategy == StrategyChoice::Exact {
             Strategy::Exact { evaluations: keys.len() }
         } else {
             Strategy::DistinctTuples { tuples: keys.len() }
         }
-    } else if settings.strategy == StrategyChoice::Exact {
-        // Direct evaluation of every texel, row by row in parallel.
-        type Row = Result<Vec<([f32; 3], [f32; 3])>, SkinError>;
-        let rows: Vec<Row> = (0..h)
-            .into_par_iter()
-            .map(|y| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Ok(Vec::new());
-                }
-                let row = (0..w).map(|x| evaluate_one(tuple(y * w + x)).map(|t| select(&t))).collect();
-                if let Some(p) = progress {
-                    p(w, n);
-                }
-                row
-            })
-            .collect();
-        for (y, row) in rows.into_iter().enumerate() {
-            for (x, (c, r)) in row?.into_iter().enumerate() {
-                for k in 0..3 {
-                    base_color[k][y * w + x] = c[k];
-                    if fit_radius {
-                        radius[k][y * w + x] = r[k];
-                    }
-                }
-            }
-        }
-        work.evaluations = n;
-        Strategy::Exact { evaluations: n }
-    } else {
+    } else if let (StrategyChoice::Auto, Some(extended)) = (settings.strategy, extended_uniform) {
         let build = Instant::now();
         let tick = progress.map(|p| move || p(0, n));
-        // Without the radius the table holds the albedo alone: its nodes fit no radius.
+        // Without the radius the table holds the albedo alone: its nodes fit no radius. The extended physiology, one
+        // value everywhere, is baked into every node (and into the cache key).
         let (table, from_cache) = MaterialTable::load_or_build_outputs(
             &prepared,
             method,
             settings.table,
             fit_radius,
+            extended,
             settings.table_cache.as_deref(),
             cancel,
             tick.as_ref().map(|t| t as &(dyn Fn() + Sync)),
@@ -419,6 +411,35 @@ pub fn compute_maps_cancellable(
         work.table_nodes_built = if from_cache { 0 } else { nodes };
         work.table_lookups = n;
         Strategy::Table { resolution, nodes, from_cache, build_seconds, measured_error }
+    } else {
+        // Direct evaluation of every texel, row by row in parallel: on request, or when an extended parameter varies
+        // over more tuples than `MAX_DISTINCT_TUPLES` (the table is over the paper's three concentrations only).
+        type Row = Result<Vec<([f32; 3], [f32; 3])>, SkinError>;
+        let rows: Vec<Row> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Ok(Vec::new());
+                }
+                let row = (0..w).map(|x| evaluate_one(tuple(y * w + x)).map(|t| select(&t))).collect();
+                if let Some(p) = progress {
+                    p(w, n);
+                }
+                row
+            })
+            .collect();
+        for (y, row) in rows.into_iter().enumerate() {
+            for (x, (c, r)) in row?.into_iter().enumerate() {
+                for k in 0..3 {
+                    base_color[k][y * w + x] = c[k];
+                    if fit_radius {
+                        radius[k][y * w + x] = r[k];
+                    }
+                }
+            }
+        }
+        work.evaluations = n;
+        Strategy::Exact { evaluations: n }
     };
 
     // With the radius, every evaluation and every node built is a material with its three channel fits
@@ -446,8 +467,14 @@ pub fn compute_maps_cancellable(
         Some(SpecularOutput::Map { specular_ior_level, .. }) => (specular_ior_level.len(), specular_ior_level.len()),
     };
 
+    let constant_values: std::collections::BTreeMap<&'static str, f64> = (0..ALL_CHANNELS.len())
+        .filter_map(|p| {
+            // Widened and rounded into range as the evaluation does (0.01f32 is just below 0.01).
+            uniform_value(image.plane(p)).map(|v| (ALL_CHANNELS[p], (v as f64).clamp(ALL_RANGES[p].0, ALL_RANGES[p].1)))
+        })
+        .collect();
     let constant_parameters =
-        (0..4).filter(|&p| uniform_value(&image.planes[p]).is_some()).map(|p| PARAM_CHANNELS[p]).collect();
+        (0..ALL_CHANNELS.len()).map(|p| ALL_CHANNELS[p]).filter(|n| constant_values.contains_key(n)).collect();
     let report = MapReport {
         crate_version: env!("CARGO_PKG_VERSION"),
         width: w,
@@ -458,6 +485,7 @@ pub fn compute_maps_cancellable(
         strategy,
         clamped: Vec::new(),
         constant_parameters,
+        constant_values,
         request: *prepared.request(),
         work,
         seconds: Timings { compute: start.elapsed().as_secs_f64(), ..Timings::default() },
@@ -483,12 +511,15 @@ fn uniform_value(plane: &Plane) -> Option<f32> {
     }
 }
 
-/// The distinct (C_m, beta_m, C_h) tuples (as f32 bit patterns) if there are at most `limit`, else None.
-fn distinct_tuples(image: &ParamImage, limit: usize) -> Option<HashMap<[u32; 3], ()>> {
+/// The distinct (C_m, beta_m, C_h, extended physiology) tuples (as f32 bit patterns) if there are at most `limit`,
+/// else None.
+fn distinct_tuples(image: &ParamImage, limit: usize) -> Option<HashMap<[u32; 6], ()>> {
     let [m, b, h, _] = &image.planes;
+    let [e0, e1, e2] = &image.extended;
     let mut set = HashMap::new();
     for i in 0..image.texel_count() {
-        set.insert([m.value(i).to_bits(), b.value(i).to_bits(), h.value(i).to_bits()], ());
+        let t = [m.value(i), b.value(i), h.value(i), e0.value(i), e1.value(i), e2.value(i)];
+        set.insert(t.map(f32::to_bits), ());
         if set.len() > limit {
             return None;
         }
@@ -725,16 +756,9 @@ pub fn commit_map_files(out_dir: &Path, prefix: Option<&str>, staged: Vec<Staged
     Ok(())
 }
 
-/// The sidecar: what each file holds (channels, meaning, units, colour space), the inputs, and the report.
-/// `compressions` holds each EXR's file name and the compression it was written with (what `auto` chose).
-fn sidecar_json(
-    report: &MapReport,
-    inputs: &ParamInputs,
-    result: &MapResult,
-    exr: ExrOptions,
-    compressions: &[(String, Compression)],
-) -> String {
-    let inputs_json = match inputs {
+/// The sidecar's record of the inputs.
+fn inputs_json(inputs: &ParamInputs) -> serde_json::Value {
+    match inputs {
         ParamInputs::Multi { path, constants } => serde_json::json!({
             "file": path.display().to_string(),
             "channels": PARAM_CHANNELS,
@@ -751,7 +775,38 @@ fn sidecar_json(
                 }
             ))
             .collect::<HashMap<_, _>>()),
-    };
+        ParamInputs::Extended { inputs, extended } => {
+            // The four as above, and each extended parameter's source: a file, a constant, or "channel or default"
+            // (the channel of that name in a multi-channel file if it has one, else the default; the report's
+            // constant_values say which value was used when it is one everywhere).
+            let mut json = inputs_json(inputs);
+            json["extended"] = serde_json::json!(EXTENDED_CHANNELS
+                .iter()
+                .zip(extended)
+                .map(|(n, s)| (
+                    n.to_string(),
+                    match s {
+                        Some(super::io::ParamSource::File(p)) => serde_json::json!({"file": p.display().to_string()}),
+                        Some(super::io::ParamSource::Constant(v)) => serde_json::json!({"constant": v}),
+                        None => serde_json::json!("channel or default"),
+                    }
+                ))
+                .collect::<HashMap<_, _>>());
+            json
+        }
+    }
+}
+
+/// The sidecar: what each file holds (channels, meaning, units, colour space), the inputs, and the report.
+/// `compressions` holds each EXR's file name and the compression it was written with (what `auto` chose).
+fn sidecar_json(
+    report: &MapReport,
+    inputs: &ParamInputs,
+    result: &MapResult,
+    exr: ExrOptions,
+    compressions: &[(String, Compression)],
+) -> String {
+    let inputs_json = inputs_json(inputs);
     let mut outputs = serde_json::json!({});
     if result.base_color.is_some() {
         outputs[ALBEDO_FILE] = serde_json::json!({"channels": ["R", "G", "B"], "meaning": "Principled BSDF Base Color",

@@ -34,12 +34,12 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::io::{commit_all, stage_bytes, stage_rgb_exr, ExrOptions, Staged};
-use super::lut::{check_point_params, check_points, MaterialTable, TableResolution, TexelMaterial};
+use super::lut::{check_point_params, check_points, with_extended, MaterialTable, TableResolution, TexelMaterial};
 use super::pipeline::{check_prefix, output_name};
 use crate::error::SkinError;
 use crate::evaluate::Prepared;
 use crate::fit::SubsurfaceMethod;
-use crate::skin::params::{HEMOGLOBIN, MELANIN, MELANIN_BLEND};
+use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN, MELANIN_BLEND};
 
 /// The `format` of a shader table's metadata (changes when the layout does).
 /// How the table's images are written: 32-bit float (PIZ). The images hold logarithms; half floats would round ln
@@ -105,6 +105,27 @@ pub struct ShaderTableMeta {
     pub stored: String,
     /// The request the table was evaluated with (accuracy, model, working space, target).
     pub request: serde_json::Value,
+    /// The extended physiology baked into every node, by name (epidermis_thickness_mm, baseline_absorption_scale,
+    /// blood_oxygenation): the table holds the material for these values only, so a front rebuilds it when they
+    /// change. Metadata written before they existed reads as the defaults (the paper's values).
+    #[serde(default = "default_extended_meta")]
+    pub extended: std::collections::BTreeMap<String, f64>,
+}
+
+/// The extended physiology by name, from values in `EXTENDED_PARAMS` order.
+pub fn extended_meta(values: [f64; 3]) -> std::collections::BTreeMap<String, f64> {
+    EXTENDED_PARAMS.iter().zip(values).map(|(s, v)| (s.name.to_string(), v)).collect()
+}
+
+fn default_extended_meta() -> std::collections::BTreeMap<String, f64> {
+    extended_meta(EXTENDED_DEFAULTS)
+}
+
+impl ShaderTableMeta {
+    /// The baked extended physiology in `EXTENDED_PARAMS` order (a missing name: its default).
+    pub fn extended_values(&self) -> [f64; 3] {
+        std::array::from_fn(|k| self.extended.get(EXTENDED_PARAMS[k].name).copied().unwrap_or(EXTENDED_DEFAULTS[k]))
+    }
 }
 
 /// A [`MaterialTable`]'s Base Color and radius as two images for Blender (see the module documentation).
@@ -137,17 +158,20 @@ impl ShaderTable {
         ShaderTable::from_table(&table, prepared)
     }
 
-    /// [`ShaderTable::build`] through the map pipeline's table cache (`MaterialTable::load_or_build_cancellable`:
-    /// read from `cache_dir` when the same table is there, else built and stored), stopping once `cancel` is set.
+    /// [`ShaderTable::build`] through the map pipeline's table cache (`MaterialTable::load_or_build_outputs`:
+    /// read from `cache_dir` when the same table is there, else built and stored), with the extended physiology
+    /// `extended` (`EXTENDED_PARAMS` order) baked into every node, stopping once `cancel` is set.
     pub fn load_or_build_cancellable(
         prepared: &Prepared,
         method: SubsurfaceMethod,
         resolution: TableResolution,
+        extended: [f64; 3],
         cache_dir: Option<&Path>,
         cancel: &AtomicBool,
     ) -> Result<ShaderTable, SkinError> {
-        let (table, _) =
-            MaterialTable::load_or_build_cancellable(prepared, method, resolution, cache_dir, cancel, None)?;
+        let (table, _) = MaterialTable::load_or_build_outputs(
+            prepared, method, resolution, true, extended, cache_dir, cancel, None,
+        )?;
         ShaderTable::from_table(&table, prepared)
     }
 
@@ -198,6 +222,7 @@ impl ShaderTable {
             stored: "ln".to_string(),
             request: serde_json::to_value(request)
                 .map_err(|e| SkinError::invalid("shader table request", e.to_string()))?,
+            extended: extended_meta(table.extended()),
         };
         Ok(ShaderTable { meta, method: table.method(), base_color_log, radius_log })
     }
@@ -375,7 +400,7 @@ pub fn measure_shader_error(
     let errors = check_points(r, samples)
         .par_iter()
         .map(|u| {
-            let p = check_point_params(*u);
+            let p = with_extended(check_point_params(*u), m.extended_values());
             let exact = TexelMaterial::of(&prepared.material(&p)?, shader.method())?;
             let (base_color, radius_mm) = shader.sample(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
             let rel =

@@ -17,6 +17,7 @@ use crate::error::SkinError;
 use crate::evaluate::ProfileGrid;
 use crate::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::maps::io::PARAM_CHANNELS;
+use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS};
 use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
 
 use super::errors::{internal, invalid};
@@ -149,17 +150,30 @@ pub(super) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Outp
         .map_err(|e| PyRuntimeError::new_err(format!("spectral-skin internal error: {e}")))
 }
 
-/// The four parameter arguments (in [`PARAM_CHANNELS`] order) and a preset to [`SkinParams`] ([`resolve_params`]).
-pub(super) fn params_arg(preset: Option<&str>, args: [Option<&Bound<'_, PyAny>>; 4]) -> PyResult<SkinParams> {
+/// The four parameter arguments (in [`PARAM_CHANNELS`] order), the extended physiology's (in [`EXTENDED_PARAMS`] order;
+/// None: the preset's, else the default) and a preset to [`SkinParams`] ([`resolve_params`]).
+pub(super) fn params_arg(
+    preset: Option<&str>,
+    args: [Option<&Bound<'_, PyAny>>; 4],
+    extended: [Option<&Bound<'_, PyAny>>; 3],
+) -> PyResult<SkinParams> {
     let mut values = [None; 4];
     for ((value, name), obj) in values.iter_mut().zip(PARAM_CHANNELS).zip(args) {
         *value = real_arg(name, obj)?;
     }
-    resolve_params(preset, values)
+    let mut params = resolve_params(preset, values)?;
+    let mut all = params.values();
+    for ((spec, obj), value) in EXTENDED_PARAMS.iter().zip(extended).zip(&mut all[4..]) {
+        if let Some(v) = real_arg(spec.name, obj)? {
+            *value = v.0;
+        }
+    }
+    params = SkinParams::from_values(all)?;
+    Ok(params)
 }
 
 /// A preset and/or the four parameters: explicit parameters override the preset's; without a preset all four are
-/// required. The core validates the ranges.
+/// required. The extended physiology is the preset's (the defaults). The core validates the ranges.
 pub(super) fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) -> PyResult<SkinParams> {
     let explicit = explicit.map(|v| v.map(|r| r.0));
     let base = preset.map(SkinParams::preset).transpose()?;
@@ -179,7 +193,8 @@ pub(super) fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) 
         ));
     }
     let [m, b, h, o] = values.map(|v| v.unwrap_or(f64::NAN));
-    Ok(SkinParams::new(m, b, h, o)?)
+    let extended = base.map_or(EXTENDED_DEFAULTS, |p| p.extended_values());
+    Ok(SkinParams::from_values([m, b, h, o, extended[0], extended[1], extended[2]])?)
 }
 
 /// `blender=` and `engine=` to a [`Target`]: the version as "MAJOR.MINOR" (or "MAJOR.MINOR.PATCH") or a tuple of

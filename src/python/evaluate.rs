@@ -89,6 +89,12 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///     melanin_blend: beta_m, eumelanin share of the melanin, 0..1 (the rest is pheomelanin).
 ///     hemoglobin: C_h, whole-blood volume fraction of the dermis, 0..0.1.
 ///     oiliness: rho_s, scale of the surface's specular lobe, 0..1.
+///     epidermis_thickness_mm: the extended physiology (docs/model.md, section Extended physiology): thickness of
+///         the epidermis, mm, 0.01..0.5; None: the preset's, else DJ2006's 0.25.
+///     baseline_absorption_scale: scale on the melanin- and blood-free tissue absorption (DJ2006 eq. 5), 0..10;
+///         None: the preset's, else 1.
+///     blood_oxygenation: gamma, oxygenated share of the dermis's haemoglobin, 0..1; None: the preset's, else
+///         DJ2006's 0.75.
 ///     preset: a preset name from :func:`presets` (case-insensitive).
 ///     outputs: names among "albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular".
 ///         None: ("albedo", "radius", "specular"), what a material needs.
@@ -152,7 +158,7 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
     name = "evaluate",
     signature = (
         melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None, *,
-        preset = None, outputs = None, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
+        epidermis_thickness_mm = None, baseline_absorption_scale = None, blood_oxygenation = None, preset = None, outputs = None, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles",
@@ -166,6 +172,9 @@ pub(super) fn evaluate_py<'py>(
     melanin_blend: Option<&Bound<'py, PyAny>>,
     hemoglobin: Option<&Bound<'py, PyAny>>,
     oiliness: Option<&Bound<'py, PyAny>>,
+    epidermis_thickness_mm: Option<&Bound<'py, PyAny>>,
+    baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
+    blood_oxygenation: Option<&Bound<'py, PyAny>>,
     preset: Option<&str>,
     outputs: Option<&Bound<'py, PyAny>>,
     accuracy: &str,
@@ -182,7 +191,11 @@ pub(super) fn evaluate_py<'py>(
     rgb_mapping: &str,
     boundaries: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let params = params_arg(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
+    let params = params_arg(
+        preset,
+        [melanin, melanin_blend, hemoglobin, oiliness],
+        [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation],
+    )?;
     let knobs = Knobs::from_args(
         accuracy,
         wavelength_step_nm,
@@ -216,7 +229,8 @@ pub(super) fn evaluate_py<'py>(
 /// ``boundaries="paper"``, none for the presets) is set to 0 and reported by a :class:`SpectralSkinWarning`.
 ///
 /// Arguments:
-///     melanin, melanin_blend, hemoglobin, oiliness, preset: as for :func:`evaluate`.
+///     melanin, melanin_blend, hemoglobin, oiliness, epidermis_thickness_mm, baseline_absorption_scale,
+///         blood_oxygenation, preset: as for :func:`evaluate`.
 ///     spectral: False: RGB profiles; True: one profile per wavelength.
 ///     accuracy, wavelength_step_nm, wavelength_placement, multipole_pairs, profile_r_min_mm, profile_r_max_mm,
 ///         profile_count, combination, working_space: as for :func:`evaluate`.
@@ -235,7 +249,7 @@ pub(super) fn evaluate_py<'py>(
     name = "profile",
     signature = (
         melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None, *,
-        preset = None, spectral = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
+        epidermis_thickness_mm = None, baseline_absorption_scale = None, blood_oxygenation = None, preset = None, spectral = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709", rgb_mapping = "linear", boundaries = "paper"
@@ -248,6 +262,9 @@ pub(super) fn profile_py<'py>(
     melanin_blend: Option<&Bound<'py, PyAny>>,
     hemoglobin: Option<&Bound<'py, PyAny>>,
     oiliness: Option<&Bound<'py, PyAny>>,
+    epidermis_thickness_mm: Option<&Bound<'py, PyAny>>,
+    baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
+    blood_oxygenation: Option<&Bound<'py, PyAny>>,
     preset: Option<&str>,
     spectral: bool,
     accuracy: &str,
@@ -262,7 +279,11 @@ pub(super) fn profile_py<'py>(
     rgb_mapping: &str,
     boundaries: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let params = params_arg(preset, [melanin, melanin_blend, hemoglobin, oiliness])?;
+    let params = params_arg(
+        preset,
+        [melanin, melanin_blend, hemoglobin, oiliness],
+        [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation],
+    )?;
     let knobs = Knobs::from_args(
         accuracy,
         wavelength_step_nm,

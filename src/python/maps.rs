@@ -13,8 +13,8 @@ use rayon::prelude::*;
 
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{
-    read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, ALL_COMPRESSIONS, ALL_PRECISIONS, MAX_TEXELS,
-    PARAM_CHANNELS,
+    default_extended, read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, ALL_CHANNELS,
+    ALL_COMPRESSIONS, ALL_PRECISIONS, ALL_RANGES, EXTENDED_CHANNELS, MAX_TEXELS, PARAM_CHANNELS,
 };
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
@@ -181,11 +181,14 @@ impl Progress {
 ///         A parameter name ("melanin", "melanin_blend", "hemoglobin" or "oiliness") for that parameter's own map
 ///         (as ``--melanin`` etc.): an EXR with exactly one channel (any name) or with a channel named like the
 ///         parameter, whose values are the parameter itself; or an 8/16-bit greyscale PNG or TIFF, whose 0..1
-///         values map linearly onto the parameter's range (:func:`parameter_ranges`).
+///         values map linearly onto the parameter's range (:func:`parameter_ranges`). An extended parameter's name
+///         ("epidermis_thickness_mm", "baseline_absorption_scale", "blood_oxygenation") reads its own map the same
+///         way.
 ///
 /// Returns:
-///     {parameter name: float32 (H, W) array, row 0 at the top}: the four parameters, or the one named. Values are
-///     not range-checked (:func:`maps` does that).
+///     {parameter name: float32 (H, W) array, row 0 at the top}: the four parameters and any of the extended
+///     physiology's channels the file has (optional channels named like them), or the one named. Values are not
+///     range-checked (:func:`maps` does that).
 ///
 /// Raises:
 ///     SpectralSkinError: a missing or unreadable file, an unsupported format, a missing channel or a multi-channel
@@ -201,26 +204,27 @@ pub(super) fn read_parameter_map_py<'py>(
     let inputs = match name {
         None => ParamInputs::Multi { path, constants: [None; 4] },
         Some(name) => {
-            let Some(p) = PARAM_CHANNELS.iter().position(|c| *c == name) else {
-                let expected = PARAM_CHANNELS.join(", ");
+            let Some(p) = ALL_CHANNELS.iter().position(|c| *c == name) else {
+                let expected = ALL_CHANNELS.join(", ");
                 return Err(invalid(
                     "name",
                     format!("expected one of {expected} (or None for the four-channel file); got {name:?}"),
                 ));
             };
-            ParamInputs::Separate(std::array::from_fn(|k| {
-                if k == p {
-                    ParamSource::File(path.clone())
-                } else {
-                    ParamSource::Constant(0.0)
-                }
-            }))
+            let source = |k: usize| if k == p { Some(ParamSource::File(path.clone())) } else { None };
+            ParamInputs::Extended {
+                inputs: Box::new(ParamInputs::Separate(std::array::from_fn(|k| {
+                    source(k).unwrap_or(ParamSource::Constant(0.0))
+                }))),
+                extended: std::array::from_fn(|k| source(4 + k)),
+            }
         }
     };
     let image = detached(py, move || read_params(&inputs))?;
     let dict = PyDict::new(py);
     let (height, width) = (image.height, image.width);
-    for (parameter, plane) in PARAM_CHANNELS.iter().zip(image.planes) {
+    let channels = PARAM_CHANNELS.iter().chain(EXTENDED_CHANNELS.iter());
+    for (parameter, plane) in channels.zip(image.planes.into_iter().chain(image.extended)) {
         if let Plane::Texels(values) = plane {
             let array = Array2::from_shape_vec((height, width), values).map_err(internal)?;
             dict.set_item(parameter, PyArray::from_owned_array(py, array))?;
@@ -233,10 +237,12 @@ pub(super) fn read_parameter_map_py<'py>(
 ///
 /// The Python side of ``spectral-skin maps``, on numpy arrays instead of files. Row 0 is the top row, as numpy and
 /// EXR store images. Each texel is evaluated as :func:`evaluate` would, by the cheapest strategy that is exact enough:
-/// "constant" (one evaluation) when melanin, melanin_blend and hemoglobin each hold one value everywhere (floats, or
-/// arrays of one value); "distinct_tuples" (one evaluation per distinct (melanin, melanin_blend, hemoglobin)) when
-/// there are at most 2048 of them; otherwise "table": a lookup table built for the call and interpolated per texel,
-/// worst error below 0.5 % in albedo and 1 % in radius (its measured figures are in ``report["strategy"]``).
+/// "constant" (one evaluation) when melanin, melanin_blend and hemoglobin (and the extended physiology) each hold one
+/// value everywhere (floats, or arrays of one value); "distinct_tuples" (one evaluation per distinct (melanin,
+/// melanin_blend, hemoglobin), with the extended physiology when it varies) when there are at most 2048 of them;
+/// otherwise "table": a lookup table built for the call and interpolated per texel, worst error below 0.5 % in albedo
+/// and 1 % in radius at the paper's extended physiology (its measured figures are in ``report["strategy"]``), or
+/// "exact" when an extended parameter varies (the table is over the three concentrations only).
 /// ``exact=True`` evaluates every texel (or distinct tuple) directly instead of using the table: a few milliseconds
 /// of CPU per texel.
 ///
@@ -253,6 +259,11 @@ pub(super) fn read_parameter_map_py<'py>(
 ///     melanin_blend: beta_m, eumelanin share of the melanin, 0..1; as melanin (channel 1).
 ///     hemoglobin: C_h, whole-blood volume fraction of the dermis, 0..0.1; as melanin (channel 2).
 ///     oiliness: rho_s, scale of the surface's specular lobe, 0..1; as melanin (channel 3).
+///     epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation: the extended physiology
+///         (:func:`parameters`; docs/model.md, "Extended physiology"): an (H, W) array, a float, or None (the
+///         default: the paper's value, 0.25 mm, 1 and 0.75). One value everywhere is baked into the lookup table
+///         (cached per value); an array that varies makes every distinct tuple (at most 2048) or else every texel
+///         be evaluated directly (no table: a few milliseconds of CPU per texel, like ``exact=True``).
 ///     method: the subsurface method the maps are for: "burley" (Christensen-Burley), "random_walk",
 ///         "random_walk_legacy" (Blender 5.2 and later only) or "random_walk_skin".
 ///     blender, engine: the target, as for :func:`evaluate`; the radius (and for the random walks Base Color) is
@@ -304,7 +315,8 @@ pub(super) fn read_parameter_map_py<'py>(
 ///     its figures: "tuples"; "evaluations"; or
 ///     "resolution", "nodes", "from_cache", "build_seconds", "measured_error"}), "clamped" (one dict per parameter
 ///     with bad values: {"parameter", "nan", "infinite", "out_of_range", "first": [[x, y], ...]}),
-///     "constant_parameters", "request" (accuracy and model), "work" ({"texels", "evaluations",
+///     "constant_parameters" (the names of the parameters, the four and the extended physiology, that are one value
+///     everywhere), "constant_values" ({name: value} of those), "request" (accuracy and model), "work" ({"texels", "evaluations",
 ///     "table_nodes_built", "table_lookups", "radius_fits", "specular_evaluations", "outputs": {"base_color",
 ///     "radius", "specular"}}: what was computed), "seconds" ({"read", "compute", "write", "total"})}.
 ///     The arrays are new, writeable and C-contiguous (handed to numpy without a copy).
@@ -330,7 +342,7 @@ pub(super) fn read_parameter_map_py<'py>(
     name = "maps",
     signature = (
         params = None, *, melanin = None, melanin_blend = None, hemoglobin = None, oiliness = None,
-        method = "burley", outputs = None, exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
+        epidermis_thickness_mm = None, baseline_absorption_scale = None, blood_oxygenation = None, method = "burley", outputs = None, exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
         wavelength_placement = None,
         working_space = "Linear Rec.709", table_resolution = None, table_cache = true, blender = None,
         engine = "cycles", progress = None, boundaries = "paper"
@@ -344,6 +356,9 @@ pub(super) fn maps_py<'py>(
     melanin_blend: Option<&Bound<'py, PyAny>>,
     hemoglobin: Option<&Bound<'py, PyAny>>,
     oiliness: Option<&Bound<'py, PyAny>>,
+    epidermis_thickness_mm: Option<&Bound<'py, PyAny>>,
+    baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
+    blood_oxygenation: Option<&Bound<'py, PyAny>>,
     method: &str,
     outputs: Option<&Bound<'py, PyAny>>,
     exact: bool,
@@ -393,9 +408,17 @@ pub(super) fn maps_py<'py>(
                 .ok_or_else(|| PyTypeError::new_err(format!("params must be {PARAMS_ARRAY} or None")))?,
         ),
     };
-    let keywords = [melanin, melanin_blend, hemoglobin, oiliness];
-    let mut inputs: Vec<Option<MapInput<'py>>> = Vec::with_capacity(4);
-    for (name, obj) in PARAM_CHANNELS.iter().zip(keywords) {
+    let keywords = [
+        melanin,
+        melanin_blend,
+        hemoglobin,
+        oiliness,
+        epidermis_thickness_mm,
+        baseline_absorption_scale,
+        blood_oxygenation,
+    ];
+    let mut inputs: Vec<Option<MapInput<'py>>> = Vec::with_capacity(ALL_CHANNELS.len());
+    for (name, obj) in ALL_CHANNELS.iter().zip(keywords) {
         inputs.push(obj.map(|o| map_input(name, o)).transpose()?);
     }
     let mut shapes: Vec<(&str, Vec<usize>)> = Vec::new();
@@ -406,7 +429,7 @@ pub(super) fn maps_py<'py>(
         }
         shapes.push(("params", shape));
     }
-    for (name, input) in PARAM_CHANNELS.iter().zip(&inputs) {
+    for (name, input) in ALL_CHANNELS.iter().zip(&inputs) {
         if let Some(MapInput::Array(a)) = input {
             shapes.push((name, a.shape()));
         }
@@ -445,26 +468,28 @@ pub(super) fn maps_py<'py>(
     if !clamp {
         for (c, input) in inputs.iter().enumerate() {
             if let Some(MapInput::Constant(v)) = input {
-                let (lo, hi) = crate::maps::io::PARAM_RANGES[c];
+                let (lo, hi) = ALL_RANGES[c];
                 if !(*v >= lo && *v <= hi) {
-                    let name = PARAM_CHANNELS[c];
+                    let name = ALL_CHANNELS[c];
                     let reason = format!("must be in [{lo}, {hi}]; got {v} (pass clamp=True to clamp it)");
                     return Err(invalid(name, reason));
                 }
             }
         }
     }
-    let mut planes = Vec::with_capacity(4);
+    let mut planes = Vec::with_capacity(ALL_CHANNELS.len());
     for (c, input) in inputs.iter().enumerate() {
         planes.push(match (input, &params) {
             (Some(MapInput::Constant(v)), _) => Plane::Constant(*v as f32),
             (Some(MapInput::Array(a)), _) => Plane::Texels(a.plane(None)?),
-            (None, Some(p)) => Plane::Texels(p.plane(Some(c))?),
-            (None, None) => return Err(internal("a parameter without a source")),
+            (None, Some(p)) if c < 4 => Plane::Texels(p.plane(Some(c))?),
+            // The extended physiology defaults to the paper's values.
+            (None, _) if c >= 4 => default_extended()[c - 4].clone(),
+            (None, _) => return Err(internal("a parameter without a source")),
         });
     }
-    let planes: [Plane; 4] = planes.try_into().map_err(|_| internal("not four planes"))?;
-    let mut image = ParamImage { width, height, planes };
+    let [p0, p1, p2, p3, e0, e1, e2]: [Plane; 7] = planes.try_into().map_err(|_| internal("not seven planes"))?;
+    let mut image = ParamImage { width, height, planes: [p0, p1, p2, p3], extended: [e0, e1, e2] };
     drop(params);
     drop(inputs);
 

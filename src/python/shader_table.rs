@@ -9,7 +9,7 @@ use crate::fit::SubsurfaceMethod;
 use crate::maps::shader_table::{ShaderTable, ShaderTableMeta, DEFAULT_SHADER_TABLE_RESOLUTION, SHADER_TABLE_EXR};
 use crate::Outputs;
 
-use super::convert::{json_to_py, target_from, type_name, Knobs};
+use super::convert::{json_to_py, real_arg, target_from, type_name, Knobs};
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
 use super::maps::{interleave, result_planes, rgb_image, table_resolution};
@@ -40,6 +40,10 @@ use super::maps::{interleave, result_planes, rgb_image, table_resolution};
 ///         (chosen on the error/size/time front of docs/shader-table.md).
 ///     accuracy, working_space, boundaries: as for :func:`maps`.
 ///     table_cache: reuse (and store) the table in the per-user cache folder that :func:`maps` uses.
+///     epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation: the extended physiology baked into every
+///         node (the table is over melanin, melanin blend and haemoglobin only): a float, or None for the default
+///         (the paper's value, 0.25 mm, 1 and 0.75). The metadata's "extended" records them, so a front rebuilds the
+///         table when they change; each value has its own cached table.
 ///
 /// Ctrl-C stops the build (within a node's evaluation, about a millisecond) and raises KeyboardInterrupt.
 ///
@@ -48,18 +52,21 @@ use super::maps::{interleave, result_planes, rgb_image, table_resolution};
 ///     x Subsurface Scale in mm); "metadata": {"format", "crate_version", "method", "blender", "engine",
 ///     "color_space", "width", "height", "slice_width", "gutter", "melanin", "melanin_blend", "hemoglobin" (each
 ///     {"nodes", "min", "max", "warp": "cube_root" | "linear"}), "stored": "ln", "request" (as JSON: a semi-infinite
-///     dermis thickness is None)}}.
+///     dermis thickness is None), "extended" ({"epidermis_thickness_mm", "baseline_absorption_scale",
+///     "blood_oxygenation": the values baked in})}}.
 ///
 /// Raises:
 ///     SpectralSkinError: an unknown method, engine, working space or accuracy level, a method the target lacks, a
-///         resolution below 2 nodes per axis or over the table's node bound.
+///         resolution below 2 nodes per axis or over the table's node bound, an extended parameter out of its range
+///         (the message names it and the range).
 ///     TypeError: a resolution that is not a sequence of integers.
 #[pyfunction]
 #[pyo3(
     name = "shader_table",
     signature = (
         *, method = "burley", blender = None, engine = "cycles", resolution = None, accuracy = "default",
-        working_space = "Linear Rec.709", boundaries = "paper", table_cache = true
+        working_space = "Linear Rec.709", boundaries = "paper", table_cache = true, epidermis_thickness_mm = None,
+        baseline_absorption_scale = None, blood_oxygenation = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -73,7 +80,18 @@ pub(super) fn shader_table_py<'py>(
     working_space: &str,
     boundaries: &str,
     table_cache: bool,
+    epidermis_thickness_mm: Option<&Bound<'py, PyAny>>,
+    baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
+    blood_oxygenation: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS};
+    let given = [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation];
+    let mut extended = EXTENDED_DEFAULTS;
+    for (k, value) in given.into_iter().enumerate() {
+        if let Some(v) = real_arg(EXTENDED_PARAMS[k].name, value)? {
+            extended[k] = EXTENDED_PARAMS[k].check(v.0)?;
+        }
+    }
     let knobs = Knobs::material(accuracy, working_space, boundaries, target_from(blender, engine)?);
     let method = SubsurfaceMethod::from_name(method)?;
     knobs.target.method_entry(method)?;
@@ -86,7 +104,7 @@ pub(super) fn shader_table_py<'py>(
     let cancel = AtomicBool::new(false);
     let shader = detached_interruptible(py, &cancel, || {
         let prepared = crate::evaluate::Prepared::new(&request)?;
-        ShaderTable::load_or_build_cancellable(&prepared, method, resolution, cache.as_deref(), &cancel)
+        ShaderTable::load_or_build_cancellable(&prepared, method, resolution, extended, cache.as_deref(), &cancel)
     })?;
     let (w, h) = (shader.meta().width, shader.meta().height);
     let dict = PyDict::new(py);

@@ -14,8 +14,6 @@ const EUMELANIN_EXPONENT: f64 = -3.33;
 pub const K_PM_PER_MM: f64 = 2.9e14;
 /// Pheomelanin wavelength exponent (DJ2006 eq. 4).
 const PHEOMELANIN_EXPONENT: f64 = -4.75;
-/// Oxygenated share of the blood, `gamma` (DJ2006, fixed at 0.75; docs/model.md, section Parameters).
-pub const OXY_FRACTION: f64 = 0.75;
 /// Haemoglobin concentration of whole blood, g/L (Prahl's conversion; docs/model.md, section Absorption).
 pub const HEMOGLOBIN_G_PER_L: f64 = 150.0;
 /// Molar mass of haemoglobin, g/mol (Prahl; docs/model.md, section Absorption).

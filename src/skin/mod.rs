@@ -5,5 +5,5 @@ pub mod optics;
 pub mod params;
 pub mod scattering;
 
-pub use optics::{skin_layers, SkinModel, EPIDERMIS_THICKNESS_MM, SKIN_IOR};
+pub use optics::{skin_layers, SkinModel, SKIN_IOR};
 pub use params::{ParamSpec, Preset, SkinParams, PARAMS, PRESETS};

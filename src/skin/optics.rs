@@ -11,17 +11,14 @@ use crate::diffusion::Layer;
 /// Index of refraction of all skin, "a constant index of refraction of 1.4 throughout the skin" (DJ2006; docs/model.md,
 /// section Parameters).
 pub const SKIN_IOR: f64 = 1.4;
-/// Epidermis thickness, mm (DJ2006; docs/model.md, section Layers).
-pub const EPIDERMIS_THICKNESS_MM: f64 = 0.25;
 
-/// Model choices that are not accuracy settings. The defaults are those of docs/model.md (Absorption, Layers).
+/// Model choices that are not accuracy settings nor physiology (the epidermis thickness is a parameter:
+/// [`super::params::EPIDERMIS_THICKNESS`]). The defaults are those of docs/model.md (Absorption, Layers).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SkinModel {
     /// `K_em` of DJ2006 eq. 3 in mm^-1 (default [`K_EM_PER_MM`]; 6.6e11 is the literal printed value, see
     /// docs/model.md, Absorption).
     pub eumelanin_k_per_mm: f64,
-    /// Epidermis thickness, mm.
-    pub epidermis_thickness_mm: f64,
     /// Dermis thickness, mm; `f64::INFINITY` (the default) is a semi-infinite dermis (docs/model.md, section Layers).
     /// In JSON an infinite thickness is the string "inf".
     #[serde(with = "finite_or_inf")]
@@ -57,33 +54,36 @@ mod finite_or_inf {
 
 impl Default for SkinModel {
     fn default() -> Self {
-        SkinModel {
-            eumelanin_k_per_mm: K_EM_PER_MM,
-            epidermis_thickness_mm: EPIDERMIS_THICKNESS_MM,
-            dermis_thickness_mm: f64::INFINITY,
-        }
+        SkinModel { eumelanin_k_per_mm: K_EM_PER_MM, dermis_thickness_mm: f64::INFINITY }
     }
+}
+
+/// The bloodless, melanin-free tissue absorption of the parameters, mm^-1: DJ2006 eq. 5 times the baseline scale.
+fn sigma_a_tissue_per_mm(p: &SkinParams, wavelength_nm: f64) -> f64 {
+    p.baseline_absorption_scale * sigma_a_baseline_per_mm(wavelength_nm)
 }
 
 /// `sigma_a_epi(lambda)`, mm^-1: melanin blend plus baseline (DJ2006 eq. 6). No haemoglobin in the DJ2006 epidermis.
 pub fn sigma_a_epidermis_per_mm(p: &SkinParams, wavelength_nm: f64, k_em_per_mm: f64) -> f64 {
     let melanin = p.melanin_blend * sigma_a_eumelanin_per_mm(wavelength_nm, k_em_per_mm)
         + (1.0 - p.melanin_blend) * sigma_a_pheomelanin_per_mm(wavelength_nm);
-    p.melanin * melanin + (1.0 - p.melanin) * sigma_a_baseline_per_mm(wavelength_nm)
+    p.melanin * melanin + (1.0 - p.melanin) * sigma_a_tissue_per_mm(p, wavelength_nm)
 }
 
-/// `sigma_a_derm(lambda)`, mm^-1: oxygenated/deoxygenated blood blend plus baseline (DJ2006 eq. 7).
+/// `sigma_a_derm(lambda)`, mm^-1: oxygenated/deoxygenated blood blend (gamma = the blood oxygenation) plus baseline
+/// (DJ2006 eq. 7).
 pub fn sigma_a_dermis_per_mm(p: &SkinParams, wavelength_nm: f64) -> f64 {
-    let blood = OXY_FRACTION * sigma_a_oxy_blood_per_mm(wavelength_nm)
-        + (1.0 - OXY_FRACTION) * sigma_a_deoxy_blood_per_mm(wavelength_nm);
-    p.hemoglobin * blood + (1.0 - p.hemoglobin) * sigma_a_baseline_per_mm(wavelength_nm)
+    let gamma = p.blood_oxygenation;
+    let blood =
+        gamma * sigma_a_oxy_blood_per_mm(wavelength_nm) + (1.0 - gamma) * sigma_a_deoxy_blood_per_mm(wavelength_nm);
+    p.hemoglobin * blood + (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(p, wavelength_nm)
 }
 
 /// The two layers, top to bottom, at one wavelength: epidermis over dermis, both with index 1.4.
 pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [Layer; 2] {
     [
         Layer {
-            thickness_mm: model.epidermis_thickness_mm,
+            thickness_mm: p.epidermis_thickness_mm,
             sigma_a_per_mm: sigma_a_epidermis_per_mm(p, wavelength_nm, model.eumelanin_k_per_mm),
             sigma_s_reduced_per_mm: sigma_s_reduced_epidermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,

@@ -1,5 +1,6 @@
-//! The four physiological parameters of Donner & Jensen 2006 (DJ2006 parameter table; docs/model.md, section
-//! Parameters) and the named presets.
+//! The physiological parameters: the four of Donner & Jensen 2006 (DJ2006 parameter table; docs/model.md, section
+//! Parameters), the extended physiology beside them (each defaulting to the paper's fixed value; docs/model.md,
+//! section Extended physiology), and the named presets.
 
 use serde::{Deserialize, Serialize};
 
@@ -113,16 +114,80 @@ pub const OILINESS: ParamSpec = ParamSpec {
     source: DJ2006_PARAMETERS,
 };
 
-/// Every parameter, in the order of [`SkinParams`]' fields (and of the parameter-map channels). Parameters with a
-/// default can be added as rows.
-pub const PARAMS: [ParamSpec; 4] = [MELANIN, MELANIN_BLEND, HEMOGLOBIN, OILINESS];
+/// The source of the extended physiology's defaults and ranges.
+const EXTENDED_SOURCE: &str = "default: the value DJ2006 fixes; range: docs/model.md, section Extended physiology";
+
+/// The epidermis thickness, mm. DJ2006 fix 0.25 mm; in-vivo epidermis over most of the body and face is thinner (about
+/// 0.05-0.1 mm by optical coherence tomography, Sandby-Moller, Poulsen & Wulf 2003, Acta Derm. Venereol. 83:410), which
+/// is what fits of measured spectra find (docs/measured-skin.md). The range spans both with margin.
+pub const EPIDERMIS_THICKNESS: ParamSpec = ParamSpec {
+    name: "epidermis_thickness_mm",
+    symbol: "d_epi",
+    label: "Epidermis Thickness",
+    description: "thickness of the epidermis",
+    effect: "a thinner epidermis holds less melanin and lets the dermis's blood show: redder, more saturated skin",
+    unit: "mm",
+    min: 0.01,
+    max: 0.5,
+    default: Some(0.25),
+    source: EXTENDED_SOURCE,
+};
+
+/// A scale on the melanin- and blood-free tissue absorption of DJ2006 eq. 5 (Jacques 1998), in both layers. 1 is the
+/// paper; fits of measured spectra ask for more blue absorption than eq. 5 gives (docs/measured-skin.md).
+pub const BASELINE_ABSORPTION_SCALE: ParamSpec = ParamSpec {
+    name: "baseline_absorption_scale",
+    symbol: "s_base",
+    label: "Baseline Absorption",
+    description: "scale on the melanin- and blood-free tissue absorption",
+    effect: "above 1 the bloodless tissue absorbs more, mostly in the blue: darker, yellower skin",
+    unit: "",
+    min: 0.0,
+    max: 10.0,
+    default: Some(1.0),
+    source: EXTENDED_SOURCE,
+};
+
+/// `gamma`: the oxygenated share of the dermis's haemoglobin. DJ2006 fix 0.75; venous blood is about 0.7, arterial
+/// about 0.97 (docs/model.md, section Extended physiology).
+pub const BLOOD_OXYGENATION: ParamSpec = ParamSpec {
+    name: "blood_oxygenation",
+    symbol: "gamma",
+    label: "Blood Oxygenation",
+    description: "oxygenated share of the dermis's haemoglobin",
+    effect: "1 is bright arterial red, 0 dark venous purple (a bruise, cold or cyanotic skin)",
+    unit: "",
+    min: 0.0,
+    max: 1.0,
+    default: Some(0.75),
+    source: EXTENDED_SOURCE,
+};
+
+/// The number of parameters ([`PARAMS`]).
+pub const PARAM_COUNT: usize = 7;
+
+/// Every parameter, in the order of [`SkinParams`]' fields: the paper's four (no default: each must be given, by value
+/// or by a preset), then the extended physiology (each with the paper's value as its default).
+pub const PARAMS: [ParamSpec; PARAM_COUNT] =
+    [MELANIN, MELANIN_BLEND, HEMOGLOBIN, OILINESS, EPIDERMIS_THICKNESS, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION];
+
+/// The paper's four parameters ([`PARAMS`]' first four): the channels every parameter map has.
+pub const PAPER_PARAMS: [ParamSpec; 4] = [MELANIN, MELANIN_BLEND, HEMOGLOBIN, OILINESS];
+
+/// The extended physiology ([`PARAMS`] after the paper's four), each with a default.
+pub const EXTENDED_PARAMS: [ParamSpec; 3] = [EPIDERMIS_THICKNESS, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION];
+
+/// The extended physiology's defaults (the values DJ2006 fix), in [`EXTENDED_PARAMS`] order.
+pub const EXTENDED_DEFAULTS: [f64; 3] =
+    [spec_default(EPIDERMIS_THICKNESS), spec_default(BASELINE_ABSORPTION_SCALE), spec_default(BLOOD_OXYGENATION)];
 
 /// The spec of the parameter called `name`.
 pub fn param_spec(name: &str) -> Option<&'static ParamSpec> {
     PARAMS.iter().find(|p| p.name == name)
 }
 
-/// Validated skin parameters. Construct with [`SkinParams::new`] or [`SkinParams::preset`].
+/// Validated skin parameters. Construct with [`SkinParams::new`] (the paper's four, the extended physiology at its
+/// defaults), [`SkinParams::from_values`] (all of them) or [`SkinParams::preset`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SkinParams {
     /// [`MELANIN`].
@@ -133,22 +198,100 @@ pub struct SkinParams {
     pub hemoglobin: f64,
     /// [`OILINESS`].
     pub oiliness: f64,
+    /// [`EPIDERMIS_THICKNESS`], mm.
+    #[serde(default = "default_epidermis_thickness_mm")]
+    pub epidermis_thickness_mm: f64,
+    /// [`BASELINE_ABSORPTION_SCALE`].
+    #[serde(default = "default_baseline_absorption_scale")]
+    pub baseline_absorption_scale: f64,
+    /// [`BLOOD_OXYGENATION`].
+    #[serde(default = "default_blood_oxygenation")]
+    pub blood_oxygenation: f64,
+}
+
+const fn spec_default(spec: ParamSpec) -> f64 {
+    match spec.default {
+        Some(v) => v,
+        None => panic!("an extended parameter without a default"),
+    }
+}
+
+fn default_epidermis_thickness_mm() -> f64 {
+    EXTENDED_DEFAULTS[0]
+}
+
+fn default_baseline_absorption_scale() -> f64 {
+    EXTENDED_DEFAULTS[1]
+}
+
+fn default_blood_oxygenation() -> f64 {
+    EXTENDED_DEFAULTS[2]
 }
 
 impl SkinParams {
-    /// Validate the four parameters against [`PARAMS`]; the error names the first parameter out of range and its range.
+    /// The paper's four parameters with the extended physiology at its defaults, unchecked (for tables' nodes and
+    /// presets, whose values are in range by construction).
+    pub(crate) const fn paper(melanin: f64, melanin_blend: f64, hemoglobin: f64, oiliness: f64) -> Self {
+        SkinParams {
+            melanin,
+            melanin_blend,
+            hemoglobin,
+            oiliness,
+            epidermis_thickness_mm: EXTENDED_DEFAULTS[0],
+            baseline_absorption_scale: EXTENDED_DEFAULTS[1],
+            blood_oxygenation: EXTENDED_DEFAULTS[2],
+        }
+    }
+
+    /// Validate the paper's four parameters against [`PARAMS`] (the extended physiology at its defaults); the error
+    /// names the first parameter out of range and its range.
     pub fn new(melanin: f64, melanin_blend: f64, hemoglobin: f64, oiliness: f64) -> Result<Self, SkinError> {
-        Ok(SkinParams {
-            melanin: MELANIN.check(melanin)?,
-            melanin_blend: MELANIN_BLEND.check(melanin_blend)?,
-            hemoglobin: HEMOGLOBIN.check(hemoglobin)?,
-            oiliness: OILINESS.check(oiliness)?,
-        })
+        Self::paper(melanin, melanin_blend, hemoglobin, oiliness).validated()
+    }
+
+    /// Validate every parameter, in [`PARAMS`] order.
+    pub fn from_values(v: [f64; PARAM_COUNT]) -> Result<Self, SkinError> {
+        SkinParams {
+            melanin: v[0],
+            melanin_blend: v[1],
+            hemoglobin: v[2],
+            oiliness: v[3],
+            epidermis_thickness_mm: v[4],
+            baseline_absorption_scale: v[5],
+            blood_oxygenation: v[6],
+        }
+        .validated()
+    }
+
+    /// These parameters if each is in its range ([`PARAMS`]), else the error naming the first that is not.
+    pub fn validated(self) -> Result<Self, SkinError> {
+        for (spec, value) in PARAMS.iter().zip(self.values()) {
+            spec.check(value)?;
+        }
+        Ok(self)
     }
 
     /// The values in [`PARAMS`] order.
-    pub fn values(&self) -> [f64; 4] {
-        [self.melanin, self.melanin_blend, self.hemoglobin, self.oiliness]
+    pub fn values(&self) -> [f64; PARAM_COUNT] {
+        [
+            self.melanin,
+            self.melanin_blend,
+            self.hemoglobin,
+            self.oiliness,
+            self.epidermis_thickness_mm,
+            self.baseline_absorption_scale,
+            self.blood_oxygenation,
+        ]
+    }
+
+    /// The extended physiology's values, in [`EXTENDED_PARAMS`] order.
+    pub fn extended_values(&self) -> [f64; 3] {
+        [self.epidermis_thickness_mm, self.baseline_absorption_scale, self.blood_oxygenation]
+    }
+
+    /// True when every extended parameter has its default: the paper's model.
+    pub fn is_paper_model(&self) -> bool {
+        self.extended_values() == EXTENDED_DEFAULTS
     }
 
     /// A named preset (case-insensitive); the error lists the known names.
@@ -169,11 +312,7 @@ pub struct Preset {
 }
 
 const fn preset(name: &'static str, description: &'static str, c_m: f64, beta_m: f64, c_h: f64, oil: f64) -> Preset {
-    Preset {
-        name,
-        description,
-        params: SkinParams { melanin: c_m, melanin_blend: beta_m, hemoglobin: c_h, oiliness: oil },
-    }
+    Preset { name, description, params: SkinParams::paper(c_m, beta_m, c_h, oil) }
 }
 
 /// The presets. The first three are the skin types of the SIGGRAPH 2006 sketch (Donner & Jensen, teaser caption;
@@ -206,18 +345,26 @@ mod tests {
             at += found + 1;
         }
         // Each spec's max is accepted and the next double above it rejected by SkinParams::new.
-        let mid = [0.1, 0.5, 0.01, 0.3];
+        let mid = [0.1, 0.5, 0.01, 0.3, 0.1, 1.0, 0.75];
         for (i, spec) in PARAMS.iter().enumerate() {
             let mut v = mid;
             v[i] = spec.max;
-            assert!(SkinParams::new(v[0], v[1], v[2], v[3]).is_ok(), "{}", spec.name);
+            assert!(SkinParams::from_values(v).is_ok(), "{}", spec.name);
             v[i] = f64::from_bits(spec.max.to_bits() + 1);
-            let e = SkinParams::new(v[0], v[1], v[2], v[3]).unwrap_err().to_string();
+            let e = SkinParams::from_values(v).unwrap_err().to_string();
             assert!(e.starts_with(&format!("{} must be in", spec.name)), "{e}");
         }
+        // The extended physiology defaults to the paper's values, in JSON too (a sidecar from before it existed).
+        let old = r#"{"melanin":0.005,"melanin_blend":0.7,"hemoglobin":0.005,"oiliness":0.3}"#;
+        let q: SkinParams = serde_json::from_str(old).unwrap();
+        assert!(q.is_paper_model() && q.epidermis_thickness_mm == 0.25 && q.blood_oxygenation == 0.75);
+        assert_eq!(q, SkinParams::preset("caucasian").unwrap());
+        assert!(
+            PAPER_PARAMS.iter().all(|s| s.default.is_none()) && EXTENDED_PARAMS.iter().all(|s| s.default.is_some())
+        );
         assert_eq!(param_spec("hemoglobin").map(|s| s.max), Some(0.1));
         // values() is in PARAMS order: each value is the field of that name.
-        let q = SkinParams::new(0.1, 0.2, 0.03, 0.4).unwrap();
+        let q = SkinParams::from_values([0.1, 0.2, 0.03, 0.4, 0.08, 2.0, 0.9]).unwrap();
         let fields = serde_json::to_value(q).unwrap();
         for (spec, value) in PARAMS.iter().zip(q.values()) {
             assert_eq!(fields[spec.name].as_f64(), Some(value), "{}", spec.name);

@@ -107,14 +107,15 @@ def _s(albedo_n):
 class Layout:
     """The preset's scene scale and pixel grid."""
 
-    def __init__(self, eevee_radius_mm: np.ndarray):
+    def __init__(self, eevee_radius_mm: np.ndarray, width_px: int = WIDTH_PX):
         # mm per world unit: the EEVEE radii lie within a factor 1.9 of 1 unit, where EEVEE's g-buffer rounds them by
         # <= 0.2 % (the Cycles radii, down to 0.30 units, by <= 0.35 %).
         self.unit_mm = math.sqrt(float(eevee_radius_mm.max() * eevee_radius_mm.min()))
         self.d_disk_mm = float(eevee_radius_mm.max()) / (4 * math.pi * _s(1.0))
         self.width_mm: float = 2 * HALF_WIDTH_D * self.d_disk_mm
-        self.pitch_mm = self.width_mm / WIDTH_PX
-        self.x_mm = pixel_centres_x(self.width_mm, WIDTH_PX)
+        self.width_px = width_px
+        self.pitch_mm = self.width_mm / width_px
+        self.x_mm = pixel_centres_x(self.width_mm, width_px)
 
     def irradiance(self) -> np.ndarray:
         """Irradiance at each column's centre (y = 0), from the spot's inverse square law and cosine: E = I H / r^3."""
@@ -145,7 +146,7 @@ def _build_scene(layout: Layout, material: Material, rows: int, pixel_aspect_y: 
     spot = bpy.data.objects.new("Spot", light)
     spot.location = (-EDGE_RADIUS_U, 0.0, SPOT_HEIGHT_U)  # points down -z
     scene.collection.objects.link(spot)
-    cam = add_top_camera(scene, ortho_scale=layout.width_mm / layout.unit_mm, width=WIDTH_PX, height=rows, z=10.0)
+    cam = add_top_camera(scene, ortho_scale=layout.width_mm / layout.unit_mm, width=layout.width_px, height=rows, z=10.0)
     cam.data.clip_start = 0.1
     cam.data.clip_end = 100.0
     scene.render.pixel_aspect_y = pixel_aspect_y

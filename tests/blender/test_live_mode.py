@@ -312,3 +312,20 @@ def test_live_in_eevee_renders_as_baked(addon):
     live_high, baked_high = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
     assert np.abs(live_high / live - 1.0).max() > 0.01
     _check("EEVEE live vs baked at haemoglobin 0.06", live_high, baked_high, atol=EEVEE_STEP)
+
+
+def test_a_group_of_another_layout_is_rebuilt_not_reused(addon):
+    """A node group left by an older add-on (another layout version, e.g. EEVEE's before it computed its own
+    bilinear weights) is rebuilt at the next Apply; one of this version is reused."""
+    from blender_addon import live
+
+    scene = blender_scenes.reset_scene()
+    material = _skin("Skin", "LIVE")
+    _slab_scene(material)
+    _apply(scene, material)
+    (group_node,) = addon_nodes.tagged_nodes(material.node_tree, "live")
+    group = group_node.node_tree
+    assert _apply(scene, material)[0]["live"]["table"] is None
+    group[live.LAYOUT_KEY] = live.LAYOUT_VERSION - 1
+    assert _apply(scene, material)[0]["live"]["table"] is not None
+    assert group[live.LAYOUT_KEY] == live.LAYOUT_VERSION

@@ -318,21 +318,32 @@ def test_plan_textures_written_by_the_core_and_specular_constants_from_maps(tmp_
     assert sorted(p.name for p in tmp_path.iterdir()) == ["Skin_albedo.exr", "Skin_radius.exr"]
 
 
-def test_least_absorbing_skin_bounds_the_radius():
+@pytest.mark.parametrize("extended", [{}, {"epidermis_thickness_mm": 0.05, "baseline_absorption_scale": 0.3}],
+                         ids=["paper", "thin-epidermis-low-baseline"])
+def test_bound_grid_bounds_the_radius(extended: dict[str, float]):
     """The bound the analysis drops subsurface by before computing (scene.radius_bound_mm) is at least the radius of
-    every parameter set on a grid over the ranges, per method and engine (monotone absorption: its premise)."""
+    every parameter set on a denser grid, offset from the bound's, over all three fractions, per method and engine,
+    for the paper's model and for a material whose extended physiology widens the radius (the bound follows the
+    material). The least absorbing skin alone is no bound: a little melanin widens the random walk's radius."""
     ranges = spectral_skin.parameter_ranges()
-    grid = [np.linspace(*ranges[name], count) for name, count in (("melanin", 5), ("melanin_blend", 3),
-                                                                     ("hemoglobin", 5))]
+    melanin = np.concatenate([np.linspace(0, 0.05, 6)[1:] + 0.003, np.linspace(0.05, 0.5, 9) + 0.011])
+    grid = [np.clip(melanin, *ranges["melanin"]), (0.0, 0.25, 0.75, 1.0), (0.0, 0.004, 0.03, 0.1)]
     for engine in ("cycles", "eevee"):
         for method in ("BURLEY", "RANDOM_WALK", "RANDOM_WALK_SKIN"):
-            settings = core.SkinSettings(method=method, engine=engine)
+            settings = core.SkinSettings(method=method, engine=engine, **extended)
             bound_mm, work = scene.radius_bound_mm(settings)
-            assert work["radius_fits"] == 3
+            assert work["radius_fits"] == 3 * (1 + (len(scene.BOUND_MELANIN_FRACTIONS) - 1) *
+                                               len(scene.BOUND_MELANIN_BLENDS))
             name = core.method_name(method)
-            largest = max(float(np.max(spectral_skin.evaluate(m, b, h, 0.0, outputs=["radius"], engine=engine)[
-                "methods"][name]["subsurface_radius_mm"])) for m in grid[0] for b in grid[1] for h in grid[2])
-            assert largest <= bound_mm * (1 + 1e-12), (engine, method, largest, bound_mm)
+            largest = max(float(np.max(spectral_skin.evaluate(m, b, h, 0.0, outputs=["radius"], engine=engine,
+                                                              **extended)["methods"][name]["subsurface_radius_mm"]))
+                          for m in grid[0] for b in grid[1] for h in grid[2])
+            assert largest <= bound_mm * (1 + 1e-9), (engine, method, largest, bound_mm)
+    # The case the grid is for: the least absorbing skin's radius is exceeded (by 22 % with a thin epidermis).
+    if extended:
+        least = spectral_skin.evaluate(0.0, 0.0, 0.0, 0.0, outputs=["radius"], **extended)["methods"]["random_walk"]
+        wide = spectral_skin.evaluate(0.125, 1.0, 0.0, 0.0, outputs=["radius"], **extended)["methods"]["random_walk"]
+        assert max(wide["subsurface_radius_mm"]) > 1.1 * max(least["subsurface_radius_mm"])
 
 
 def test_dropped_effects_are_not_computed():

@@ -144,3 +144,10 @@ def test_maps_non_contiguous_and_read_only_arrays_work():
     assert not melanin.flags.c_contiguous
     got = spectral_skin.maps(params, melanin=melanin, exact=True)
     np.testing.assert_array_equal(got["base_color"], expected["base_color"])
+
+
+@pytest.mark.parametrize("bad", NOT_NUMBERS, ids=repr)
+def test_maps_extended_keywords_reject_bool_and_str(bad):
+    params = params_array()
+    for name in ("epidermis_thickness_mm", "baseline_absorption_scale", "blood_oxygenation"):
+        raises_naming(TypeError, name, lambda name=name: spectral_skin.maps(params, **{name: bad}))

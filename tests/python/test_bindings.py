@@ -89,12 +89,15 @@ def test_presets():
     presets = spectral_skin.presets()
     assert set(presets) == set(PRESET_NAMES)
     for name, p in presets.items():
-        assert set(p) == {"melanin", "melanin_blend", "hemoglobin", "oiliness", "description"}
+        specs = spectral_skin.parameters()
+        assert set(p) == {s["name"] for s in specs} | {"description"}
         assert 0 <= p["melanin"] <= 0.5 and 0 <= p["melanin_blend"] <= 1
         assert 0 <= p["hemoglobin"] <= 0.1 and 0 <= p["oiliness"] <= 1
+        # The paper's presets keep the extended physiology at its defaults (the paper's fixed values).
+        assert all(p[s["name"]] == s["default"] for s in specs if s["default"] is not None)
         assert isinstance(p["description"], str) and p["description"]
         params = spectral_skin.evaluate(preset=name, outputs=())["params"]
-        assert params == {k: p[k] for k in ("melanin", "melanin_blend", "hemoglobin", "oiliness")}
+        assert params == {s["name"]: p[s["name"]] for s in specs}
 
 
 def test_explicit_parameters_override_preset():
@@ -285,7 +288,9 @@ def test_concurrent_calls_finish_and_agree():
 
 def test_parameter_ranges_bound_what_evaluate_accepts():
     ranges = spectral_skin.parameter_ranges()
-    assert ranges == {"melanin": (0.0, 0.5), "melanin_blend": (0.0, 1.0), "hemoglobin": (0.0, 0.1), "oiliness": (0.0, 1.0)}
+    assert ranges == {"melanin": (0.0, 0.5), "melanin_blend": (0.0, 1.0), "hemoglobin": (0.0, 0.1), "oiliness": (0.0, 1.0),
+                      "epidermis_thickness_mm": (0.01, 0.5), "baseline_absorption_scale": (0.0, 10.0),
+                      "blood_oxygenation": (0.0, 1.0)}
     for name, (_low, high) in ranges.items():
         values = {"melanin": 0.1, "melanin_blend": 0.5, "hemoglobin": 0.01, "oiliness": 0.2}
         spectral_skin.evaluate(**{**values, name: high}, outputs=("albedo",))

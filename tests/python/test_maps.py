@@ -9,6 +9,7 @@ from spectral_skin import SpectralSkinError
 
 CHANNELS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
 RANGES = {"melanin": (0.0, 0.5), "melanin_blend": (0.0, 1.0), "hemoglobin": (0.0, 0.1), "oiliness": (0.0, 1.0)}
+EXTENDED = ("epidermis_thickness_mm", "baseline_absorption_scale", "blood_oxygenation")
 METHODS = ("burley", "random_walk")
 # Worst relative error the lookup table is built for (docs/maps-performance.md): albedo and radius.
 TABLE_ALBEDO_RTOL = 0.005
@@ -56,7 +57,8 @@ def test_exact_map_equals_evaluate_per_texel(method):
     assert (report["width"], report["height"]) == (7, 6)
     assert report["method"] == method
     assert report["color_space"] == "Linear Rec.709"
-    assert report["clamped"] == [] and report["constant_parameters"] == []
+    # The extended physiology is at its defaults, one value everywhere.
+    assert report["clamped"] == [] and report["constant_parameters"] == list(EXTENDED)
     assert report["request"]["model"]["dermis_thickness_mm"] == float("inf")
     for y in range(6):
         for x in range(7):
@@ -123,7 +125,7 @@ def test_constant_parameters():
     result = spectral_skin.maps(melanin=0.15, melanin_blend=0.0, hemoglobin=0.01, oiliness=oil)
     report = result["report"]
     assert report["strategy"] == {"name": "constant"}
-    assert report["constant_parameters"] == ["melanin", "melanin_blend", "hemoglobin"]
+    assert report["constant_parameters"] == ["melanin", "melanin_blend", "hemoglobin", *EXTENDED]
     color, radius = evaluate_texel([0.15, 0.0, 0.01, 0.0], "burley")
     for image, expected in [(result["base_color"], color), (result["radius_mm"], radius)]:
         assert_image(image, 3, 4)
@@ -141,7 +143,7 @@ def test_few_distinct_values():
     result = spectral_skin.maps(params, method="random_walk")
     assert result["report"]["strategy"] == {"name": "distinct_tuples", "tuples": 3}
     # Oiliness is 0.3 everywhere: an array holding one value counts as a constant.
-    assert result["report"]["constant_parameters"] == ["oiliness"]
+    assert result["report"]["constant_parameters"] == ["oiliness", *EXTENDED]
     assert result["specular"]["specular_ior_level"] == pytest.approx(0.15, rel=1e-6)
     for region in range(3):
         color, radius = evaluate_texel(values[region], "random_walk")
@@ -367,3 +369,63 @@ def test_outputs_choice_computes_only_what_is_asked(exact):
 def test_outputs_choice_rejects_what_maps_do_not_compute(outputs):
     with pytest.raises(SpectralSkinError, match="maps computes albedo, radius, specular"):
         spectral_skin.maps(random_params(2, 2), outputs=outputs)
+
+
+# --- the extended physiology ----------------------------------------------------------------------------------------
+
+
+def test_extended_defaults_give_identical_maps():
+    params = random_params(6, 7, seed=3)
+    plain = spectral_skin.maps(params, table_cache=False)
+    defaults = {p["name"]: p["default"] for p in spectral_skin.parameters() if p["name"] in EXTENDED}
+    assert defaults == {"epidermis_thickness_mm": 0.25, "baseline_absorption_scale": 1.0, "blood_oxygenation": 0.75}
+    given = spectral_skin.maps(params, table_cache=False, **defaults)
+    np.testing.assert_array_equal(plain["base_color"], given["base_color"])
+    np.testing.assert_array_equal(plain["radius_mm"], given["radius_mm"])
+    assert set(EXTENDED) <= set(given["report"]["constant_parameters"])
+    assert given["report"]["constant_values"]["blood_oxygenation"] == 0.75
+
+
+@pytest.mark.parametrize("exact", [False, True])
+def test_extended_constant_gives_evaluates_values(exact):
+    # A few distinct tuples: each evaluated directly, so the maps equal evaluate() at float32 inputs.
+    params = np.zeros((2, 3, 4), np.float32)
+    params[..., 0] = [[0.01, 0.2, 0.4], [0.01, 0.2, 0.4]]
+    params[..., 1:] = (0.5, 0.02, 0.3)
+    result = spectral_skin.maps(params, epidermis_thickness_mm=0.08, blood_oxygenation=0.9, exact=exact)
+    for y, x in np.ndindex(2, 3):
+        m, b, h, o = (float(v) for v in params[y, x])
+        ev = spectral_skin.evaluate(m, b, h, o, epidermis_thickness_mm=0.08, blood_oxygenation=float(np.float32(0.9)))
+        expected = ev["methods"]["burley"]
+        np.testing.assert_allclose(result["base_color"][y, x], expected["base_color"], rtol=1e-6)
+        np.testing.assert_allclose(result["radius_mm"][y, x], expected["subsurface_radius_mm"], rtol=1e-6)
+    paper = spectral_skin.maps(params)
+    assert relative_error(paper["base_color"], result["base_color"].astype(np.float64)) > 0.01
+
+
+def test_extended_map_varies_per_texel():
+    params = np.zeros((3, 4, 4), np.float32)
+    params[...] = (0.1, 0.5, 0.02, 0.3)
+    thickness = np.linspace(0.02, 0.46, 12, dtype=np.float32).reshape(3, 4)
+    result = spectral_skin.maps(params, epidermis_thickness_mm=thickness)
+    assert result["report"]["strategy"]["name"] == "distinct_tuples"
+    assert "epidermis_thickness_mm" not in result["report"]["constant_parameters"]
+    for y, x in np.ndindex(3, 4):
+        ev = spectral_skin.evaluate(0.1, float(np.float32(0.5)), float(np.float32(0.02)), float(np.float32(0.3)),
+                                    epidermis_thickness_mm=float(thickness[y, x]))
+        np.testing.assert_allclose(result["base_color"][y, x], ev["methods"]["burley"]["base_color"], rtol=1e-6)
+
+
+def test_extended_bad_values_name_the_parameter():
+    params = random_params(3, 3)
+    with pytest.raises(SpectralSkinError, match=r"blood_oxygenation.*\[0, 1\]"):
+        spectral_skin.maps(params, blood_oxygenation=1.5)
+    bad = np.full((3, 3), 0.25, np.float32)
+    bad[1, 2] = 0.9
+    with pytest.raises(SpectralSkinError, match="epidermis_thickness_mm") as info:
+        spectral_skin.maps(params, epidermis_thickness_mm=bad)
+    assert info.value.bad_texels["first"] == [(2, 1)]
+    clamped = spectral_skin.maps(params, epidermis_thickness_mm=bad, clamp=True)
+    assert clamped["report"]["clamped"][0]["parameter"] == "epidermis_thickness_mm"
+    with pytest.raises(SpectralSkinError, match="shapes"):
+        spectral_skin.maps(params, baseline_absorption_scale=np.ones((2, 3), np.float32))

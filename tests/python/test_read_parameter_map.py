@@ -114,3 +114,21 @@ def test_progress_reports_and_cancels() -> None:
         spectral_skin.maps(values, progress=lambda done, total: 1 / 0)
     with pytest.raises(TypeError, match="progress must be a callable"):
         spectral_skin.maps(values, progress=3)  # type: ignore[arg-type]
+
+
+def test_extended_channels_and_maps(tmp_path: Path) -> None:
+    values = params()
+    thickness = np.linspace(0.02, 0.4, 35, dtype=np.float32).reshape(5, 7)
+    path = tmp_path / "face.exr"
+    write(path, np.concatenate([values, thickness[:, :, None]], axis=-1), (*PARAMETERS, "epidermis_thickness_mm"))
+    planes = spectral_skin.read_parameter_map(path)
+    # The channel present is returned; the extended ones absent are not (maps() takes their defaults).
+    assert sorted(planes) == sorted((*PARAMETERS, "epidermis_thickness_mm"))
+    np.testing.assert_array_equal(planes["epidermis_thickness_mm"], thickness)
+    oxygen = tmp_path / "oxygen.png"
+    write(oxygen, np.array([[0, 51, 255]], dtype=np.uint8), ("Y",), "uint8")
+    planes = spectral_skin.read_parameter_map(oxygen, "blood_oxygenation")
+    assert list(planes) == ["blood_oxygenation"]
+    np.testing.assert_allclose(planes["blood_oxygenation"], [[0.0, 0.2, 1.0]], rtol=1e-7)
+    with pytest.raises(SpectralSkinError, match="blood_oxygenation"):
+        spectral_skin.read_parameter_map(oxygen, "oxygen")

@@ -140,3 +140,21 @@ def test_cli_writes_the_same_table(small: spectral_skin._core._ShaderTable, tmp_
     pixels = np.asarray(inp.read_image(oiio.FLOAT))
     inp.close()
     np.testing.assert_array_equal(pixels.reshape(small["radius_log"].shape), small["radius_log"])
+
+
+def test_extended_constants_are_baked_and_recorded() -> None:
+    thin = spectral_skin.shader_table(resolution=SMALL, table_cache=False, epidermis_thickness_mm=0.08)
+    meta = thin["metadata"]
+    assert meta["extended"] == {"epidermis_thickness_mm": 0.08, "baseline_absorption_scale": 1.0,
+                                "blood_oxygenation": 0.75}
+    # Node (0, 0, 0): C_m = 0, beta_m = 0, C_h = 0 at the table's top-left texel past the guard column (row H - 1).
+    ev = spectral_skin.evaluate(0.0, 0.0, 0.0, 0.0, epidermis_thickness_mm=0.08)
+    expected = np.log(ev["methods"]["burley"]["base_color"])
+    np.testing.assert_allclose(thin["base_color_log"][SMALL[2] - 1, 1], expected, rtol=1e-5, atol=1e-6)
+    paper = spectral_skin.shader_table(resolution=SMALL, table_cache=False)
+    assert paper["metadata"]["extended"]["epidermis_thickness_mm"] == 0.25
+    assert not np.allclose(paper["base_color_log"], thin["base_color_log"])
+    with pytest.raises(SpectralSkinError, match="baseline_absorption_scale"):
+        spectral_skin.shader_table(resolution=SMALL, table_cache=False, baseline_absorption_scale=11.0)
+    with pytest.raises(TypeError, match="blood_oxygenation"):
+        spectral_skin.shader_table(resolution=SMALL, table_cache=False, blood_oxygenation=True)  # type: ignore[arg-type]

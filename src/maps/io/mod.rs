@@ -27,7 +27,7 @@ pub use encode::{resolve_compression, stage_channels_exr, stage_rgb_exr, write_c
 pub use read::{read_exr_channels, read_params, read_params_from_bytes};
 pub use staging::{commit_all, stage_bytes, write_atomic, Staged};
 
-use crate::skin::params::PARAMS;
+use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, PAPER_PARAMS as PARAMS};
 
 /// The names of the four parameters ([`PARAMS`]: melanin, melanin_blend, hemoglobin, oiliness). These are also the channel names
 /// a multi-channel parameter EXR must use (exact, case-sensitive).
@@ -36,6 +36,38 @@ pub const PARAM_CHANNELS: [&str; 4] = [PARAMS[0].name, PARAMS[1].name, PARAMS[2]
 /// The allowed range `(min, max)` of each parameter ([`PARAMS`]), in [`PARAM_CHANNELS`] order (unitless volume fractions and
 /// shares). An integer PNG/TIFF value `v` of bit depth `b` maps to `min + (max - min) * v / (2^b - 1)`.
 pub const PARAM_RANGES: [(f64, f64); 4] = [PARAMS[0].range(), PARAMS[1].range(), PARAMS[2].range(), PARAMS[3].range()];
+
+/// The names of the extended physiology ([`EXTENDED_PARAMS`]: epidermis_thickness_mm, baseline_absorption_scale,
+/// blood_oxygenation): optional channels of a parameter EXR, named exactly so; a missing one takes the value given for
+/// it, else its default (the paper's value).
+pub const EXTENDED_CHANNELS: [&str; 3] = [EXTENDED_PARAMS[0].name, EXTENDED_PARAMS[1].name, EXTENDED_PARAMS[2].name];
+
+/// The allowed range of each extended parameter, in [`EXTENDED_CHANNELS`] order; an integer PNG/TIFF value maps onto
+/// it as for [`PARAM_RANGES`].
+pub const EXTENDED_RANGES: [(f64, f64); 3] =
+    [EXTENDED_PARAMS[0].range(), EXTENDED_PARAMS[1].range(), EXTENDED_PARAMS[2].range()];
+
+/// [`PARAM_CHANNELS`] then [`EXTENDED_CHANNELS`]: every parameter a map can hold, indexed as `crate::skin::params::PARAMS`.
+pub(crate) const ALL_CHANNELS: [&str; 7] = [
+    PARAM_CHANNELS[0],
+    PARAM_CHANNELS[1],
+    PARAM_CHANNELS[2],
+    PARAM_CHANNELS[3],
+    EXTENDED_CHANNELS[0],
+    EXTENDED_CHANNELS[1],
+    EXTENDED_CHANNELS[2],
+];
+
+/// The ranges of [`ALL_CHANNELS`].
+pub(crate) const ALL_RANGES: [(f64, f64); 7] = [
+    PARAM_RANGES[0],
+    PARAM_RANGES[1],
+    PARAM_RANGES[2],
+    PARAM_RANGES[3],
+    EXTENDED_RANGES[0],
+    EXTENDED_RANGES[1],
+    EXTENDED_RANGES[2],
+];
 
 /// The largest image accepted or written, in texels (16384 x 16384). Larger headers are rejected before any
 /// allocation, so a corrupt size field gives an error instead of an out-of-memory abort.
@@ -59,6 +91,11 @@ pub enum ParamInputs {
     Multi { path: PathBuf, constants: [Option<f64>; 4] },
     /// One source per parameter, in [`PARAM_CHANNELS`] order.
     Separate([ParamSource; 4]),
+    /// The paper's four from `inputs` (a `Multi` or `Separate`), the extended physiology from `extended`, in
+    /// [`EXTENDED_CHANNELS`] order: a constant, a single-channel file (as a `Separate` source, of the same size), or
+    /// None: the channel of that name in a `Multi` file if it has one, else the parameter's default. `Multi` and
+    /// `Separate` alone are this with every entry None.
+    Extended { inputs: Box<ParamInputs>, extended: [Option<ParamSource>; 3] },
 }
 
 /// A parameter plane: per-texel values, or one constant.
@@ -94,9 +131,31 @@ pub struct ParamImage {
     pub width: usize,
     pub height: usize,
     pub planes: [Plane; 4],
+    /// The extended physiology, in [`EXTENDED_CHANNELS`] order (constants at the defaults unless a map or value gave
+    /// them).
+    pub extended: [Plane; 3],
+}
+
+/// The extended physiology at its defaults (the paper's values), as constant planes.
+pub fn default_extended() -> [Plane; 3] {
+    EXTENDED_DEFAULTS.map(|v| Plane::Constant(v as f32))
 }
 
 impl ParamImage {
+    /// The paper's four planes, the extended physiology at its defaults.
+    pub fn new(width: usize, height: usize, planes: [Plane; 4]) -> ParamImage {
+        ParamImage { width, height, planes, extended: default_extended() }
+    }
+
+    /// Plane `p` of all seven, indexed as `crate::skin::params::PARAMS` (the four, then the extended physiology).
+    pub fn plane(&self, p: usize) -> &Plane {
+        if p < 4 {
+            &self.planes[p]
+        } else {
+            &self.extended[p - 4]
+        }
+    }
+
     /// Number of texels, `width * height`.
     pub fn texel_count(&self) -> usize {
         self.width * self.height

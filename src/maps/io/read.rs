@@ -10,8 +10,12 @@ use exr::meta::header::Header;
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::f16;
 
-use super::{guard, ParamImage, ParamInputs, ParamSource, Plane, MAX_TEXELS, PARAM_CHANNELS, PARAM_RANGES};
+use super::{
+    guard, ParamImage, ParamInputs, ParamSource, Plane, ALL_CHANNELS, ALL_RANGES, EXTENDED_CHANNELS, MAX_TEXELS,
+    PARAM_CHANNELS,
+};
 use crate::error::SkinError;
+use crate::skin::params::EXTENDED_DEFAULTS;
 
 /// Read and check the parameter inputs.
 ///
@@ -31,15 +35,38 @@ use crate::error::SkinError;
 /// - Before an EXR's pixel data is read, its offset table and every chunk's declared size are checked against the
 ///   file's length: a damaged file is an error naming the chunk, never an allocation of the size it claims.
 ///
+/// The extended physiology ([`super::EXTENDED_CHANNELS`], `ParamInputs::Extended`) follows the same rules: a
+/// multi-channel EXR may hold channels of those names (optional: a missing one is the value given for it, else its
+/// default), a one-parameter file of an extended parameter is read like the four's (an integer PNG/TIFF onto its
+/// range) and must have the maps' size.
+///
 /// If every source is a constant there is no size to use: that is an error asking for at least one map.
 /// Values are not range-checked here (NaN, infinities and out-of-range values pass through).
 pub fn read_params(inputs: &ParamInputs) -> Result<ParamImage, SkinError> {
-    match inputs {
-        ParamInputs::Multi { path, constants } => read_multi(Source::Path(path), constants),
-        ParamInputs::Separate(sources) => read_separate(&sources.each_ref().map(|s| match s {
+    fn input(s: &ParamSource) -> Input<'_> {
+        match s {
             ParamSource::File(path) => Input::File(Source::Path(path)),
             ParamSource::Constant(value) => Input::Constant(*value),
+        }
+    }
+    let (inputs, extended): (&ParamInputs, [Option<Input<'_>>; 3]) = match inputs {
+        ParamInputs::Extended { inputs, extended } => {
+            (inputs.as_ref(), std::array::from_fn(|k| extended[k].as_ref().map(input)))
+        }
+        other => (other, [None, None, None]),
+    };
+    match inputs {
+        ParamInputs::Multi { path, constants } => read_multi(Source::Path(path), constants, &extended),
+        ParamInputs::Separate(sources) => read_separate(&std::array::from_fn(|p| {
+            if p < 4 {
+                input(&sources[p])
+            } else {
+                extended[p - 4].unwrap_or(Input::Constant(EXTENDED_DEFAULTS[p - 4]))
+            }
         })),
+        ParamInputs::Extended { .. } => {
+            Err(SkinError::invalid("parameter inputs", "ParamInputs::Extended inside ParamInputs::Extended"))
+        }
     }
 }
 
@@ -54,18 +81,16 @@ pub fn read_params(inputs: &ParamInputs) -> Result<ParamImage, SkinError> {
 pub fn read_params_from_bytes(bytes: &[u8], label: &str, parameter: Option<usize>) -> Result<ParamImage, SkinError> {
     let source = Source::Bytes { label: Path::new(label), bytes };
     match parameter {
-        None => read_multi(source, &[None; 4]),
-        Some(p) if p < PARAM_CHANNELS.len() => {
-            read_separate(&std::array::from_fn(
-                |k| {
-                    if k == p {
-                        Input::File(source)
-                    } else {
-                        Input::Constant(f64::NAN)
-                    }
-                },
-            ))
-        }
+        None => read_multi(source, &[None; 4], &[None; 3]),
+        Some(p) if p < PARAM_CHANNELS.len() => read_separate(&std::array::from_fn(|k| {
+            if k == p {
+                Input::File(source)
+            } else if k < 4 {
+                Input::Constant(f64::NAN)
+            } else {
+                Input::Constant(EXTENDED_DEFAULTS[k - 4])
+            }
+        })),
         Some(p) => Err(SkinError::invalid(
             "parameter index",
             format!(
@@ -148,7 +173,11 @@ impl Seek for SourceReader<'_> {
     }
 }
 
-fn read_multi(src: Source<'_>, constants: &[Option<f64>; 4]) -> Result<ParamImage, SkinError> {
+fn read_multi(
+    src: Source<'_>,
+    constants: &[Option<f64>; 4],
+    extended: &[Option<Input<'_>>; 3],
+) -> Result<ParamImage, SkinError> {
     let what = "parameter EXR";
     let path = src.label();
     let probe = probe_exr(src, what)?;
@@ -177,19 +206,81 @@ fn read_multi(src: Source<'_>, constants: &[Option<f64>; 4]) -> Result<ParamImag
             ),
         ));
     }
+    // The extended physiology: optional channels, unless a value or a file of their own is given.
+    let mut extended_files: Vec<(usize, Source<'_>, FileProbe)> = Vec::new();
+    for (k, name) in EXTENDED_CHANNELS.iter().enumerate() {
+        match extended[k] {
+            Some(Input::Constant(_)) => {}
+            Some(Input::File(file)) => {
+                let file_probe = probe_param_file(file, 4 + k)?;
+                if (file_probe.width(), file_probe.height()) != (probe.width, probe.height) {
+                    return Err(SkinError::invalid(
+                        "parameter maps",
+                        format!(
+                            "expected all maps to have the same size (width x height); found {} {} is {}x{}, {name} {} \
+                             is {}x{}",
+                            what,
+                            path.display(),
+                            probe.width,
+                            probe.height,
+                            file.label().display(),
+                            file_probe.width(),
+                            file_probe.height()
+                        ),
+                    ));
+                }
+                extended_files.push((4 + k, file, file_probe));
+            }
+            None => {
+                if let Some(c) = probe.channels.iter().position(|(c, _)| c == name) {
+                    wanted.push((4 + k, c));
+                }
+            }
+        }
+    }
     let indices: Vec<usize> = wanted.iter().map(|&(_, c)| c).collect();
     let mut read = read_exr_planes(src, what, &probe, &indices)?.into_iter();
-    let mut planes: [Plane; 4] = std::array::from_fn(|p| Plane::Constant(constants[p].unwrap_or(f64::NAN) as f32));
+    let mut planes: [Plane; 7] = std::array::from_fn(|p| {
+        let value = if p < 4 {
+            constants[p].unwrap_or(f64::NAN)
+        } else {
+            match extended[p - 4] {
+                Some(Input::Constant(v)) => v,
+                _ => EXTENDED_DEFAULTS[p - 4],
+            }
+        };
+        Plane::Constant(value as f32)
+    });
     for &(p, _) in &wanted {
         // One plane was read per wanted channel, in the same order.
         if let Some(values) = read.next() {
             planes[p] = Plane::Texels(values);
         }
     }
-    Ok(ParamImage { width: probe.width, height: probe.height, planes })
+    for (p, file, file_probe) in &extended_files {
+        planes[*p] = Plane::Texels(read_probed(*file, *p, file_probe)?);
+    }
+    Ok(image_of(probe.width, probe.height, planes))
 }
 
-fn read_separate(sources: &[Input<'_>; 4]) -> Result<ParamImage, SkinError> {
+/// The four planes and the extended physiology's three as a [`ParamImage`].
+fn image_of(width: usize, height: usize, planes: [Plane; 7]) -> ParamImage {
+    let [m, b, h, o, e0, e1, e2] = planes;
+    ParamImage { width, height, planes: [m, b, h, o], extended: [e0, e1, e2] }
+}
+
+/// Decode a one-parameter file whose header `probe` has been checked.
+fn read_probed(src: Source<'_>, p: usize, probe: &FileProbe) -> Result<Vec<f32>, SkinError> {
+    let what = map_name(p);
+    match probe {
+        FileProbe::Exr { probe, channel } => {
+            Ok(read_exr_planes(src, &what, probe, &[*channel])?.pop().unwrap_or_default())
+        }
+        FileProbe::Integer { width, height, .. } => read_integer_image(src, &what, p, *width, *height),
+    }
+}
+
+fn read_separate(sources: &[Input<'_>; 7]) -> Result<ParamImage, SkinError> {
     // Phase 1: headers only.
     let mut probes: Vec<(usize, Source<'_>, FileProbe)> = Vec::new();
     for (p, source) in sources.iter().enumerate() {
@@ -208,7 +299,7 @@ fn read_separate(sources: &[Input<'_>; 4]) -> Result<ParamImage, SkinError> {
         let sizes: Vec<String> = probes
             .iter()
             .map(|(p, src, probe)| {
-                format!("{} {} is {}x{}", PARAM_CHANNELS[*p], src.label().display(), probe.width(), probe.height())
+                format!("{} {} is {}x{}", ALL_CHANNELS[*p], src.label().display(), probe.width(), probe.height())
             })
             .collect();
         return Err(SkinError::invalid(
@@ -218,25 +309,18 @@ fn read_separate(sources: &[Input<'_>; 4]) -> Result<ParamImage, SkinError> {
     }
 
     // Phase 2: decode.
-    let mut planes: [Plane; 4] = std::array::from_fn(|p| match &sources[p] {
+    let mut planes: [Plane; 7] = std::array::from_fn(|p| match &sources[p] {
         Input::Constant(value) => Plane::Constant(*value as f32),
         Input::File(_) => Plane::Constant(f32::NAN), // replaced below
     });
     for (p, src, probe) in &probes {
-        let what = map_name(*p);
-        let values = match probe {
-            FileProbe::Exr { probe, channel } => {
-                read_exr_planes(*src, &what, probe, &[*channel])?.pop().unwrap_or_default()
-            }
-            FileProbe::Integer { width, height, .. } => read_integer_image(*src, &what, *p, *width, *height)?,
-        };
-        planes[*p] = Plane::Texels(values);
+        planes[*p] = Plane::Texels(read_probed(*src, *p, probe)?);
     }
-    Ok(ParamImage { width, height, planes })
+    Ok(image_of(width, height, planes))
 }
 
 fn map_name(p: usize) -> String {
-    format!("{} map", PARAM_CHANNELS[p])
+    format!("{} map", ALL_CHANNELS[p])
 }
 
 /// What phase 1 learnt about one file.
@@ -378,7 +462,7 @@ fn probe_param_file(src: Source<'_>, p: usize) -> Result<FileProbe, SkinError> {
         let probe = probe_exr(src, &what)?;
         let channel = if probe.channels.len() == 1 {
             0
-        } else if let Some(c) = probe.channels.iter().position(|(c, _)| c == PARAM_CHANNELS[p]) {
+        } else if let Some(c) = probe.channels.iter().position(|(c, _)| c == ALL_CHANNELS[p]) {
             c
         } else {
             return Err(SkinError::invalid(
@@ -386,7 +470,7 @@ fn probe_param_file(src: Source<'_>, p: usize) -> Result<FileProbe, SkinError> {
                 format!(
                     "{}: expected a single-channel EXR or one with a channel named {}; found channels: {}",
                     path.display(),
-                    PARAM_CHANNELS[p],
+                    ALL_CHANNELS[p],
                     probe.channel_list()
                 ),
             ));
@@ -480,7 +564,7 @@ fn read_integer_image(
             ),
         ));
     }
-    let (min, max) = PARAM_RANGES[p];
+    let (min, max) = ALL_RANGES[p];
     let map8 = |v: u8| (min + (max - min) * f64::from(v) / 255.0) as f32;
     let map16 = |v: u16| (min + (max - min) * f64::from(v) / 65535.0) as f32;
     let values: Vec<f32> = match img {

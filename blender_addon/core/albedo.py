@@ -1,0 +1,122 @@
+"""From Albedo Texture, without bpy: the albedo image's pixels as linear RGB, the core's per-texel fit
+(``spectral_skin.fit_albedo_map``), the four-channel parameter EXR written beside the .blend, and what the operator
+reports (the bpy glue is ``ops.SPECTRAL_SKIN_OT_from_albedo_texture``).
+
+The fit inverts the model: per texel the four parameters whose albedo is nearest the texel's colour (CIEDE2000), with
+the extended physiology one value per texture (docs/model.md, Extended physiology). Its result's parameter map is
+what ``spectral-skin maps`` and the panel's *Parameter Map* read: channels melanin, melanin_blend, hemoglobin,
+oiliness.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import spectral_skin
+
+from .settings import EXTENDED_DEFAULTS, EXTENDED_PARAMETERS, PARAMETERS, WORKING_SPACES
+
+# Blender's names of the image colour spaces whose 8/16-bit values are sRGB-encoded Rec.709.
+SRGB_NAMES = ("sRGB",)
+# Blender's names of the linear colour spaces the core knows (Blender 4.x calls Linear Rec.709 "Linear").
+LINEAR_NAMES = {**{name: name for name in WORKING_SPACES}, "Linear": "Linear Rec.709"}
+
+
+def available() -> bool:
+    """Whether this spectral_skin has the per-texel albedo fit."""
+    return callable(getattr(spectral_skin, "fit_albedo_map", None))
+
+
+UNAVAILABLE = ("needs a spectral_skin with fit_albedo_map (the albedo-texture fit; this is spectral_skin "
+               f"{getattr(spectral_skin, '__version__', '?')})")
+
+
+def srgb_to_linear(encoded: Any) -> Any:
+    """The sRGB decoding (IEC 61966-2-1: linear below 0.04045, else a 2.4 power), as float32."""
+    import numpy as np
+
+    v = np.asarray(encoded, dtype=np.float32)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
+def linear_albedo(pixels: Any, colorspace: str, is_float: bool, scene_space: str) -> tuple[Any, str]:
+    """The albedo as (H, W, 3) float32 linear RGB and its working space, from an image's pixels as Blender gives
+    them ((H, W, >= 3), row 0 at the top): a float image's are scene-linear already (Blender converts float images
+    into the working space ``scene_space`` on loading); an 8/16-bit image's are its encoded values, decoded here from
+    sRGB (Rec.709 primaries) or taken as they are in a linear colour space the core knows. ValueError for any other
+    colour space (naming it)."""
+    import numpy as np
+
+    rgb = np.ascontiguousarray(np.asarray(pixels, dtype=np.float32)[:, :, :3])
+    if is_float:
+        return rgb, scene_space
+    if colorspace in SRGB_NAMES:
+        return srgb_to_linear(rgb), "Linear Rec.709"
+    if colorspace in LINEAR_NAMES:
+        return rgb, LINEAR_NAMES[colorspace]
+    raise ValueError(f"the Base Color image is in the colour space {colorspace!r}; From Albedo Texture reads an "
+                     f"8/16-bit image in {', '.join((*SRGB_NAMES, *LINEAR_NAMES))}, or any float image")
+
+
+def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None) -> dict[str, Any]:
+    """The core's per-texel fit (``spectral_skin.fit_albedo_map``) and what the operator needs of it:
+    {"params": (H, W, 4) float32, "residual_delta_e00": (H, W), "extended": the extended physiology the parameters
+    hold for (the fit's where it reports them, else the thickness given, else the defaults), "median_delta_e00",
+    "max_delta_e00"}. Raises spectral_skin.SpectralSkinError when the core refuses the input; RuntimeError when this
+    spectral_skin has no fit."""
+    import numpy as np
+
+    fit_map: Any = getattr(spectral_skin, "fit_albedo_map", None)
+    if not callable(fit_map):
+        raise RuntimeError(f"From Albedo Texture {UNAVAILABLE}")
+    result = fit_map(albedo, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm)
+    params = np.asarray(result["params"], dtype=np.float32)
+    residual = np.asarray(result["residual_delta_e00"], dtype=np.float32)
+    if params.shape != (*albedo.shape[:2], len(PARAMETERS)) or residual.shape != albedo.shape[:2]:
+        raise RuntimeError(f"spectral_skin.fit_albedo_map returned params {params.shape} and residual "
+                           f"{residual.shape} for an albedo of {albedo.shape}")
+    given = {} if epidermis_thickness_mm is None else {"epidermis_thickness_mm": float(epidermis_thickness_mm)}
+    extended = {name: float(result.get(name, given.get(name, EXTENDED_DEFAULTS[name]))) for name in EXTENDED_PARAMETERS}
+    return {"params": params, "residual_delta_e00": residual, "extended": extended,
+            "median_delta_e00": float(np.median(residual)), "max_delta_e00": float(np.max(residual))}
+
+
+def parameter_map_path(blend_path: str, prefix: str) -> str:
+    """Where the parameter EXR goes: beside the .blend, ``<prefix>_params.exr`` (prefix: core.texture_prefix).
+    ValueError for an unsaved .blend (no place beside it)."""
+    if not blend_path:
+        raise ValueError("the .blend is not saved yet, so the parameter map has no place beside it: save it first")
+    return os.path.join(os.path.dirname(os.path.abspath(blend_path)), f"{prefix}_params.exr")
+
+
+def write_parameter_map(path: str, params: Any) -> None:
+    """Write (H, W, 4) parameters as the four-channel parameter EXR (float, channels melanin, melanin_blend,
+    hemoglobin, oiliness, row 0 at the top) that the core's reader takes (``spectral_skin.read_parameter_map``),
+    with OpenImageIO (the core's map writer writes only its outputs): first to a temporary file beside it, then
+    renamed into place, so a failure leaves an existing file as it was. Raises OSError naming the file."""
+    import numpy as np
+
+    try:
+        import OpenImageIO as oiio
+    except ImportError as error:
+        raise OSError(f"{path}: writing the parameter EXR needs the OpenImageIO Python module, which this Python "
+                      "lacks") from error
+    data = np.ascontiguousarray(params, dtype=np.float32)
+    height, width, channels = data.shape
+    spec = oiio.ImageSpec(width, height, channels, "float")
+    spec.channelnames = tuple(PARAMETERS)
+    spec.attribute("compression", "zip")
+    tmp = f"{path}.{os.getpid()}.tmp.exr"
+    out = oiio.ImageOutput.create(tmp)
+    if out is None or not out.open(tmp, spec):
+        raise OSError(f"{path}: cannot write the parameter EXR: {oiio.geterror()}")
+    try:
+        ok = out.write_image(data)
+        message = out.geterror()
+    finally:
+        out.close()
+    if not ok:
+        os.remove(tmp)
+        raise OSError(f"{path}: cannot write the parameter EXR: {message}")
+    os.replace(tmp, path)
