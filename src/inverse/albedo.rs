@@ -272,22 +272,25 @@ impl<F: Fn([f64; 3]) -> [f64; 3]> Problem<'_, F> {
                     }
                 }
             }
+            // Active set: a coordinate on its bound whose gradient points outward is held for this step (a projected
+            // step would otherwise shrink to nothing there).
+            let free = [0, 1, 2].map(|i| self.free[i] && !((u[i] <= 0.0 && g[i] > 0.0) || (u[i] >= 1.0 && g[i] < 0.0)));
             let mut improved = false;
             while lambda < 1e12 {
                 // Fixed coordinates: their rows and columns are the identity (no step).
                 let mut m = [0, 1, 2].map(|i| {
-                    [0, 1, 2].map(|j| match (self.free[i], self.free[j]) {
+                    [0, 1, 2].map(|j| match (free[i], free[j]) {
                         (true, true) if i == j => a[i][i] + lambda * a[i][i].max(1e-9) + 1e-12,
                         (true, true) => a[i][j],
                         _ => 0.0,
                     })
                 });
                 for (i, row) in m.iter_mut().enumerate() {
-                    if !self.free[i] {
+                    if !free[i] {
                         row[i] = 1.0;
                     }
                 }
-                let rhs = [0, 1, 2].map(|i| if self.free[i] { -g[i] } else { 0.0 });
+                let rhs = [0, 1, 2].map(|i| if free[i] { -g[i] } else { 0.0 });
                 let step = solve3(m, rhs);
                 let trial = [0, 1, 2].map(|i| (u[i] + step[i]).clamp(0.0, 1.0));
                 let rt = self.residual(trial);
@@ -338,11 +341,13 @@ pub(crate) fn coarse_start(
     target_lab: [f64; 3],
     options: &AlbedoFitOptions,
     stride: usize,
+    blend_level: Option<usize>,
 ) -> [f64; 3] {
     let n = table.n;
     let mut best = (f64::INFINITY, [0.0; 3]);
+    let levels = blend_level.map_or(0..n[1], |j| j..j + 1);
     for i in (0..n[0]).step_by(stride) {
-        for j in 0..n[1] {
+        for j in levels.clone() {
             for k in (0..n[2]).step_by(stride) {
                 let node = (i * n[1] + j) * n[2] + k;
                 let l = table.lab[node];
@@ -358,6 +363,9 @@ pub(crate) fn coarse_start(
     best.1
 }
 
+/// The cost (ΔE00² plus the prior's term) above which a table fit is restarted from other blends: 0.2² ΔE00².
+const RESTART_COST: f64 = 0.04;
+
 /// The table fit of one colour: coarse start, then Levenberg-Marquardt on the table. Returns table coordinates and
 /// the table's ΔE00 there.
 pub(crate) fn fit_on_table(table: &AlbedoTable, target_rgb: [f64; 3], options: &AlbedoFitOptions) -> ([f64; 3], f64) {
@@ -371,7 +379,17 @@ pub(crate) fn fit_on_table(table: &AlbedoTable, target_rgb: [f64; 3], options: &
         weight: options.prior_weight,
         free: [true; 3],
     };
-    let (u, _) = problem.solve(coarse_start(table, target_lab, options, 2), 40);
+    let (mut u, mut cost) = problem.solve(coarse_start(table, target_lab, options, 2, None), 40);
+    // A poor fit may be a local minimum (or a start stuck on a bound): restart from the nearest node at every other
+    // melanin blend of the table and keep the best.
+    if cost > RESTART_COST {
+        for j in (0..table.n[1]).step_by(2) {
+            let (v, c) = problem.solve(coarse_start(table, target_lab, options, 2, Some(j)), 40);
+            if c < cost {
+                (u, cost) = (v, c);
+            }
+        }
+    }
     (u, ciede2000(target_lab, conv.lab(table.albedo(u))))
 }
 
@@ -474,15 +492,34 @@ pub fn fit_albedo(target_rgb: [f64; 3], options: &AlbedoFitOptions) -> Result<Al
     })
 }
 
-/// Distinct colours of a texture and each texel's index into them (8-bit textures repeat colours: each is fitted
-/// once).
+/// Levels per channel of the colour cache's key: colours within one step of 10-bit sRGB encoding (IEC 61966-2-1) of
+/// each other share a fit (the first texel's colour is fitted), so that a float texture whose colours vary by noise
+/// below that step costs what an 8-bit one does.
+pub const CACHE_LEVELS: f32 = 1023.0;
+
+/// The cache key of a colour: its 10-bit sRGB codes where every channel is in [0, 1], else its exact bits (an
+/// out-of-gamut colour is fitted as it is).
+fn colour_key(t: &[f32; 3]) -> [u32; 3] {
+    if t.iter().all(|v| (0.0..=1.0).contains(v)) {
+        t.map(|v| {
+            let s = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+            (s * CACHE_LEVELS).round() as u32
+        })
+    } else {
+        // +0.0 and -0.0 are one colour; the top bit marks an exact key (codes stay below 1024).
+        let b = t.map(|v| (v + 0.0).to_bits());
+        [b[0], b[1], b[2] | 0x8000_0000]
+    }
+}
+
+/// Distinct colours of a texture (up to the cache key's quantisation, [`CACHE_LEVELS`]) and each texel's index into
+/// them: 8-bit textures repeat colours, and each is fitted once.
 pub(crate) fn distinct_colours(texels: &[[f32; 3]]) -> (Vec<[f32; 3]>, Vec<u32>) {
     let mut index: HashMap<[u32; 3], u32, std::hash::BuildHasherDefault<FxHasher>> = HashMap::default();
     let mut colours = Vec::new();
+    let keys: Vec<[u32; 3]> = texels.par_iter().map(colour_key).collect();
     let mut of_texel = Vec::with_capacity(texels.len());
-    for t in texels {
-        // +0.0 and -0.0 are one colour.
-        let key = t.map(|v| (v + 0.0).to_bits());
+    for (t, key) in texels.iter().zip(keys) {
         let next = colours.len() as u32;
         let i = *index.entry(key).or_insert_with(|| {
             colours.push(*t);

@@ -7,7 +7,7 @@ use pyo3::types::PyDict;
 
 use crate::color::ALL_WORKING_SPACES;
 use crate::inverse::albedo::{fit_albedo, AlbedoFitOptions};
-use crate::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness, is_paper_extended};
+use crate::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness as choose_thickness, is_paper_extended};
 use crate::skin::params::EXTENDED_PARAMS;
 
 use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, to_py};
@@ -118,7 +118,8 @@ pub(super) fn fit_albedo_py<'py>(
 ///         naming it.
 ///     fit_epidermis_thickness: if True, one epidermis thickness for the whole texture is chosen first (the
 ///         candidate of 0.05..0.5 mm with the least mean ΔE00), instead of ``epidermis_thickness_mm``.
-///     The other keywords: as :func:`fit_albedo`.
+///     working_space, epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation, oiliness,
+///     melanin_blend_prior, prior_weight, ambiguity_delta_e: as for :func:`fit_albedo`.
 ///
 /// Returns:
 ///     A dict: "params" (H, W, 4) float32 (melanin, melanin_blend, hemoglobin, oiliness: the channels of a
@@ -175,7 +176,7 @@ pub(super) fn fit_albedo_map_py<'py>(
     )?;
     let mut thickness_means = None;
     if fit_epidermis_thickness {
-        let (best, means) = detached(py, || fit_epidermis_thickness(&texels, width, height, &options))?;
+        let (best, means) = detached(py, || choose_thickness(&texels, width, height, &options))?;
         options.extended[0] = best;
         thickness_means = Some(means);
     }
