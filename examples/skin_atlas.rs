@@ -110,7 +110,8 @@ fn main() {
                     }
                 }
             }
-            // The measured colours, at this blend: filled where the fit reaches them within 2 ΔE00, hollow where not.
+            // The measured colours (filled with their own colour) where the fit at this blend puts them: a black border where
+            // it reaches them within 2 ΔE00, a white one where not (the nearest reachable colour).
             let held = AlbedoFitOptions { melanin_blend_prior: blend, prior_weight: 100.0, ..options };
             for (_, _, c) in &marks {
                 let fit = fit_albedo(*c, &held).unwrap();
@@ -123,12 +124,11 @@ fn main() {
                             continue;
                         }
                         let border = dx.abs() == 4 || dy.abs() == 4;
-                        let colour = if border {
-                            Rgb([0, 0, 0])
-                        } else if fit.delta_e00 <= 2.0 {
-                            Rgb(c.map(srgb8))
-                        } else {
-                            continue;
+                        let reached = fit.delta_e00 <= 2.0;
+                        let colour = match (border, reached) {
+                            (true, true) => Rgb([0, 0, 0]),
+                            (true, false) => Rgb([255, 255, 255]),
+                            (false, _) => Rgb(c.map(srgb8)),
                         };
                         img.put_pixel((x0 as i64 + px) as u32, py as u32, colour);
                     }
