@@ -102,7 +102,7 @@ fn out_of_gamut_colours_give_finite_parameters_and_their_delta_e() {
 #[test]
 fn nan_texel_is_an_error_naming_it() {
     let mut texels = vec![[0.4f32, 0.3, 0.25]; 12];
-    texels[4 * 1 + 3] = [0.4, f32::NAN, 0.2];
+    texels[4 + 3] = [0.4, f32::NAN, 0.2]; // x = 3, y = 1 in a 4-wide texture
     let e = fit_albedo_map(&texels, 4, 3, &AlbedoFitOptions::default()).unwrap_err().to_string();
     assert!(e.contains("(x, y) = (3, 1)") && e.contains("finite"), "{e}");
     let e = fit_albedo([0.3, f64::INFINITY, 0.2], &AlbedoFitOptions::default()).unwrap_err().to_string();

@@ -162,7 +162,7 @@ pub fn fit_epidermis_thickness(
     let sample: Vec<[f32; 3]> = colours.iter().step_by(step).copied().collect();
     let mut means = Vec::new();
     for t in THICKNESS_CANDIDATES_MM {
-        debug_assert!(t >= EPIDERMIS_THICKNESS.min && t <= EPIDERMIS_THICKNESS.max);
+        debug_assert!((EPIDERMIS_THICKNESS.min..=EPIDERMIS_THICKNESS.max).contains(&t));
         let o = AlbedoFitOptions { extended: [t, options.extended[1], options.extended[2]], ..*options }.validated()?;
         let (table, _) = cached_albedo_table(&o)?;
         let fits = fit_colours(&table, &sample, &o, &AtomicBool::new(false))?;
