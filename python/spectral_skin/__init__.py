@@ -18,6 +18,8 @@ Functions:
     write_maps: a maps() result written as EXRs, atomically, by the CLI's writer.
     shader_table: Base Color and Subsurface Radius tabulated as images for a live node group in Blender.
     write_shader_table: a shader_table() result written as EXRs and a JSON sidecar.
+    fit_albedo: the parameters whose model albedo is closest (CIEDE2000) to an RGB colour.
+    fit_albedo_map: parameter maps and a per-texel ΔE00 residual from an albedo texture.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
@@ -33,6 +35,8 @@ from ._core import (
     accuracy_levels,
     blender_targets,
     evaluate,
+    fit_albedo,
+    fit_albedo_map,
     layered_reflectance,
     maps,
     parameter_ranges,
@@ -53,6 +57,8 @@ __all__ = [
     "accuracy_levels",
     "blender_targets",
     "evaluate",
+    "fit_albedo",
+    "fit_albedo_map",
     "layered_reflectance",
     "maps",
     "parameter_ranges",

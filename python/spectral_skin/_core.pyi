@@ -302,3 +302,32 @@ def read_parameter_map(
 
 def blender_targets() -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.blender_targets)``."""
+
+def fit_albedo(
+    rgb: Sequence[float] | _FloatArray,
+    *,
+    working_space: _WorkingSpace | str = "Linear Rec.709",
+    epidermis_thickness_mm: float | None = None,
+    baseline_absorption_scale: float | None = None,
+    blood_oxygenation: float | None = None,
+    oiliness: float | None = None,
+    melanin_blend_prior: float | None = None,
+    prior_weight: float | None = None,
+    ambiguity_delta_e: float | None = None,
+) -> dict[str, Any]:
+    """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo)``."""
+
+def fit_albedo_map(
+    albedo: _MapArray,
+    *,
+    working_space: _WorkingSpace | str = "Linear Rec.709",
+    epidermis_thickness_mm: float | None = None,
+    baseline_absorption_scale: float | None = None,
+    blood_oxygenation: float | None = None,
+    oiliness: float | None = None,
+    melanin_blend_prior: float | None = None,
+    prior_weight: float | None = None,
+    ambiguity_delta_e: float | None = None,
+    fit_epidermis_thickness: bool = False,
+) -> dict[str, Any]:
+    """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo_map)``."""

@@ -96,6 +96,11 @@ enum Command {
     /// The lookup table as images for the add-on's live node group: shader_base_color.exr, shader_radius.exr (ln of
     /// Base Color and radius, float32) and shader_table.json (layout and axes).
     ShaderTable(ShaderTableArgs),
+    /// Albedo texture in, parameter map out: the parameters whose model albedo is closest in CIEDE2000 to each texel
+    /// (docs/skin-atlas.md, "Fitting a texture"), as the four-channel EXR `maps` reads, and residual.exr (ΔE00 per
+    /// texel, channel Y).
+    #[command(allow_negative_numbers = true)]
+    FitMaps(FitMapsArgs),
     /// Write the built-in example parameter map (a face-like test card) as one four-channel EXR (PIZ, half floats
     /// unless --precision float).
     #[command(allow_negative_numbers = true)]
@@ -371,6 +376,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             print_profile_csv(&ev);
         }
         Command::Maps(args) => run_maps(*args)?,
+        Command::FitMaps(args) => fit_maps::run(args)?,
         Command::ShaderTable(args) => run_shader_table(args)?,
         Command::Example { out, size, kind, precision } => {
             write_example_params_encoded(&out, kind, size, ExrOptions { precision, ..EXAMPLE_EXR })?;
@@ -653,4 +659,126 @@ fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Err
         paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
     );
     Ok(())
+}
+
+#[derive(Args)]
+struct FitMapsArgs {
+    /// The albedo texture: an EXR with channels R, G, B, linear RGB in --working-space.
+    #[arg(long)]
+    albedo: PathBuf,
+    /// The parameter map to write (channels melanin, melanin_blend, hemoglobin, oiliness).
+    #[arg(long, default_value = "params.exr")]
+    out: PathBuf,
+    /// The residual map to write (ΔE00 per texel, channel Y); default: residual.exr beside --out.
+    #[arg(long)]
+    residual: Option<PathBuf>,
+    /// The albedo's linear RGB working space.
+    #[arg(long, value_enum, default_value_t = fit_maps::Space::LinearRec709)]
+    working_space: fit_maps::Space,
+    /// Epidermis thickness held for every texel, mm (0.01..0.5); default the paper's 0.25. With a value other than
+    /// 0.25 the map is fitted at it, and `maps` must be run with the same thickness.
+    #[arg(long)]
+    epidermis_thickness_mm: Option<f64>,
+    /// Choose one epidermis thickness for the whole texture (0.05..0.5 mm, least mean ΔE00) instead.
+    #[arg(long, conflicts_with = "epidermis_thickness_mm")]
+    fit_epidermis_thickness: bool,
+    /// Oiliness written into every texel (0..1; the albedo does not depend on it); default 0.3.
+    #[arg(long)]
+    oiliness: Option<f64>,
+    /// The melanin blend the prior pulls toward (0..1); default 0.7.
+    #[arg(long)]
+    melanin_blend_prior: Option<f64>,
+    /// Print the figures of the fit as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `fit-maps`: albedo EXR -> parameter EXR + residual EXR, both staged and renamed into place together.
+mod fit_maps {
+    use spectral_skin::color::WorkingSpace;
+    use spectral_skin::inverse::albedo::AlbedoFitOptions;
+    use spectral_skin::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness};
+    use spectral_skin::maps::io::{commit_all, read_exr_channels, stage_channels_exr, ExrOptions, PARAM_CHANNELS};
+
+    #[derive(Clone, Copy, clap::ValueEnum)]
+    #[value(rename_all = "snake_case")]
+    pub enum Space {
+        LinearRec709,
+        LinearRec2020,
+        Acescg,
+    }
+
+    pub fn run(args: super::FitMapsArgs) -> Result<(), Box<dyn std::error::Error>> {
+        let (width, height, channels) = read_exr_channels(&args.albedo)?;
+        let plane = |name: &str| {
+            channels.iter().find(|(n, _)| n == name).map(|(_, p)| p).ok_or_else(|| {
+                format!("{}: no channel {name} (an albedo texture needs R, G and B)", args.albedo.display())
+            })
+        };
+        let (r, g, b) = (plane("R")?, plane("G")?, plane("B")?);
+        let texels: Vec<[f32; 3]> = (0..width * height).map(|i| [r[i], g[i], b[i]]).collect();
+        let mut options = AlbedoFitOptions {
+            working_space: match args.working_space {
+                Space::LinearRec709 => WorkingSpace::LinearRec709,
+                Space::LinearRec2020 => WorkingSpace::LinearRec2020,
+                Space::Acescg => WorkingSpace::AcesCg,
+            },
+            ..AlbedoFitOptions::default()
+        };
+        if let Some(t) = args.epidermis_thickness_mm {
+            options.extended[0] = t;
+        }
+        if let Some(o) = args.oiliness {
+            options.oiliness = o;
+        }
+        if let Some(p) = args.melanin_blend_prior {
+            options.melanin_blend_prior = p;
+        }
+        let mut options = options.validated()?;
+        let start = std::time::Instant::now();
+        if args.fit_epidermis_thickness {
+            let (best, means) = fit_epidermis_thickness(&texels, width, height, &options)?;
+            eprintln!("epidermis thickness: {best} mm (mean ΔE00 per candidate [mm, ΔE00]: {means:?})");
+            options.extended[0] = best;
+        }
+        let fit = fit_albedo_map(&texels, width, height, &options)?;
+        let seconds = start.elapsed().as_secs_f64();
+        let params: Vec<Vec<f32>> = (0..4).map(|c| fit.params.iter().map(|p| p[c]).collect()).collect();
+        let named: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().copied().zip(params.iter().map(Vec::as_slice)).collect();
+        let residual_path = args.residual.clone().unwrap_or_else(|| args.out.with_file_name("residual.exr"));
+        let staged = vec![
+            stage_channels_exr(&args.out, width, height, &named, ExrOptions::FLOAT_PIZ)?,
+            stage_channels_exr(
+                &residual_path,
+                width,
+                height,
+                &[("Y", &fit.residual_delta_e00)],
+                ExrOptions::FLOAT_PIZ,
+            )?,
+        ];
+        commit_all(staged)?;
+        let s = &fit.stats;
+        if args.json {
+            println!("{}", serde_json::json!({ "stats": s, "seconds": seconds }));
+        } else {
+            println!(
+                "wrote {} and {} ({width}x{height}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
+                 {} texel(s) out of the model's gamut (ΔE00 > {})",
+                args.out.display(),
+                residual_path.display(),
+                s.distinct_colours,
+                s.mean_delta_e00,
+                s.max_delta_e00,
+                s.out_of_gamut_texels,
+                options.ambiguity_delta_e
+            );
+            if options.extended[0] != spectral_skin::skin::params::EXTENDED_DEFAULTS[0] {
+                println!(
+                    "the map is fitted at epidermis_thickness_mm = {}: use it for `maps` too",
+                    options.extended[0]
+                );
+            }
+        }
+        Ok(())
+    }
 }

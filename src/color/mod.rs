@@ -1,6 +1,7 @@
 //! Colour: spectra to CIE XYZ (1931 2-degree observer, D65) to a linear RGB working space.
 
 pub mod cmf;
+pub mod difference;
 pub mod gamut;
 pub mod rgb;
 pub mod spectrum;

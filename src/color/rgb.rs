@@ -72,6 +72,12 @@ impl WorkingSpace {
         }
     }
 
+    /// The RGB -> XYZ matrix for a scene whose white is `white_xyz`: the inverse of
+    /// [`WorkingSpace::xyz_to_rgb_matrix`].
+    pub fn rgb_to_xyz_matrix(self, white_xyz: [f64; 3]) -> [[f64; 3]; 3] {
+        invert(self.xyz_to_rgb_matrix(white_xyz))
+    }
+
     /// The luminance of linear RGB in this space for a scene whose white is `white_xyz`: Y = l . rgb with Y relative
     /// to the white's (so l sums to 1): the middle row of the RGB -> XYZ matrix (the inverse of
     /// [`WorkingSpace::xyz_to_rgb_matrix`]) divided by the white's Y.

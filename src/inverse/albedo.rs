@@ -1,0 +1,555 @@
+//! Fit to an RGB colour: the parameters (C_m, beta_m, C_h) whose model albedo (linear RGB in the working space, as
+//! `evaluate`'s `diffuse_reflectance_rgb`) is closest in CIEDE2000 to a target colour, at fixed extended physiology.
+//!
+//! An RGB colour has three numbers and the model three free parameters, but they are not independent everywhere: a
+//! little more eumelanin (beta_m) and a little less blood (C_h) can give nearly the same colour. The fit therefore
+//! minimises ΔE00² + (w (beta_m - beta_prior))², a Tikhonov prior pulling the melanin blend toward a typical value
+//! (`DEFAULT_MELANIN_BLEND_PRIOR`) with a small weight (`DEFAULT_PRIOR_WEIGHT`, ΔE00 per unit of beta_m), so that it
+//! decides only where the colour does not, and reports the ambiguity it resolved: the parameters of the best fit at
+//! each melanin blend on a grid whose colour is within `ambiguity_delta_e` of the target ([`Ambiguity`]).
+//!
+//! The search runs in the table coordinates of src/maps/lut.rs: u_m = (C_m / 0.5)^(1/3), beta_m, u_h = (C_h /
+//! 0.1)^(1/3), each in [0, 1] (equal steps are similar changes in colour). A forward table over them ([`AlbedoTable`])
+//! gives the start (the nearest node in CIELAB) and a bounded Levenberg-Marquardt refinement on the three-term
+//! vector whose length is ΔE00 (`ciede2000_terms`); the single-colour fit then polishes with direct evaluation.
+//! Out-of-gamut targets (a green texel) end at the nearest reachable colour on the domain's boundary, with their ΔE00
+//! reported; nothing returns NaN.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::color::difference::{ciede2000, ciede2000_terms, LabConverter};
+use crate::color::WorkingSpace;
+use crate::error::{check_range, SkinError};
+use crate::evaluate::{Outputs, Prepared, Request};
+use crate::skin::params::{
+    BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_DEFAULTS, HEMOGLOBIN, MELANIN, MELANIN_BLEND,
+};
+use crate::skin::SkinParams;
+
+/// The melanin blend the prior pulls toward: 0.7, that of the Caucasian and African skin types of Donner & Jensen
+/// (2006, teaser caption; `PRESETS`).
+pub const DEFAULT_MELANIN_BLEND_PRIOR: f64 = 0.7;
+/// The prior's weight, ΔE00 per unit of beta_m: a fit may move beta_m the whole range from the prior for 0.2 ΔE00
+/// of colour (well under the 0.5 to 1 ΔE00 of a just noticeable difference), so the colour decides wherever it can.
+pub const DEFAULT_PRIOR_WEIGHT: f64 = 0.2;
+/// The ΔE00 within which parameters count as reproducing a colour (the ambiguity set, `in_gamut`): 0.5, about half
+/// a just noticeable difference.
+pub const DEFAULT_AMBIGUITY_DELTA_E: f64 = 0.5;
+/// Oiliness written into fitted parameter maps when none is given: 0.3, the DJ2006 presets' (albedo does not
+/// depend on it).
+pub const DEFAULT_OILINESS: f64 = 0.3;
+/// The melanin blends scanned for the ambiguity set.
+const AMBIGUITY_BLEND_STEPS: usize = 21;
+
+/// What the fit holds fixed and how it regularises.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct AlbedoFitOptions {
+    pub working_space: WorkingSpace,
+    /// epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation (held fixed; default the paper's).
+    pub extended: [f64; 3],
+    /// Written into the result (the albedo does not depend on it).
+    pub oiliness: f64,
+    pub melanin_blend_prior: f64,
+    pub prior_weight: f64,
+    pub ambiguity_delta_e: f64,
+}
+
+impl Default for AlbedoFitOptions {
+    fn default() -> Self {
+        AlbedoFitOptions {
+            working_space: WorkingSpace::default(),
+            extended: EXTENDED_DEFAULTS,
+            oiliness: DEFAULT_OILINESS,
+            melanin_blend_prior: DEFAULT_MELANIN_BLEND_PRIOR,
+            prior_weight: DEFAULT_PRIOR_WEIGHT,
+            ambiguity_delta_e: DEFAULT_AMBIGUITY_DELTA_E,
+        }
+    }
+}
+
+impl AlbedoFitOptions {
+    /// The options if every value is in range (the extended parameters' and oiliness' ranges of `PARAMS`).
+    pub fn validated(self) -> Result<Self, SkinError> {
+        SkinParams::from_values([0.0, 0.0, 0.0, self.oiliness, self.extended[0], self.extended[1], self.extended[2]])?;
+        check_range(
+            "melanin_blend_prior",
+            "the melanin blend the prior pulls toward",
+            self.melanin_blend_prior,
+            0.0,
+            1.0,
+        )?;
+        check_range("prior_weight", "ΔE00 per unit of melanin blend", self.prior_weight, 0.0, 100.0)?;
+        check_range("ambiguity_delta_e", "ΔE00 of the ambiguity set", self.ambiguity_delta_e, 1e-6, 100.0)?;
+        Ok(self)
+    }
+
+    /// The evaluation the fit inverts: the albedo alone, default accuracy, in the working space.
+    pub fn prepared(&self) -> Result<Prepared, SkinError> {
+        Prepared::new(&Request {
+            working_space: self.working_space,
+            ..Request::new(Outputs { albedo: true, ..Outputs::default() })
+        })
+    }
+
+    /// The parameters at table coordinates `u` (clamped to [0, 1]).
+    pub fn params_at(&self, u: [f64; 3]) -> SkinParams {
+        let [um, b, uh] = u.map(|x| x.clamp(0.0, 1.0));
+        SkinParams {
+            melanin: MELANIN.max * um.powi(3),
+            melanin_blend: MELANIN_BLEND.min + b * (MELANIN_BLEND.max - MELANIN_BLEND.min),
+            hemoglobin: HEMOGLOBIN.max * uh.powi(3),
+            oiliness: self.oiliness,
+            epidermis_thickness_mm: self.extended[0],
+            baseline_absorption_scale: self.extended[1],
+            blood_oxygenation: self.extended[2],
+        }
+    }
+}
+
+/// Table coordinates of parameters (inverse of [`AlbedoFitOptions::params_at`]).
+pub fn table_coordinates(p: &SkinParams) -> [f64; 3] {
+    [(p.melanin / MELANIN.max).cbrt(), p.melanin_blend, (p.hemoglobin / HEMOGLOBIN.max).cbrt()]
+}
+
+/// Nodes per axis (u_m, beta_m, u_h) of the fit's forward table: chosen so that the table's colour error (ΔE00
+/// against direct evaluation, `tests/inverse_albedo.rs`) leaves room within the 0.5 ΔE00 a fit must reach.
+pub const ALBEDO_TABLE_RESOLUTION: [usize; 3] = [41, 11, 25];
+
+/// The model albedo over the table coordinates at fixed extended physiology: ln albedo at each node, interpolated
+/// trilinearly (as `MaterialTable`, whose nodes hold the paper's extended values only).
+#[derive(Debug, Clone)]
+pub struct AlbedoTable {
+    n: [usize; 3],
+    log_albedo: Vec<[f64; 3]>,
+    /// CIELAB of each node's albedo (the coarse search's candidates).
+    lab: Vec<[f64; 3]>,
+    converter: LabConverter,
+}
+
+impl AlbedoTable {
+    /// Evaluate every node (in parallel).
+    pub fn build(options: &AlbedoFitOptions) -> Result<AlbedoTable, SkinError> {
+        let options = options.validated()?;
+        let prepared = options.prepared()?;
+        let n = ALBEDO_TABLE_RESOLUTION;
+        let count = n[0] * n[1] * n[2];
+        let albedo = (0..count)
+            .into_par_iter()
+            .map(|i| prepared.albedo(&options.params_at(node_u(n, i))))
+            .collect::<Result<Vec<_>, SkinError>>()?;
+        let converter = LabConverter::new(options.working_space);
+        Ok(AlbedoTable {
+            n,
+            log_albedo: albedo.iter().map(|a| a.map(|x| x.max(1e-30).ln())).collect(),
+            lab: albedo.iter().map(|a| converter.lab(*a)).collect(),
+            converter,
+        })
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.log_albedo.len()
+    }
+
+    pub fn node_u(&self, i: usize) -> [f64; 3] {
+        node_u(self.n, i)
+    }
+
+    pub fn node_lab(&self, i: usize) -> [f64; 3] {
+        self.lab[i]
+    }
+
+    pub fn converter(&self) -> &LabConverter {
+        &self.converter
+    }
+
+    /// The albedo at table coordinates `u` (clamped to [0, 1]).
+    pub fn albedo(&self, u: [f64; 3]) -> [f64; 3] {
+        let n = self.n;
+        let mut idx = [0usize; 3];
+        let mut t = [0.0f64; 3];
+        for d in 0..3 {
+            let x = u[d].clamp(0.0, 1.0) * (n[d] - 1) as f64;
+            idx[d] = (x as usize).min(n[d] - 2);
+            t[d] = x - idx[d] as f64;
+        }
+        let (si, sj) = (n[1] * n[2], n[2]);
+        let base = idx[0] * si + idx[1] * sj + idx[2];
+        let mut out = [0.0; 3];
+        for (oi, wi) in [(0, 1.0 - t[0]), (si, t[0])] {
+            for (oj, wj) in [(0, 1.0 - t[1]), (sj, t[1])] {
+                for (ok, wk) in [(0, 1.0 - t[2]), (1, t[2])] {
+                    let v = &self.log_albedo[base + oi + oj + ok];
+                    let w = wi * wj * wk;
+                    for c in 0..3 {
+                        out[c] += w * v[c];
+                    }
+                }
+            }
+        }
+        out.map(f64::exp)
+    }
+}
+
+fn node_u(n: [usize; 3], i: usize) -> [f64; 3] {
+    let k = i % n[2];
+    let j = (i / n[2]) % n[1];
+    let m = i / (n[1] * n[2]);
+    [m as f64 / (n[0] - 1) as f64, j as f64 / (n[1] - 1) as f64, k as f64 / (n[2] - 1) as f64]
+}
+
+/// The forward table for `options`, from an in-process cache of the last few (keyed by working space and extended
+/// physiology), else built. Returns whether it came from the cache.
+pub fn cached_albedo_table(options: &AlbedoFitOptions) -> Result<(Arc<AlbedoTable>, bool), SkinError> {
+    static CACHE: Mutex<Vec<(String, Arc<AlbedoTable>)>> = Mutex::new(Vec::new());
+    let key = format!("{:?}|{:?}", options.working_space, options.extended.map(f64::to_bits));
+    if let Some((_, t)) = CACHE.lock().map_err(|_| poisoned())?.iter().find(|(k, _)| *k == key) {
+        return Ok((t.clone(), true));
+    }
+    let table = Arc::new(AlbedoTable::build(options)?);
+    let mut cache = CACHE.lock().map_err(|_| poisoned())?;
+    if cache.len() >= 4 {
+        cache.remove(0);
+    }
+    cache.push((key, table.clone()));
+    Ok((table, false))
+}
+
+fn poisoned() -> SkinError {
+    SkinError::invalid("albedo table cache", "a thread panicked while holding it")
+}
+
+/// The least-squares problem: residual (ΔE00 terms, prior) at table coordinates, with some coordinates held fixed.
+pub(crate) struct Problem<'a, F: Fn([f64; 3]) -> [f64; 3]> {
+    pub forward: F,
+    pub converter: &'a LabConverter,
+    pub target_lab: [f64; 3],
+    pub prior: f64,
+    pub weight: f64,
+    pub free: [bool; 3],
+}
+
+impl<F: Fn([f64; 3]) -> [f64; 3]> Problem<'_, F> {
+    fn residual(&self, u: [f64; 3]) -> [f64; 4] {
+        let lab = self.converter.lab((self.forward)(u));
+        let t = ciede2000_terms(self.target_lab, lab);
+        [t[0], t[1], t[2], self.weight * (u[1] - self.prior)]
+    }
+
+    /// Bounded Levenberg-Marquardt from `start` (forward-difference Jacobian, steps projected onto [0, 1]³).
+    /// Returns the coordinates and the cost |r|².
+    pub fn solve(&self, start: [f64; 3], max_iterations: usize) -> ([f64; 3], f64) {
+        let cost = |r: [f64; 4]| r.iter().map(|x| x * x).sum::<f64>();
+        let mut u = start.map(|x| x.clamp(0.0, 1.0));
+        let mut r = self.residual(u);
+        let mut c = cost(r);
+        let mut lambda = 1e-3;
+        const H: f64 = 1e-4;
+        for _ in 0..max_iterations {
+            let mut jac = [[0.0f64; 3]; 4];
+            for d in 0..3 {
+                if !self.free[d] {
+                    continue;
+                }
+                let mut v = u;
+                let h = if u[d] + H <= 1.0 { H } else { -H };
+                v[d] += h;
+                let rv = self.residual(v);
+                for q in 0..4 {
+                    jac[q][d] = (rv[q] - r[q]) / h;
+                }
+            }
+            let mut a = [[0.0f64; 3]; 3];
+            let mut g = [0.0f64; 3];
+            for i in 0..3 {
+                for q in 0..4 {
+                    g[i] += jac[q][i] * r[q];
+                    for j in 0..3 {
+                        a[i][j] += jac[q][i] * jac[q][j];
+                    }
+                }
+            }
+            // Active set: a coordinate on its bound whose gradient points outward is held for this step (a projected
+            // step would otherwise shrink to nothing there).
+            let free = [0, 1, 2].map(|i| self.free[i] && !((u[i] <= 0.0 && g[i] > 0.0) || (u[i] >= 1.0 && g[i] < 0.0)));
+            let mut improved = false;
+            while lambda < 1e12 {
+                // Fixed coordinates: their rows and columns are the identity (no step).
+                let mut m = [0, 1, 2].map(|i| {
+                    [0, 1, 2].map(|j| match (free[i], free[j]) {
+                        (true, true) if i == j => a[i][i] + lambda * a[i][i].max(1e-9) + 1e-12,
+                        (true, true) => a[i][j],
+                        _ => 0.0,
+                    })
+                });
+                for (i, row) in m.iter_mut().enumerate() {
+                    if !free[i] {
+                        row[i] = 1.0;
+                    }
+                }
+                let rhs = [0, 1, 2].map(|i| if free[i] { -g[i] } else { 0.0 });
+                let step = solve3(m, rhs);
+                let trial = [0, 1, 2].map(|i| (u[i] + step[i]).clamp(0.0, 1.0));
+                let rt = self.residual(trial);
+                let ct = cost(rt);
+                if ct.is_finite() && ct < c {
+                    let moved = (0..3).map(|i| (trial[i] - u[i]).abs()).fold(0.0, f64::max);
+                    let gain = c - ct;
+                    u = trial;
+                    r = rt;
+                    c = ct;
+                    lambda = (lambda / 3.0).max(1e-9);
+                    improved = moved > 1e-10 && gain > 1e-14 * (1.0 + c);
+                    break;
+                }
+                lambda *= 4.0;
+            }
+            if !improved {
+                break;
+            }
+        }
+        (u, c)
+    }
+}
+
+/// 3x3 linear solve by Cramer's rule (the matrix is symmetric positive definite here); zeros if singular.
+fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> [f64; 3] {
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(m);
+    if !d.is_finite() || d.abs() < 1e-300 {
+        return [0.0; 3];
+    }
+    [0, 1, 2].map(|c| {
+        let mut mc = m;
+        for r in 0..3 {
+            mc[r][c] = b[r];
+        }
+        det(mc) / d
+    })
+}
+
+/// The coarse start: the table node nearest the target in CIELAB (plus the prior's term), searched on every
+/// `stride`-th node of the concentration axes.
+pub(crate) fn coarse_start(
+    table: &AlbedoTable,
+    target_lab: [f64; 3],
+    options: &AlbedoFitOptions,
+    stride: usize,
+    blend_level: Option<usize>,
+) -> [f64; 3] {
+    let n = table.n;
+    let mut best = (f64::INFINITY, [0.0; 3]);
+    let levels = blend_level.map_or(0..n[1], |j| j..j + 1);
+    for i in (0..n[0]).step_by(stride) {
+        for j in levels.clone() {
+            for k in (0..n[2]).step_by(stride) {
+                let node = (i * n[1] + j) * n[2] + k;
+                let l = table.lab[node];
+                let u = table.node_u(node);
+                let d = (0..3).map(|c| (l[c] - target_lab[c]).powi(2)).sum::<f64>()
+                    + (options.prior_weight * (u[1] - options.melanin_blend_prior)).powi(2);
+                if d < best.0 {
+                    best = (d, u);
+                }
+            }
+        }
+    }
+    best.1
+}
+
+/// The cost (ΔE00² plus the prior's term) above which a table fit is restarted from other blends: 0.2² ΔE00².
+const RESTART_COST: f64 = 0.04;
+
+/// The table fit of one colour: coarse start, then Levenberg-Marquardt on the table. Returns table coordinates and
+/// the table's ΔE00 there.
+pub(crate) fn fit_on_table(table: &AlbedoTable, target_rgb: [f64; 3], options: &AlbedoFitOptions) -> ([f64; 3], f64) {
+    let conv = table.converter();
+    let target_lab = conv.lab(target_rgb);
+    let problem = Problem {
+        forward: |u| table.albedo(u),
+        converter: conv,
+        target_lab,
+        prior: options.melanin_blend_prior,
+        weight: options.prior_weight,
+        free: [true; 3],
+    };
+    let (mut u, mut cost) = problem.solve(coarse_start(table, target_lab, options, 2, None), 40);
+    // A poor fit may be a local minimum (or a start stuck on a bound): restart from the nearest node at every other
+    // melanin blend of the table and keep the best.
+    if cost > RESTART_COST {
+        for j in (0..table.n[1]).step_by(2) {
+            let (v, c) = problem.solve(coarse_start(table, target_lab, options, 2, Some(j)), 40);
+            if c < cost {
+                (u, cost) = (v, c);
+            }
+        }
+    }
+    (u, ciede2000(target_lab, conv.lab(table.albedo(u))))
+}
+
+/// Parameters that reproduce a colour within the ambiguity ΔE00: the best fit at each melanin blend of a grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Ambiguity {
+    pub delta_e00: f64,
+    /// (min, max) of each parameter over the set (with the fit itself).
+    pub melanin: [f64; 2],
+    pub melanin_blend: [f64; 2],
+    pub hemoglobin: [f64; 2],
+    /// The set's members: (C_m, beta_m, C_h, ΔE00 by direct evaluation).
+    pub members: Vec<[f64; 4]>,
+}
+
+/// The result of [`fit_albedo`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AlbedoFit {
+    pub params: SkinParams,
+    pub target_rgb: [f64; 3],
+    /// The model albedo of `params` (direct evaluation).
+    pub albedo_rgb: [f64; 3],
+    pub delta_e00: f64,
+    /// Whether `delta_e00` is within the ambiguity threshold (the colour is one the model reaches).
+    pub in_gamut: bool,
+    pub ambiguity: Ambiguity,
+    pub table_from_cache: bool,
+}
+
+/// Check an RGB target: finite (negative channels are allowed: out-of-gamut colours of a working space).
+pub fn check_rgb(name: &str, rgb: [f64; 3]) -> Result<[f64; 3], SkinError> {
+    if rgb.iter().all(|v| v.is_finite() && v.abs() <= 1e6) {
+        Ok(rgb)
+    } else {
+        Err(SkinError::invalid(
+            name,
+            format!("every channel must be a finite linear RGB value (|v| <= 1e6); got {rgb:?}"),
+        ))
+    }
+}
+
+/// Fit one colour (see the module's text). `target_rgb` is linear RGB in `options.working_space`.
+pub fn fit_albedo(target_rgb: [f64; 3], options: &AlbedoFitOptions) -> Result<AlbedoFit, SkinError> {
+    let options = options.validated()?;
+    let target_rgb = check_rgb("target albedo", target_rgb)?;
+    let (table, from_cache) = cached_albedo_table(&options)?;
+    let prepared = options.prepared()?;
+    let conv = *table.converter();
+    let target_lab = conv.lab(target_rgb);
+    let direct = |u: [f64; 3]| prepared.albedo(&options.params_at(u)).unwrap_or([f64::NAN; 3]);
+    let (u_table, _) = fit_on_table(&table, target_rgb, &options);
+    let polish = Problem {
+        forward: direct,
+        converter: &conv,
+        target_lab,
+        prior: options.melanin_blend_prior,
+        weight: options.prior_weight,
+        free: [true; 3],
+    };
+    let (u, _) = polish.solve(u_table, 20);
+    let params = options.params_at(u);
+    let albedo_rgb = prepared.albedo(&params)?;
+    let delta_e00 = ciede2000(target_lab, conv.lab(albedo_rgb));
+    // The ambiguity: at each melanin blend, the best (C_m, C_h) on the table, checked by direct evaluation.
+    let mut members = vec![[params.melanin, params.melanin_blend, params.hemoglobin, delta_e00]];
+    for s in 0..AMBIGUITY_BLEND_STEPS {
+        let b = s as f64 / (AMBIGUITY_BLEND_STEPS - 1) as f64;
+        let fixed = Problem {
+            forward: |v: [f64; 3]| table.albedo(v),
+            converter: &conv,
+            target_lab,
+            prior: 0.0,
+            weight: 0.0,
+            free: [true, false, true],
+        };
+        let (v, _) = fixed.solve([u[0], b, u[2]], 30);
+        let p = options.params_at(v);
+        let de = ciede2000(target_lab, conv.lab(prepared.albedo(&p)?));
+        if de <= options.ambiguity_delta_e {
+            members.push([p.melanin, p.melanin_blend, p.hemoglobin, de]);
+        }
+    }
+    let range =
+        |q: usize| members.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], m| [lo.min(m[q]), hi.max(m[q])]);
+    let ambiguity = Ambiguity {
+        delta_e00: options.ambiguity_delta_e,
+        melanin: range(0),
+        melanin_blend: range(1),
+        hemoglobin: range(2),
+        members,
+    };
+    Ok(AlbedoFit {
+        params,
+        target_rgb,
+        albedo_rgb,
+        delta_e00,
+        in_gamut: delta_e00 <= options.ambiguity_delta_e,
+        ambiguity,
+        table_from_cache: from_cache,
+    })
+}
+
+/// Levels per channel of the colour cache's key: colours within one step of 10-bit sRGB encoding (IEC 61966-2-1) of
+/// each other share a fit (the first texel's colour is fitted), so that a float texture whose colours vary by noise
+/// below that step costs what an 8-bit one does.
+pub const CACHE_LEVELS: f32 = 1023.0;
+
+/// The cache key of a colour: its 10-bit sRGB codes where every channel is in [0, 1], else its exact bits (an
+/// out-of-gamut colour is fitted as it is).
+fn colour_key(t: &[f32; 3]) -> [u32; 3] {
+    if t.iter().all(|v| (0.0..=1.0).contains(v)) {
+        t.map(|v| {
+            let s = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+            (s * CACHE_LEVELS).round() as u32
+        })
+    } else {
+        // +0.0 and -0.0 are one colour; the top bit marks an exact key (codes stay below 1024).
+        let b = t.map(|v| (v + 0.0).to_bits());
+        [b[0], b[1], b[2] | 0x8000_0000]
+    }
+}
+
+/// Distinct colours of a texture (up to the cache key's quantisation, [`CACHE_LEVELS`]) and each texel's index into
+/// them: 8-bit textures repeat colours, and each is fitted once.
+pub(crate) fn distinct_colours(texels: &[[f32; 3]]) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut index: HashMap<[u32; 3], u32, std::hash::BuildHasherDefault<FxHasher>> = HashMap::default();
+    let mut colours = Vec::new();
+    let keys: Vec<[u32; 3]> = texels.par_iter().map(colour_key).collect();
+    let mut of_texel = Vec::with_capacity(texels.len());
+    for (t, key) in texels.iter().zip(keys) {
+        let next = colours.len() as u32;
+        let i = *index.entry(key).or_insert_with(|| {
+            colours.push(*t);
+            next
+        });
+        of_texel.push(i);
+    }
+    (colours, of_texel)
+}
+
+/// The Firefox / rustc hash (a multiply and rotate per word): fast for the fixed-size keys above; not DoS-resistant,
+/// which a texture's colours do not need.
+#[derive(Default)]
+pub(crate) struct FxHasher(u64);
+
+impl std::hash::Hasher for FxHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(4) {
+            let mut w = [0u8; 4];
+            w[..chunk.len()].copy_from_slice(chunk);
+            self.write_u32(u32::from_le_bytes(w));
+        }
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.0 = (self.0.rotate_left(5) ^ i as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// The extended parameters' names, for messages and results.
+pub const EXTENDED_NAMES: [&str; 3] = [EPIDERMIS_THICKNESS.name, "baseline_absorption_scale", BLOOD_OXYGENATION.name];

@@ -1,0 +1,209 @@
+//! `fit_albedo` and `fit_albedo_map`: the parameters that reproduce an albedo colour or texture
+//! (src/inverse/albedo.rs).
+
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::color::ALL_WORKING_SPACES;
+use crate::inverse::albedo::{fit_albedo, AlbedoFitOptions};
+use crate::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness as choose_thickness, is_paper_extended};
+use crate::skin::params::EXTENDED_PARAMS;
+
+use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, to_py};
+use super::detach::{detached, detached_interruptible};
+use super::errors::{internal, invalid};
+
+/// The options from the keyword arguments (None: the defaults of src/inverse/albedo.rs).
+#[allow(clippy::too_many_arguments)]
+fn options_from(
+    working_space: &str,
+    extended: [Option<&Bound<'_, PyAny>>; 3],
+    oiliness: Option<&Bound<'_, PyAny>>,
+    melanin_blend_prior: Option<&Bound<'_, PyAny>>,
+    prior_weight: Option<&Bound<'_, PyAny>>,
+    ambiguity_delta_e: Option<&Bound<'_, PyAny>>,
+) -> PyResult<AlbedoFitOptions> {
+    let mut o = AlbedoFitOptions {
+        working_space: by_name("working_space", working_space, &ALL_WORKING_SPACES)?,
+        ..AlbedoFitOptions::default()
+    };
+    for ((spec, obj), value) in EXTENDED_PARAMS.iter().zip(extended).zip(&mut o.extended) {
+        if let Some(v) = real_arg(spec.name, obj)? {
+            *value = v.0;
+        }
+    }
+    for (name, obj, value) in [
+        ("oiliness", oiliness, &mut o.oiliness),
+        ("melanin_blend_prior", melanin_blend_prior, &mut o.melanin_blend_prior),
+        ("prior_weight", prior_weight, &mut o.prior_weight),
+        ("ambiguity_delta_e", ambiguity_delta_e, &mut o.ambiguity_delta_e),
+    ] {
+        if let Some(v) = real_arg(name, obj)? {
+            *value = v.0;
+        }
+    }
+    Ok(o.validated()?)
+}
+
+/// The parameters whose model albedo is closest in CIEDE2000 to a colour (docs/skin-atlas.md, "Fitting a colour").
+///
+/// The extended physiology is held (default: the paper's); the melanin blend, which RGB cannot always separate from
+/// the haemoglobin, is pulled toward ``melanin_blend_prior`` with ``prior_weight`` ΔE00 per unit.
+///
+/// Arguments:
+///     rgb: the target albedo, linear RGB in ``working_space`` (3 numbers; out-of-gamut colours are allowed).
+///     working_space: "Linear Rec.709", "Linear Rec.2020" or "ACEScg".
+///     epidermis_thickness_mm: held fixed, mm, 0.01..0.5; None: 0.25.
+///     baseline_absorption_scale: held fixed, 0..10; None: 1.
+///     blood_oxygenation: held fixed, 0..1; None: 0.75.
+///     oiliness: written into the result (the albedo does not depend on it), 0..1; None: 0.3.
+///     melanin_blend_prior: the melanin blend the prior pulls toward, 0..1; None: 0.7.
+///     prior_weight: the prior's weight, ΔE00 per unit of melanin blend, 0..100; None: 0.2.
+///     ambiguity_delta_e: the ΔE00 within which parameters reproduce the colour, for "in_gamut" and "ambiguity";
+///         None: 0.5.
+///
+/// Returns:
+///     A dict: "params" (the seven parameters by name), "target_rgb", "albedo_rgb" (the fit's model albedo, direct
+///     evaluation), "delta_e00", "in_gamut", "ambiguity" ({"delta_e00", "melanin", "melanin_blend", "hemoglobin":
+///     [min, max] over the set, "members": [[C_m, beta_m, C_h, ΔE00], ...]}), "table_from_cache".
+///
+/// Raises:
+///     SpectralSkinError: a value out of range or not finite, an unknown working space.
+///     TypeError: an argument of the wrong type.
+#[pyfunction]
+#[pyo3(
+    name = "fit_albedo",
+    signature = (
+        rgb, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
+        blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
+        ambiguity_delta_e = None
+    )
+)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn fit_albedo_py<'py>(
+    py: Python<'py>,
+    rgb: &Bound<'py, PyAny>,
+    working_space: &str,
+    epidermis_thickness_mm: Option<&Bound<'py, PyAny>>,
+    baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
+    blood_oxygenation: Option<&Bound<'py, PyAny>>,
+    oiliness: Option<&Bound<'py, PyAny>>,
+    melanin_blend_prior: Option<&Bound<'py, PyAny>>,
+    prior_weight: Option<&Bound<'py, PyAny>>,
+    ambiguity_delta_e: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let values = real_vector("rgb", rgb, "3 numbers (linear RGB)")?;
+    let target: [f64; 3] = values
+        .as_slice()
+        .try_into()
+        .map_err(|_| invalid("rgb", format!("must be 3 numbers (linear RGB); got {}", values.len())))?;
+    let options = options_from(
+        working_space,
+        [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation],
+        oiliness,
+        melanin_blend_prior,
+        prior_weight,
+        ambiguity_delta_e,
+    )?;
+    let fit = detached(py, || fit_albedo(target, &options))?;
+    to_py(py, &fit)
+}
+
+/// Fit every texel of an albedo texture (docs/skin-atlas.md, "Fitting a texture"): a forward table at the held
+/// extended physiology, the nearest node and a Levenberg-Marquardt refinement per distinct colour.
+///
+/// Arguments:
+///     albedo: (H, W, 3) float32 or float64, linear RGB in ``working_space``. A NaN or infinite texel is an error
+///         naming it.
+///     fit_epidermis_thickness: if True, one epidermis thickness for the whole texture is chosen first (the
+///         candidate of 0.05..0.5 mm with the least mean ΔE00), instead of ``epidermis_thickness_mm``.
+///     working_space, epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation, oiliness,
+///     melanin_blend_prior, prior_weight, ambiguity_delta_e: as for :func:`fit_albedo`.
+///
+/// Returns:
+///     A dict: "params" (H, W, 4) float32 (melanin, melanin_blend, hemoglobin, oiliness: the channels of a
+///     parameter map), or (H, W, 7) with the extended physiology appended when it is not the paper's;
+///     "residual_delta_e00" (H, W) float32 (ΔE00 between each texel and its fit, by the table); "extended"
+///     (the held values by name); "stats" ({"texels", "distinct_colours", "table_from_cache", "max_delta_e00",
+///     "mean_delta_e00", "out_of_gamut_texels", "options"}); "thickness_means" ([[mm, mean ΔE00], ...]) when
+///     ``fit_epidermis_thickness``.
+///
+/// Raises:
+///     SpectralSkinError: a non-finite texel, a value out of range, another shape.
+///     TypeError: another dtype.
+///     KeyboardInterrupt: Ctrl-C during the fit.
+#[pyfunction]
+#[pyo3(
+    name = "fit_albedo_map",
+    signature = (
+        albedo, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
+        blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
+        ambiguity_delta_e = None, fit_epidermis_thickness = false
+    )
+)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn fit_albedo_map_py<'py>(
+    py: Python<'py>,
+    albedo: &Bound<'py, PyAny>,
+    working_space: &str,
+    epidermis_thickness_mm: Option<&Bound<'py, PyAny>>,
+    baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
+    blood_oxygenation: Option<&Bound<'py, PyAny>>,
+    oiliness: Option<&Bound<'py, PyAny>>,
+    melanin_blend_prior: Option<&Bound<'py, PyAny>>,
+    prior_weight: Option<&Bound<'py, PyAny>>,
+    ambiguity_delta_e: Option<&Bound<'py, PyAny>>,
+    fit_epidermis_thickness: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    const EXPECTED: &str = "an (H, W, 3) float array of linear RGB";
+    let array = float_array("albedo", albedo, 3, EXPECTED)?
+        .ok_or_else(|| pyo3::exceptions::PyTypeError::new_err(format!("albedo must be {EXPECTED}")))?;
+    let shape = array.shape();
+    if shape[2] != 3 {
+        return Err(invalid("albedo", format!("must be {EXPECTED}; got shape {}", shape_text(&shape))));
+    }
+    let (height, width) = (shape[0], shape[1]);
+    let planes = [array.plane(Some(0))?, array.plane(Some(1))?, array.plane(Some(2))?];
+    let texels: Vec<[f32; 3]> = (0..height * width).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
+    let mut options = options_from(
+        working_space,
+        [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation],
+        oiliness,
+        melanin_blend_prior,
+        prior_weight,
+        ambiguity_delta_e,
+    )?;
+    let mut thickness_means = None;
+    if fit_epidermis_thickness {
+        let (best, means) = detached(py, || choose_thickness(&texels, width, height, &options))?;
+        options.extended[0] = best;
+        thickness_means = Some(means);
+    }
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let fit = detached_interruptible(py, &cancel, || fit_albedo_map(&texels, width, height, &options))?;
+    let channels = if is_paper_extended(&options) { 4 } else { 7 };
+    let mut values = Vec::with_capacity(fit.params.len() * channels);
+    for p in &fit.params {
+        values.extend_from_slice(p);
+        if channels == 7 {
+            values.extend(options.extended.map(|v| v as f32));
+        }
+    }
+    let dict = PyDict::new(py);
+    dict.set_item("params", PyArray1::from_vec(py, values).reshape([height, width, channels]).map_err(internal)?)?;
+    dict.set_item(
+        "residual_delta_e00",
+        PyArray1::from_vec(py, fit.residual_delta_e00).reshape([height, width]).map_err(internal)?,
+    )?;
+    let extended = PyDict::new(py);
+    for (spec, v) in EXTENDED_PARAMS.iter().zip(options.extended) {
+        extended.set_item(spec.name, v)?;
+    }
+    dict.set_item("extended", extended)?;
+    dict.set_item("stats", to_py(py, &fit.stats)?)?;
+    if let Some(m) = thickness_means {
+        dict.set_item("thickness_means", m)?;
+    }
+    Ok(dict)
+}

@@ -1,0 +1,143 @@
+//! Fit to an albedo colour and texture (src/inverse/albedo.rs, albedo_maps.rs): parameters -> albedo by the core's
+//! `evaluate` (the independent forward model) -> fit -> the fitted parameters' albedo, again by `evaluate`, must be
+//! within ΔE00 0.5 of the texel (CIEDE2000 checked against Sharma et al.'s table in src/color/difference.rs).
+
+use spectral_skin::color::difference::{ciede2000, LabConverter};
+use spectral_skin::color::WorkingSpace;
+use spectral_skin::evaluate::{evaluate, Outputs, Request};
+use spectral_skin::inverse::albedo::{fit_albedo, AlbedoFitOptions, AlbedoTable, ALBEDO_TABLE_RESOLUTION};
+use spectral_skin::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness};
+use spectral_skin::skin::SkinParams;
+
+fn albedo_of(p: &SkinParams, space: WorkingSpace) -> [f64; 3] {
+    let request = Request { working_space: space, ..Request::new(Outputs { albedo: true, ..Outputs::default() }) };
+    evaluate(p, &request).unwrap().diffuse_reflectance_rgb.unwrap()
+}
+
+/// Parameters spread over the domain (a fixed low-discrepancy sequence on the cube-root axes of the table), at the
+/// extended values `ext`.
+fn spread(count: usize, ext: [f64; 3]) -> Vec<SkinParams> {
+    const G: f64 = 1.220_744_084_605_759_5; // plastic number (R3 sequence)
+    (0..count)
+        .map(|n| {
+            let u = [1.0 / G, 1.0 / (G * G), 1.0 / (G * G * G)].map(|a| (0.5 + a * (n + 1) as f64).fract());
+            SkinParams::from_values([0.5 * u[0].powi(3), u[1], 0.1 * u[2].powi(3), 0.3, ext[0], ext[1], ext[2]])
+                .unwrap()
+        })
+        .collect()
+}
+
+fn round_trip(options: &AlbedoFitOptions, count: usize) -> f64 {
+    let truth = spread(count, options.extended);
+    let texels: Vec<[f32; 3]> = truth.iter().map(|p| albedo_of(p, options.working_space).map(|v| v as f32)).collect();
+    let fit = fit_albedo_map(&texels, count, 1, options).unwrap();
+    let conv = LabConverter::new(options.working_space);
+    let mut worst: f64 = 0.0;
+    for (t, p) in texels.iter().zip(&fit.params) {
+        let q = SkinParams::from_values([
+            p[0] as f64,
+            p[1] as f64,
+            p[2] as f64,
+            p[3] as f64,
+            options.extended[0],
+            options.extended[1],
+            options.extended[2],
+        ])
+        .unwrap();
+        let de = ciede2000(conv.lab(t.map(f64::from)), conv.lab(albedo_of(&q, options.working_space)));
+        worst = worst.max(de);
+    }
+    assert!(fit.stats.max_delta_e00 < 0.5, "{:?}", fit.stats);
+    worst
+}
+
+#[test]
+fn texture_round_trip_is_within_half_a_delta_e() {
+    let worst = round_trip(&AlbedoFitOptions::default(), 200);
+    assert!(worst <= 0.5, "worst ΔE00 {worst}");
+}
+
+#[test]
+fn texture_round_trip_at_a_thin_epidermis_in_acescg() {
+    let options = AlbedoFitOptions {
+        working_space: WorkingSpace::AcesCg,
+        extended: [0.08, 1.0, 0.75],
+        ..AlbedoFitOptions::default()
+    };
+    let worst = round_trip(&options, 60);
+    assert!(worst <= 0.5, "worst ΔE00 {worst}");
+}
+
+#[test]
+fn single_colour_round_trip_and_ambiguity() {
+    let options = AlbedoFitOptions::default();
+    let conv = LabConverter::new(options.working_space);
+    for p in spread(12, options.extended) {
+        let target = albedo_of(&p, options.working_space);
+        let fit = fit_albedo(target, &options).unwrap();
+        let de = ciede2000(conv.lab(target), conv.lab(albedo_of(&fit.params, options.working_space)));
+        assert!(de <= 0.5 && fit.in_gamut, "{p:?}: {de} {fit:?}");
+        assert!((de - fit.delta_e00).abs() < 1e-9, "{de} vs {}", fit.delta_e00);
+        let a = &fit.ambiguity;
+        assert!(a.members.iter().all(|m| m[3] <= 0.5), "{a:?}");
+        assert!(a.melanin_blend[0] <= fit.params.melanin_blend && fit.params.melanin_blend <= a.melanin_blend[1]);
+    }
+}
+
+/// A saturated green and a saturated blue are far outside skin's colours: finite parameters in range, a large ΔE00.
+#[test]
+fn out_of_gamut_colours_give_finite_parameters_and_their_delta_e() {
+    let options = AlbedoFitOptions::default();
+    for rgb in [[0.05, 0.6, 0.05], [0.0, 0.0, 0.8], [-0.1, 0.3, 0.0], [0.0; 3], [1.5, 1.5, 1.5]] {
+        let fit = fit_albedo(rgb, &options).unwrap();
+        assert!(fit.params.validated().is_ok() && fit.delta_e00.is_finite(), "{rgb:?} {fit:?}");
+        assert!(!fit.in_gamut, "{rgb:?} {fit:?}");
+        let map = fit_albedo_map(&[rgb.map(|v| v as f32)], 1, 1, &options).unwrap();
+        assert!(map.params[0].iter().all(|v| v.is_finite()) && map.residual_delta_e00[0] > 2.0, "{map:?}");
+    }
+    let green = fit_albedo([0.05, 0.6, 0.05], &options).unwrap();
+    assert!(green.delta_e00 > 20.0, "{green:?}");
+}
+
+#[test]
+fn nan_texel_is_an_error_naming_it() {
+    let mut texels = vec![[0.4f32, 0.3, 0.25]; 12];
+    texels[4 + 3] = [0.4, f32::NAN, 0.2]; // x = 3, y = 1 in a 4-wide texture
+    let e = fit_albedo_map(&texels, 4, 3, &AlbedoFitOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("(x, y) = (3, 1)") && e.contains("finite"), "{e}");
+    let e = fit_albedo([0.3, f64::INFINITY, 0.2], &AlbedoFitOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("target albedo"), "{e}");
+    let bad = AlbedoFitOptions { extended: [0.9, 1.0, 0.75], ..AlbedoFitOptions::default() };
+    let e = fit_albedo([0.3, 0.2, 0.2], &bad).unwrap_err().to_string();
+    assert!(e.starts_with("epidermis_thickness_mm must be in"), "{e}");
+}
+
+/// The forward table against direct evaluation at cell centres: the part of the fit's error budget it takes.
+#[test]
+fn forward_table_error_is_small() {
+    let options = AlbedoFitOptions::default();
+    let table = AlbedoTable::build(&options).unwrap();
+    let conv = LabConverter::new(options.working_space);
+    let n = ALBEDO_TABLE_RESOLUTION;
+    let mut worst: f64 = 0.0;
+    for (i, j, k) in [(0, 0, 0), (3, 2, 5), (10, 5, 12), (20, 9, 3), (39, 1, 23), (1, 7, 1), (30, 4, 20)] {
+        let u = [
+            (i as f64 + 0.5) / (n[0] - 1) as f64,
+            (j as f64 + 0.5) / (n[1] - 1) as f64,
+            (k as f64 + 0.5) / (n[2] - 1) as f64,
+        ];
+        let direct = albedo_of(&options.params_at(u), options.working_space);
+        worst = worst.max(ciede2000(conv.lab(direct), conv.lab(table.albedo(u))));
+    }
+    assert!(worst < 0.3, "{worst}");
+}
+
+/// A texture made at 0.1 mm is fitted best by a thin epidermis.
+#[test]
+fn one_thickness_for_a_texture() {
+    let truth = spread(40, [0.1, 1.0, 0.75]);
+    let texels: Vec<[f32; 3]> =
+        truth.iter().map(|p| albedo_of(p, WorkingSpace::LinearRec709).map(|v| v as f32)).collect();
+    let (best, means) = fit_epidermis_thickness(&texels, 40, 1, &AlbedoFitOptions::default()).unwrap();
+    assert!(best <= 0.15, "{best} {means:?}");
+}

@@ -1,0 +1,81 @@
+"""fit_albedo and fit_albedo_map (src/inverse/albedo.rs): parameters -> albedo by evaluate() -> fit -> the fitted
+parameters' albedo by evaluate() again, within ΔE00 0.5 of the target, measured with the independent numpy CIEDE2000
+of scripts/color_difference.py (checked against Sharma et al.'s table in test_color_difference.py)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+import spectral_skin
+
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "color_difference.py"
+_spec = importlib.util.spec_from_file_location("_color_difference", SCRIPT)
+assert _spec is not None and _spec.loader is not None
+color_difference = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(color_difference)
+
+TRUTH = [(0.005, 0.7, 0.005), (0.15, 0.0, 0.01), (0.5, 0.7, 0.05), (0.05, 0.3, 0.002), (0.02, 0.9, 0.08),
+         (0.3, 0.5, 0.03)]
+
+
+def albedo(m: float, b: float, h: float, **extended: float) -> np.ndarray:
+    result = spectral_skin.evaluate(m, b, h, 0.3, outputs=["albedo"], **extended)
+    return np.asarray(result["diffuse_reflectance_rgb"])
+
+
+def test_texture_round_trip_is_within_half_a_delta_e() -> None:
+    texture = np.array([[albedo(*p) for p in TRUTH]], dtype=np.float32)  # (1, 6, 3)
+    fit = spectral_skin.fit_albedo_map(texture)
+    assert fit["params"].shape == (1, 6, 4) and fit["params"].dtype == np.float32
+    assert fit["residual_delta_e00"].shape == (1, 6)
+    assert fit["stats"]["distinct_colours"] == 6 and fit["stats"]["out_of_gamut_texels"] == 0
+    back = np.array([albedo(*map(float, p[:3])) for p in fit["params"][0]])
+    de = color_difference.delta_e00_linear_rgb(texture[0].astype(np.float64), back)
+    assert np.all(de <= 0.5), de
+    np.testing.assert_allclose(fit["params"][0, :, 3], 0.3)
+
+
+def test_a_thin_epidermis_gives_seven_channels() -> None:
+    texture = np.array([[albedo(*p, epidermis_thickness_mm=0.1) for p in TRUTH[:3]]])
+    fit = spectral_skin.fit_albedo_map(texture, epidermis_thickness_mm=0.1)
+    assert fit["params"].shape == (1, 3, 7) and fit["extended"]["epidermis_thickness_mm"] == 0.1
+    np.testing.assert_allclose(fit["params"][0, :, 4], 0.1)
+    back = np.array([albedo(*map(float, p[:3]), epidermis_thickness_mm=0.1) for p in fit["params"][0]])
+    assert np.all(color_difference.delta_e00_linear_rgb(texture[0], back) <= 0.5)
+
+
+def test_single_colour_and_its_ambiguity() -> None:
+    target = albedo(*TRUTH[0])
+    fit = spectral_skin.fit_albedo(target)
+    p = fit["params"]
+    back = albedo(p["melanin"], p["melanin_blend"], p["hemoglobin"])
+    assert color_difference.delta_e00_linear_rgb(target, back) <= 0.5 and fit["in_gamut"]
+    a = fit["ambiguity"]
+    assert a["melanin_blend"][0] <= p["melanin_blend"] <= a["melanin_blend"][1]
+    assert all(m[3] <= 0.5 for m in a["members"])
+
+
+def test_green_is_out_of_gamut_with_finite_parameters() -> None:
+    fit = spectral_skin.fit_albedo([0.05, 0.6, 0.05])
+    assert not fit["in_gamut"] and fit["delta_e00"] > 20.0
+    assert all(np.isfinite(v) for v in fit["params"].values())
+    texture = np.array([[[0.05, 0.6, 0.05], albedo(*TRUTH[1])]], dtype=np.float64)
+    m = spectral_skin.fit_albedo_map(texture)
+    assert np.all(np.isfinite(m["params"])) and m["residual_delta_e00"][0, 0] > 20.0
+    assert m["residual_delta_e00"][0, 1] < 0.5 and m["stats"]["out_of_gamut_texels"] == 1
+
+
+def test_bad_input_names_it() -> None:
+    texture = np.full((3, 4, 3), 0.3, dtype=np.float32)
+    texture[2, 1, 0] = np.nan
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"\(x, y\) = \(1, 2\)"):
+        spectral_skin.fit_albedo_map(texture)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="albedo"):
+        spectral_skin.fit_albedo_map(np.zeros((2, 2, 4), dtype=np.float32))
+    with pytest.raises(spectral_skin.SpectralSkinError, match="epidermis_thickness_mm"):
+        spectral_skin.fit_albedo([0.3, 0.2, 0.2], epidermis_thickness_mm=2.0)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="rgb"):
+        spectral_skin.fit_albedo([0.3, 0.2])
