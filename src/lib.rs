@@ -12,6 +12,7 @@ pub mod diffusion;
 pub mod error;
 pub mod evaluate;
 pub mod fit;
+pub mod inverse;
 pub mod maps;
 mod numeric;
 pub mod skin;

@@ -18,6 +18,7 @@ Functions:
     write_maps: a maps() result written as EXRs, atomically, by the CLI's writer.
     shader_table: Base Color and Subsurface Radius tabulated as images for a live node group in Blender.
     write_shader_table: a shader_table() result written as EXRs and a JSON sidecar.
+    fit_spectrum: model parameters fitted to a measured reflectance spectrum.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
@@ -33,6 +34,7 @@ from ._core import (
     accuracy_levels,
     blender_targets,
     evaluate,
+    fit_spectrum,
     layered_reflectance,
     maps,
     parameter_ranges,
@@ -53,6 +55,7 @@ __all__ = [
     "accuracy_levels",
     "blender_targets",
     "evaluate",
+    "fit_spectrum",
     "layered_reflectance",
     "maps",
     "parameter_ranges",

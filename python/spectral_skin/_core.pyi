@@ -292,3 +292,15 @@ def read_parameter_map(path: str | os.PathLike[str], name: _Parameter | str | No
 
 def blender_targets() -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.blender_targets)``."""
+
+def fit_spectrum(
+    wavelengths_nm: npt.ArrayLike,
+    reflectance: npt.ArrayLike,
+    *,
+    free: Sequence[str] | None = None,
+    fixed: Mapping[str, float] | None = None,
+    specular: Literal["free", "fresnel"] | float | None = None,
+    objective: Literal["reflectance", "cielab"] = "reflectance",
+    starts: int | None = None,
+) -> dict[str, Any]:
+    """Documented once, in the compiled module: ``help(spectral_skin.fit_spectrum)``."""

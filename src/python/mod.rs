@@ -7,6 +7,7 @@ mod convert;
 mod detach;
 mod errors;
 mod evaluate;
+mod inverse;
 mod maps;
 mod shader_table;
 
@@ -15,6 +16,7 @@ use pyo3::prelude::*;
 use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, parameters_py, presets_py};
 use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
+use inverse::fit_spectrum_py;
 use maps::{maps_py, read_parameter_map_py, write_maps_py};
 use shader_table::{shader_table_py, write_shader_table_py};
 
@@ -38,5 +40,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_maps_py, m)?)?;
     m.add_function(wrap_pyfunction!(shader_table_py, m)?)?;
     m.add_function(wrap_pyfunction!(write_shader_table_py, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_spectrum_py, m)?)?;
     Ok(())
 }

@@ -18,7 +18,7 @@ NO_RAISES = {"accuracy_levels", "blender_targets", "parameter_ranges", "paramete
 
 
 def test_every_public_function_is_checked() -> None:
-    assert FUNCTIONS == ["accuracy_levels", "blender_targets", "evaluate", "layered_reflectance", "maps",
+    assert FUNCTIONS == ["accuracy_levels", "blender_targets", "evaluate", "fit_spectrum", "layered_reflectance", "maps",
                          "parameter_ranges", "parameters", "presets", "profile", "read_parameter_map", "shader_table",
                          "write_maps", "write_shader_table"]
 
