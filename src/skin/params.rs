@@ -336,17 +336,17 @@ pub const PRESETS: &[Preset] = &[
     measured(
         "measured-light",
         "lightest third of 4392 in-vivo spectra (Xiao et al. 2016), median fit; docs/measured-skin.md",
-        [0.0523, 0.263, 0.0120, 0.050, 1.93],
+        [0.0640, 0.087, 0.0130, 0.042, 2.02],
     ),
     measured(
         "measured-medium",
         "middle third of 4392 in-vivo spectra (Xiao et al. 2016), median fit; docs/measured-skin.md",
-        [0.1130, 0.718, 0.0202, 0.032, 1.87],
+        [0.1056, 0.557, 0.0214, 0.033, 2.04],
     ),
     measured(
         "measured-dark",
         "darkest third of 4392 in-vivo spectra (Xiao et al. 2016), median fit; docs/measured-skin.md",
-        [0.1674, 1.0, 0.0267, 0.027, 2.49],
+        [0.1609, 1.0, 0.0301, 0.027, 2.61],
     ),
 ];
 
