@@ -276,18 +276,11 @@ impl Prepared {
 
     /// The layer stack of `params` at each of this request's wavelengths.
     pub fn stacks(&self, params: &SkinParams) -> Result<Vec<LayerStack>, SkinError> {
-        self.grid
-            .wavelengths_nm
-            .iter()
-            .map(|&w| {
-                LayerStack::with_boundaries(&skin_layers(params, &self.request.model, w), self.request.boundaries)
-            })
-            .collect()
+        layer_stacks(params, &self.request, &self.grid.wavelengths_nm)
     }
 
     fn totals(&self, stacks: &[LayerStack]) -> Vec<f64> {
-        let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
-        stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect()
+        totals_of(stacks, &self.request)
     }
 
     /// Burley fits per channel from the RGB transfer function on the fit frequencies.
@@ -406,6 +399,32 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
         work,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The layer stack of `params` at each of `wavelengths_nm` with the request's model and boundaries.
+fn layer_stacks(params: &SkinParams, request: &Request, wavelengths_nm: &[f64]) -> Result<Vec<LayerStack>, SkinError> {
+    wavelengths_nm
+        .iter()
+        .map(|&w| LayerStack::with_boundaries(&skin_layers(params, &request.model, w), request.boundaries))
+        .collect()
+}
+
+/// The total diffuse reflectance `R~(0)` of each stack (the request's combination and multipole terms).
+fn totals_of(stacks: &[LayerStack], request: &Request) -> Vec<f64> {
+    let (comb, terms) = (request.combination, request.accuracy.multipole_terms);
+    stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect()
+}
+
+/// The model's total diffuse reflectance (subsurface only) of `params` at arbitrary wavelengths, as
+/// [`Evaluation::spectral_reflectance`] computes it on the request's own grid, with the request's model, combination,
+/// boundaries and multipole terms (its outputs and wavelength grid are not used; `params` is not validated: the
+/// caller does). The forward model of the spectrum fits (`crate::inverse`).
+pub fn diffuse_reflectance_at(
+    params: &SkinParams,
+    request: &Request,
+    wavelengths_nm: &[f64],
+) -> Result<Vec<f64>, SkinError> {
+    Ok(totals_of(&layer_stacks(params, request, wavelengths_nm)?, request))
 }
 
 /// Every method's inputs on `target` from the albedo and the Burley fit (`fit::blender_target`).

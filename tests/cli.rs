@@ -478,3 +478,32 @@ fn extended_physiology_flags() {
     assert_eq!(meta["extended"]["baseline_absorption_scale"], 2.0);
     assert_eq!(meta["extended"]["epidermis_thickness_mm"], 0.25);
 }
+
+/// `fit --spectrum`: the first Xiao et al. 2016 spectrum (data/) as a two-column CSV in, the fit's JSON out; a file
+/// without the header is an error naming the file.
+#[test]
+fn fit_a_measured_spectrum() {
+    let data =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/xiao2016_skin_reflectance_400_700nm.csv"))
+            .unwrap();
+    let first = data.lines().filter(|l| !l.starts_with('#')).nth(1).unwrap();
+    let mut csv = String::from(
+        "# the first spectrum of data/xiao2016_skin_reflectance_400_700nm.csv\nwavelength_nm,reflectance\n",
+    );
+    for (i, r) in first.split(',').skip(1).enumerate() {
+        csv.push_str(&format!("{},{r}\n", 400 + 10 * i));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("spectrum.csv");
+    std::fs::write(&path, &csv).unwrap();
+    let out = run(&["fit", "--spectrum", path.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["rms"].as_f64().unwrap() < 0.02 && v["delta_e00"].as_f64().unwrap() < 2.0, "{v}");
+    assert_eq!(v["fitted_reflectance"].as_array().unwrap().len(), 31);
+    assert!(v["params"]["epidermis_thickness_mm"].is_number() && v["specular"] == "free", "{v}");
+    std::fs::write(&path, "400,0.1\n410,0.1\n").unwrap();
+    let out = run(&["fit", "--spectrum", path.to_str().unwrap(), "--specular", "fresnel"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.code() == Some(2) && err.contains("spectrum.csv") && err.contains("header"), "{err}");
+}

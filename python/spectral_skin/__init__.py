@@ -20,6 +20,7 @@ Functions:
     write_shader_table: a shader_table() result written as EXRs and a JSON sidecar.
     fit_albedo: the parameters whose model albedo is closest (CIEDE2000) to an RGB colour.
     fit_albedo_map: parameter maps and a per-texel ΔE00 residual from an albedo texture.
+    fit_spectrum: model parameters fitted to a measured reflectance spectrum.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
@@ -37,6 +38,7 @@ from ._core import (
     evaluate,
     fit_albedo,
     fit_albedo_map,
+    fit_spectrum,
     layered_reflectance,
     maps,
     parameter_ranges,
@@ -59,6 +61,7 @@ __all__ = [
     "evaluate",
     "fit_albedo",
     "fit_albedo_map",
+    "fit_spectrum",
     "layered_reflectance",
     "maps",
     "parameter_ranges",

@@ -331,3 +331,14 @@ def fit_albedo_map(
     fit_epidermis_thickness: bool = False,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo_map)``."""
+def fit_spectrum(
+    wavelengths_nm: npt.ArrayLike,
+    reflectance: npt.ArrayLike,
+    *,
+    free: Sequence[str] | None = None,
+    fixed: Mapping[str, float] | None = None,
+    specular: Literal["free", "fresnel"] | float | None = None,
+    objective: Literal["reflectance", "cielab"] = "reflectance",
+    starts: int | None = None,
+) -> dict[str, Any]:
+    """Documented once, in the compiled module: ``help(spectral_skin.fit_spectrum)``."""

@@ -96,6 +96,9 @@ enum Command {
     /// The lookup table as images for the add-on's live node group: shader_base_color.exr, shader_radius.exr (ln of
     /// Base Color and radius, float32) and shader_table.json (layout and axes).
     ShaderTable(ShaderTableArgs),
+    /// Fit the model to a measured reflectance spectrum (docs/measured-skin.md); prints JSON.
+    #[command(allow_negative_numbers = true)]
+    Fit(FitArgs),
     /// Albedo texture in, parameter map out: the parameters whose model albedo is closest in CIEDE2000 to each texel
     /// (docs/skin-atlas.md, "Fitting a texture"), as the four-channel EXR `maps` reads, and residual.exr (ΔE00 per
     /// texel, channel Y).
@@ -118,6 +121,29 @@ enum Command {
         #[arg(long, value_enum, default_value_t = Precision::Half)]
         precision: Precision,
     },
+}
+
+#[derive(Args)]
+struct FitArgs {
+    /// CSV file with columns wavelength_nm, reflectance (a header line; lines starting with '#' are comments);
+    /// wavelengths 380..780 nm, increasing; reflectance a fraction 0..1.
+    #[arg(long)]
+    spectrum: PathBuf,
+    /// Comma-separated free parameters; default: the set docs/measured-skin.md chooses.
+    #[arg(long, value_delimiter = ',')]
+    free: Option<Vec<String>>,
+    /// A value for a parameter that is not free, NAME=VALUE (repeatable).
+    #[arg(long = "fixed", value_name = "NAME=VALUE")]
+    fixed: Vec<String>,
+    /// Surface reflection added to the model: free (fitted), fresnel (0.0278, index 1.4) or a number 0..0.1.
+    #[arg(long, default_value = "free")]
+    specular: String,
+    /// What is minimised.
+    #[arg(long, value_enum, default_value_t = spectral_skin::inverse::Objective::Reflectance)]
+    objective: spectral_skin::inverse::Objective,
+    /// How many of the start table's best entries are refined.
+    #[arg(long, default_value_t = spectral_skin::inverse::spectrum::DEFAULT_STARTS)]
+    starts: usize,
 }
 
 #[derive(Args)]
@@ -376,6 +402,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             print_profile_csv(&ev);
         }
         Command::Maps(args) => run_maps(*args)?,
+        Command::Fit(args) => run_fit(args)?,
         Command::FitMaps(args) => fit_maps::run(args)?,
         Command::ShaderTable(args) => run_shader_table(args)?,
         Command::Example { out, size, kind, precision } => {
@@ -392,6 +419,51 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
+    Ok(())
+}
+
+fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
+    use spectral_skin::inverse::{fit_spectrum, FitOptions, Specular};
+    let path = args.spectrum.display().to_string();
+    let text = std::fs::read_to_string(&args.spectrum).map_err(|e| format!("{path}: {e}"))?;
+    let mut rows = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+    let header = rows.next().map(|(_, l)| l.trim()).unwrap_or("");
+    if header.replace(' ', "") != "wavelength_nm,reflectance" {
+        return Err(
+            format!("{path}: the first line must be the header wavelength_nm,reflectance; got {header:?}").into()
+        );
+    }
+    let (mut wavelengths, mut reflectance) = (Vec::new(), Vec::new());
+    for (i, line) in rows {
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let parse = |c: &str| c.parse::<f64>().map_err(|_| format!("{path}, line {}: {c:?} is not a number", i + 1));
+        match cells.as_slice() {
+            [w, r] => {
+                wavelengths.push(parse(w)?);
+                reflectance.push(parse(r)?);
+            }
+            _ => return Err(format!("{path}, line {}: expected 2 columns, got {}", i + 1, cells.len()).into()),
+        }
+    }
+    let mut options = FitOptions { objective: args.objective, starts: args.starts, ..FitOptions::default() };
+    if let Some(free) = args.free {
+        options.free = free;
+    }
+    for item in &args.fixed {
+        let (name, value) = item.split_once('=').ok_or_else(|| format!("--fixed {item:?}: expected NAME=VALUE"))?;
+        let i =
+            PARAMS.iter().position(|p| p.name == name).ok_or_else(|| format!("--fixed: unknown parameter {name:?}"))?;
+        options.fixed[i] = Some(value.parse().map_err(|_| format!("--fixed {item:?}: {value:?} is not a number"))?);
+    }
+    options.specular = match args.specular.as_str() {
+        "free" => Specular::Free,
+        "fresnel" => Specular::Fresnel,
+        v => Specular::Fixed(
+            v.parse().map_err(|_| format!("--specular: expected free, fresnel or a number; got {v:?}"))?,
+        ),
+    };
+    let fit = fit_spectrum(&wavelengths, &reflectance, &options)?;
+    println!("{}", serde_json::to_string_pretty(&fit)?);
     Ok(())
 }
 

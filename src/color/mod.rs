@@ -6,6 +6,7 @@ pub mod gamut;
 pub mod rgb;
 pub mod spectrum;
 
+pub use difference::{ciede2000, lab_from_xyz};
 pub use gamut::{RgbMapping, ALL_RGB_MAPPINGS};
 pub use rgb::{WorkingSpace, ALL_WORKING_SPACES};
 pub use spectrum::{spectrum_to_xyz, WavelengthGrid, WavelengthPlacement, ALL_WAVELENGTH_PLACEMENTS};

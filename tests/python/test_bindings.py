@@ -10,6 +10,8 @@ import spectral_skin
 from spectral_skin import SpectralSkinError
 
 PRESET_NAMES = ("caucasian", "asian", "african")
+# Median fits of the thirds of the Xiao et al. 2016 spectra by L* (docs/measured-skin.md, section Presets).
+MEASURED_PRESET_NAMES = ("measured-light", "measured-medium", "measured-dark")
 ALL_OUTPUTS = ("albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular")
 # Rec.709 luminance weights (ITU-R BT.709-6), for ordering the presets by lightness.
 REC709_LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -87,14 +89,16 @@ def test_layered_reflectance_accepts_array_likes():
 
 def test_presets():
     presets = spectral_skin.presets()
-    assert set(presets) == set(PRESET_NAMES)
+    assert list(presets) == [*PRESET_NAMES, *MEASURED_PRESET_NAMES]
     for name, p in presets.items():
         specs = spectral_skin.parameters()
         assert set(p) == {s["name"] for s in specs} | {"description"}
         assert 0 <= p["melanin"] <= 0.5 and 0 <= p["melanin_blend"] <= 1
         assert 0 <= p["hemoglobin"] <= 0.1 and 0 <= p["oiliness"] <= 1
-        # The paper's presets keep the extended physiology at its defaults (the paper's fixed values).
-        assert all(p[s["name"]] == s["default"] for s in specs if s["default"] is not None)
+        # The paper's presets keep the extended physiology at its defaults (the paper's fixed values); the measured
+        # ones have their fitted epidermis thickness and baseline scale.
+        at_defaults = all(p[s["name"]] == s["default"] for s in specs if s["default"] is not None)
+        assert at_defaults == (name in PRESET_NAMES), name
         assert isinstance(p["description"], str) and p["description"]
         params = spectral_skin.evaluate(preset=name, outputs=())["params"]
         assert params == {s["name"]: p[s["name"]] for s in specs}
@@ -257,7 +261,7 @@ def test_error_and_warning_classes_are_exported():
     assert issubclass(spectral_skin.SpectralSkinWarning, UserWarning)
     assert issubclass(spectral_skin.SpectralSkinIOError, OSError)
     assert set(spectral_skin.__all__) == {
-        "SpectralSkinError", "SpectralSkinIOError", "SpectralSkinWarning", "__version__", "blender_targets", "evaluate", "layered_reflectance", "maps",
+        "SpectralSkinError", "SpectralSkinIOError", "SpectralSkinWarning", "__version__", "blender_targets", "evaluate", "fit_spectrum", "layered_reflectance", "maps",
         "parameter_ranges", "parameters", "accuracy_levels", "presets", "profile", "read_parameter_map", "shader_table",
         "write_maps", "write_shader_table"
     }

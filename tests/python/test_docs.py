@@ -19,7 +19,7 @@ NO_RAISES = {"accuracy_levels", "blender_targets", "parameter_ranges", "paramete
 
 def test_every_public_function_is_checked() -> None:
     assert FUNCTIONS == ["accuracy_levels", "blender_targets", "evaluate", "fit_albedo", "fit_albedo_map",
-                         "layered_reflectance", "maps",
+                         "fit_spectrum", "layered_reflectance", "maps",
                          "parameter_ranges", "parameters", "presets", "profile", "read_parameter_map", "shader_table",
                          "write_maps", "write_shader_table"]
 

@@ -1,0 +1,452 @@
+//! Fitting the model to a measured reflectance spectrum (docs/measured-skin.md).
+//!
+//! The forward model is the model's total diffuse reflectance at the measured wavelengths
+//! ([`crate::evaluate::diffuse_reflectance_at`]) plus a constant surface reflection ([`Specular`]): a spectrophotometer
+//! with an integrating sphere (d/8 geometry, specular component included) sees the light the skin's surface reflects
+//! as well as the light that entered it, and the model's diffuse reflectance holds only the latter.
+//!
+//! The fit is bounded (each parameter inside its [`PARAMS`] range) and global: every spectrum of a coarse table over
+//! the free parameters is compared with the measurement (with its best offset), and the best start(s) are refined by
+//! a bounded Levenberg-Marquardt ([`super::lm`]). The table depends on the wavelengths and on what is fixed, not on the
+//! measurement: [`SpectrumFitter`] builds it once for many spectra.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::lm::{minimize, LmSettings};
+use crate::color::spectrum::VISIBLE_RANGE_NM;
+use crate::color::{ciede2000, lab_from_xyz, spectrum_to_xyz, WavelengthGrid};
+use crate::error::SkinError;
+use crate::evaluate::{diffuse_reflectance_at, Request};
+use crate::skin::optics::SKIN_IOR;
+use crate::skin::params::{SkinParams, OILINESS, PARAMS, PARAM_COUNT};
+
+/// The paper's parameters that change the diffuse reflectance (the oiliness scales only the specular lobe).
+pub const PAPER_FREE: [&str; 3] = ["melanin", "melanin_blend", "hemoglobin"];
+
+/// The parameters [`fit_spectrum`] fits unless told otherwise: the paper's three and the epidermis thickness and
+/// the baseline absorption scale (the choice and its figures: docs/measured-skin.md).
+pub const DEFAULT_FREE: [&str; 5] =
+    ["melanin", "melanin_blend", "hemoglobin", "epidermis_thickness_mm", "baseline_absorption_scale"];
+
+/// The number of start-table entries [`fit_spectrum`] refines by default: one start alone misses the best fit of
+/// the default set on about 15 % of measured spectra, by up to 0.008 RMS (docs/measured-skin.md, the restart check).
+pub const DEFAULT_STARTS: usize = 4;
+
+/// The oiliness a fit reports when none is given: the value of all three DJ2006 presets (it does not change the
+/// diffuse reflectance, so a spectrum cannot tell it).
+pub const DEFAULT_OILINESS: f64 = 0.3;
+
+/// Normal-incidence Fresnel reflectance of the skin surface, ((n - 1) / (n + 1))^2 with n = [`SKIN_IOR`] (1.4):
+/// 0.0278. A d/8 instrument views at 8°, where the Fresnel reflectance differs from this by under 0.1 %.
+pub const FRESNEL_NORMAL_REFLECTANCE: f64 =
+    ((SKIN_IOR - 1.0) / (SKIN_IOR + 1.0)) * ((SKIN_IOR - 1.0) / (SKIN_IOR + 1.0));
+
+/// The range of a fitted or given surface-reflection offset: none up to 0.1 (3.6 times the Fresnel reflectance of a
+/// smooth n = 1.4 surface; more would be a glossy coating, not skin).
+pub const SPECULAR_OFFSET_RANGE: (f64, f64) = (0.0, 0.1);
+
+/// How the surface reflection in a measured spectrum is modelled: a constant added to the model's diffuse reflectance.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Specular {
+    /// Fitted, within [`SPECULAR_OFFSET_RANGE`] (the default; docs/measured-skin.md says why).
+    #[default]
+    Free,
+    /// [`FRESNEL_NORMAL_REFLECTANCE`]: a smooth surface of index 1.4, specular component included.
+    Fresnel,
+    /// A given constant (0 for a measurement with the specular component excluded).
+    Fixed(f64),
+}
+
+impl Specular {
+    /// The name the fronts use: "free", "fresnel" or "fixed".
+    pub fn name(&self) -> &'static str {
+        match self {
+            Specular::Free => "free",
+            Specular::Fresnel => "fresnel",
+            Specular::Fixed(_) => "fixed",
+        }
+    }
+}
+
+/// What the fit minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
+#[serde(rename_all = "snake_case")]
+pub enum Objective {
+    /// The sum of squared reflectance differences over the wavelengths.
+    #[default]
+    Reflectance,
+    /// The squared CIELAB difference (D65, CIE 1931 2°) of the spectra's colours, plus the reflectance differences
+    /// unscaled, which only break ties between spectra of one colour (an RMS of 0.01 over 31 wavelengths weighs as a
+    /// ΔE*ab of 0.06).
+    Cielab,
+}
+
+/// Every objective, in the order the docs list them.
+pub const ALL_OBJECTIVES: [Objective; 2] = [Objective::Reflectance, Objective::Cielab];
+
+/// What to fit and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitOptions {
+    /// The free parameters, by name ([`PARAMS`]; not the oiliness).
+    pub free: Vec<String>,
+    /// Values of parameters that are not free, in [`PARAMS`] order; None takes the parameter's default (the paper's
+    /// value of an extended parameter, [`DEFAULT_OILINESS`]); one of the paper's three without a default must be given
+    /// if it is not free.
+    pub fixed: [Option<f64>; PARAM_COUNT],
+    pub specular: Specular,
+    pub objective: Objective,
+    /// How many of the table's best starts are refined (the best result is kept); the default 4 leaves little for
+    /// more starts to find on the measured skin spectra (docs/measured-skin.md, the restart check).
+    pub starts: usize,
+    /// The model choices (model, combination, boundaries, multipole terms); outputs and wavelength grid unused.
+    pub request: Request,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            free: DEFAULT_FREE.iter().map(|s| s.to_string()).collect(),
+            fixed: [None; PARAM_COUNT],
+            specular: Specular::Free,
+            objective: Objective::Reflectance,
+            starts: DEFAULT_STARTS,
+            request: Request::default(),
+        }
+    }
+}
+
+/// The result of a fit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpectrumFit {
+    /// Every model parameter, fitted and fixed.
+    pub params: SkinParams,
+    /// The names of the fitted ones.
+    pub free: Vec<&'static str>,
+    /// "free", "fresnel" or "fixed".
+    pub specular: &'static str,
+    /// The surface reflection added to the model's diffuse reflectance.
+    pub specular_offset: f64,
+    pub objective: Objective,
+    pub wavelengths_nm: Vec<f64>,
+    /// The model's diffuse reflectance plus the offset, at `wavelengths_nm`: what was compared with the measurement.
+    pub fitted_reflectance: Vec<f64>,
+    /// Root-mean-square difference of `fitted_reflectance` and the measurement.
+    pub rms: f64,
+    /// CIEDE2000 difference of their colours (D65, CIE 1931 2°; each spectrum held constant beyond its ends).
+    pub delta_e00: f64,
+    /// CIELAB of the measurement and of the fit.
+    pub lab_measured: [f64; 3],
+    pub lab_fitted: [f64; 3],
+    /// Local refinements run (table starts) and forward spectra computed in them.
+    pub starts: usize,
+    pub evaluations: usize,
+}
+
+/// A fitter for spectra on one wavelength grid with one set of options: the validated options, the colour weights
+/// and the table of forward spectra the starts come from.
+#[derive(Debug, Clone)]
+pub struct SpectrumFitter {
+    wavelengths_nm: Vec<f64>,
+    options: FitOptions,
+    /// Indices into PARAMS of the free parameters.
+    free: Vec<usize>,
+    /// Every parameter's value, the free ones at the middle of their grid (replaced in each evaluation).
+    base: [f64; PARAM_COUNT],
+    xyz_weights: Vec<[f64; 3]>,
+    white_xyz: [f64; 3],
+    /// (free parameter values, diffuse spectrum) for the coarse start.
+    table: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+/// The start table's values of a parameter: spread over the range where measured skin lies, denser where the
+/// reflectance changes fastest (small melanin, blood and thickness).
+fn table_values(name: &str) -> &'static [f64] {
+    match name {
+        "melanin" => &[0.002, 0.006, 0.015, 0.03, 0.06, 0.12, 0.25, 0.45],
+        "melanin_blend" => &[0.0, 0.25, 0.5, 0.75, 1.0],
+        "hemoglobin" => &[0.001, 0.004, 0.01, 0.025, 0.06],
+        "epidermis_thickness_mm" => &[0.02, 0.05, 0.1, 0.2, 0.4],
+        "baseline_absorption_scale" => &[0.25, 1.0, 2.5, 6.0],
+        "blood_oxygenation" => &[0.2, 0.5, 0.8, 1.0],
+        _ => &[],
+    }
+}
+
+impl SpectrumFitter {
+    /// Validate the wavelengths and options and build the start table.
+    pub fn new(wavelengths_nm: &[f64], options: &FitOptions) -> Result<SpectrumFitter, SkinError> {
+        check_wavelengths(wavelengths_nm)?;
+        let mut free = Vec::new();
+        for name in &options.free {
+            let Some(index) = PARAMS.iter().position(|p| p.name == name) else {
+                let names: Vec<&str> = PARAMS.iter().map(|p| p.name).filter(|n| *n != OILINESS.name).collect();
+                return Err(SkinError::invalid(
+                    "free",
+                    format!("unknown parameter {name:?}; the parameters that can be fitted: {}", names.join(", ")),
+                ));
+            };
+            if index == 3 {
+                return Err(SkinError::invalid(
+                    "free",
+                    "oiliness cannot be fitted: it scales the specular lobe only, not the diffuse reflectance",
+                ));
+            }
+            if free.contains(&index) {
+                return Err(SkinError::invalid("free", format!("{name} is listed twice")));
+            }
+            if options.fixed[index].is_some() {
+                return Err(SkinError::invalid("fixed", format!("{name} is free and cannot have a fixed value too")));
+            }
+            free.push(index);
+        }
+        if free.is_empty() {
+            return Err(SkinError::invalid("free", "no parameter to fit"));
+        }
+        if wavelengths_nm.len() < free.len() + 1 {
+            return Err(SkinError::invalid(
+                "wavelengths_nm",
+                format!(
+                    "{} wavelengths cannot determine {} free parameters and the offset",
+                    wavelengths_nm.len(),
+                    free.len()
+                ),
+            ));
+        }
+        let mut base = [0.0; PARAM_COUNT];
+        for (i, spec) in PARAMS.iter().enumerate() {
+            base[i] = if let Some(&k) = free.iter().find(|&&k| k == i) {
+                let values = table_values(PARAMS[k].name);
+                values[values.len() / 2]
+            } else if let Some(v) = options.fixed[i] {
+                spec.check(v)?
+            } else if i == 3 {
+                DEFAULT_OILINESS
+            } else if let Some(d) = spec.default {
+                d
+            } else {
+                return Err(SkinError::invalid(
+                    "fixed",
+                    format!("{} is not free, so it needs a fixed value ({})", spec.name, spec.summary()),
+                ));
+            };
+        }
+        if let Specular::Fixed(v) = options.specular {
+            let (lo, hi) = SPECULAR_OFFSET_RANGE;
+            crate::error::check_range("specular", "surface reflection added to the diffuse reflectance", v, lo, hi)?;
+        }
+        if options.starts == 0 {
+            return Err(SkinError::invalid("starts", "at least one start must be refined"));
+        }
+        let grid = WavelengthGrid { wavelengths_nm: wavelengths_nm.to_vec() };
+        let xyz_weights = grid.xyz_weights();
+        let white_xyz = spectrum_to_xyz(&vec![1.0; wavelengths_nm.len()], &xyz_weights);
+        let mut fitter = SpectrumFitter {
+            wavelengths_nm: wavelengths_nm.to_vec(),
+            options: options.clone(),
+            free,
+            base,
+            xyz_weights,
+            white_xyz,
+            table: Vec::new(),
+        };
+        fitter.table = fitter.build_table();
+        if fitter.table.is_empty() {
+            return Err(SkinError::invalid("fixed", "the fixed values leave no valid forward spectrum"));
+        }
+        Ok(fitter)
+    }
+
+    /// The model's diffuse reflectance with the free parameters at `x` (None if the model rejects them).
+    fn forward(&self, x: &[f64]) -> Option<Vec<f64>> {
+        let mut v = self.base;
+        for (&k, &value) in self.free.iter().zip(x) {
+            v[k] = value;
+        }
+        let params = SkinParams::from_values(v).ok()?;
+        diffuse_reflectance_at(&params, &self.options.request, &self.wavelengths_nm).ok()
+    }
+
+    fn build_table(&self) -> Vec<(Vec<f64>, Vec<f64>)> {
+        let axes: Vec<&[f64]> = self.free.iter().map(|&k| table_values(PARAMS[k].name)).collect();
+        let count: usize = axes.iter().map(|a| a.len()).product();
+        (0..count)
+            .into_par_iter()
+            .filter_map(|mut index| {
+                let x: Vec<f64> = axes
+                    .iter()
+                    .map(|a| {
+                        let v = a[index % a.len()];
+                        index /= a.len();
+                        v
+                    })
+                    .collect();
+                self.forward(&x).map(|r| (x, r))
+            })
+            .collect()
+    }
+
+    /// The wavelengths the fitter was built for.
+    pub fn wavelengths_nm(&self) -> &[f64] {
+        &self.wavelengths_nm
+    }
+
+    /// The number of spectra in the start table.
+    pub fn table_len(&self) -> usize {
+        self.table.len()
+    }
+
+    /// The offset for a diffuse spectrum: fixed, or (free) the least-squares one clipped to its range.
+    fn offset_for(&self, diffuse: &[f64], measured: &[f64]) -> f64 {
+        match self.options.specular {
+            Specular::Fresnel => FRESNEL_NORMAL_REFLECTANCE,
+            Specular::Fixed(v) => v,
+            Specular::Free => {
+                let mean = measured.iter().zip(diffuse).map(|(m, d)| m - d).sum::<f64>() / measured.len() as f64;
+                mean.clamp(SPECULAR_OFFSET_RANGE.0, SPECULAR_OFFSET_RANGE.1)
+            }
+        }
+    }
+
+    fn lab(&self, spectrum: &[f64]) -> [f64; 3] {
+        lab_from_xyz(spectrum_to_xyz(spectrum, &self.xyz_weights), self.white_xyz)
+    }
+
+    /// Fit one measured spectrum (on the fitter's wavelengths).
+    pub fn fit(&self, reflectance: &[f64]) -> Result<SpectrumFit, SkinError> {
+        check_reflectance(reflectance, self.wavelengths_nm.len())?;
+        let n_free = self.free.len();
+        let fit_offset = self.options.specular == Specular::Free;
+        // Coarse start: the table's best spectra, each with its best offset.
+        let mut scored: Vec<(f64, usize)> = self
+            .table
+            .iter()
+            .enumerate()
+            .map(|(i, (_, diffuse))| {
+                let off = self.offset_for(diffuse, reflectance);
+                let sse: f64 = diffuse.iter().zip(reflectance).map(|(d, m)| (d + off - m).powi(2)).sum();
+                (sse, i)
+            })
+            .collect();
+        let starts = self.options.starts.min(scored.len());
+        scored.select_nth_unstable_by(starts - 1, |a, b| a.0.total_cmp(&b.0));
+        scored[..starts].sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Local refinement in the free parameters (and the offset when it is free).
+        let mut lower: Vec<f64> = self.free.iter().map(|&k| PARAMS[k].min).collect();
+        let mut upper: Vec<f64> = self.free.iter().map(|&k| PARAMS[k].max).collect();
+        if fit_offset {
+            lower.push(SPECULAR_OFFSET_RANGE.0);
+            upper.push(SPECULAR_OFFSET_RANGE.1);
+        }
+        let lab_measured = self.lab(reflectance);
+        let residuals = |x: &[f64]| -> Vec<f64> {
+            let Some(diffuse) = self.forward(&x[..n_free]) else {
+                return vec![f64::NAN; reflectance.len()];
+            };
+            let off = if fit_offset { x[n_free] } else { self.offset_for(&diffuse, reflectance) };
+            let diff = diffuse.iter().zip(reflectance).map(|(d, m)| d + off - m);
+            match self.options.objective {
+                Objective::Reflectance => diff.collect(),
+                Objective::Cielab => {
+                    let fitted: Vec<f64> = diffuse.iter().map(|d| d + off).collect();
+                    let lab = self.lab(&fitted);
+                    (0..3).map(|c| lab[c] - lab_measured[c]).chain(diff).collect()
+                }
+            }
+        };
+        let mut best: Option<super::lm::LmResult> = None;
+        let mut evaluations = 0;
+        for &(_, i) in &scored[..starts] {
+            let (x_table, diffuse) = &self.table[i];
+            let mut x0 = x_table.clone();
+            if fit_offset {
+                x0.push(self.offset_for(diffuse, reflectance));
+            }
+            let result = minimize(residuals, &x0, &lower, &upper, &LmSettings::default());
+            evaluations += result.evaluations;
+            if best.as_ref().map_or(true, |b| result.cost < b.cost) {
+                best = Some(result);
+            }
+        }
+        let best = best.expect("at least one start");
+        let diffuse = self.forward(&best.x[..n_free]).ok_or_else(|| {
+            SkinError::invalid("reflectance", "the fit ended on parameters the model rejects (please report this)")
+        })?;
+        let specular_offset = if fit_offset { best.x[n_free] } else { self.offset_for(&diffuse, reflectance) };
+        let fitted: Vec<f64> = diffuse.iter().map(|d| d + specular_offset).collect();
+        let rms =
+            (fitted.iter().zip(reflectance).map(|(f, m)| (f - m).powi(2)).sum::<f64>() / fitted.len() as f64).sqrt();
+        let lab_fitted = self.lab(&fitted);
+        let mut values = self.base;
+        for (&k, &value) in self.free.iter().zip(&best.x) {
+            values[k] = value;
+        }
+        Ok(SpectrumFit {
+            params: SkinParams::from_values(values)?,
+            free: self.free.iter().map(|&k| PARAMS[k].name).collect(),
+            specular: self.options.specular.name(),
+            specular_offset,
+            objective: self.options.objective,
+            wavelengths_nm: self.wavelengths_nm.clone(),
+            fitted_reflectance: fitted,
+            rms,
+            delta_e00: ciede2000(lab_measured, lab_fitted),
+            lab_measured,
+            lab_fitted,
+            starts,
+            evaluations,
+        })
+    }
+
+    /// Fit many spectra in parallel (rayon), each as [`SpectrumFitter::fit`].
+    pub fn fit_many(&self, spectra: &[Vec<f64>]) -> Vec<Result<SpectrumFit, SkinError>> {
+        spectra.par_iter().map(|s| self.fit(s)).collect()
+    }
+}
+
+/// Fit one measured spectrum: [`SpectrumFitter::new`] then [`SpectrumFitter::fit`].
+pub fn fit_spectrum(
+    wavelengths_nm: &[f64],
+    reflectance: &[f64],
+    options: &FitOptions,
+) -> Result<SpectrumFit, SkinError> {
+    check_reflectance(reflectance, wavelengths_nm.len())?;
+    SpectrumFitter::new(wavelengths_nm, options)?.fit(reflectance)
+}
+
+/// Wavelengths must be finite, strictly increasing and inside the visible range the colour is integrated over
+/// ([`VISIBLE_RANGE_NM`]), at least three of them.
+fn check_wavelengths(w: &[f64]) -> Result<(), SkinError> {
+    let (lo, hi) = VISIBLE_RANGE_NM;
+    if w.len() < 3 {
+        return Err(SkinError::invalid("wavelengths_nm", format!("need at least 3 wavelengths, got {}", w.len())));
+    }
+    if let Some((i, v)) = w.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= lo && **v <= hi)) {
+        return Err(SkinError::invalid(
+            "wavelengths_nm",
+            format!("wavelength {i} is {v}; each must be in [{lo}, {hi}] nm (the model's visible range)"),
+        ));
+    }
+    if let Some(i) = (1..w.len()).find(|&i| w[i] <= w[i - 1]) {
+        return Err(SkinError::invalid(
+            "wavelengths_nm",
+            format!("must be strictly increasing; wavelength {i} ({}) follows {}", w[i], w[i - 1]),
+        ));
+    }
+    Ok(())
+}
+
+/// The measurement must have one finite value in [0, 1] per wavelength.
+fn check_reflectance(r: &[f64], wavelengths: usize) -> Result<(), SkinError> {
+    if r.len() != wavelengths {
+        return Err(SkinError::invalid(
+            "reflectance",
+            format!("has {} values for {wavelengths} wavelengths; give one per wavelength", r.len()),
+        ));
+    }
+    if let Some((i, v)) = r.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0 && **v <= 1.0)) {
+        return Err(SkinError::invalid("reflectance", format!("value {i} is {v}; each must be in [0, 1]")));
+    }
+    Ok(())
+}

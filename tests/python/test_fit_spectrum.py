@@ -1,0 +1,55 @@
+"""spectral_skin.fit_spectrum (docs/measured-skin.md): a model spectrum plus an offset is fitted back; bad input is
+a clear error naming the argument."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import spectral_skin
+
+TRUTH = {"melanin": 0.04, "melanin_blend": 0.4, "hemoglobin": 0.02, "epidermis_thickness_mm": 0.08,
+         "baseline_absorption_scale": 2.0}
+
+
+def _model_spectrum(offset: float) -> tuple[np.ndarray, np.ndarray]:
+    ev = spectral_skin.evaluate(TRUTH["melanin"], TRUTH["melanin_blend"], TRUTH["hemoglobin"], 0.3,
+                                epidermis_thickness_mm=TRUTH["epidermis_thickness_mm"],
+                                baseline_absorption_scale=TRUTH["baseline_absorption_scale"], outputs=["spectrum"],
+                                wavelength_step_nm=10.0, wavelength_placement="uniform")
+    keep = (ev["wavelengths_nm"] >= 400) & (ev["wavelengths_nm"] <= 700)
+    return ev["wavelengths_nm"][keep], ev["spectral_reflectance"][keep] + offset
+
+
+def test_round_trip_recovers_parameters_and_offset() -> None:
+    wavelengths, measured = _model_spectrum(0.03)
+    fit = spectral_skin.fit_spectrum(wavelengths, measured)
+    assert fit["rms"] < 2e-5 and fit["delta_e00"] < 0.01, fit
+    assert fit["specular"] == "free" and abs(fit["specular_offset"] - 0.03) < 1e-3
+    for name, value in TRUTH.items():
+        assert fit["params"][name] == pytest.approx(value, rel=0.05), name
+    assert fit["params"]["blood_oxygenation"] == 0.75 and fit["params"]["oiliness"] == 0.3
+    assert fit["fitted_reflectance"].shape == wavelengths.shape
+    # Fixed values and a fixed offset are taken as given.
+    fixed = spectral_skin.fit_spectrum(wavelengths, measured, free=["melanin", "hemoglobin"],
+                                       fixed={"melanin_blend": 0.4, "epidermis_thickness_mm": 0.08,
+                                              "baseline_absorption_scale": 2.0}, specular=0.03)
+    assert fixed["specular_offset"] == 0.03 and fixed["params"]["melanin_blend"] == 0.4
+    assert fixed["params"]["melanin"] == pytest.approx(0.04, rel=0.01) and fixed["rms"] < 1e-4
+
+
+def test_bad_input_names_the_argument() -> None:
+    wavelengths, measured = _model_spectrum(0.0)
+    bad = measured.copy()
+    bad[3] = np.nan
+    with pytest.raises(spectral_skin.SpectralSkinError, match="reflectance.*value 3 is NaN"):
+        spectral_skin.fit_spectrum(wavelengths, bad)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="30 values for 31 wavelengths"):
+        spectral_skin.fit_spectrum(wavelengths, measured[:30])
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"wavelengths_nm.*\[380, 780\]"):
+        spectral_skin.fit_spectrum(wavelengths + 100.0, measured)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="oiliness cannot be fitted"):
+        spectral_skin.fit_spectrum(wavelengths, measured, free=["melanin", "oiliness"])
+    with pytest.raises(spectral_skin.SpectralSkinError, match="specular"):
+        spectral_skin.fit_spectrum(wavelengths, measured, specular="glossy")
+    with pytest.raises(TypeError, match="free"):
+        spectral_skin.fit_spectrum(wavelengths, measured, free="melanin")
