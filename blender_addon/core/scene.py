@@ -295,7 +295,7 @@ def radius_bound_mm(settings: Any) -> tuple[float, dict[str, int]]:
            tuple(sorted(extended.items())))
     if key not in _BOUNDS:
         melanin_max = PARAMETER_INFO["melanin"].high
-        largest, work = 0.0, {}
+        largest, work = 0.0, dict[str, int]()
         for fraction in BOUND_MELANIN_FRACTIONS:
             for blend in BOUND_MELANIN_BLENDS if fraction > 0 else (0.0,):
                 ev = spectral_skin.evaluate(fraction * melanin_max, blend, 0.0, 0.0,

@@ -7,8 +7,8 @@ mod convert;
 mod detach;
 mod errors;
 mod evaluate;
-mod inverse_albedo;
 mod inverse;
+mod inverse_albedo;
 mod maps;
 mod shader_table;
 
@@ -17,8 +17,8 @@ use pyo3::prelude::*;
 use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, parameters_py, presets_py};
 use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
-use inverse_albedo::{fit_albedo_map_py, fit_albedo_py};
 use inverse::fit_spectrum_py;
+use inverse_albedo::{fit_albedo_map_py, fit_albedo_py};
 use maps::{maps_py, read_parameter_map_py, write_maps_py};
 use shader_table::{shader_table_py, write_shader_table_py};
 
