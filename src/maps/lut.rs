@@ -307,22 +307,7 @@ impl MaterialTable {
         let r = self.resolution;
         let (di, dj) = (r.melanin_blend * r.hemoglobin, r.hemoglobin);
         let v = &self.method_logs;
-        let mut out = [0.0f32; 8];
-        for (offset, w) in [
-            (0, (1.0 - ti) * (1.0 - tj) * (1.0 - tk)),
-            (1, (1.0 - ti) * (1.0 - tj) * tk),
-            (dj, (1.0 - ti) * tj * (1.0 - tk)),
-            (dj + 1, (1.0 - ti) * tj * tk),
-            (di, ti * (1.0 - tj) * (1.0 - tk)),
-            (di + 1, ti * (1.0 - tj) * tk),
-            (di + dj, ti * tj * (1.0 - tk)),
-            (di + dj + 1, ti * tj * tk),
-        ] {
-            let node = &v[corner + offset];
-            for q in 0..8 {
-                out[q] += w * node[q];
-            }
-        }
+        let out = trilinear_row(v, corner, di, dj, [ti, tj, tk]);
         let e = out.map(exp_stored);
         ([e[0], e[1], e[2]], [e[3], e[4], e[5]])
     }
@@ -427,22 +412,7 @@ impl MaterialTable {
         for x in 0..len {
             let (corner, [ti, tj, tk]) =
                 self.cell_of_warped(u_m[x], (b[x] as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, u_h[x]);
-            let mut out = [0.0f32; 8];
-            for (offset, w) in [
-                (0, (1.0 - ti) * (1.0 - tj) * (1.0 - tk)),
-                (1, (1.0 - ti) * (1.0 - tj) * tk),
-                (dj, (1.0 - ti) * tj * (1.0 - tk)),
-                (dj + 1, (1.0 - ti) * tj * tk),
-                (di, ti * (1.0 - tj) * (1.0 - tk)),
-                (di + 1, ti * (1.0 - tj) * tk),
-                (di + dj, ti * tj * (1.0 - tk)),
-                (di + dj + 1, ti * tj * tk),
-            ] {
-                let node = &v[corner + offset];
-                for q in 0..8 {
-                    out[q] += w * node[q];
-                }
-            }
+            let out = trilinear_row(v, corner, di, dj, [ti, tj, tk]);
             // All eight lanes (two of them padding), so that the sums and the exponentials stay vector code.
             for q in 0..8 {
                 logs[x][q] = exp_stored(out[q]);
@@ -695,6 +665,30 @@ pub fn default_cache_dir() -> Option<PathBuf> {
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)
         .or_else(|| dirs::cache_dir().map(|d| d.join("spectral-skin")))
+}
+
+/// Trilinear interpolation of the 8-lane rows `v` in the cell whose first node is `corner` (node strides `di` along
+/// melanin, `dj` along the melanin blend, 1 along haemoglobin) at the cell fractions `t`.
+#[inline]
+fn trilinear_row(v: &[[f32; 8]], corner: usize, di: usize, dj: usize, t: [f32; 3]) -> [f32; 8] {
+    let [ti, tj, tk] = t;
+    let mut out = [0.0f32; 8];
+    for (offset, w) in [
+        (0, (1.0 - ti) * (1.0 - tj) * (1.0 - tk)),
+        (1, (1.0 - ti) * (1.0 - tj) * tk),
+        (dj, (1.0 - ti) * tj * (1.0 - tk)),
+        (dj + 1, (1.0 - ti) * tj * tk),
+        (di, ti * (1.0 - tj) * (1.0 - tk)),
+        (di + 1, ti * (1.0 - tj) * tk),
+        (di + dj, ti * tj * (1.0 - tk)),
+        (di + dj + 1, ti * tj * tk),
+    ] {
+        let node = &v[corner + offset];
+        for q in 0..8 {
+            out[q] += w * node[q];
+        }
+    }
+    out
 }
 
 /// The parameters at node n (oiliness does not enter the table).
