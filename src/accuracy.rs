@@ -7,6 +7,7 @@ use crate::color::WavelengthPlacement;
 use crate::diffusion::{HankelQuadrature, MultipoleTerms};
 use crate::error::{check_range, SkinError};
 use crate::fit::RadiusFit;
+use crate::transport::{DEFAULT_STREAMS, STREAMS_RANGE};
 
 /// Radii of radial profiles: `count` log-spaced values from `r_min_mm` to `r_max_mm`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -53,7 +54,21 @@ pub struct Accuracy {
     /// How the Burley radius is fitted.
     #[serde(default)]
     pub radius_fit: RadiusFit,
+    /// Streams (quadrature directions per hemisphere) of the adding-doubling solver that gives the totals with
+    /// `Transport::AddingDoubling` ([`crate::transport`]); unused by `Transport::Diffusion`.
+    #[serde(default = "default_streams")]
+    pub streams: usize,
 }
+
+/// [`DEFAULT_STREAMS`], for serde: a request written before the knob existed reads as the default level's.
+fn default_streams() -> usize {
+    DEFAULT_STREAMS
+}
+
+/// Streams of the draft level (half the default's; not yet on the fronts of docs/accuracy-vs-time.md).
+pub const DRAFT_STREAMS: usize = 4;
+/// Streams of the reference level (four times the default's; `reference().refined()` doubles them again).
+pub const REFERENCE_STREAMS: usize = 32;
 
 impl Default for Accuracy {
     fn default() -> Self {
@@ -68,6 +83,7 @@ impl Default for Accuracy {
             hankel: HankelQuadrature::default(),
             fit_frequencies_per_decade: 4.0,
             radius_fit: RadiusFit::EdgeL2,
+            streams: DEFAULT_STREAMS,
         }
     }
 }
@@ -86,12 +102,14 @@ impl Accuracy {
             hankel: HankelQuadrature { gauss_order: 12, refinement: 2.0, cutoff: 1e-15 },
             fit_frequencies_per_decade: 16.0,
             radius_fit: RadiusFit::EdgeL2,
+            streams: REFERENCE_STREAMS,
         }
     }
 
     /// Every knob refined once more: half the wavelength step, twice the fit frequencies, four more nodes per panel,
-    /// panels half as wide and a cut-off ten times lower. `reference().refined()` is the check that the reference has
-    /// converged (tests/accuracy.rs, docs/accuracy-vs-time.md).
+    /// panels half as wide, a cut-off ten times lower and twice the streams (at most `STREAMS_RANGE`'s maximum).
+    /// `reference().refined()` is the check that the reference has converged (tests/accuracy.rs,
+    /// docs/accuracy-vs-time.md).
     pub fn refined(&self) -> Accuracy {
         let h = self.hankel;
         Accuracy {
@@ -102,6 +120,7 @@ impl Accuracy {
                 refinement: 2.0 * h.refinement,
                 cutoff: 0.1 * h.cutoff,
             },
+            streams: (2 * self.streams).min(STREAMS_RANGE.1),
             ..*self
         }
     }
@@ -125,8 +144,15 @@ impl Accuracy {
             2.0,
             200.0,
         )?;
-        Ok(())
+        check_streams(self.streams)
     }
+}
+
+/// `streams` if in `STREAMS_RANGE`, else an error naming `streams` and the range (every front that takes streams).
+pub(crate) fn check_streams(streams: usize) -> Result<(), SkinError> {
+    let (lo, hi) = STREAMS_RANGE;
+    check_range("streams", "adding-doubling streams per hemisphere", streams as f64, lo as f64, hi as f64)?;
+    Ok(())
 }
 
 /// Named accuracy levels, each a point on the error-time fronts of docs/accuracy-vs-time.md.
@@ -206,6 +232,7 @@ impl Accuracy {
             wavelength_step_nm: 20.0,
             wavelength_placement: WavelengthPlacement::CmfAdapted,
             fit_frequencies_per_decade: 2.0,
+            streams: DRAFT_STREAMS,
             ..Accuracy::default()
         }
     }

@@ -9,7 +9,7 @@ pub use crate::accuracy::{Accuracy, AccuracyLevel, ProfileGrid};
 use crate::color::{
     placement_rgb_weights, rgb_luminance_weights, spectrum_to_rgb, RgbMapping, WavelengthGrid, WorkingSpace,
 };
-use crate::diffusion::{clamped_reflectance_profiles, Boundaries, Combination, LayerStack};
+use crate::diffusion::{clamped_reflectance_profiles, Boundaries, Combination, Layer, LayerStack};
 use crate::error::{check_range, SkinError};
 use crate::fit::blender_target::{Target, TargetInfo};
 use crate::fit::burley::{
@@ -19,6 +19,7 @@ use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams, Su
 pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
+use crate::transport::{total_diffuse_reflectance, Transport};
 
 /// Which outputs to compute. Each costs only what it needs: albedo is one transform value per wavelength, the radius
 /// a few dozen, a radial profile an inverse transform per wavelength.
@@ -103,6 +104,11 @@ pub struct Request {
     /// when the paper's.
     #[serde(default, skip_serializing_if = "Boundaries::is_paper")]
     pub boundaries: Boundaries,
+    /// How each wavelength's total diffuse reflectance is computed: exactly (adding-doubling, the default; the radial
+    /// profile and the radius fit keep the multipole's shape scaled to that total) or by the paper's multipole
+    /// ([`Transport`]). Always in JSON, so every result, sidecar and cache key names it.
+    #[serde(default)]
+    pub transport: Transport,
 }
 
 impl Request {
@@ -187,6 +193,9 @@ pub struct Work {
     pub radius_fits: usize,
     /// Specular inputs computed from an oiliness (one per parameter set whose specular was asked for).
     pub specular_evaluations: usize,
+    /// Exact (adding-doubling) totals solved (one per wavelength with `Transport::AddingDoubling`, none with
+    /// `Transport::Diffusion`).
+    pub transport_solves: usize,
 }
 
 /// The result of [`evaluate`]; fields not requested are `None`. Serialises to the CLI's stable JSON.
@@ -199,6 +208,8 @@ pub struct Evaluation {
     pub combination: Combination,
     /// The layers' boundary conditions ([`Boundaries`]).
     pub boundaries: Boundaries,
+    /// How the totals were computed ([`Transport`]).
+    pub transport: Transport,
     /// The Blender version and engine `methods` are for, and whether that version was tested.
     pub target: TargetInfo,
     /// The model's total diffuse reflectance (subsurface only): what a rendered flat slab must show.
@@ -276,21 +287,30 @@ impl Prepared {
 
     /// The layer stack of `params` at each of this request's wavelengths.
     pub fn stacks(&self, params: &SkinParams) -> Result<Vec<LayerStack>, SkinError> {
-        layer_stacks(params, &self.request, &self.grid.wavelengths_nm)
+        Ok(self.optics(params)?.stacks)
     }
 
-    fn totals(&self, stacks: &[LayerStack]) -> Vec<f64> {
-        totals_of(stacks, &self.request)
+    fn optics(&self, params: &SkinParams) -> Result<Optics, SkinError> {
+        optics_of(params, &self.request, &self.grid.wavelengths_nm)
     }
 
-    /// Burley fits per channel from the RGB transfer function on the fit frequencies.
-    fn fits(&self, stacks: &[LayerStack], albedo: [f64; 3], parallel: bool) -> [BurleyFit; 3] {
+    fn totals(&self, optics: &Optics, parallel: bool) -> Result<Totals, SkinError> {
+        totals_of(optics, &self.request, parallel)
+    }
+
+    /// Burley fits per channel from the RGB transfer function on the fit frequencies (each wavelength's transform
+    /// scaled to its total, [`Totals::scale`]).
+    fn fits(&self, stacks: &[LayerStack], scale: &[f64], albedo: [f64; 3], parallel: bool) -> [BurleyFit; 3] {
         let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
         let s = &self.fit_s;
-        let transform =
-            |st: &LayerStack| -> Vec<f64> { s.iter().map(|&x| st.reflectance_hat(x, comb, terms)).collect() };
-        let transforms: Vec<Vec<f64>> =
-            if parallel { stacks.par_iter().map(transform).collect() } else { stacks.iter().map(transform).collect() };
+        let transform = |(st, &k): (&LayerStack, &f64)| -> Vec<f64> {
+            s.iter().map(|&x| st.reflectance_hat(x, comb, terms) * k).collect()
+        };
+        let transforms: Vec<Vec<f64>> = if parallel {
+            stacks.par_iter().zip(scale).map(transform).collect()
+        } else {
+            stacks.iter().zip(scale).map(transform).collect()
+        };
         // RGB transfer function per frequency, normalised by the albedo.
         let rgb: Vec<[f64; 3]> = (0..s.len())
             .map(|i| spectrum_to_rgb(&transforms.iter().map(|t| t[i]).collect::<Vec<_>>(), &self.weights))
@@ -308,16 +328,17 @@ impl Prepared {
     /// no radius fit. It is [`Material::albedo`] to the last bit (the same sums), and the Base Color of a material
     /// without subsurface, whatever the method.
     pub fn albedo(&self, params: &SkinParams) -> Result<[f64; 3], SkinError> {
-        let stacks = self.stacks(params)?;
-        Ok(spectrum_to_rgb(&self.totals(&stacks), &self.weights))
+        let optics = self.optics(params)?;
+        Ok(spectrum_to_rgb(&self.totals(&optics, false)?.total, &self.weights))
     }
 
     /// Albedo and both methods' Base Color and radius for one parameter set, computed on the calling thread (callers
     /// that evaluate many parameter sets parallelise across them).
     pub fn material(&self, params: &SkinParams) -> Result<Material, SkinError> {
-        let stacks = self.stacks(params)?;
-        let albedo = spectrum_to_rgb(&self.totals(&stacks), &self.weights);
-        let fits = self.fits(&stacks, albedo, false);
+        let optics = self.optics(params)?;
+        let totals = self.totals(&optics, false)?;
+        let albedo = spectrum_to_rgb(&totals.total, &self.weights);
+        let fits = self.fits(&optics.stacks, &totals.scale, albedo, false);
         Ok(Material { albedo, fits, methods: methods_from(&self.request.target, albedo, &fits)? })
     }
 }
@@ -331,16 +352,18 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
     let acc = &request.accuracy;
 
     let needs_layers = out.albedo || out.radius || out.spectrum || out.profile_rgb || out.profile_spectral;
-    let stacks = if needs_layers { prepared.stacks(&params)? } else { Vec::new() };
+    let optics = if needs_layers { prepared.optics(&params)? } else { Optics::default() };
+    let stacks = &optics.stacks;
     let mut work = Work { wavelengths: stacks.len(), ..Work::default() };
 
-    let totals = prepared.totals(&stacks);
-    work.transform_samples += totals.len();
+    let Totals { total: totals, scale, solves } = prepared.totals(&optics, true)?;
+    work.transform_samples += stacks.len();
+    work.transport_solves += solves;
     let albedo = spectrum_to_rgb(&totals, &prepared.weights);
     let needs_albedo = out.albedo || out.radius;
 
     let (methods, radius_fit) = if out.radius {
-        let fits = prepared.fits(&stacks, albedo, true);
+        let fits = prepared.fits(stacks, &scale, albedo, true);
         work.transform_samples += stacks.len() * prepared.fit_s.len();
         work.radius_fits += fits.len();
         (Some(methods_from(&request.target, albedo, &fits)?), Some(fits))
@@ -351,13 +374,20 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
     let profile = if out.profile_rgb || out.profile_spectral {
         let radii = acc.profile_grid.radii_mm();
         let clamped =
-            clamped_reflectance_profiles(&stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel);
+            clamped_reflectance_profiles(stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel);
         let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
             wavelength_nm: prepared.grid.wavelengths_nm[l.profile],
             radius_mm: l.radius_mm,
             relative_to_peak: l.relative_to_peak,
         });
-        let spectral = clamped.per_mm2;
+        // Each wavelength's profile keeps the multipole's shape, scaled to its total (x 1 with diffusion). The clamp
+        // and the lobe's depth relative to the peak do not change under a positive scale.
+        let spectral: Vec<Vec<f64>> = clamped
+            .per_mm2
+            .into_iter()
+            .zip(&scale)
+            .map(|(p, &k)| if k == 1.0 { p } else { p.into_iter().map(|v| v * k).collect() })
+            .collect();
         work.radial_profiles = spectral.len();
         let rgb = out.profile_rgb.then(|| {
             (0..radii.len())
@@ -386,6 +416,7 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
         model: request.model,
         combination: request.combination,
         boundaries: request.boundaries,
+        transport: request.transport,
         target: request.target.info(),
         diffuse_reflectance_rgb: needs_albedo.then_some(albedo),
         default_method: DEFAULT_METHOD.name(),
@@ -401,30 +432,65 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
     })
 }
 
-/// The layer stack of `params` at each of `wavelengths_nm` with the request's model and boundaries.
-fn layer_stacks(params: &SkinParams, request: &Request, wavelengths_nm: &[f64]) -> Result<Vec<LayerStack>, SkinError> {
-    wavelengths_nm
-        .iter()
-        .map(|&w| LayerStack::with_boundaries(&skin_layers(params, &request.model, w), request.boundaries))
-        .collect()
+/// The layers of one parameter set at each wavelength, raw (what the exact solver takes) and as the multipole's stacks.
+#[derive(Debug, Clone, Default)]
+struct Optics {
+    layers: Vec<[Layer; 2]>,
+    stacks: Vec<LayerStack>,
 }
 
-/// The total diffuse reflectance `R~(0)` of each stack (the request's combination and multipole terms).
-fn totals_of(stacks: &[LayerStack], request: &Request) -> Vec<f64> {
+/// The layers of `params` at each of `wavelengths_nm` with the request's model, and their stacks with its boundaries.
+fn optics_of(params: &SkinParams, request: &Request, wavelengths_nm: &[f64]) -> Result<Optics, SkinError> {
+    let layers: Vec<[Layer; 2]> = wavelengths_nm.iter().map(|&w| skin_layers(params, &request.model, w)).collect();
+    let stacks =
+        layers.iter().map(|l| LayerStack::with_boundaries(l, request.boundaries)).collect::<Result<Vec<_>, _>>()?;
+    Ok(Optics { layers, stacks })
+}
+
+/// Each wavelength's total diffuse reflectance, and the factor that scales the multipole's transform (and so its radial
+/// profile) to it.
+struct Totals {
+    total: Vec<f64>,
+    /// `total / R~(0)` of the multipole: 1 with `Transport::Diffusion` (and where the multipole's total is 0).
+    scale: Vec<f64>,
+    /// Exact solves done.
+    solves: usize,
+}
+
+/// The total diffuse reflectance of each wavelength: the multipole's `R~(0)` (the request's combination and multipole
+/// terms), or with `Transport::AddingDoubling` the exact one at the request's streams. The one place totals come from.
+fn totals_of(optics: &Optics, request: &Request, parallel: bool) -> Result<Totals, SkinError> {
     let (comb, terms) = (request.combination, request.accuracy.multipole_terms);
-    stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect()
+    let multipole: Vec<f64> = optics.stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect();
+    match request.transport {
+        Transport::Diffusion => {
+            let scale = vec![1.0; multipole.len()];
+            Ok(Totals { total: multipole, scale, solves: 0 })
+        }
+        Transport::AddingDoubling => {
+            let streams = request.accuracy.streams;
+            let solve = |layers: &[Layer; 2]| total_diffuse_reflectance(layers, streams);
+            let total: Vec<f64> = if parallel {
+                optics.layers.par_iter().map(solve).collect::<Result<_, _>>()?
+            } else {
+                optics.layers.iter().map(solve).collect::<Result<_, _>>()?
+            };
+            let scale = total.iter().zip(&multipole).map(|(&t, &m)| crate::numeric::safe_div(t, m, 1.0)).collect();
+            Ok(Totals { solves: total.len(), total, scale })
+        }
+    }
 }
 
 /// The model's total diffuse reflectance (subsurface only) of `params` at arbitrary wavelengths, as
-/// [`Evaluation::spectral_reflectance`] computes it on the request's own grid, with the request's model, combination,
-/// boundaries and multipole terms (its outputs and wavelength grid are not used; `params` is not validated: the
-/// caller does). The forward model of the spectrum fits (`crate::inverse`).
+/// [`Evaluation::spectral_reflectance`] computes it on the request's own grid, with the request's transport (and
+/// streams), model, combination, boundaries and multipole terms (its outputs and wavelength grid are not used;
+/// `params` is not validated: the caller does). The forward model of the spectrum fits (`crate::inverse`).
 pub fn diffuse_reflectance_at(
     params: &SkinParams,
     request: &Request,
     wavelengths_nm: &[f64],
 ) -> Result<Vec<f64>, SkinError> {
-    Ok(totals_of(&layer_stacks(params, request, wavelengths_nm)?, request))
+    Ok(totals_of(&optics_of(params, request, wavelengths_nm)?, request, false)?.total)
 }
 
 /// Every method's inputs on `target` from the albedo and the Burley fit (`fit::blender_target`).

@@ -58,5 +58,6 @@ mod one_spelling {
         check(&crate::maps::io::ALL_COMPRESSIONS);
         check(&crate::maps::io::ALL_PRECISIONS);
         check(&crate::ALL_MATERIAL_OUTPUTS);
+        check(&crate::transport::ALL_TRANSPORTS);
     }
 }

@@ -507,3 +507,65 @@ fn fit_a_measured_spectrum() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.code() == Some(2) && err.contains("spectrum.csv") && err.contains("header"), "{err}");
 }
+
+/// Issue 20: `--transport` and `--streams` on every subcommand that computes the model; `eval` and the maps sidecar
+/// name the transport (default adding_doubling); `diffusion` is the paper's multipole; bad values are clear errors.
+#[test]
+fn transport_on_every_front() {
+    use spectral_skin::transport::{ALL_TRANSPORTS, DEFAULT_STREAMS};
+    for sub in ["eval", "profile", "maps", "shader-table", "fit", "fit-maps"] {
+        let out = run(&[sub, "--help"]);
+        let help = String::from_utf8_lossy(&out.stdout);
+        assert!(help.contains("--transport") && help.contains("--streams"), "{sub}: {help}");
+        for t in ALL_TRANSPORTS {
+            assert!(help.contains(t.name()), "{sub} help lacks {}", t.name());
+        }
+    }
+    let default = eval_json("african");
+    assert_eq!(default["transport"], "adding_doubling");
+    assert_eq!(default["accuracy"]["streams"], DEFAULT_STREAMS);
+    assert_eq!(default["work"]["transport_solves"], default["work"]["wavelengths"]);
+    let out = run(&["eval", "--preset", "african", "--json", "--transport", "diffusion", "--streams", "16"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["transport"], "diffusion");
+    assert_eq!(j["accuracy"]["streams"], 16);
+    assert_eq!(j["work"]["transport_solves"], 0);
+    let summary = String::from_utf8(run(&["eval", "--preset", "african"]).stdout).unwrap();
+    assert!(summary.contains(&format!("transport: adding_doubling, {DEFAULT_STREAMS} streams")), "{summary}");
+
+    for (args, needles) in [
+        (vec!["eval", "--preset", "asian", "--transport", "monte_carlo"], vec!["adding_doubling", "diffusion"]),
+        (vec!["eval", "--preset", "asian", "--streams", "1"], vec!["streams", "[2, 64]"]),
+        (vec!["profile", "--preset", "asian", "--streams", "65"], vec!["streams", "[2, 64]"]),
+        (vec!["eval", "--preset", "asian", "--streams", "-3"], vec!["--streams"]),
+    ] {
+        let out = run(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(needles.iter().all(|n| err.contains(n)), "{args:?}: {err}");
+    }
+
+    // The maps sidecar names the transport and streams of its request.
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("uniform.exr");
+    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "4", "--kind", "uniform"]).status.success());
+    for transport in ALL_TRANSPORTS {
+        let out_dir = dir.path().join(transport.name());
+        let out = run(&[
+            "maps",
+            "--params",
+            params.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--transport",
+            transport.name(),
+            "--no-cache",
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let sidecar: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+        assert_eq!(sidecar["report"]["request"]["transport"], transport.name());
+        assert_eq!(sidecar["report"]["request"]["accuracy"]["streams"], DEFAULT_STREAMS);
+    }
+}

@@ -3,7 +3,7 @@
 
 use std::f64::consts::PI;
 
-use spectral_skin::diffusion::{layered_reflectance, Layer, LayerStack, MultipoleTerms, Slab};
+use spectral_skin::diffusion::{multipole_reflectance, Layer, LayerStack, MultipoleTerms, Slab};
 
 /// 2 pi int_0^inf f(r) J0(s r) r dr by the trapezoid rule in ln r (1000 points per decade, 1e-7 to 1e3 mm).
 fn forward_hankel(f: impl Fn(f64) -> f64, s: f64) -> f64 {
@@ -53,8 +53,8 @@ fn layer(t: f64, sa: f64, ss: f64) -> Layer {
 #[test]
 fn thick_slab_equals_semi_infinite() {
     let radii = [0.0, 0.1, 1.0, 5.0];
-    let (t_thick, p_thick) = layered_reflectance(&[layer(100.0, 0.02, 1.5)], &radii).unwrap();
-    let (t_semi, p_semi) = layered_reflectance(&[layer(f64::INFINITY, 0.02, 1.5)], &radii).unwrap();
+    let (t_thick, p_thick) = multipole_reflectance(&[layer(100.0, 0.02, 1.5)], &radii).unwrap();
+    let (t_semi, p_semi) = multipole_reflectance(&[layer(f64::INFINITY, 0.02, 1.5)], &radii).unwrap();
     assert!((t_thick - t_semi).abs() < 1e-12);
     for (a, b) in p_thick.iter().zip(&p_semi) {
         assert!((a - b).abs() < 1e-9 * b, "{a} {b}");
@@ -72,8 +72,8 @@ fn split_layer_equals_whole() {
     let mut worst: f64 = 0.0;
     for (sa, ss, top) in [(0.05, 2.0, 0.3), (0.2, 6.0, 0.25), (0.02, 1.0, 2.0)] {
         for bottom in [1.0, f64::INFINITY] {
-            let whole = layered_reflectance(&[layer(top + bottom, sa, ss)], &[]).unwrap().0;
-            let split = layered_reflectance(&[layer(top, sa, ss), layer(bottom, sa, ss)], &[]).unwrap().0;
+            let whole = multipole_reflectance(&[layer(top + bottom, sa, ss)], &[]).unwrap().0;
+            let split = multipole_reflectance(&[layer(top, sa, ss), layer(bottom, sa, ss)], &[]).unwrap().0;
             let rel = (split - whole) / whole;
             println!(
                 "split layer sa={sa} ss={ss} top={top} bottom={bottom}: whole {whole:.5} split {split:.5} ({:+.3} %)",
@@ -97,7 +97,7 @@ fn extreme_inputs_are_stable() {
             }
             for t in [1e-4, 0.25, 50.0, f64::INFINITY] {
                 let layers = [layer(0.25, sa, ss), layer(t, 0.1 * sa + 1e-3, ss)];
-                let (total, profile) = layered_reflectance(&layers, &radii).unwrap();
+                let (total, profile) = multipole_reflectance(&layers, &radii).unwrap();
                 assert!(total.is_finite() && (0.0..=1.0 + 1e-12).contains(&total), "sa={sa} ss={ss} t={t}: {total}");
                 assert!(profile.iter().all(|v| v.is_finite() && *v >= 0.0), "sa={sa} ss={ss} t={t}: {profile:?}");
                 let stack = LayerStack::new(&layers[..1]).unwrap();

@@ -3,9 +3,9 @@
 //! (a) The Monte Carlo on its own, against analytic results that involve no diffusion code:
 //!     energy conservation, Beer-Lambert, Fresnel (normal and oblique), the exact single-scattering
 //!     radial profile (which checks exit positions), and Chandrasekhar's plane albedo.
-//! (b) `layered_reflectance` against the Monte Carlo for skin-like stacks (isotropic scattering with
-//!     sigma_s = sigma_s', so the two solve the same transport problem; diffusion is an approximation
-//!     of it, known to be a few per cent off for high albedo and worse for low albedo).
+//! (b) `multipole_reflectance` (`layered_reflectance` with `Transport::Diffusion`) against the Monte Carlo for
+//!     skin-like stacks (isotropic scattering with sigma_s = sigma_s', so the two solve the same transport problem;
+//!     diffusion is an approximation of it, known to be a few per cent off for high albedo and worse for low albedo).
 //!
 //! Run with `cargo test --release --test monte_carlo -- --nocapture` to see the measured figures.
 
@@ -13,7 +13,7 @@ mod support;
 
 use support::mc::{annulus_area, fresnel_unpolarized, log_edges, simulate, McConfig, McLayer, McResult};
 
-use spectral_skin::diffusion::{layered_reflectance, Layer};
+use spectral_skin::diffusion::{multipole_reflectance, Layer};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 
 fn semi_infinite(sigma_a: f64, sigma_s: f64, ior: f64) -> Vec<McLayer> {
@@ -373,7 +373,7 @@ fn compare(name: &str, layers: &[Layer], photons: u64, seed: u64, mfp_mm: f64, l
         }
     }
     let start = std::time::Instant::now();
-    let (r_diffusion, profile) = layered_reflectance(layers, &radii).expect("diffusion solver");
+    let (r_diffusion, profile) = multipole_reflectance(layers, &radii).expect("diffusion solver");
     let diffusion_seconds = start.elapsed().as_secs_f64();
     assert!(r_diffusion.is_finite() && profile.iter().all(|v| v.is_finite()), "{name}: non-finite diffusion output");
     let bin_weight: Vec<f64> = (0..nbins)

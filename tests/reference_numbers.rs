@@ -1,8 +1,10 @@
 //! Reference numbers computed by an independent script from the same equations (docs/model.md, section Reference
-//! numbers; not data from the paper): spectra, colours and radial profiles of the three presets.
+//! numbers; not data from the paper): spectra, colours and radial profiles of the three presets. The script solved the
+//! paper's diffusion model, so the front values are checked with `Transport::Diffusion`.
 
-use spectral_skin::diffusion::{layered_reflectance, Combination, LayerStack, MultipoleTerms};
+use spectral_skin::diffusion::{multipole_reflectance, Combination, LayerStack, MultipoleTerms};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
+use spectral_skin::transport::Transport;
 use spectral_skin::{evaluate, Outputs, Request};
 
 fn total(preset: &str, wavelength_nm: f64, combination: Combination, model: &SkinModel) -> f64 {
@@ -39,6 +41,7 @@ fn preset_colours_match_reference() {
         [("caucasian", [0.498, 0.395, 0.353]), ("asian", [0.154, 0.095, 0.060]), ("african", [0.032, 0.023, 0.017])];
     let mut request = Request::new(Outputs { albedo: true, ..Outputs::default() });
     request.accuracy.wavelength_step_nm = 2.0;
+    request.transport = Transport::Diffusion;
     for (preset, expected) in table {
         let ev = evaluate(&SkinParams::preset(preset).unwrap(), &request).unwrap();
         let rgb = ev.diffuse_reflectance_rgb.unwrap();
@@ -70,7 +73,7 @@ fn caucasian_profile_matches_reference() {
     let p = SkinParams::preset("caucasian").unwrap();
     for (w, expected) in table {
         let layers = skin_layers(&p, &SkinModel::default(), w);
-        let (_, profile) = layered_reflectance(&layers, &radii).unwrap();
+        let (_, profile) = multipole_reflectance(&layers, &radii).unwrap();
         for ((r, got), printed) in radii.iter().zip(&profile).zip(expected) {
             if w == 450.0 && *r == 4.0 {
                 continue;
@@ -118,7 +121,7 @@ fn profile_matches_brute_force_quadrature() {
     for (preset, w) in [("caucasian", 650.0), ("african", 450.0), ("asian", 550.0)] {
         let layers = skin_layers(&SkinParams::preset(preset).unwrap(), &SkinModel::default(), w);
         let stack = LayerStack::new(&layers).unwrap();
-        let (_, ours) = layered_reflectance(&layers, &radii).unwrap();
+        let (_, ours) = multipole_reflectance(&layers, &radii).unwrap();
         let (ds, s_max) = (2e-3, 2500.0);
         let n = (s_max / ds) as usize;
         let transform: Vec<f64> = (0..=n)

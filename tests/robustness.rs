@@ -7,8 +7,9 @@ mod support;
 use std::f64::consts::PI;
 
 use spectral_skin::diffusion::{
-    layered_reflectance, layered_reflectance_with, raw_reflectance_profiles, reflectance_profiles, Boundaries,
-    ClampedProfiles, Combination, HankelQuadrature, Layer, LayerStack, MultipoleTerms, ROUND_OFF_OF_PEAK,
+    layered_reflectance, layered_reflectance_with, multipole_reflectance, raw_reflectance_profiles,
+    reflectance_profiles, Boundaries, ClampedProfiles, Combination, HankelQuadrature, Layer, LayerStack,
+    LayeredOptions, MultipoleTerms, ROUND_OFF_OF_PEAK,
 };
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::fit::SubsurfaceMethod;
@@ -70,8 +71,9 @@ fn brute_force_profile(stack: &LayerStack, r_mm: f64) -> f64 {
 #[test]
 fn profile_value_does_not_depend_on_the_other_radii() {
     let layers = [layer(0.25, 0.3, 6.0, 1.4), layer(INF, 0.2, 3.0, 1.4)];
-    let (_, alone) = layered_reflectance(&layers, &[3.0, 10.0]).unwrap();
-    let (_, with_far) = layered_reflectance(&layers, &[3.0, 10.0, 1e6]).unwrap();
+    // The multipole's profile as such (the brute-force reference below is the multipole's).
+    let (_, alone) = multipole_reflectance(&layers, &[3.0, 10.0]).unwrap();
+    let (_, with_far) = multipole_reflectance(&layers, &[3.0, 10.0, 1e6]).unwrap();
     let stack = LayerStack::new(&layers).unwrap();
     for (k, r) in [3.0, 10.0].into_iter().enumerate() {
         let reference = brute_force_profile(&stack, r);
@@ -378,7 +380,8 @@ fn sizes_are_bounded_before_allocation() {
 fn a_clamped_lobe_is_reported_not_hidden() {
     let layers = [layer(0.0134, 0.0021, 17.0, 1.39), layer(INF, 1.64, 1.17, 1.31)];
     let radii: Vec<f64> = (0..=86).map(|i| 1e-3 * 10f64.powf(i as f64 / 20.0)).collect();
-    let paper = layered_reflectance_with(&layers, &radii, Boundaries::Paper).unwrap();
+    let with = |boundaries| LayeredOptions { boundaries, ..LayeredOptions::default() };
+    let paper = layered_reflectance_with(&layers, &radii, &with(Boundaries::Paper)).unwrap();
     let lobe = paper.negative_lobe.expect("the paper's boundaries give this stack a negative lobe");
     let stack = LayerStack::new(&layers).unwrap();
     let q = HankelQuadrature::default();
@@ -391,7 +394,7 @@ fn a_clamped_lobe_is_reported_not_hidden() {
     assert!(paper.profile_per_mm2.iter().all(|&v| v >= 0.0));
     assert!(lobe.to_string().contains("capped"), "the message names the way out: {lobe}");
 
-    let capped = layered_reflectance_with(&layers, &radii, Boundaries::Capped).unwrap();
+    let capped = layered_reflectance_with(&layers, &radii, &with(Boundaries::Capped)).unwrap();
     assert_eq!(capped.negative_lobe, None);
 
     let request = Request::new(Outputs { profile_spectral: true, ..Outputs::default() });

@@ -18,6 +18,7 @@ use spectral_skin::skin::params::{
     ParamSpec, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN,
     MELANIN_BLEND, OILINESS, PARAMS,
 };
+use spectral_skin::transport::Transport;
 use spectral_skin::{
     evaluate, AccuracyLevel, Evaluation, MaterialOutput, Outputs, Request, SkinError, SkinParams, PRESETS,
 };
@@ -144,6 +145,8 @@ struct FitArgs {
     /// How many of the start table's best entries are refined.
     #[arg(long, default_value_t = spectral_skin::inverse::spectrum::DEFAULT_STARTS)]
     starts: usize,
+    #[command(flatten)]
+    transport: TransportArgs,
 }
 
 #[derive(Args)]
@@ -269,6 +272,32 @@ struct AccuracyArgs {
     /// absorption by construction; docs/robustness.md, "Negative profile lobes").
     #[arg(long, value_enum, default_value_t = Boundaries::Paper)]
     boundaries: Boundaries,
+    #[command(flatten)]
+    transport: TransportArgs,
+}
+
+/// How the totals are computed (`spectral_skin::transport`).
+#[derive(Args)]
+struct TransportArgs {
+    /// How each wavelength's total diffuse reflectance is computed: adding_doubling (exact radiative transfer; the
+    /// profile and radius keep the multipole's shape scaled to it) or diffusion (the paper's layered multipole:
+    /// reproduces DJ2006).
+    #[arg(long, value_enum, default_value_t = Transport::default())]
+    transport: Transport,
+    /// Streams (directions per hemisphere) of the adding-doubling solver, 2..64 [default: the level's, 8 at the
+    /// default level].
+    #[arg(long)]
+    streams: Option<usize>,
+}
+
+impl TransportArgs {
+    /// The transport and streams into `request` (the streams only where given).
+    fn apply(&self, request: &mut Request) {
+        request.transport = self.transport;
+        if let Some(n) = self.streams {
+            request.accuracy.streams = n;
+        }
+    }
 }
 
 impl SkinArgs {
@@ -332,6 +361,7 @@ impl AccuracyArgs {
         }
         r.combination = self.combination;
         r.boundaries = self.boundaries;
+        self.transport.apply(&mut r);
         r
     }
 }
@@ -446,6 +476,7 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let mut options = FitOptions { objective: args.objective, starts: args.starts, ..FitOptions::default() };
+    args.transport.apply(&mut options.request);
     if let Some(free) = args.free {
         options.free = free;
     }
@@ -626,6 +657,11 @@ fn print_summary(ev: &Evaluation, only: Option<SubsurfaceMethod>) {
     let t = ev.target;
     let tested = if t.tested { "tested" } else { "untested: newest known behaviour" };
     println!("target: Blender {} {} ({tested})", t.blender, t.engine.name());
+    let streams = match ev.transport {
+        Transport::AddingDoubling => format!(", {} streams", ev.accuracy.streams),
+        Transport::Diffusion => String::new(),
+    };
+    println!("transport: {}{streams}", ev.transport.name());
     if let Some(a) = ev.diffuse_reflectance_rgb {
         println!("diffuse reflectance (RGB): {:.4} {:.4} {:.4}", a[0], a[1], a[2]);
     }
@@ -760,6 +796,8 @@ struct FitMapsArgs {
     /// The melanin blend the prior pulls toward (0..1); default 0.7.
     #[arg(long)]
     melanin_blend_prior: Option<f64>,
+    #[command(flatten)]
+    transport: TransportArgs,
     /// Print the figures of the fit as JSON.
     #[arg(long)]
     json: bool,
@@ -805,6 +843,10 @@ mod fit_maps {
         }
         if let Some(p) = args.melanin_blend_prior {
             options.melanin_blend_prior = p;
+        }
+        options.transport = args.transport.transport;
+        if let Some(n) = args.transport.streams {
+            options.streams = n;
         }
         let mut options = options.validated()?;
         let start = std::time::Instant::now();

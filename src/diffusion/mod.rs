@@ -18,14 +18,44 @@ pub use layered::{
 pub use multipole::{MultipoleTerms, Slab};
 
 use crate::error::SkinError;
+use crate::numeric::safe_div;
+use crate::transport::{total_diffuse_reflectance, Transport, DEFAULT_STREAMS};
 
 /// Total diffuse reflectance and the radial profile (mm^-2) at `radii_mm` of a stack of layers under air, top to bottom,
-/// with the paper's boundaries, the default combination, the whole multipole series and the default quadrature. This
-/// exposes the solver alone, for checks against other solvers. [`layered_reflectance_with`] chooses the boundaries
-/// and reports a negative lobe the clamp removed.
+/// with the default [`LayeredOptions`]: the exact total (adding-doubling, [`crate::transport`]) and the multipole's
+/// profile (the paper's boundaries, the default combination, the whole series and the default quadrature) scaled to
+/// it. This exposes the solver alone, for checks against other solvers. [`multipole_reflectance`] is the multipole
+/// alone; [`layered_reflectance_with`] chooses the transport and the boundaries and reports a negative lobe the clamp
+/// removed.
 pub fn layered_reflectance(layers: &[Layer], radii_mm: &[f64]) -> Result<(f64, Vec<f64>), SkinError> {
-    let r = layered_reflectance_with(layers, radii_mm, Boundaries::Paper)?;
+    let r = layered_reflectance_with(layers, radii_mm, &LayeredOptions::default())?;
     Ok((r.total, r.profile_per_mm2))
+}
+
+/// [`layered_reflectance`] with `Transport::Diffusion`: the layered multipole's own total and profile (DJ2005), for
+/// checks of the diffusion model as such.
+pub fn multipole_reflectance(layers: &[Layer], radii_mm: &[f64]) -> Result<(f64, Vec<f64>), SkinError> {
+    let options = LayeredOptions { transport: Transport::Diffusion, ..LayeredOptions::default() };
+    let r = layered_reflectance_with(layers, radii_mm, &options)?;
+    Ok((r.total, r.profile_per_mm2))
+}
+
+/// The choices of [`layered_reflectance_with`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LayeredOptions {
+    /// The multipole's boundary conditions (its profile's shape; with `Transport::Diffusion` its total too).
+    pub boundaries: Boundaries,
+    /// Where the total comes from: exact (the default) or the multipole's.
+    pub transport: Transport,
+    /// Streams of the adding-doubling solver (in `STREAMS_RANGE` whatever the transport; unused by
+    /// `Transport::Diffusion`).
+    pub streams: usize,
+}
+
+impl Default for LayeredOptions {
+    fn default() -> Self {
+        LayeredOptions { boundaries: Boundaries::Paper, transport: Transport::default(), streams: DEFAULT_STREAMS }
+    }
 }
 
 /// What [`layered_reflectance_with`] returns.
@@ -33,21 +63,27 @@ pub fn layered_reflectance(layers: &[Layer], radii_mm: &[f64]) -> Result<(f64, V
 pub struct LayeredReflectance {
     /// Total diffuse reflectance.
     pub total: f64,
-    /// R(r) at the radii asked for, mm^-2, clamped to zero.
+    /// R(r) at the radii asked for, mm^-2, clamped to zero: the multipole's, scaled to `total` with
+    /// `Transport::AddingDoubling`.
     pub profile_per_mm2: Vec<f64>,
     /// The negative lobe the clamp removed beyond round-off (only with `Boundaries::Paper`).
     pub negative_lobe: Option<NegativeLobe>,
 }
 
-/// [`layered_reflectance`] with the boundaries chosen, and the negative lobe the clamp removed.
+/// [`layered_reflectance`] with the transport and boundaries chosen, and the negative lobe the clamp removed.
 pub fn layered_reflectance_with(
     layers: &[Layer],
     radii_mm: &[f64],
-    boundaries: Boundaries,
+    options: &LayeredOptions,
 ) -> Result<LayeredReflectance, SkinError> {
     validate_radii(radii_mm)?;
-    let stack = LayerStack::with_boundaries(layers, boundaries)?;
-    let total = stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
+    crate::accuracy::check_streams(options.streams)?;
+    let stack = LayerStack::with_boundaries(layers, options.boundaries)?;
+    let multipole_total = stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
+    let total = match options.transport {
+        Transport::Diffusion => multipole_total,
+        Transport::AddingDoubling => total_diffuse_reflectance(layers, options.streams)?,
+    };
     let mut profiles = clamped_reflectance_profiles(
         std::slice::from_ref(&stack),
         radii_mm,
@@ -55,7 +91,11 @@ pub fn layered_reflectance_with(
         MultipoleTerms::All,
         &HankelQuadrature::default(),
     );
-    let profile_per_mm2 = profiles.per_mm2.pop().unwrap_or_default();
+    let mut profile_per_mm2 = profiles.per_mm2.pop().unwrap_or_default();
+    if options.transport != Transport::Diffusion {
+        let scale = safe_div(total, multipole_total, 1.0);
+        profile_per_mm2.iter_mut().for_each(|v| *v *= scale);
+    }
     Ok(LayeredReflectance { total, profile_per_mm2, negative_lobe: profiles.negative_lobe })
 }
 

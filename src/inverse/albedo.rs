@@ -24,11 +24,12 @@ use serde::Serialize;
 use crate::color::difference::{ciede2000, ciede2000_terms, LabConverter};
 use crate::color::WorkingSpace;
 use crate::error::{check_range, SkinError};
-use crate::evaluate::{Outputs, Prepared, Request};
+use crate::evaluate::{Accuracy, Outputs, Prepared, Request};
 use crate::skin::params::{
     BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_DEFAULTS, HEMOGLOBIN, MELANIN, MELANIN_BLEND,
 };
 use crate::skin::SkinParams;
+use crate::transport::{Transport, DEFAULT_STREAMS};
 
 /// The melanin blend the prior pulls toward: 0.7, that of the Caucasian and African skin types of Donner & Jensen
 /// (2006, teaser caption; `PRESETS`).
@@ -56,6 +57,9 @@ pub struct AlbedoFitOptions {
     pub melanin_blend_prior: f64,
     pub prior_weight: f64,
     pub ambiguity_delta_e: f64,
+    /// How the model's albedo is computed (exact totals by default, [`Transport`]) and the adding-doubling streams.
+    pub transport: Transport,
+    pub streams: usize,
 }
 
 impl Default for AlbedoFitOptions {
@@ -67,6 +71,8 @@ impl Default for AlbedoFitOptions {
             melanin_blend_prior: DEFAULT_MELANIN_BLEND_PRIOR,
             prior_weight: DEFAULT_PRIOR_WEIGHT,
             ambiguity_delta_e: DEFAULT_AMBIGUITY_DELTA_E,
+            transport: Transport::default(),
+            streams: DEFAULT_STREAMS,
         }
     }
 }
@@ -84,14 +90,19 @@ impl AlbedoFitOptions {
         )?;
         check_range("prior_weight", "ΔE00 per unit of melanin blend", self.prior_weight, 0.0, 100.0)?;
         check_range("ambiguity_delta_e", "ΔE00 of the ambiguity set", self.ambiguity_delta_e, 1e-6, 100.0)?;
+        crate::accuracy::check_streams(self.streams)?;
         Ok(self)
     }
 
-    /// The evaluation the fit inverts: the albedo alone, default accuracy, in the working space.
+    /// The evaluation the fit inverts: the albedo alone, default accuracy (with the options' streams), in the working
+    /// space, with the options' transport.
     pub fn prepared(&self) -> Result<Prepared, SkinError> {
+        let request = Request::new(Outputs { albedo: true, ..Outputs::default() });
         Prepared::new(&Request {
             working_space: self.working_space,
-            ..Request::new(Outputs { albedo: true, ..Outputs::default() })
+            transport: self.transport,
+            accuracy: Accuracy { streams: self.streams, ..request.accuracy },
+            ..request
         })
     }
 
@@ -201,11 +212,11 @@ fn node_u(n: [usize; 3], i: usize) -> [f64; 3] {
     [m as f64 / (n[0] - 1) as f64, j as f64 / (n[1] - 1) as f64, k as f64 / (n[2] - 1) as f64]
 }
 
-/// The forward table for `options`, from an in-process cache of the last few (keyed by working space and extended
-/// physiology), else built. Returns whether it came from the cache.
+/// The forward table for `options`, from an in-process cache of the last few (keyed by working space, extended
+/// physiology, transport and streams), else built. Returns whether it came from the cache.
 pub fn cached_albedo_table(options: &AlbedoFitOptions) -> Result<(Arc<AlbedoTable>, bool), SkinError> {
     static CACHE: Mutex<Vec<(String, Arc<AlbedoTable>)>> = Mutex::new(Vec::new());
-    let key = format!("{:?}|{:?}", options.working_space, options.extended.map(f64::to_bits));
+    let key = albedo_table_key(options);
     if let Some((_, t)) = CACHE.lock().map_err(|_| poisoned())?.iter().find(|(k, _)| *k == key) {
         return Ok((t.clone(), true));
     }
@@ -216,6 +227,17 @@ pub fn cached_albedo_table(options: &AlbedoFitOptions) -> Result<(Arc<AlbedoTabl
     }
     cache.push((key, table.clone()));
     Ok((table, false))
+}
+
+/// The key of [`cached_albedo_table`]'s cache: everything the table depends on.
+pub fn albedo_table_key(options: &AlbedoFitOptions) -> String {
+    format!(
+        "{:?}|{:?}|{}|{}",
+        options.working_space,
+        options.extended.map(f64::to_bits),
+        options.transport.name(),
+        options.streams
+    )
 }
 
 fn poisoned() -> SkinError {
@@ -417,6 +439,9 @@ pub struct AlbedoFit {
     pub in_gamut: bool,
     pub ambiguity: Ambiguity,
     pub table_from_cache: bool,
+    /// The model fitted: its transport and adding-doubling streams (`AlbedoFitOptions`).
+    pub transport: Transport,
+    pub streams: usize,
 }
 
 /// Check an RGB target: finite (negative channels are allowed: out-of-gamut colours of a working space).
@@ -489,6 +514,8 @@ pub fn fit_albedo(target_rgb: [f64; 3], options: &AlbedoFitOptions) -> Result<Al
         in_gamut: delta_e00 <= options.ambiguity_delta_e,
         ambiguity,
         table_from_cache: from_cache,
+        transport: options.transport,
+        streams: options.streams,
     })
 }
 

@@ -100,7 +100,8 @@ pub struct FitOptions {
     /// How many of the table's best starts are refined (the best result is kept); the default 4 leaves little for
     /// more starts to find on the measured skin spectra (docs/measured-skin.md, the restart check).
     pub starts: usize,
-    /// The model choices (model, combination, boundaries, multipole terms); outputs and wavelength grid unused.
+    /// The model choices (transport and its streams, model, combination, boundaries, multipole terms); outputs and
+    /// wavelength grid unused.
     pub request: Request,
 }
 
@@ -142,6 +143,9 @@ pub struct SpectrumFit {
     /// Local refinements run (table starts) and forward spectra computed in them.
     pub starts: usize,
     pub evaluations: usize,
+    /// How the model's totals were computed (`FitOptions::request`'s transport) and the adding-doubling streams.
+    pub transport: crate::transport::Transport,
+    pub streams: usize,
 }
 
 /// A fitter for spectra on one wavelength grid with one set of options: the validated options, the colour weights
@@ -239,6 +243,7 @@ impl SpectrumFitter {
         if options.starts == 0 {
             return Err(SkinError::invalid("starts", "at least one start must be refined"));
         }
+        crate::accuracy::check_streams(options.request.accuracy.streams)?;
         let grid = WavelengthGrid { wavelengths_nm: wavelengths_nm.to_vec() };
         let xyz_weights = grid.xyz_weights();
         let white_xyz = spectrum_to_xyz(&vec![1.0; wavelengths_nm.len()], &xyz_weights);
@@ -396,6 +401,8 @@ impl SpectrumFitter {
             lab_fitted,
             starts,
             evaluations,
+            transport: self.options.request.transport,
+            streams: self.options.request.accuracy.streams,
         })
     }
 

@@ -6,6 +6,7 @@ use pyo3::types::{PyDict, PyList};
 use crate::accuracy::ALL_ACCURACY_LEVELS;
 use crate::fit::blender_target::describe_targets;
 use crate::skin::PARAMS;
+use crate::transport::{Transport, ALL_TRANSPORTS};
 use crate::PRESETS;
 
 use super::convert::to_py;
@@ -88,6 +89,26 @@ pub(super) fn accuracy_levels_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> 
         let d = PyDict::new(py);
         d.set_item("name", level.name())?;
         d.set_item("description", level.description())?;
+        all.append(d)?;
+    }
+    Ok(all)
+}
+
+/// The transports: how each wavelength's total diffuse reflectance is computed (docs/model.md), the default first.
+///
+/// Returns:
+///     [{"name": "adding_doubling", "description": one line, "default": True}, {"name": "diffusion", ...,
+///     "default": False}]; the names are accepted by ``transport=`` of :func:`evaluate`, :func:`profile`,
+///     :func:`maps`, :func:`shader_table`, :func:`layered_reflectance` and the fits.
+#[pyfunction]
+#[pyo3(name = "transports")]
+pub(super) fn transports_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let all = PyList::empty(py);
+    for transport in ALL_TRANSPORTS {
+        let d = PyDict::new(py);
+        d.set_item("name", transport.name())?;
+        d.set_item("description", transport.description())?;
+        d.set_item("default", transport == Transport::default())?;
         all.append(d)?;
     }
     Ok(all)

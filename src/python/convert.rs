@@ -18,6 +18,7 @@ use crate::evaluate::ProfileGrid;
 use crate::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::maps::io::PARAM_CHANNELS;
 use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS};
+use crate::transport::{Transport, ALL_TRANSPORTS, STREAMS_RANGE};
 use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
 
 use super::errors::{internal, invalid};
@@ -223,6 +224,26 @@ pub(super) fn to_u32(name: &'static str, meaning: &'static str, value: i64) -> P
     })
 }
 
+/// `transport=` by its serde name; the error lists the names ([`ALL_TRANSPORTS`]).
+pub(super) fn transport_arg(name: &str) -> PyResult<Transport> {
+    by_name("transport", name, &ALL_TRANSPORTS)
+}
+
+/// `streams=`: None, or an integer in `STREAMS_RANGE` (an error naming `streams` and the range otherwise).
+pub(super) fn streams_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
+    let Some(Count(n)) = count_arg("streams", obj)? else { return Ok(None) };
+    let (lo, hi) = STREAMS_RANGE;
+    let streams = usize::try_from(n).map_err(|_| SkinError::OutOfRange {
+        name: "streams",
+        meaning: "adding-doubling streams per hemisphere",
+        min: lo as f64,
+        max: hi as f64,
+        value: n as f64,
+    })?;
+    crate::accuracy::check_streams(streams)?;
+    Ok(Some(streams))
+}
+
 /// The accuracy and model choices common to `evaluate` and `profile`.
 pub(super) struct Knobs<'a> {
     /// A named level (draft, default, reference); the knobs below override it where given.
@@ -238,6 +259,10 @@ pub(super) struct Knobs<'a> {
     pub(super) rgb_mapping: &'a str,
     pub(super) boundaries: &'a str,
     pub(super) target: Target,
+    /// Where the totals come from (a [`Transport`] serde name).
+    pub(super) transport: &'a str,
+    /// Adding-doubling streams; None: the level's.
+    pub(super) streams: Option<usize>,
 }
 
 impl<'a> Knobs<'a> {
@@ -256,6 +281,8 @@ impl<'a> Knobs<'a> {
         rgb_mapping: &'a str,
         boundaries: &'a str,
         target: Target,
+        transport: &'a str,
+        streams: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         Ok(Knobs {
             accuracy,
@@ -270,12 +297,20 @@ impl<'a> Knobs<'a> {
             rgb_mapping,
             boundaries,
             target,
+            transport,
+            streams: streams_arg(streams)?,
         })
     }
 
     /// The knobs of a material table or map (`maps`, `shader_table`): no profile, the directional combination and
-    /// the linear RGB mapping; the level's wavelength grid unless a caller overrides it.
-    pub(super) fn material(accuracy: &'a str, working_space: &'a str, boundaries: &'a str, target: Target) -> Self {
+    /// the linear RGB mapping; the level's wavelength grid and streams unless a caller overrides them.
+    pub(super) fn material(
+        accuracy: &'a str,
+        working_space: &'a str,
+        boundaries: &'a str,
+        target: Target,
+        transport: &'a str,
+    ) -> Self {
         Knobs {
             accuracy,
             wavelength_step_nm: None,
@@ -289,6 +324,8 @@ impl<'a> Knobs<'a> {
             rgb_mapping: "linear",
             boundaries,
             target,
+            transport,
+            streams: None,
         }
     }
 
@@ -315,6 +352,7 @@ impl<'a> Knobs<'a> {
                 r_max_mm: self.profile_r_max_mm.map_or(defaults.r_max_mm, |r| r.0),
                 count,
             },
+            streams: self.streams.unwrap_or(level.streams),
             ..level
         };
         Ok(Request {
@@ -325,6 +363,7 @@ impl<'a> Knobs<'a> {
             rgb_mapping: by_name("rgb_mapping", self.rgb_mapping, &ALL_RGB_MAPPINGS)?,
             boundaries: by_name("boundaries", self.boundaries, &ALL_BOUNDARIES)?,
             target: self.target,
+            transport: transport_arg(self.transport)?,
             ..Request::default()
         })
     }

@@ -5,14 +5,14 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use serde_json::Value;
 
-use crate::diffusion::{Layer, ALL_BOUNDARIES};
+use crate::diffusion::{Layer, LayeredOptions, ALL_BOUNDARIES};
 use crate::evaluate::{Evaluation, MethodParams};
 use crate::fit::blender_target::Target;
 use crate::Outputs;
 
 use super::convert::{
     by_name, json_to_py, nested_rows, params_arg, parse_outputs, real_sequence, real_vector, reject_string, rgb_rows,
-    target_from, to_py, Knobs,
+    streams_arg, target_from, to_py, transport_arg, Knobs,
 };
 use super::detach::detached;
 use super::errors::{internal, invalid, warn_lobe};
@@ -127,12 +127,18 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///         "capped" (each layer's extrapolation distances capped so that every radial profile is non-negative and
 ///         the total reflectance never rises with absorption, by construction; it moves a thin or red-lit epidermis
 ///         away from Monte Carlo: docs/robustness.md, "Negative profile lobes").
+///     transport: how each wavelength's total diffuse reflectance (the albedo, and the scale of the radial profile
+///         and of the radius fit's transform) is computed, a name from :func:`transports`: "adding_doubling" (exact
+///         radiative transfer; the default) or "diffusion" (the paper's layered multipole: reproduces DJ2006).
+///     streams: quadrature directions per hemisphere of the adding-doubling solver, 2..64; None: the level's (8 at
+///         "default"). Unused with transport="diffusion".
 ///
 /// Returns:
-///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy", "model" (model["dermis_thickness_mm"]
-///     is float("inf") for a semi-infinite dermis), "combination", "target" ({"blender": "5.3", "engine":
-///     "cycles", "tested": True}), "default_method", "work" ({"wavelengths",
-///     "transform_samples", "radial_profiles", "radius_fits", "specular_evaluations"}: what was computed),
+///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy" (with "streams"), "model"
+///     (model["dermis_thickness_mm"] is float("inf") for a semi-infinite dermis), "combination", "boundaries",
+///     "transport", "target" ({"blender": "5.3", "engine": "cycles", "tested": True}), "default_method", "work"
+///     ({"wavelengths", "transform_samples", "radial_profiles", "radius_fits", "specular_evaluations",
+///     "transport_solves"}: what was computed),
 ///     "surface" ({"roughness", "ior", "beckmann_m"}: the inputs no parameter changes), "seconds". Per requested
 ///     output, numpy arrays where array-valued:
 ///     albedo or radius: "diffuse_reflectance_rgb" (3,);
@@ -149,8 +155,8 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///     SpectralSkinWarning} (and "wavelengths_nm" (K,) with profile_spectral).
 ///
 /// Raises:
-///     SpectralSkinError: a parameter or knob out of range or not finite, an unknown preset, output, combination or
-///         working space, or neither a preset nor all four parameters; a Blender version older than 4.2 or not
+///     SpectralSkinError: a parameter or knob out of range or not finite, an unknown preset, output, combination,
+///         working space or transport, or neither a preset nor all four parameters; a Blender version older than 4.2 or not
 ///         MAJOR.MINOR; an unknown engine.
 ///     TypeError: an argument of the wrong type (e.g. outputs given as a single string).
 #[pyfunction]
@@ -162,7 +168,7 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles",
-        rgb_mapping = "linear", boundaries = "paper"
+        rgb_mapping = "linear", boundaries = "paper", transport = "adding_doubling", streams = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -190,6 +196,8 @@ pub(super) fn evaluate_py<'py>(
     engine: &str,
     rgb_mapping: &str,
     boundaries: &str,
+    transport: &str,
+    streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = params_arg(
         preset,
@@ -209,6 +217,8 @@ pub(super) fn evaluate_py<'py>(
         rgb_mapping,
         boundaries,
         target_from(blender, engine)?,
+        transport,
+        streams,
     )?;
     let request = knobs.request(parse_outputs(outputs)?)?;
     let evaluation = detached(py, move || crate::evaluate(&params, &request))?;
@@ -236,6 +246,8 @@ pub(super) fn evaluate_py<'py>(
 ///         profile_count, combination, working_space: as for :func:`evaluate`.
 ///     rgb_mapping: "linear" or "non_negative", see above.
 ///     boundaries: "paper" or "capped", as for :func:`evaluate`.
+///     transport, streams: as for :func:`evaluate` (the profile keeps the multipole's shape, scaled per wavelength to
+///         the transport's total).
 ///
 /// Returns:
 ///     {"radii_mm": (N,), "rgb_per_mm2": (N, 3)} in mm^-2, or with spectral=True
@@ -252,7 +264,8 @@ pub(super) fn evaluate_py<'py>(
         epidermis_thickness_mm = None, baseline_absorption_scale = None, blood_oxygenation = None, preset = None, spectral = false, accuracy = "default", wavelength_step_nm = None, wavelength_placement = None,
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
-        combination = "directional", working_space = "Linear Rec.709", rgb_mapping = "linear", boundaries = "paper"
+        combination = "directional", working_space = "Linear Rec.709", rgb_mapping = "linear", boundaries = "paper",
+        transport = "adding_doubling", streams = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -278,6 +291,8 @@ pub(super) fn profile_py<'py>(
     working_space: &str,
     rgb_mapping: &str,
     boundaries: &str,
+    transport: &str,
+    streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = params_arg(
         preset,
@@ -297,6 +312,8 @@ pub(super) fn profile_py<'py>(
         rgb_mapping,
         boundaries,
         Target::default(),
+        transport,
+        streams,
     )?;
     let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
     let request = knobs.request(outputs)?;
@@ -329,20 +346,24 @@ pub(super) fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<L
     }
 }
 
-/// Total diffuse reflectance and radial profile of a stack of layers under air (the diffusion solver alone).
+/// Total diffuse reflectance and radial profile of a stack of layers under air.
 ///
-/// Uses the directional combination, the whole multipole series and the default inverse-Hankel quadrature. With the
-/// paper's boundaries a thin layer over layers that do not fill it can give a profile that is negative at some
-/// radii (the model's own lobe); it is returned clamped to 0 and reported by a :class:`SpectralSkinWarning` naming
-/// the radius and the depth relative to the peak. ``boundaries="capped"`` gives a profile that is non-negative and
-/// a total that is monotone in absorption by construction (docs/robustness.md, "Negative profile lobes").
+/// The total comes from ``transport``: exact radiative transfer (adding-doubling, the default) or the layered
+/// multipole (diffusion, DJ2005). The profile is the multipole's (directional combination, whole series, default
+/// inverse-Hankel quadrature), scaled to the total. With the paper's boundaries a thin layer over layers that do not
+/// fill it can give a profile that is negative at some radii (the model's own lobe); it is returned clamped to 0 and
+/// reported by a :class:`SpectralSkinWarning` naming the radius and the depth relative to the peak.
+/// ``boundaries="capped"`` gives a profile that is non-negative and, with ``transport="diffusion"``, a total that is
+/// monotone in absorption by construction (docs/robustness.md, "Negative profile lobes").
 ///
 /// Arguments:
 ///     layers: top to bottom, each (thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior): thickness in mm
 ///         (float("inf") for a semi-infinite last layer), absorption and reduced scattering coefficients in mm^-1,
 ///         index of refraction 1..2.
 ///     radii_mm: 1-D radii in mm, finite and >= 0.
-///     boundaries: "paper" (the default) or "capped".
+///     boundaries: "paper" (the default) or "capped": the multipole's boundary conditions.
+///     transport: "adding_doubling" (the default) or "diffusion" (the multipole alone), as for :func:`evaluate`.
+///     streams: quadrature directions per hemisphere of the adding-doubling solver, 2..64; None: 8.
 ///
 /// Returns:
 ///     (total diffuse reflectance, R(r) at radii_mm in mm^-2 as a float64 array of the same length).
@@ -350,22 +371,32 @@ pub(super) fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<L
 /// Raises:
 ///     SpectralSkinError: no layers, a layer that is not 4 values, a thickness outside 1e-11..1e6 mm (inf only for
 ///         the last layer), a coefficient other than 0 or 1e-12..1e6 per mm, an ior outside 1..2 (where the diffuse
-///         Fresnel fits hold), or a radius outside 0..1e6 mm.
+///         Fresnel fits hold), a radius outside 0..1e6 mm, an unknown boundaries or transport, streams out of range.
 ///     TypeError: layers or radii_mm not sequences of numbers.
 #[pyfunction]
-#[pyo3(name = "layered_reflectance", signature = (layers, radii_mm, *, boundaries = "paper"))]
+#[pyo3(
+    name = "layered_reflectance",
+    signature = (layers, radii_mm, *, boundaries = "paper", transport = "adding_doubling", streams = None)
+)]
 pub(super) fn layered_reflectance_py<'py>(
     py: Python<'py>,
     layers: &Bound<'py, PyAny>,
     radii_mm: &Bound<'py, PyAny>,
     boundaries: &str,
+    transport: &str,
+    streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(f64, Bound<'py, PyArray1<f64>>)> {
     reject_string(layers, &format!("layers must be a list of tuples {LAYER_FIELDS}"))?;
     let layers: Vec<Layer> =
         layers.try_iter()?.enumerate().map(|(i, item)| extract_layer(i, &item?)).collect::<PyResult<_>>()?;
     let radii = real_vector("radii_mm", radii_mm, "a 1-D array-like of radii in mm")?;
-    let boundaries = by_name("boundaries", boundaries, &ALL_BOUNDARIES)?;
-    let r = detached(py, move || crate::diffusion::layered_reflectance_with(&layers, &radii, boundaries))?;
+    let defaults = LayeredOptions::default();
+    let options = LayeredOptions {
+        boundaries: by_name("boundaries", boundaries, &ALL_BOUNDARIES)?,
+        transport: transport_arg(transport)?,
+        streams: streams_arg(streams)?.unwrap_or(defaults.streams),
+    };
+    let r = detached(py, move || crate::diffusion::layered_reflectance_with(&layers, &radii, &options))?;
     warn_lobe(py, r.negative_lobe)?;
     Ok((r.total, PyArray1::from_vec(py, r.profile_per_mm2)))
 }

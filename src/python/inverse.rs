@@ -7,7 +7,9 @@ use pyo3::types::{PyDict, PyString};
 use crate::inverse::spectrum::{FitOptions, Objective, Specular, ALL_OBJECTIVES};
 use crate::skin::params::{PARAMS, PARAM_COUNT};
 
-use super::convert::{by_name, count_arg, real_of, real_vector, reject_string, to_py, type_name};
+use super::convert::{
+    by_name, count_arg, real_of, real_vector, reject_string, streams_arg, to_py, transport_arg, type_name,
+};
 use super::detach::detached;
 use super::errors::invalid;
 
@@ -36,12 +38,16 @@ use super::errors::invalid;
 ///         "cielab" (the squared CIELAB difference of the colours, the reflectance differences only breaking ties).
 ///     starts: how many of the start table's best entries are refined (the best fit is kept), >= 1; None: 4
 ///         (docs/measured-skin.md, the restart check).
+///     transport: the model fitted, "adding_doubling" (exact totals; the default) or "diffusion" (the paper's), as
+///         for :func:`evaluate`.
+///     streams: adding-doubling streams per hemisphere, 2..64; None: the default level's (8).
 ///
 /// Returns:
 ///     A dict: "params" (every model parameter, fitted and fixed, by name), "free" (the fitted names), "specular"
 ///     ("free", "fresnel" or "fixed"), "specular_offset", "objective", "wavelengths_nm" (K,), "fitted_reflectance"
 ///     (K,) (model plus offset), "rms" (root-mean-square difference from the measurement), "delta_e00" (CIEDE2000
-///     of the two spectra's colours under D65), "lab_measured", "lab_fitted", "starts", "evaluations".
+///     of the two spectra's colours under D65), "lab_measured", "lab_fitted", "starts", "evaluations", "transport",
+///     "streams".
 ///
 /// Raises:
 ///     SpectralSkinError: wavelengths outside 380..780 nm, not increasing or too few; a reflectance that is not one
@@ -52,7 +58,10 @@ use super::errors::invalid;
 #[pyfunction]
 #[pyo3(
     name = "fit_spectrum",
-    signature = (wavelengths_nm, reflectance, *, free = None, fixed = None, specular = None, objective = "reflectance", starts = None)
+    signature = (
+        wavelengths_nm, reflectance, *, free = None, fixed = None, specular = None, objective = "reflectance",
+        starts = None, transport = "adding_doubling", streams = None
+    )
 )]
 #[allow(clippy::too_many_arguments)]
 pub(super) fn fit_spectrum_py<'py>(
@@ -64,6 +73,8 @@ pub(super) fn fit_spectrum_py<'py>(
     specular: Option<&Bound<'py, PyAny>>,
     objective: &str,
     starts: Option<&Bound<'py, PyAny>>,
+    transport: &str,
+    streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     const NUMBERS: &str = "a 1-D sequence or array of numbers";
     let wavelengths = real_vector("wavelengths_nm", wavelengths_nm, NUMBERS)?;
@@ -104,6 +115,10 @@ pub(super) fn fit_spectrum_py<'py>(
     options.objective = by_name::<Objective>("objective", objective, &ALL_OBJECTIVES)?;
     if let Some(n) = count_arg("starts", starts)? {
         options.starts = usize::try_from(n.0).map_err(|_| invalid("starts", format!("must be >= 1; got {}", n.0)))?;
+    }
+    options.request.transport = transport_arg(transport)?;
+    if let Some(n) = streams_arg(streams)? {
+        options.request.accuracy.streams = n;
     }
     let fit = detached(py, move || crate::inverse::fit_spectrum(&wavelengths, &measured, &options))?;
     let dict = to_py(py, &fit)?.cast_into::<PyDict>()?;

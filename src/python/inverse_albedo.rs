@@ -10,7 +10,7 @@ use crate::inverse::albedo::{fit_albedo, AlbedoFitOptions};
 use crate::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness as choose_thickness, is_paper_extended};
 use crate::skin::params::EXTENDED_PARAMS;
 
-use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, to_py};
+use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg};
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
 
@@ -23,10 +23,15 @@ fn options_from(
     melanin_blend_prior: Option<&Bound<'_, PyAny>>,
     prior_weight: Option<&Bound<'_, PyAny>>,
     ambiguity_delta_e: Option<&Bound<'_, PyAny>>,
+    transport: &str,
+    streams: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<AlbedoFitOptions> {
+    let defaults = AlbedoFitOptions::default();
     let mut o = AlbedoFitOptions {
         working_space: by_name("working_space", working_space, &ALL_WORKING_SPACES)?,
-        ..AlbedoFitOptions::default()
+        transport: transport_arg(transport)?,
+        streams: streams_arg(streams)?.unwrap_or(defaults.streams),
+        ..defaults
     };
     for ((spec, obj), value) in EXTENDED_PARAMS.iter().zip(extended).zip(&mut o.extended) {
         if let Some(v) = real_arg(spec.name, obj)? {
@@ -62,11 +67,15 @@ fn options_from(
 ///     prior_weight: the prior's weight, ΔE00 per unit of melanin blend, 0..100; None: 0.2.
 ///     ambiguity_delta_e: the ΔE00 within which parameters reproduce the colour, for "in_gamut" and "ambiguity";
 ///         None: 0.5.
+///     transport: the model whose albedo is fitted, "adding_doubling" (exact totals; the default) or "diffusion"
+///         (the paper's), as for :func:`evaluate`.
+///     streams: adding-doubling streams per hemisphere, 2..64; None: the default level's (8).
 ///
 /// Returns:
 ///     A dict: "params" (the seven parameters by name), "target_rgb", "albedo_rgb" (the fit's model albedo, direct
 ///     evaluation), "delta_e00", "in_gamut", "ambiguity" ({"delta_e00", "melanin", "melanin_blend", "hemoglobin":
-///     [min, max] over the set, "members": [[C_m, beta_m, C_h, ΔE00], ...]}), "table_from_cache".
+///     [min, max] over the set, "members": [[C_m, beta_m, C_h, ΔE00], ...]}), "table_from_cache", "transport",
+///     "streams".
 ///
 /// Raises:
 ///     SpectralSkinError: a value out of range or not finite, an unknown working space.
@@ -77,7 +86,7 @@ fn options_from(
     signature = (
         rgb, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
         blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
-        ambiguity_delta_e = None
+        ambiguity_delta_e = None, transport = "adding_doubling", streams = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -92,6 +101,8 @@ pub(super) fn fit_albedo_py<'py>(
     melanin_blend_prior: Option<&Bound<'py, PyAny>>,
     prior_weight: Option<&Bound<'py, PyAny>>,
     ambiguity_delta_e: Option<&Bound<'py, PyAny>>,
+    transport: &str,
+    streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let values = real_vector("rgb", rgb, "3 numbers (linear RGB)")?;
     let target: [f64; 3] = values
@@ -105,6 +116,8 @@ pub(super) fn fit_albedo_py<'py>(
         melanin_blend_prior,
         prior_weight,
         ambiguity_delta_e,
+        transport,
+        streams,
     )?;
     let fit = detached(py, || fit_albedo(target, &options))?;
     to_py(py, &fit)
@@ -119,15 +132,15 @@ pub(super) fn fit_albedo_py<'py>(
 ///     fit_epidermis_thickness: if True, one epidermis thickness for the whole texture is chosen first (the
 ///         candidate of 0.05..0.5 mm with the least mean ΔE00), instead of ``epidermis_thickness_mm``.
 ///     working_space, epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation, oiliness,
-///     melanin_blend_prior, prior_weight, ambiguity_delta_e: as for :func:`fit_albedo`.
+///     melanin_blend_prior, prior_weight, ambiguity_delta_e, transport, streams: as for :func:`fit_albedo`.
 ///
 /// Returns:
 ///     A dict: "params" (H, W, 4) float32 (melanin, melanin_blend, hemoglobin, oiliness: the channels of a
 ///     parameter map), or (H, W, 7) with the extended physiology appended when it is not the paper's;
 ///     "residual_delta_e00" (H, W) float32 (ΔE00 between each texel and its fit, by the table); "extended"
 ///     (the held values by name); "stats" ({"texels", "distinct_colours", "table_from_cache", "max_delta_e00",
-///     "mean_delta_e00", "out_of_gamut_texels", "options"}); "thickness_means" ([[mm, mean ΔE00], ...]) when
-///     ``fit_epidermis_thickness``.
+///     "mean_delta_e00", "out_of_gamut_texels", "options" (with "transport" and "streams")}); "thickness_means"
+///     ([[mm, mean ΔE00], ...]) when ``fit_epidermis_thickness``.
 ///
 /// Raises:
 ///     SpectralSkinError: a non-finite texel, a value out of range, another shape.
@@ -139,7 +152,7 @@ pub(super) fn fit_albedo_py<'py>(
     signature = (
         albedo, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
         blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
-        ambiguity_delta_e = None, fit_epidermis_thickness = false
+        ambiguity_delta_e = None, fit_epidermis_thickness = false, transport = "adding_doubling", streams = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -155,6 +168,8 @@ pub(super) fn fit_albedo_map_py<'py>(
     prior_weight: Option<&Bound<'py, PyAny>>,
     ambiguity_delta_e: Option<&Bound<'py, PyAny>>,
     fit_epidermis_thickness: bool,
+    transport: &str,
+    streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     const EXPECTED: &str = "an (H, W, 3) float array of linear RGB";
     let array = float_array("albedo", albedo, 3, EXPECTED)?
@@ -173,6 +188,8 @@ pub(super) fn fit_albedo_map_py<'py>(
         melanin_blend_prior,
         prior_weight,
         ambiguity_delta_e,
+        transport,
+        streams,
     )?;
     let mut thickness_means = None;
     if fit_epidermis_thickness {

@@ -25,7 +25,7 @@ use crate::Outputs;
 
 use super::convert::{
     by_name, count_sequence, float_array, is_boolean, material_outputs, parse_outputs, real_arg, shape_text,
-    target_from, to_py, type_name, FloatArray, Knobs,
+    streams_arg, target_from, to_py, type_name, FloatArray, Knobs,
 };
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
@@ -293,6 +293,8 @@ pub(super) fn read_parameter_map_py<'py>(
 ///         InterruptedError is raised. An exception raised by the callback cancels the same way and is re-raised.
 ///     boundaries: the layers' boundary conditions, "paper" or "capped", as for :func:`evaluate` (a cached table
 ///         is kept per choice).
+///     transport, streams: how the totals are computed, "adding_doubling" (the default) or "diffusion", and the
+///         adding-doubling streams, as for :func:`evaluate` (a cached table is kept per choice).
 ///
 /// Ctrl-C (KeyboardInterrupt, or any exception a Python signal handler raises) stops the call the same way: the
 /// calling thread checks for signals every 0.1 s while the work runs, the rows or table nodes being computed are
@@ -316,7 +318,7 @@ pub(super) fn read_parameter_map_py<'py>(
 ///     "resolution", "nodes", "from_cache", "build_seconds", "measured_error"}), "clamped" (one dict per parameter
 ///     with bad values: {"parameter", "nan", "infinite", "out_of_range", "first": [[x, y], ...]}),
 ///     "constant_parameters" (the names of the parameters, the four and the extended physiology, that are one value
-///     everywhere), "constant_values" ({name: value} of those), "request" (accuracy and model), "work" ({"texels", "evaluations",
+///     everywhere), "constant_values" ({name: value} of those), "request" (accuracy, model and transport), "work" ({"texels", "evaluations",
 ///     "table_nodes_built", "table_lookups", "radius_fits", "specular_evaluations", "outputs": {"base_color",
 ///     "radius", "specular"}}: what was computed), "seconds" ({"read", "compute", "write", "total"})}.
 ///     The arrays are new, writeable and C-contiguous (handed to numpy without a copy).
@@ -345,7 +347,7 @@ pub(super) fn read_parameter_map_py<'py>(
         epidermis_thickness_mm = None, baseline_absorption_scale = None, blood_oxygenation = None, method = "burley", outputs = None, exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
         wavelength_placement = None,
         working_space = "Linear Rec.709", table_resolution = None, table_cache = true, blender = None,
-        engine = "cycles", progress = None, boundaries = "paper"
+        engine = "cycles", progress = None, boundaries = "paper", transport = "adding_doubling", streams = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -373,6 +375,8 @@ pub(super) fn maps_py<'py>(
     engine: &str,
     progress: Option<Bound<'py, PyAny>>,
     boundaries: &str,
+    transport: &str,
+    streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let start = Instant::now();
     if let Some(callback) = progress.as_ref().filter(|c| !c.is_callable()) {
@@ -386,7 +390,8 @@ pub(super) fn maps_py<'py>(
     let knobs = Knobs {
         wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
         wavelength_placement,
-        ..Knobs::material(accuracy, working_space, boundaries, target_from(blender, engine)?)
+        streams: streams_arg(streams)?,
+        ..Knobs::material(accuracy, working_space, boundaries, target_from(blender, engine)?, transport)
     };
     let method = SubsurfaceMethod::from_name(method)?;
     knobs.target.method_entry(method)?;

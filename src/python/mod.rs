@@ -14,7 +14,7 @@ mod shader_table;
 
 use pyo3::prelude::*;
 
-use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, parameters_py, presets_py};
+use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, parameters_py, presets_py, transports_py};
 use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
 use inverse::fit_spectrum_py;
@@ -35,6 +35,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parameter_ranges_py, m)?)?;
     m.add_function(wrap_pyfunction!(parameters_py, m)?)?;
     m.add_function(wrap_pyfunction!(accuracy_levels_py, m)?)?;
+    m.add_function(wrap_pyfunction!(transports_py, m)?)?;
     m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
     m.add_function(wrap_pyfunction!(maps_py, m)?)?;
     m.add_function(wrap_pyfunction!(blender_targets_py, m)?)?;

@@ -9,7 +9,7 @@ use crate::fit::SubsurfaceMethod;
 use crate::maps::shader_table::{ShaderTable, ShaderTableMeta, DEFAULT_SHADER_TABLE_RESOLUTION, SHADER_TABLE_EXR};
 use crate::Outputs;
 
-use super::convert::{json_to_py, real_arg, target_from, type_name, Knobs};
+use super::convert::{json_to_py, real_arg, streams_arg, target_from, type_name, Knobs};
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
 use super::maps::{interleave, result_planes, rgb_image, table_resolution};
@@ -44,6 +44,7 @@ use super::maps::{interleave, result_planes, rgb_image, table_resolution};
 ///         node (the table is over melanin, melanin blend and haemoglobin only): a float, or None for the default
 ///         (the paper's value, 0.25 mm, 1 and 0.75). The metadata's "extended" records them, so a front rebuilds the
 ///         table when they change; each value has its own cached table.
+///     transport, streams: as for :func:`maps` (the metadata's "request" names them; each has its own cached table).
 ///
 /// Ctrl-C stops the build (within a node's evaluation, about a millisecond) and raises KeyboardInterrupt.
 ///
@@ -56,9 +57,9 @@ use super::maps::{interleave, result_planes, rgb_image, table_resolution};
 ///     "blood_oxygenation": the values baked in})}}.
 ///
 /// Raises:
-///     SpectralSkinError: an unknown method, engine, working space or accuracy level, a method the target lacks, a
-///         resolution below 2 nodes per axis or over the table's node bound, an extended parameter out of its range
-///         (the message names it and the range).
+///     SpectralSkinError: an unknown method, engine, working space, transport or accuracy level, streams out of
+///         range, a method the target lacks, a resolution below 2 nodes per axis or over the table's node bound, an
+///         extended parameter out of its range (the message names it and the range).
 ///     TypeError: a resolution that is not a sequence of integers.
 #[pyfunction]
 #[pyo3(
@@ -66,7 +67,7 @@ use super::maps::{interleave, result_planes, rgb_image, table_resolution};
     signature = (
         *, method = "burley", blender = None, engine = "cycles", resolution = None, accuracy = "default",
         working_space = "Linear Rec.709", boundaries = "paper", table_cache = true, epidermis_thickness_mm = None,
-        baseline_absorption_scale = None, blood_oxygenation = None
+        baseline_absorption_scale = None, blood_oxygenation = None, transport = "adding_doubling", streams = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -83,6 +84,8 @@ pub(super) fn shader_table_py<'py>(
     epidermis_thickness_mm: Option<&Bound<'py, PyAny>>,
     baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
     blood_oxygenation: Option<&Bound<'py, PyAny>>,
+    transport: &str,
+    streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS};
     let given = [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation];
@@ -92,7 +95,10 @@ pub(super) fn shader_table_py<'py>(
             extended[k] = EXTENDED_PARAMS[k].check(v.0)?;
         }
     }
-    let knobs = Knobs::material(accuracy, working_space, boundaries, target_from(blender, engine)?);
+    let knobs = Knobs {
+        streams: streams_arg(streams)?,
+        ..Knobs::material(accuracy, working_space, boundaries, target_from(blender, engine)?, transport)
+    };
     let method = SubsurfaceMethod::from_name(method)?;
     knobs.target.method_entry(method)?;
     let request = knobs.request(Outputs::material())?;

@@ -42,7 +42,9 @@ impl Transport {
                 "exact totals (adding-doubling radiative transfer) with the multipole's profile shape: right for every \
                  skin tone (default)"
             }
-            Transport::Diffusion => "the paper's layered multipole diffusion: reproduces DJ2006, too bright for dark skin",
+            Transport::Diffusion => {
+                "the paper's layered multipole diffusion: reproduces DJ2006, too bright for dark skin"
+            }
         }
     }
 }

@@ -1,0 +1,219 @@
+//! Issue 20, item 2: the transport is a choice of every Rust front (`Request`, `Accuracy::streams`,
+//! `layered_reflectance_with`, the fits' options, the cache keys), reported in every result; `Transport::Diffusion`
+//! reproduces the multipole's values bit for bit; `Transport::AddingDoubling` (the default) takes each wavelength's
+//! total from the exact solver and scales the multipole's profile to it.
+
+use spectral_skin::diffusion::{
+    clamped_reflectance_profiles, layered_reflectance_with, Combination, LayerStack, LayeredOptions, MultipoleTerms,
+};
+use spectral_skin::evaluate::{Accuracy, AccuracyLevel, Prepared};
+use spectral_skin::fit::SubsurfaceMethod;
+use spectral_skin::inverse::albedo::{albedo_table_key, AlbedoFitOptions};
+use spectral_skin::inverse::{fit_spectrum, FitOptions};
+use spectral_skin::maps::lut::{cache_key, TableResolution};
+use spectral_skin::skin::params::EXTENDED_DEFAULTS;
+use spectral_skin::skin::skin_layers;
+use spectral_skin::transport::{total_diffuse_reflectance, Transport, ALL_TRANSPORTS, DEFAULT_STREAMS, STREAMS_RANGE};
+use spectral_skin::{evaluate, Outputs, Request, SkinParams, PRESETS};
+
+fn request(transport: Transport, outputs: Outputs) -> Request {
+    Request { transport, ..Request::new(outputs) }
+}
+
+fn everything() -> Outputs {
+    Outputs { albedo: true, radius: true, spectrum: true, profile_spectral: true, ..Outputs::default() }
+}
+
+/// The multipole's own totals and clamped profiles of `params` on `request`'s grid, from the diffusion module's public
+/// pieces: what every output was before the transport existed.
+fn multipole(params: &SkinParams, request: &Request) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let prepared = Prepared::new(request).unwrap();
+    let stacks = prepared.stacks(params).unwrap();
+    let acc = &request.accuracy;
+    let totals = stacks.iter().map(|s| s.reflectance_hat(0.0, request.combination, acc.multipole_terms)).collect();
+    let radii = acc.profile_grid.radii_mm();
+    let profiles =
+        clamped_reflectance_profiles(&stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel).per_mm2;
+    (totals, profiles)
+}
+
+/// `Transport::Diffusion` is the multipole, bit for bit: every wavelength's total and profile value.
+#[test]
+fn diffusion_reproduces_the_multipole_bit_for_bit() {
+    for preset in PRESETS {
+        let r = request(Transport::Diffusion, everything());
+        let ev = evaluate(&preset.params, &r).unwrap();
+        let (totals, profiles) = multipole(&preset.params, &r);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(ev.spectral_reflectance.as_ref().unwrap()), bits(&totals), "{}", preset.name);
+        let spectral = ev.profile.as_ref().unwrap().spectral_per_mm2.as_ref().unwrap();
+        for (got, want) in spectral.iter().zip(&profiles) {
+            assert_eq!(bits(got), bits(want), "{}", preset.name);
+        }
+        assert_eq!(ev.transport, Transport::Diffusion);
+        assert_eq!(ev.work.transport_solves, 0);
+    }
+}
+
+/// `Transport::AddingDoubling`: each total is the exact solver's at the request's streams, the profile the multipole's
+/// scaled by total / multipole total, and the work counts one solve per wavelength.
+#[test]
+fn adding_doubling_scales_the_multipole_to_the_exact_total() {
+    let params = SkinParams::preset("african").unwrap();
+    for streams in [4, DEFAULT_STREAMS, 16] {
+        let mut r = request(Transport::AddingDoubling, everything());
+        r.accuracy.streams = streams;
+        let ev = evaluate(&params, &r).unwrap();
+        assert_eq!(ev.transport, Transport::AddingDoubling);
+        assert_eq!(ev.accuracy.streams, streams);
+        let wavelengths = ev.wavelengths_nm.as_ref().unwrap();
+        assert_eq!(ev.work.transport_solves, wavelengths.len());
+        let (multipole_totals, multipole_profiles) = multipole(&params, &r);
+        let spectral = ev.profile.as_ref().unwrap().spectral_per_mm2.as_ref().unwrap();
+        for (k, &w) in wavelengths.iter().enumerate() {
+            let exact = total_diffuse_reflectance(&skin_layers(&params, &r.model, w), streams).unwrap();
+            assert_eq!(ev.spectral_reflectance.as_ref().unwrap()[k].to_bits(), exact.to_bits(), "{w} nm");
+            let scale = exact / multipole_totals[k];
+            for (got, want) in spectral[k].iter().zip(&multipole_profiles[k]) {
+                assert!(
+                    (got - want * scale).abs() <= 1e-15 * (want * scale).abs(),
+                    "{w} nm: {got} vs {}",
+                    want * scale
+                );
+            }
+        }
+    }
+}
+
+/// The default is adding-doubling everywhere, and a request or accuracy written before the choice existed reads as the
+/// default; the JSON always names the transport and the streams.
+#[test]
+fn default_and_json() {
+    assert_eq!(Transport::default(), Transport::AddingDoubling);
+    assert_eq!(ALL_TRANSPORTS[0], Transport::default());
+    assert_eq!(Request::default().transport, Transport::AddingDoubling);
+    assert_eq!(LayeredOptions::default().transport, Transport::AddingDoubling);
+    assert_eq!(AlbedoFitOptions::default().transport, Transport::AddingDoubling);
+    assert_eq!(FitOptions::default().request.transport, Transport::AddingDoubling);
+
+    let mut json = serde_json::to_value(Request::default()).unwrap();
+    assert_eq!(json["transport"], "adding_doubling");
+    assert_eq!(json["accuracy"]["streams"], DEFAULT_STREAMS);
+    json.as_object_mut().unwrap().remove("transport");
+    json["accuracy"].as_object_mut().unwrap().remove("streams");
+    let old: Request = serde_json::from_value(json).unwrap();
+    assert_eq!(old, Request::default());
+
+    let diffusion = request(Transport::Diffusion, Outputs::material());
+    let back: Request = serde_json::from_str(&serde_json::to_string(&diffusion).unwrap()).unwrap();
+    assert_eq!(back, diffusion);
+
+    let ev = evaluate(&SkinParams::preset("asian").unwrap(), &diffusion).unwrap();
+    let j = serde_json::to_value(&ev).unwrap();
+    assert_eq!(j["transport"], "diffusion");
+    assert_eq!(j["accuracy"]["streams"], DEFAULT_STREAMS);
+    assert_eq!(j["work"]["transport_solves"], 0);
+}
+
+/// The levels' streams: draft 4, default `DEFAULT_STREAMS`, reference 32; `refined()` doubles them up to the range.
+#[test]
+fn streams_per_level() {
+    assert_eq!(AccuracyLevel::Draft.accuracy().streams, 4);
+    assert_eq!(AccuracyLevel::Default.accuracy().streams, DEFAULT_STREAMS);
+    assert_eq!(AccuracyLevel::Reference.accuracy().streams, 32);
+    assert_eq!(Accuracy::reference().refined().streams, 64);
+    assert_eq!(Accuracy { streams: 48, ..Accuracy::default() }.refined().streams, STREAMS_RANGE.1);
+    assert_eq!(Accuracy::default().refined().streams, 2 * DEFAULT_STREAMS);
+}
+
+/// Streams outside `STREAMS_RANGE` are an error naming `streams` and the range, on every Rust front.
+#[test]
+fn bad_streams_are_clear_errors() {
+    let (lo, hi) = STREAMS_RANGE;
+    for bad in [0, lo - 1, hi + 1, 1000] {
+        let named = |e: String| {
+            assert!(
+                e.contains("streams") && e.contains(&format!("[{lo}, {hi}]")) && e.contains(&bad.to_string()),
+                "{e}"
+            )
+        };
+        let mut r = Request::new(Outputs::material());
+        r.accuracy.streams = bad;
+        named(Prepared::new(&r).unwrap_err().to_string());
+        named(evaluate(&SkinParams::preset("asian").unwrap(), &r).unwrap_err().to_string());
+        let layers = skin_layers(&SkinParams::preset("asian").unwrap(), &r.model, 550.0);
+        let options = LayeredOptions { streams: bad, ..LayeredOptions::default() };
+        named(layered_reflectance_with(&layers, &[1.0], &options).unwrap_err().to_string());
+        named(AlbedoFitOptions { streams: bad, ..AlbedoFitOptions::default() }.validated().unwrap_err().to_string());
+        let mut fit = FitOptions::default();
+        fit.request.accuracy.streams = bad;
+        let wavelengths: Vec<f64> = (0..9).map(|i| 400.0 + 40.0 * i as f64).collect();
+        named(fit_spectrum(&wavelengths, &[0.3; 9], &fit).unwrap_err().to_string());
+    }
+    // Diffusion does not use the streams, but a bad value is still refused (one rule for the knob, as `Accuracy`'s).
+    let options = LayeredOptions { transport: Transport::Diffusion, streams: 0, ..LayeredOptions::default() };
+    let layers = skin_layers(&SkinParams::preset("asian").unwrap(), &Default::default(), 550.0);
+    assert!(layered_reflectance_with(&layers, &[1.0], &options).unwrap_err().to_string().contains("streams"));
+}
+
+/// The material-table cache key (and so the shader table's) and the albedo fit's table key differ by transport and
+/// by streams.
+#[test]
+fn cache_keys_differ_by_transport_and_streams() {
+    let resolution = TableResolution::default();
+    let key = |transport: Transport, streams: usize| {
+        let mut r = request(transport, Outputs::material());
+        r.accuracy.streams = streams;
+        cache_key(&Prepared::new(&r).unwrap(), SubsurfaceMethod::Burley, resolution, true, EXTENDED_DEFAULTS)
+    };
+    let base = key(Transport::AddingDoubling, DEFAULT_STREAMS);
+    assert_ne!(base, key(Transport::Diffusion, DEFAULT_STREAMS));
+    assert_ne!(base, key(Transport::AddingDoubling, 16));
+    assert_eq!(base, key(Transport::AddingDoubling, DEFAULT_STREAMS));
+
+    let albedo = |transport: Transport, streams: usize| {
+        albedo_table_key(&AlbedoFitOptions { transport, streams, ..AlbedoFitOptions::default() })
+    };
+    let base = albedo(Transport::AddingDoubling, DEFAULT_STREAMS);
+    assert_ne!(base, albedo(Transport::Diffusion, DEFAULT_STREAMS));
+    assert_ne!(base, albedo(Transport::AddingDoubling, 16));
+}
+
+/// The fits invert the model of their options' transport: the albedo fit's forward evaluation is the request's.
+#[test]
+fn fits_use_their_transport() {
+    for transport in ALL_TRANSPORTS {
+        let options = AlbedoFitOptions { transport, streams: 16, ..AlbedoFitOptions::default() };
+        let prepared = options.prepared().unwrap();
+        assert_eq!(prepared.request().transport, transport);
+        assert_eq!(prepared.request().accuracy.streams, 16);
+        let params = SkinParams::preset("caucasian").unwrap();
+        let direct = evaluate(
+            &params,
+            &Request { outputs: Outputs { albedo: true, ..Outputs::default() }, ..*prepared.request() },
+        )
+        .unwrap()
+        .diffuse_reflectance_rgb
+        .unwrap();
+        assert_eq!(prepared.albedo(&params).unwrap(), direct);
+    }
+}
+
+/// `layered_reflectance_with`: diffusion is the multipole stack's own total and profile; adding-doubling the exact
+/// total with the multipole profile scaled to it.
+#[test]
+fn layered_reflectance_takes_the_transport() {
+    let params = SkinParams::preset("african").unwrap();
+    let layers = skin_layers(&params, &Default::default(), 450.0);
+    let radii = [0.0, 0.1, 1.0];
+    let diffusion = LayeredOptions { transport: Transport::Diffusion, ..LayeredOptions::default() };
+    let d = layered_reflectance_with(&layers, &radii, &diffusion).unwrap();
+    let stack = LayerStack::new(&layers).unwrap();
+    assert_eq!(d.total.to_bits(), stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All).to_bits());
+    let a = layered_reflectance_with(&layers, &radii, &LayeredOptions::default()).unwrap();
+    assert_eq!(a.total.to_bits(), total_diffuse_reflectance(&layers, DEFAULT_STREAMS).unwrap().to_bits());
+    for (x, y) in a.profile_per_mm2.iter().zip(&d.profile_per_mm2) {
+        let want = y * (a.total / d.total);
+        assert!((x - want).abs() <= 1e-15 * want, "{x} vs {want}");
+    }
+}
