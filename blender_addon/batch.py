@@ -110,12 +110,14 @@ def sidecar_path(out_blend: str) -> str:
 
 
 def _write_sidecar(out_blend: str, plans: dict[str, dict[str, Any]]) -> None:
-    """Per material: the target, the extended physiology computed with (``extended``), the decisions (``effects``),
+    """Per material: the target, the transport and the extended physiology computed with (``transport``,
+    ``extended``), the decisions (``effects``),
     the core's work (``work``: what was computed, the counts the operator stores on the material), the texture files
     and the per-frame values of an animated constant material (``animation``, or null), as JSON next to the .blend."""
     import json
 
-    content = {name: {"target": plan["target"], "method": plan["method"], "extended": plan.get("extended"),
+    content = {name: {"target": plan["target"], "method": plan["method"], "transport": plan.get("transport"),
+                      "extended": plan.get("extended"),
                       "effects": plan["effects"],
                       "work": plan.get("work", {}), "textures": plan["textures"], "animation": plan.get("animation")}
                for name, plan in plans.items()}
@@ -165,6 +167,9 @@ def _apply_main(argv: list[str]) -> int:
                         help="subsurface method (those of this Blender); the mapping follows the scene's engine")
     parser.add_argument("--accuracy", choices=list(core.ACCURACY_LEVELS), default="DEFAULT",
                         help="accuracy level of the spectral computation")
+    parser.add_argument("--transport", choices=list(core.TRANSPORTS), default=core.DEFAULT_TRANSPORT,
+                        help="how the totals are computed: " + "; ".join(
+                            f"{key}: {text}" for key, text in core.TRANSPORT_DESCRIPTIONS.items()))
     parser.add_argument("--out-dir", default="", help="texture folder ('//' = next to the input .blend)")
     parser.add_argument("--pack", action="store_true", help="pack the textures into the .blend")
     args = parser.parse_args(argv)
@@ -172,7 +177,8 @@ def _apply_main(argv: list[str]) -> int:
         overrides = {n: getattr(args, n) for n in (*core.PARAMETERS, *core.EXTENDED_PARAMETERS)
                      if getattr(args, n) is not None}
         settings = core.SkinSettings.from_preset(args.preset, **overrides).replace(
-            method=args.method, accuracy=args.accuracy, output_dir=args.out_dir, clamp=args.clamp)
+            method=args.method, accuracy=args.accuracy, transport=args.transport, output_dir=args.out_dir,
+            clamp=args.clamp)
         maps = _read_map(args.params_map, None) if args.params_map else {}
         for n in core.PARAMETERS:
             if getattr(args, f"{n}_map"):

@@ -310,7 +310,8 @@ def from_albedo_texture(material: bpy.types.Material) -> dict[str, Any]:
     settings = material.spectral_skin
     # The material's epidermis thickness when the artist set one, else the fit's choice.
     chosen = float(settings.epidermis_thickness_mm)
-    result = core_albedo.fit(pixels, space, None if chosen == EXTENDED_DEFAULTS["epidermis_thickness_mm"] else chosen)
+    result = core_albedo.fit(pixels, space, None if chosen == EXTENDED_DEFAULTS["epidermis_thickness_mm"] else chosen,
+                             settings.transport)
     path = core_albedo.parameter_map_path(bpy.data.filepath, texture_prefix(bpy.data.filepath, material.name))
     core_albedo.write_parameter_map(path, result["params"])
     loaded = bpy.data.images.load(path, check_existing=True)

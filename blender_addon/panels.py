@@ -86,8 +86,9 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
 
 
 class SPECTRAL_SKIN_PT_advanced(bpy.types.Panel):
-    """The extended physiology (core.EXTENDED_PARAMETERS: sliders from the core's table), closed by default: the
-    paper's values unless changed; one value per material."""
+    """The extended physiology (core.EXTENDED_PARAMETERS: sliders from the core's table) and the transport (the
+    core's transports), closed by default: the paper's values and the core's default unless changed; one value per
+    material."""
 
     bl_label = "Advanced"
     bl_idname = "SPECTRAL_SKIN_PT_advanced"
@@ -108,6 +109,7 @@ class SPECTRAL_SKIN_PT_advanced(bpy.types.Panel):
         for name in EXTENDED_PARAMETERS:
             layout.prop(props, name, slider=True)
         layout.label(text="Extended physiology: the defaults are the paper's model", icon="INFO")
+        layout.prop(props, "transport")
 
 
 classes = (SPECTRAL_SKIN_PT_material, SPECTRAL_SKIN_PT_advanced)

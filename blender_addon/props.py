@@ -14,11 +14,14 @@ import spectral_skin
 from .core import (
     ACCURACY_DESCRIPTIONS,
     ACCURACY_LEVELS,
+    DEFAULT_TRANSPORT,
     DEFAULT_WORKING_SPACE,
     EXTENDED_DEFAULTS,
     EXTENDED_PARAMETERS,
     PARAMETER_INFO,
     PARAMETERS,
+    TRANSPORT_DESCRIPTIONS,
+    TRANSPORTS,
     ParameterMap,
     SkinSettings,
     read_map_file,
@@ -73,6 +76,9 @@ METHOD_ITEMS = [
 
 # The core's accuracy levels and their descriptions (core/settings.py).
 ACCURACY_ITEMS = [(key, name.title(), ACCURACY_DESCRIPTIONS[key]) for key, name in ACCURACY_LEVELS.items()]
+# The core's transports and their descriptions (core/settings.py), the core's default first.
+TRANSPORT_ITEMS = [(key, name.replace("_", "-").title(), TRANSPORT_DESCRIPTIONS[key])
+                   for key, name in TRANSPORTS.items()]
 
 
 # True while a preset writes the parameters, so that their update does not switch the menu to Custom (nor compute the
@@ -87,7 +93,7 @@ def update_swatch(props: SpectralSkinSettings) -> None:
     leave the swatch as it was (Apply reports them)."""
     values = {name: float(getattr(props, name)) for name in (*PARAMETERS, *EXTENDED_PARAMETERS)}
     try:
-        props.swatch_value = swatch_albedo(values, scene_working_space())
+        props.swatch_value = swatch_albedo(values, scene_working_space(), props.transport)
     except (spectral_skin.SpectralSkinError, ValueError):
         pass
 
@@ -192,6 +198,10 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     accuracy: bpy.props.EnumProperty(
         name="Accuracy", description="Accuracy of the spectral computation (docs/accuracy-vs-time.md)",
         items=ACCURACY_ITEMS, default="DEFAULT")
+    transport: bpy.props.EnumProperty(
+        name="Transport", description="How the skin's total reflectance (Base Color, and the scale of the profile "
+        "the radius is fitted to) is computed: the core's transports",
+        items=TRANSPORT_ITEMS, default=DEFAULT_TRANSPORT, update=lambda self, _context: update_swatch(self))
     output_dir: bpy.props.StringProperty(
         name="Texture Folder",
         description="Folder for the texture maps computed from parameter maps ('//' is the .blend's folder); the "
@@ -300,7 +310,8 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
     output_dir = texture_folder(props) if maps and props.mode == "BAKED" else ""
     target = scene_target(scene)
     return SkinSettings(
-        **{name: getattr(props, name) for name in (*PARAMETERS, *EXTENDED_PARAMETERS)}, method=props.method, accuracy=props.accuracy, maps=maps,
+        **{name: getattr(props, name) for name in (*PARAMETERS, *EXTENDED_PARAMETERS)}, method=props.method, accuracy=props.accuracy,
+        transport=props.transport, maps=maps,
         clamp=props.clamp, output_dir=output_dir, file_prefix=texture_prefix(bpy.data.filepath, material.name),
         scale_length=scene.unit_settings.scale_length, working_space=scene_working_space(),
         blender=target["blender"], engine=target["engine"], mode=props.mode)

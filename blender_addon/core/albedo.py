@@ -15,7 +15,7 @@ from typing import Any
 
 import spectral_skin
 
-from .settings import EXTENDED_DEFAULTS, EXTENDED_PARAMETERS, PARAMETERS, WORKING_SPACES
+from .settings import DEFAULT_TRANSPORT, EXTENDED_DEFAULTS, EXTENDED_PARAMETERS, PARAMETERS, TRANSPORTS, WORKING_SPACES
 
 # Blender's names of the image colour spaces whose 8/16-bit values are sRGB-encoded Rec.709.
 SRGB_NAMES = ("sRGB",)
@@ -59,8 +59,10 @@ def linear_albedo(pixels: Any, colorspace: str, is_float: bool, scene_space: str
                      f"8/16-bit image in {', '.join((*SRGB_NAMES, *LINEAR_NAMES))}, or any float image")
 
 
-def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None) -> dict[str, Any]:
-    """The core's per-texel fit (``spectral_skin.fit_albedo_map``) and what the operator needs of it:
+def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
+        transport: str = DEFAULT_TRANSPORT) -> dict[str, Any]:
+    """The core's per-texel fit (``spectral_skin.fit_albedo_map``, of the model with ``transport``, a key of
+    TRANSPORTS) and what the operator needs of it:
     {"params": (H, W, 4) float32, "residual_delta_e00": (H, W), "extended": the extended physiology the parameters
     hold for (the fit's where it reports them, else the thickness given, else the defaults), "median_delta_e00",
     "max_delta_e00"}. Raises spectral_skin.SpectralSkinError when the core refuses the input; RuntimeError when this
@@ -70,7 +72,8 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None) -
     fit_map: Any = getattr(spectral_skin, "fit_albedo_map", None)
     if not callable(fit_map):
         raise RuntimeError(f"From Albedo Texture {UNAVAILABLE}")
-    result = fit_map(albedo, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm)
+    keywords: dict[str, Any] = {} if transport == DEFAULT_TRANSPORT else {"transport": TRANSPORTS[transport]}
+    result = fit_map(albedo, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm, **keywords)
     params = np.asarray(result["params"], dtype=np.float32)
     residual = np.asarray(result["residual_delta_e00"], dtype=np.float32)
     if params.shape != (*albedo.shape[:2], len(PARAMETERS)) or residual.shape != albedo.shape[:2]:

@@ -22,7 +22,7 @@ import hashlib
 from typing import Any
 
 from .plan import extended_keywords
-from .settings import ACCURACY_LEVELS, EXTENDED_PARAMETERS, PARAMETER_INFO, SkinSettings
+from .settings import ACCURACY_LEVELS, DEFAULT_TRANSPORT, EXTENDED_PARAMETERS, PARAMETER_INFO, TRANSPORTS, SkinSettings
 from .targets import method_name
 
 
@@ -43,13 +43,15 @@ MAX_NAME = 63 - len(" Base Color")
 
 def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
     """The name of the node group (and the prefix of its two images) for the table a material needs: one per table
-    key (Blender version, engine, method, accuracy, working space, the extended physiology the table is baked with;
-    the default accuracy, Linear Rec.709 and the paper's extended values left out), shared by the materials that need
-    the same: changing an extended value gives another name, so Apply computes that table. A name too long for
+    key (Blender version, engine, method, accuracy, transport, working space, the extended physiology it is baked with;
+    the default accuracy and transport, Linear Rec.709, the paper's extended values left out), shared by materials that
+    need the same: changing an extended value gives another name, so Apply computes that table. A name too long for
     Blender ends in a hash of the whole key."""
     parts = [settings.blender or "current", settings.engine, table_method(settings, overrides)]
     if settings.accuracy != "DEFAULT":
         parts.append(settings.accuracy.lower())
+    if settings.transport != DEFAULT_TRANSPORT:
+        parts.append(TRANSPORTS[settings.transport])
     if settings.working_space != "Linear Rec.709":
         parts.append(settings.working_space.removeprefix("Linear "))
     changed = settings.changed_extended()
@@ -71,6 +73,7 @@ def shader_table(settings: SkinSettings, overrides: dict[str, str] | None) -> di
     extended = extended_keywords(spectral_skin.shader_table, settings, "extended physiology in Live mode")
     return dict(spectral_skin.shader_table(method=table_method(settings, overrides), blender=settings.blender,
                                            engine=settings.engine, accuracy=ACCURACY_LEVELS[settings.accuracy],
+                                           **settings.transport_keywords(),
                                            working_space=settings.working_space, **extended))
 
 

@@ -16,6 +16,7 @@
 - ``work``: what the core computed for this plan, as it reports it (``evaluate(...)["work"]``: wavelengths,
   transform samples, radial profiles, radius fits, specular evaluations; or ``maps(...)["report"]["work"]``: texels,
   evaluations, table nodes built, table lookups, radius fits, specular evaluations, texels per output);
+- ``transport``: the core's transport name the totals were computed with ("adding_doubling" or "diffusion");
 - ``extended``: the extended physiology the core computed with ({epidermis_thickness_mm, baseline_absorption_scale,
   blood_oxygenation}: the settings', one value per material; the paper's values by default);
 - ``computed``: {"radius": bool, "specular": bool}: whether the core was asked for the radius and the specular inputs
@@ -37,7 +38,16 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .settings import ACCURACY_LEVELS, EXTENDED_PARAMETERS, PARAMETER_INFO, PARAMETERS, SkinSettings, check
+from .settings import (
+    ACCURACY_LEVELS,
+    DEFAULT_TRANSPORT,
+    EXTENDED_PARAMETERS,
+    PARAMETER_INFO,
+    PARAMETERS,
+    TRANSPORTS,
+    SkinSettings,
+    check,
+)
 from .targets import method_name
 
 METRES_PER_MM = 1e-3
@@ -76,15 +86,17 @@ def extended_keywords(function: Callable[..., Any], settings: SkinSettings, what
     return changed
 
 
-def swatch_albedo(values: dict[str, float], working_space: str) -> list[float]:
+def swatch_albedo(values: dict[str, float], working_space: str, transport: str = DEFAULT_TRANSPORT) -> list[float]:
     """The panel's albedo swatch: the skin's total diffuse reflectance (``evaluate(outputs=["albedo"])``, linear RGB
-    in ``working_space``) of constant values (the four parameters and the extended physiology; an extended one left
-    out takes its default)."""
+    in ``working_space``, with ``transport``, a key of TRANSPORTS) of constant values (the four parameters and the
+    extended physiology; an extended one left out takes its default)."""
     import spectral_skin
 
-    extended: dict[str, Any] = {p: values[p] for p in EXTENDED_PARAMETERS if p in values}
+    keywords: dict[str, Any] = {p: values[p] for p in EXTENDED_PARAMETERS if p in values}
+    if transport != DEFAULT_TRANSPORT:
+        keywords["transport"] = TRANSPORTS[transport]
     ev = spectral_skin.evaluate(*(values[p] for p in PARAMETERS), outputs=["albedo"], working_space=working_space,
-                                **extended)
+                                **keywords)
     return _rgb(ev["diffuse_reflectance_rgb"])
 
 def subsurface_scale(scale_length: float) -> float:
@@ -139,6 +151,7 @@ def make_plan(settings: SkinSettings, progress: Any = None, *, radius: bool = Tr
     plan["computed"] = {"radius": radius, "specular": specular}
     plan["extended"] = settings.extended()
     plan["method"] = settings.method
+    plan["transport"] = TRANSPORTS[settings.transport]
     plan["working_space"] = settings.working_space
     plan["scale"] = subsurface_scale(settings.scale_length)
     target = plan["target"]
@@ -158,7 +171,8 @@ def _plan_from_constants(settings: SkinSettings, radius: bool, specular: bool) -
     outputs = ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]
     ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"], outputs=outputs,
                                 accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
-                                blender=settings.blender, engine=settings.engine, **settings.extended())
+                                blender=settings.blender, engine=settings.engine, **settings.transport_keywords(),
+                                **settings.extended())
     albedo = _rgb(ev["diffuse_reflectance_rgb"])
     radius_mm: list[float] | None = None
     base_color = albedo
@@ -223,7 +237,8 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
     result = spectral_skin.maps(**inputs, method=method_name(settings.method if radius else "BURLEY"),
                                 outputs=outputs, accuracy=ACCURACY_LEVELS[settings.accuracy],
                                 working_space=settings.working_space, clamp=settings.clamp, progress=progress,
-                                blender=settings.blender, engine=settings.engine, **extended)
+                                blender=settings.blender, engine=settings.engine, **settings.transport_keywords(),
+                                **extended)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)

@@ -281,7 +281,7 @@ _BOUNDS: dict[tuple[Any, ...], tuple[float, dict[str, int]]] = {}
 
 def radius_bound_mm(settings: Any) -> tuple[float, dict[str, int]]:
     """The largest Subsurface Radius × Scale (mm) any skin parameters give for the settings' method, target,
-    accuracy, working space and extended physiology (one value per material: a thinner epidermis or less baseline
+    accuracy, transport, working space and extended physiology (one value per material: a thinner epidermis or less baseline
     absorption widens the radius): the largest over the grid of :data:`BOUND_MELANIN_FRACTIONS` ×
     :data:`BOUND_MELANIN_BLENDS`, no blood; and the core's work for it (summed over the grid; computed once per
     process and key)."""
@@ -291,8 +291,8 @@ def radius_bound_mm(settings: Any) -> tuple[float, dict[str, int]]:
     from .targets import method_name
 
     extended = settings.changed_extended()
-    key = (settings.method, settings.blender, settings.engine, settings.accuracy, settings.working_space,
-           tuple(sorted(extended.items())))
+    key = (settings.method, settings.blender, settings.engine, settings.accuracy, settings.transport,
+           settings.working_space, tuple(sorted(extended.items())))
     if key not in _BOUNDS:
         melanin_max = PARAMETER_INFO["melanin"].high
         largest, work = 0.0, dict[str, int]()
@@ -301,7 +301,7 @@ def radius_bound_mm(settings: Any) -> tuple[float, dict[str, int]]:
                 ev = spectral_skin.evaluate(fraction * melanin_max, blend, 0.0, 0.0,
                                             outputs=["radius"], accuracy=ACCURACY_LEVELS[settings.accuracy],
                                             working_space=settings.working_space, blender=settings.blender,
-                                            engine=settings.engine, **extended)
+                                            engine=settings.engine, **settings.transport_keywords(), **extended)
                 largest = max(largest, _largest(ev["methods"][method_name(settings.method)]["subsurface_radius_mm"]))
                 work = {k: work.get(k, 0) + v for k, v in ev["work"].items()}
         _BOUNDS[key] = (largest, work)

@@ -44,6 +44,13 @@ MODES = ("BAKED", "LIVE")
 ACCURACY_LEVELS = {a["name"].upper(): a["name"] for a in spectral_skin.accuracy_levels()}
 ACCURACY_DESCRIPTIONS = {a["name"].upper(): a["description"] for a in spectral_skin.accuracy_levels()}
 
+# The core's transports (``spectral_skin.transports()``): how each wavelength's total diffuse reflectance is computed
+# (exact adding-doubling, the core's default, or the paper's diffusion). Blender's enum identifier -> the core's name;
+# TRANSPORT_DESCRIPTIONS: the core's one line for each; DEFAULT_TRANSPORT: the identifier of the core's default.
+TRANSPORTS = {t["name"].upper(): t["name"] for t in spectral_skin.transports()}
+TRANSPORT_DESCRIPTIONS = {t["name"].upper(): t["description"] for t in spectral_skin.transports()}
+DEFAULT_TRANSPORT = next(t["name"].upper() for t in spectral_skin.transports() if t["default"])
+
 # Greek letters for the core's ASCII-spelled symbols ("beta_m" -> "β_m"), for labels.
 _GREEK = {"beta": "β", "rho": "ρ"}
 
@@ -111,6 +118,8 @@ class SkinSettings:
     engine: str = "cycles"
     # Accuracy level of the spectral computation (a key of ACCURACY_LEVELS).
     accuracy: str = "DEFAULT"
+    # How the totals are computed (a key of TRANSPORTS; the Advanced settings).
+    transport: str = DEFAULT_TRANSPORT
     # parameter name -> ParameterMap; a parameter with a map ignores its constant.
     maps: dict[str, ParameterMap] = field(default_factory=dict)
     # Clamp NaN, infinite and out-of-range texels of the maps into range instead of refusing them.
@@ -164,6 +173,11 @@ class SkinSettings:
         """The extended values that differ from the paper's (the defaults): what a core call must be given."""
         return {p: v for p, v in self.extended().items() if v != EXTENDED_DEFAULTS[p]}
 
+    def transport_keywords(self) -> dict[str, Any]:
+        """The core's ``transport=`` keyword for the settings' transport: given whenever it is not the core's
+        default (the default calls the core as before, as the extended physiology's keywords do)."""
+        return {} if self.transport == DEFAULT_TRANSPORT else {"transport": TRANSPORTS[self.transport]}
+
 
 def check(settings: SkinSettings) -> None:
     """Raise ``spectral_skin.SpectralSkinError`` (a ValueError) for settings Blender would reject."""
@@ -173,6 +187,9 @@ def check(settings: SkinSettings) -> None:
     if settings.accuracy not in ACCURACY_LEVELS:
         raise spectral_skin.SpectralSkinError(
             f"accuracy must be one of {', '.join(ACCURACY_LEVELS)}; got {settings.accuracy!r}")
+    if settings.transport not in TRANSPORTS:
+        raise spectral_skin.SpectralSkinError(
+            f"transport must be one of {', '.join(TRANSPORTS)}; got {settings.transport!r}")
     if not settings.scale_length > 0.0:
         raise spectral_skin.SpectralSkinError(
             f"scene unit scale must be > 0 (metres per scene unit); got {settings.scale_length}")

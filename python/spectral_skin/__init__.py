@@ -10,8 +10,9 @@ Functions:
     parameters: each parameter's name, symbol, label, meaning, unit and range (the core's parameter table).
     parameter_ranges: the allowed range of each parameter.
     accuracy_levels: the named accuracy levels and what each is for.
+    transports: how the totals are computed (adding-doubling, the default, or the paper's diffusion).
     presets: the named parameter sets.
-    layered_reflectance: the layered diffusion solver alone, for checks against other solvers.
+    layered_reflectance: the layered solver alone (exact total, multipole profile), for checks against other solvers.
     maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
     blender_targets: the Blender versions, engines and subsurface methods the mappings target.
     read_parameter_map: parameter maps read from an EXR, PNG or TIFF file by the CLI's rules.
@@ -47,6 +48,7 @@ from ._core import (
     profile,
     read_parameter_map,
     shader_table,
+    transports,
     write_maps,
     write_shader_table,
 )
@@ -70,6 +72,7 @@ __all__ = [
     "profile",
     "read_parameter_map",
     "shader_table",
+    "transports",
     "write_maps",
     "write_shader_table",
 ]

@@ -33,6 +33,7 @@ __all__ = [
     "profile",
     "read_parameter_map",
     "shader_table",
+    "transports",
     "write_maps",
     "write_shader_table",
 ]
@@ -56,6 +57,7 @@ _Parameter = Literal["melanin", "melanin_blend", "hemoglobin", "oiliness"]
 _ExtendedParameter = Literal["epidermis_thickness_mm", "baseline_absorption_scale", "blood_oxygenation"]
 _RgbMapping = Literal["linear", "non_negative"]
 _Boundaries = Literal["paper", "capped"]
+_Transport = Literal["adding_doubling", "diffusion"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
 _MapOutputName = Literal["albedo", "radius", "specular"]
 
@@ -115,6 +117,8 @@ def evaluate(
     engine: _Engine | str = "cycles",
     rgb_mapping: _RgbMapping | str = "linear",
     boundaries: _Boundaries | str = "paper",
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.evaluate)``."""
 
@@ -140,6 +144,8 @@ def profile(
     working_space: _WorkingSpace | str = "Linear Rec.709",
     rgb_mapping: _RgbMapping | str = "linear",
     boundaries: _Boundaries | str = "paper",
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
 ) -> dict[str, _FloatArray]:
     """Documented once, in the compiled module: ``help(spectral_skin.profile)``."""
 
@@ -172,6 +178,16 @@ def parameter_ranges() -> dict[str, tuple[float, float]]:
 def accuracy_levels() -> list[_AccuracyLevelSpec]:
     """Documented once, in the compiled module: ``help(spectral_skin.accuracy_levels)``."""
 
+class _TransportSpec(TypedDict):
+    """A transport (see :func:`transports`)."""
+
+    name: str
+    description: str
+    default: bool
+
+def transports() -> list[_TransportSpec]:
+    """Documented once, in the compiled module: ``help(spectral_skin.transports)``."""
+
 def presets() -> dict[str, _Preset]:
     """Documented once, in the compiled module: ``help(spectral_skin.presets)``."""
 
@@ -180,6 +196,8 @@ def layered_reflectance(
     radii_mm: npt.ArrayLike,
     *,
     boundaries: _Boundaries | str = "paper",
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
 ) -> tuple[float, _FloatArray]:
     """Documented once, in the compiled module: ``help(spectral_skin.layered_reflectance)``."""
 
@@ -234,6 +252,8 @@ def maps(
     engine: _Engine | str = "cycles",
     progress: Callable[[int, int], bool | None] | None = None,
     boundaries: _Boundaries | str = "paper",
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
 ) -> _Maps:
     """Documented once, in the compiled module: ``help(spectral_skin.maps)``."""
 
@@ -290,6 +310,8 @@ def shader_table(
     epidermis_thickness_mm: float | None = None,
     baseline_absorption_scale: float | None = None,
     blood_oxygenation: float | None = None,
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
 ) -> _ShaderTable:
     """Documented once, in the compiled module: ``help(spectral_skin.shader_table)``."""
 
@@ -317,6 +339,8 @@ def fit_albedo(
     melanin_blend_prior: float | None = None,
     prior_weight: float | None = None,
     ambiguity_delta_e: float | None = None,
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo)``."""
 
@@ -332,6 +356,8 @@ def fit_albedo_map(
     prior_weight: float | None = None,
     ambiguity_delta_e: float | None = None,
     fit_epidermis_thickness: bool = False,
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo_map)``."""
 def fit_spectrum(
@@ -343,5 +369,7 @@ def fit_spectrum(
     specular: Literal["free", "fresnel"] | float | None = None,
     objective: Literal["reflectance", "cielab"] = "reflectance",
     starts: int | None = None,
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_spectrum)``."""

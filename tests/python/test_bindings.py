@@ -60,7 +60,9 @@ def jensen_dipole(r_mm, sigma_a, sigma_s_reduced, eta):
 
 
 def test_readme_line_matches_jensen_closed_form():
-    total, profile = spectral_skin.layered_reflectance([(float("inf"), 0.01, 1.0, 1.4)], [0.5, 1.0])
+    # Jensen's dipole is diffusion: the multipole alone (the default transport's total is exact radiative transfer).
+    total, profile = spectral_skin.layered_reflectance([(float("inf"), 0.01, 1.0, 1.4)], [0.5, 1.0],
+                                                       transport="diffusion")
     assert isinstance(total, float)
     assert_float_array(profile, (2,))
     expected = jensen_total(0.01, 1.0, 1.4)
@@ -70,7 +72,8 @@ def test_readme_line_matches_jensen_closed_form():
 @pytest.mark.parametrize("sigma_a, sigma_s_reduced", [(0.01, 1.0), (0.2, 3.0), (1.0, 0.5)])
 def test_semi_infinite_profile_is_jensen_dipole(sigma_a, sigma_s_reduced):
     radii = np.concatenate([[0.0], np.geomspace(1e-3, 20.0, 30)])
-    total, profile = spectral_skin.layered_reflectance([(math.inf, sigma_a, sigma_s_reduced, 1.4)], radii)
+    total, profile = spectral_skin.layered_reflectance([(math.inf, sigma_a, sigma_s_reduced, 1.4)], radii,
+                                                       transport="diffusion")
     expected = jensen_dipole(radii, sigma_a, sigma_s_reduced, 1.4)
     np.testing.assert_allclose(profile, expected, rtol=1e-9, atol=0)
     assert total == pytest.approx(jensen_total(sigma_a, sigma_s_reduced, 1.4), rel=1e-12)
@@ -264,7 +267,7 @@ def test_error_and_warning_classes_are_exported():
         "SpectralSkinError", "SpectralSkinIOError", "SpectralSkinWarning", "__version__", "blender_targets", "evaluate",
         "fit_albedo", "fit_albedo_map", "fit_spectrum", "layered_reflectance", "maps",
         "parameter_ranges", "parameters", "accuracy_levels", "presets", "profile", "read_parameter_map", "shader_table",
-        "write_maps", "write_shader_table"
+        "transports", "write_maps", "write_shader_table"
     }
 
 
