@@ -106,10 +106,10 @@ class SPECTRAL_SKIN_PT_advanced(bpy.types.Panel):
         layout = self.layout
         layout.use_property_split = True
         props = context.material.spectral_skin
+        layout.prop(props, "transport")
         for name in EXTENDED_PARAMETERS:
             layout.prop(props, name, slider=True)
         layout.label(text="Extended physiology: the defaults are the paper's model", icon="INFO")
-        layout.prop(props, "transport")
 
 
 classes = (SPECTRAL_SKIN_PT_material, SPECTRAL_SKIN_PT_advanced)

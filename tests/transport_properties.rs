@@ -49,7 +49,9 @@ fn total(layers: &[Layer]) -> f64 {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: CASES, rng_seed: RngSeed::Fixed(20), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: CASES, rng_seed: RngSeed::Fixed(20), failure_persistence: None, ..ProptestConfig::default()
+    })]
 
     /// (a) 100 slices of one material are the homogeneous slab of their summed thickness (within 1e-3 of it), over air
     /// or over any other stack below.
