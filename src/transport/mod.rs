@@ -4,6 +4,7 @@
 
 pub mod adding_doubling;
 pub mod half_space;
+mod matrix;
 
 use serde::{Deserialize, Serialize};
 
@@ -42,7 +43,9 @@ impl Transport {
                 "exact totals (adding-doubling radiative transfer) with the multipole's profile shape: right for every \
                  skin tone (default)"
             }
-            Transport::Diffusion => "the paper's layered multipole diffusion: reproduces DJ2006, too bright for dark skin",
+            Transport::Diffusion => {
+                "the paper's layered multipole diffusion: reproduces DJ2006, too bright for dark skin"
+            }
         }
     }
 }
