@@ -88,6 +88,15 @@ impl Layer {
     }
 }
 
+/// At least one layer, each valid ([`Layer`]'s ranges), infinite thickness only for the last.
+pub(crate) fn validate_layers(layers: &[Layer]) -> Result<(), SkinError> {
+    if layers.is_empty() {
+        return Err(SkinError::invalid("layers", "need at least one layer"));
+    }
+    let last = layers.len() - 1;
+    layers.iter().enumerate().try_for_each(|(i, layer)| layer.validate(i, i == last))
+}
+
 /// A number as written by hand where that is short (0.25, -0.1, 1e101, 1e-310).
 fn readable(x: f64) -> String {
     if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
@@ -155,13 +164,8 @@ impl LayerStack {
 
     /// [`LayerStack::new`] with the boundaries set up as `boundaries` says.
     pub fn with_boundaries(layers: &[Layer], boundaries: Boundaries) -> Result<LayerStack, SkinError> {
-        if layers.is_empty() {
-            return Err(SkinError::invalid("layers", "need at least one layer"));
-        }
+        validate_layers(layers)?;
         let last = layers.len() - 1;
-        for (i, layer) in layers.iter().enumerate() {
-            layer.validate(i, i == last)?;
-        }
         // The blend weight w of each layer (1 - w of its own index, w of what lies beyond it).
         let ballistic: Vec<f64> = layers
             .iter()

@@ -4,6 +4,7 @@
 
 pub mod adding_doubling;
 pub mod half_space;
+mod matrix;
 
 use serde::{Deserialize, Serialize};
 
