@@ -7,6 +7,7 @@ use crate::color::WavelengthPlacement;
 use crate::diffusion::{HankelQuadrature, MultipoleTerms};
 use crate::error::{check_range, SkinError};
 use crate::fit::RadiusFit;
+use crate::transport::adding_doubling::validate_streams;
 use crate::transport::{DEFAULT_STREAMS, STREAMS_RANGE};
 
 /// Radii of radial profiles: `count` log-spaced values from `r_min_mm` to `r_max_mm`.
@@ -144,15 +145,8 @@ impl Accuracy {
             2.0,
             200.0,
         )?;
-        check_streams(self.streams)
+        validate_streams(self.streams)
     }
-}
-
-/// `streams` if in `STREAMS_RANGE`, else an error naming `streams` and the range (every front that takes streams).
-pub(crate) fn check_streams(streams: usize) -> Result<(), SkinError> {
-    let (lo, hi) = STREAMS_RANGE;
-    check_range("streams", "adding-doubling streams per hemisphere", streams as f64, lo as f64, hi as f64)?;
-    Ok(())
 }
 
 /// Named accuracy levels, each a point on the error-time fronts of docs/accuracy-vs-time.md.

@@ -1,6 +1,8 @@
 //! Property tests over the whole domain of `layered_reflectance` and `evaluate`, and beyond it (issue 10): random stacks
 //! of 1-4 layers with coefficients 1e-8..1e5 per mm, thicknesses 1e-6 mm..infinity, every accepted ior, radii
-//! 1e-6..1e4 mm. Each property states the class of inputs it holds on; docs/robustness.md lists the classes, the
+//! 1e-6..1e4 mm. The stacks have index steps, which only the multipole takes (the exact transport refuses them), so the
+//! public front is asked for `Transport::Diffusion` (`multipole_reflectance`); tests/transport_properties.rs has the
+//! exact transport's properties. Each property states the class of inputs it holds on; docs/robustness.md lists the classes, the
 //! counts and what is still outside. `PROPTEST_CASES` scales every test (default 256 cases each; CI runs the default).
 
 use std::f64::consts::PI;
@@ -8,7 +10,7 @@ use std::f64::consts::PI;
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use spectral_skin::diffusion::{
-    layered_reflectance, raw_reflectance_profiles, Boundaries, Combination, HankelQuadrature, Layer, LayerStack,
+    multipole_reflectance, raw_reflectance_profiles, Boundaries, Combination, HankelQuadrature, Layer, LayerStack,
     MultipoleTerms, Slab, IOR_RANGE,
 };
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
@@ -62,7 +64,7 @@ proptest! {
     /// has R >= 0, T >= 0 and R + T <= 1 at every frequency.
     #[test]
     fn outputs_are_bounded(layers in any_stack(), radii in radii()) {
-        let (r, profile) = layered_reflectance(&layers, &radii).unwrap();
+        let (r, profile) = multipole_reflectance(&layers, &radii).unwrap();
         prop_assert!(r.is_finite() && (0.0..=1.0).contains(&r), "total {}", r);
         prop_assert!(profile.iter().all(|p| p.is_finite() && *p >= 0.0), "{:?}", profile);
         let stack = LayerStack::new(&layers).unwrap();
@@ -133,7 +135,7 @@ proptest! {
         }
         // 2.01..100 is accepted for a coefficient and a thickness; only ior must refuse it.
         let refused = match field { 3 => true, _ => !(bad > 1e-12 && bad <= 1e5) };
-        let result = layered_reflectance(&layers, &[1.0]);
+        let result = multipole_reflectance(&layers, &[1.0]);
         if refused {
             let e = result.unwrap_err().to_string();
             prop_assert!(e.contains(&format!("layer {k}")) && e.contains(name), "{}", e);
@@ -145,10 +147,10 @@ proptest! {
     /// A profile value depends only on its radius: asked alone or with others, it is the same number.
     #[test]
     fn profile_value_is_independent_of_the_other_radii(layers in any_stack(), radii in radii(), extra in radii()) {
-        let (_, alone) = layered_reflectance(&layers, &radii[..1]).unwrap();
+        let (_, alone) = multipole_reflectance(&layers, &radii[..1]).unwrap();
         let mut all = extra.clone();
         all.insert(extra.len() / 2, radii[0]);
-        let (_, with_others) = layered_reflectance(&layers, &all).unwrap();
+        let (_, with_others) = multipole_reflectance(&layers, &all).unwrap();
         prop_assert_eq!(alone[0], with_others[extra.len() / 2]);
     }
 

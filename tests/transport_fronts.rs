@@ -126,11 +126,11 @@ fn streams_per_level() {
     assert_eq!(Accuracy::default().refined().streams, 2 * DEFAULT_STREAMS);
 }
 
-/// Streams outside `STREAMS_RANGE` are an error naming `streams` and the range, on every Rust front.
+/// Streams outside `STREAMS_RANGE` or odd are an error naming `streams` and the range, on every Rust front.
 #[test]
 fn bad_streams_are_clear_errors() {
     let (lo, hi) = STREAMS_RANGE;
-    for bad in [0, lo - 1, hi + 1, 1000] {
+    for bad in [0, lo - 1, 7, hi + 1, 1000] {
         let named = |e: String| {
             assert!(
                 e.contains("streams") && e.contains(&format!("[{lo}, {hi}]")) && e.contains(&bad.to_string()),

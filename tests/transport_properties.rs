@@ -18,11 +18,11 @@ fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
     (lo.ln()..hi.ln()).prop_map(f64::exp)
 }
 
-/// A skin-like and beyond layer: absorption 1e-4..1e2 per mm, reduced scattering 1e-2..1e3 per mm, thickness
-/// 1e-3..10 mm, any accepted ior. The smallest albedo gap (1e-7) keeps a semi-infinite total below 1.
-fn any_layer() -> impl Strategy<Value = Layer> {
-    (log_uniform(1e-3, 10.0), log_uniform(1e-4, 1e2), log_uniform(1e-2, 1e3), IOR_RANGE.0..=IOR_RANGE.1).prop_map(
-        |(thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior)| Layer {
+/// A skin-like and beyond layer of index `ior`: absorption 1e-4..1e2 per mm, reduced scattering 1e-2..1e3 per mm,
+/// thickness 1e-3..10 mm. The smallest albedo gap (1e-7) keeps a semi-infinite total below 1.
+fn any_layer(ior: f64) -> impl Strategy<Value = Layer> {
+    (log_uniform(1e-3, 10.0), log_uniform(1e-4, 1e2), log_uniform(1e-2, 1e3)).prop_map(
+        move |(thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm)| Layer {
             thickness_mm,
             sigma_a_per_mm,
             sigma_s_reduced_per_mm,
@@ -31,13 +31,16 @@ fn any_layer() -> impl Strategy<Value = Layer> {
     )
 }
 
-/// `count` layers; the last one semi-infinite half of the time.
+/// `count` layers of one index (any accepted one: the adding-doubling solver refuses index steps inside a stack, with
+/// an error naming them), the last one semi-infinite half of the time.
 fn any_stack(count: std::ops::RangeInclusive<usize>) -> impl Strategy<Value = Vec<Layer>> {
-    (prop::collection::vec(any_layer(), count), any::<bool>()).prop_map(|(mut layers, semi)| {
-        if let (true, Some(last)) = (semi, layers.last_mut()) {
-            last.thickness_mm = INF;
-        }
-        layers
+    (IOR_RANGE.0..=IOR_RANGE.1, any::<bool>()).prop_flat_map(move |(ior, semi)| {
+        prop::collection::vec(any_layer(ior), count.clone()).prop_map(move |mut layers| {
+            if let (true, Some(last)) = (semi, layers.last_mut()) {
+                last.thickness_mm = INF;
+            }
+            layers
+        })
     })
 }
 
@@ -54,9 +57,11 @@ proptest! {
     })]
 
     /// (a) 100 slices of one material are the homogeneous slab of their summed thickness (within 1e-3 of it), over air
-    /// or over any other stack below.
+    /// or over up to two other layers below.
     #[test]
-    fn slices_are_the_homogeneous_medium(material in any_layer(), below in any_stack(0..=2)) {
+    fn slices_are_the_homogeneous_medium(stack in any_stack(1..=3)) {
+        let (first, below) = stack.split_first().unwrap();
+        let material = Layer { thickness_mm: if first.thickness_mm.is_finite() { first.thickness_mm } else { 5.0 }, ..*first };
         let whole: Vec<Layer> = std::iter::once(material).chain(below.iter().copied()).collect();
         let slice = Layer { thickness_mm: material.thickness_mm / 100.0, ..material };
         let sliced: Vec<Layer> = std::iter::repeat_n(slice, 100).chain(below.iter().copied()).collect();

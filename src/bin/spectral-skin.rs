@@ -284,7 +284,7 @@ struct TransportArgs {
     /// reproduces DJ2006).
     #[arg(long, value_enum, default_value_t = Transport::default())]
     transport: Transport,
-    /// Streams (directions per hemisphere) of the adding-doubling solver, 2..64 [default: the level's, 8 at the
+    /// Streams (directions per hemisphere) of the adding-doubling solver, even, 2..64 [default: the level's, 8 at the
     /// default level].
     #[arg(long)]
     streams: Option<usize>,

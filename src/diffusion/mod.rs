@@ -77,7 +77,7 @@ pub fn layered_reflectance_with(
     options: &LayeredOptions,
 ) -> Result<LayeredReflectance, SkinError> {
     validate_radii(radii_mm)?;
-    crate::accuracy::check_streams(options.streams)?;
+    crate::transport::adding_doubling::validate_streams(options.streams)?;
     let stack = LayerStack::with_boundaries(layers, options.boundaries)?;
     let multipole_total = stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
     let total = match options.transport {

@@ -90,7 +90,7 @@ impl AlbedoFitOptions {
         )?;
         check_range("prior_weight", "ΔE00 per unit of melanin blend", self.prior_weight, 0.0, 100.0)?;
         check_range("ambiguity_delta_e", "ΔE00 of the ambiguity set", self.ambiguity_delta_e, 1e-6, 100.0)?;
-        crate::accuracy::check_streams(self.streams)?;
+        crate::transport::adding_doubling::validate_streams(self.streams)?;
         Ok(self)
     }
 

@@ -243,7 +243,7 @@ impl SpectrumFitter {
         if options.starts == 0 {
             return Err(SkinError::invalid("starts", "at least one start must be refined"));
         }
-        crate::accuracy::check_streams(options.request.accuracy.streams)?;
+        crate::transport::adding_doubling::validate_streams(options.request.accuracy.streams)?;
         let grid = WavelengthGrid { wavelengths_nm: wavelengths_nm.to_vec() };
         let xyz_weights = grid.xyz_weights();
         let white_xyz = spectrum_to_xyz(&vec![1.0; wavelengths_nm.len()], &xyz_weights);

@@ -229,18 +229,14 @@ pub(super) fn transport_arg(name: &str) -> PyResult<Transport> {
     by_name("transport", name, &ALL_TRANSPORTS)
 }
 
-/// `streams=`: None, or an integer in `STREAMS_RANGE` (an error naming `streams` and the range otherwise).
+/// `streams=`: None, or an even integer in `STREAMS_RANGE` (the solver's rule; an error naming `streams` and the range
+/// otherwise).
 pub(super) fn streams_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
     let Some(Count(n)) = count_arg("streams", obj)? else { return Ok(None) };
     let (lo, hi) = STREAMS_RANGE;
-    let streams = usize::try_from(n).map_err(|_| SkinError::OutOfRange {
-        name: "streams",
-        meaning: "adding-doubling streams per hemisphere",
-        min: lo as f64,
-        max: hi as f64,
-        value: n as f64,
-    })?;
-    crate::accuracy::check_streams(streams)?;
+    let streams = usize::try_from(n)
+        .map_err(|_| invalid("streams", format!("must be an even count in [{lo}, {hi}]; got {n}")))?;
+    crate::transport::adding_doubling::validate_streams(streams)?;
     Ok(Some(streams))
 }
 

@@ -130,8 +130,8 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///     transport: how each wavelength's total diffuse reflectance (the albedo, and the scale of the radial profile
 ///         and of the radius fit's transform) is computed, a name from :func:`transports`: "adding_doubling" (exact
 ///         radiative transfer; the default) or "diffusion" (the paper's layered multipole: reproduces DJ2006).
-///     streams: quadrature directions per hemisphere of the adding-doubling solver, 2..64; None: the level's (8 at
-///         "default"). Unused with transport="diffusion".
+///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; None: the level's
+///         (8 at "default"). Unused with transport="diffusion".
 ///
 /// Returns:
 ///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy" (with "streams"), "model"
@@ -363,7 +363,7 @@ pub(super) fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<L
 ///     radii_mm: 1-D radii in mm, finite and >= 0.
 ///     boundaries: "paper" (the default) or "capped": the multipole's boundary conditions.
 ///     transport: "adding_doubling" (the default) or "diffusion" (the multipole alone), as for :func:`evaluate`.
-///     streams: quadrature directions per hemisphere of the adding-doubling solver, 2..64; None: 8.
+///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; None: 8.
 ///
 /// Returns:
 ///     (total diffuse reflectance, R(r) at radii_mm in mm^-2 as a float64 array of the same length).

@@ -67,6 +67,11 @@ def test_layered_reflectance_takes_the_transport():
     np.testing.assert_allclose(exact_profile, multipole_profile * (exact / multipole), rtol=1e-14, atol=0)
     assert 0 < exact < 1 and 0 < multipole < 1
     assert spectral_skin.layered_reflectance(LAYERS, radii, streams=16)[0] > 0
+    # The exact transport needs one index for every layer; an index step is refused, pointing at diffusion.
+    steps = [(0.25, 0.3, 6.0, 1.4), (float("inf"), 0.2, 3.0, 1.3)]
+    with pytest.raises(SpectralSkinError, match=r"layer 1.*index of refraction.*diffusion"):
+        spectral_skin.layered_reflectance(steps, radii)
+    assert 0 < spectral_skin.layered_reflectance(steps, radii, transport="diffusion")[0] < 1
 
 
 def test_maps_and_shader_table_name_the_transport_and_cache_one_table_each(tmp_path, monkeypatch):
@@ -120,7 +125,7 @@ def test_fits_report_their_transport():
 def test_bad_transport_and_streams_are_clear_errors(call):
     with pytest.raises(SpectralSkinError, match=r'transport.*"adding_doubling", "diffusion"'):
         call(transport="monte_carlo")
-    for bad in (0, 1, 65, -1, 2**40):
+    for bad in (0, 1, 7, 65, -1, 2**40):
         with pytest.raises(SpectralSkinError, match=r"streams.*\[2, 64\]"):
             call(streams=bad)
     with pytest.raises(TypeError, match="streams"):
