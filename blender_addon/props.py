@@ -113,6 +113,11 @@ def _apply_preset(self: SpectralSkinSettings, _context: bpy.types.Context) -> No
     update_swatch(self)
 
 
+def _transport_changed(self: SpectralSkinSettings, _context: bpy.types.Context) -> None:
+    """The transport chosen: the swatch follows (the sliders, and so the preset menu, do not change)."""
+    update_swatch(self)
+
+
 def _parameter_edited(self: SpectralSkinSettings, _context: bpy.types.Context) -> None:
     """A slider moved by hand: the parameters are no longer the preset's, so the menu shows Custom; the swatch
     follows."""
@@ -201,7 +206,7 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
     transport: bpy.props.EnumProperty(
         name="Transport", description="How the skin's total reflectance (Base Color, and the scale of the profile "
         "the radius is fitted to) is computed: the core's transports",
-        items=TRANSPORT_ITEMS, default=DEFAULT_TRANSPORT, update=lambda self, _context: update_swatch(self))
+        items=TRANSPORT_ITEMS, default=DEFAULT_TRANSPORT, update=_transport_changed)
     output_dir: bpy.props.StringProperty(
         name="Texture Folder",
         description="Folder for the texture maps computed from parameter maps ('//' is the .blend's folder); the "
