@@ -27,6 +27,41 @@ impl Matrix {
         m
     }
 
+    pub(crate) fn diagonal(values: &[f64]) -> Matrix {
+        let n = values.len();
+        let mut m = Matrix::zeros(n);
+        for (i, v) in values.iter().enumerate() {
+            m.a[i * n + i] = *v;
+        }
+        m
+    }
+
+    pub(crate) fn transpose(&self) -> Matrix {
+        let n = self.n;
+        let mut t = Matrix::zeros(n);
+        for i in 0..n {
+            for j in 0..n {
+                t.a[j * n + i] = self.a[i * n + j];
+            }
+        }
+        t
+    }
+
+    /// `diag(d) * self`: row i scaled by `d[i]`.
+    pub(crate) fn scale_rows(&self, d: &[f64]) -> Matrix {
+        let n = self.n;
+        let mut m = self.clone();
+        for (row, di) in m.a.chunks_exact_mut(n).zip(d) {
+            row.iter_mut().for_each(|x| *x *= di);
+        }
+        m
+    }
+
+    /// `self * v`.
+    pub(crate) fn mul_vector(&self, v: &[f64]) -> Vec<f64> {
+        self.a.chunks_exact(self.n).map(|row| row.iter().zip(v).map(|(x, y)| x * y).sum()).collect()
+    }
+
     pub(crate) fn n(&self) -> usize {
         self.n
     }
