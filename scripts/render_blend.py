@@ -45,7 +45,9 @@ def stored_engines() -> dict[str, str]:
     """{material name: render engine} of every material Apply set up, from the target stored on it."""
     found = {}
     for material in bpy.data.materials:
-        group = material.get(SETTINGS_PROPERTY)
+        # Blender 5.0+ keeps properties an add-on registered apart from custom properties (system properties).
+        system = material.bl_system_properties_get() if hasattr(material, "bl_system_properties_get") else None
+        group = (system or material).get(SETTINGS_PROPERTY)
         target = group.get(TARGET_KEY) if hasattr(group, "get") else None
         if isinstance(target, str) and "," in target:
             word = target.rsplit(",", 1)[1].strip().upper()

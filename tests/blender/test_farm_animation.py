@@ -112,3 +112,30 @@ def test_reapply_replaces_the_keys_and_remove_clears_them(addon):
     assert path in {c.data_path for c in anim.fcurves(tree)}
     assert bpy.ops.spectral_skin.remove(material="Skin") == {"FINISHED"}
     assert path not in {c.data_path for c in anim.fcurves(tree)}
+
+
+def test_live_reapply_keeps_the_slider_keys_and_the_sockets_own(addon):
+    """Live: re-applying copies the slider's keys again (edited keys follow); a key the artist put on another input
+    socket itself stays; Baked mode removes the group node and its keys."""
+    scene, material = _keyed_scene("LIVE")
+    _apply(scene, material)
+    tree = material.node_tree
+    (group,) = addon_nodes.tagged_nodes(tree, "live")
+    hemoglobin = group.inputs["Hemoglobin"].path_from_id("default_value")
+    group.inputs["Oiliness"].default_value = 0.0
+    group.inputs["Oiliness"].keyframe_insert("default_value", frame=1)
+    oiliness = group.inputs["Oiliness"].path_from_id("default_value")
+    # The artist edits the slider's second key, then applies again.
+    [curve] = [c for c in anim.fcurves(material) if c.data_path == "spectral_skin.hemoglobin"]
+    curve.keyframe_points[1].co = (2.0, 0.08)
+    _apply(scene, material)
+    curves = {c.data_path: c for c in anim.fcurves(tree)}
+    assert oiliness in curves and hemoglobin in curves
+    assert [tuple(p.co) for p in curves[hemoglobin].keyframe_points] == [pytest.approx((1.0, 0.005)),
+                                                                         pytest.approx((2.0, 0.08))]
+    scene.frame_set(2)
+    assert group.inputs["Hemoglobin"].default_value == pytest.approx(0.08)
+    material.spectral_skin.mode = "BAKED"
+    _apply(scene, material)
+    assert not addon_nodes.tagged_nodes(tree, "live")
+    assert not [c for c in anim.fcurves(tree) if c.data_path in (hemoglobin, oiliness)]
