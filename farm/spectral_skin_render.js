@@ -36,7 +36,9 @@ const JOB_TYPE = {
         { key: "render_output_path", type: "string", subtype: "file_path", editable: false,
           eval: "str(Path(abspath(settings.render_output_root), jobname, '######'))",
           description: "Final file path of the frames (#: frame number)" },
-        { key: "blendfile", type: "string", required: true, eval: "bpy.data.filepath", visible: "web",
+        // Filled in by Flamenco's Blender add-on at submission (the path on the shared storage), as for the built-in
+        // job types.
+        { key: "blendfile", type: "string", required: true, visible: "web",
           description: "The .blend to render" },
         { key: "format", type: "string", required: true, eval: "C.scene.render.image_settings.file_format",
           visible: "web" },

@@ -7,7 +7,8 @@ One scene per engine: a row of small UV-mapped slabs under a top camera, one mat
 a parameter map, keyed haemoglobin; Live: constants, a painted map, a painted blush mask, keyed haemoglobin, a
 driven haemoglobin), Apply from the panel's path, saved, frames 1 and 2 rendered here and on the worker. A feature
 passes when its slab's mean colour on the worker equals the session's within the noise of the samples (3 standard
-errors of the slab's pixels; the renders use the same seed, so they are expected identical) at both frames; and the
+errors of the slab's pixels, at least one EEVEE colour step in EEVEE; the renders use the same seed, so they are
+expected identical, and were but for a few EEVEE pixels one step apart in 4.2) at both frames; and the
 animated features must change between the frames (or the comparison could not see frame 1's colour at frame 2).
 
 Run: python -m pytest tests/blender/test_farm_features.py -s   (-s prints the per-feature figures)
@@ -40,6 +41,9 @@ FEATURES = ("baked constants", "baked parameter map", "baked keys", "live consta
 ANIMATED = {"baked keys", "live keys", "live driver"}
 SLAB_M, GAP_M, PX_PER_SLAB, MARGIN_PX = 0.05, 0.01, 16, 3
 SAMPLES = {"CYCLES": 16, "EEVEE": 4}
+# Below the samples' noise: float precision in Cycles (the same seed renders the same image); one colour step in EEVEE,
+# where Blender 4.2 rendered a few pixels one step apart between two processes (max 0.0029, means 1e-4).
+FLOOR = {"CYCLES": 1e-6, "EEVEE": 1.0 / 1024}
 MELANIN_MAP = np.array([[0.01, 0.05, 0.10, 0.20],
                         [0.02, 0.08, 0.15, 0.30],
                         [0.03, 0.12, 0.25, 0.40],
@@ -176,7 +180,7 @@ def test_every_feature_renders_on_a_plain_worker_as_in_the_session(addon, tmp_pa
             mean_here, mean_there = here.mean(axis=0), there.mean(axis=0)
             noise = here.std(axis=0) / np.sqrt(len(here))
             rel = mean_there / mean_here - 1.0
-            ok = bool(np.all(np.abs(mean_there - mean_here) <= 3 * noise + 1e-6))
+            ok = bool(np.all(np.abs(mean_there - mean_here) <= 3 * noise + FLOOR[engine]))
             print(f"\n[farm] Blender {bpy.app.version_string} {engine} {feature} frame {frame}: session "
                   f"{np.array2string(mean_here, precision=4)} worker {np.array2string(mean_there, precision=4)} "
                   f"worker/session - 1 = {np.array2string(rel * 100, precision=3)} % (3 s.e. "

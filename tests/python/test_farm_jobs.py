@@ -66,6 +66,7 @@ def test_job_type_settings(tmp_path):
             "render_output_path", "format"} <= set(keys)
     assert keys["chunk_size"]["type"] == "int32" and keys["reapply"]["type"] == "bool"
     assert keys["frames"]["eval"] == "f'{C.scene.frame_start}-{C.scene.frame_end}'"
+    assert "eval" not in keys["blendfile"]  # Flamenco's add-on fills it with the path on the shared storage
 
 
 def test_render_only_job(tmp_path):
