@@ -88,7 +88,8 @@ def write_keys(target: Any, prop: str, index: int, frames: Sequence[int], values
 
 
 def copy_keys(source: Any, target: Any, prop: str, index: int = -1) -> Any:
-    """Copy the F-curve ``source`` (its keys, handles, interpolation, extrapolation) onto ``target.prop[index]``."""
+    """Copy the F-curve ``source`` (its keys, handles, interpolation, extrapolation, modifiers) onto
+    ``target.prop[index]``."""
     points = source.keyframe_points
     curve = _new_curve(target, prop, index, points[0].co[0] if len(points) else 0.0)
     curve.keyframe_points.add(len(points) - 1)
@@ -98,8 +99,29 @@ def copy_keys(source: Any, target: Any, prop: str, index: int = -1) -> Any:
             setattr(dst, name, getattr(src, name))
     curve.extrapolation = source.extrapolation
     curve.mute = source.mute
+    copy_modifiers(source, curve)
     curve.update()
     return curve
+
+
+# F-curve modifier properties set first: they size or switch the others (a Generator's coefficients).
+_MODIFIER_FIRST = ("mode", "poly_order", "function_type")
+
+
+def copy_modifiers(source: Any, curve: Any) -> None:
+    """Replace ``curve``'s F-curve modifiers by copies of ``source``'s (Cycles, Noise, Generator, ...: every
+    writable plain property; an Envelope's control points are not copied)."""
+    for modifier in list(curve.modifiers):
+        curve.modifiers.remove(modifier)
+    for original in source.modifiers:
+        copy = curve.modifiers.new(original.type)
+        names = [p.identifier for p in original.bl_rna.properties
+                 if not p.is_readonly and p.type != "POINTER" and p.identifier not in {"rna_type", "type"}]
+        for name in sorted(names, key=lambda n: n not in _MODIFIER_FIRST):
+            try:
+                setattr(copy, name, getattr(original, name))
+            except (AttributeError, TypeError, ValueError):  # pragma: no cover - a property of another mode
+                pass
 
 
 def copy_driver(source: Any, target: Any, prop: str, index: int = -1) -> Any:
@@ -124,17 +146,15 @@ def copy_driver(source: Any, target: Any, prop: str, index: int = -1) -> Any:
             dst.id = src.id
             for name in ("data_path", "bone_target", "transform_type", "transform_space", "rotation_mode"):
                 setattr(dst, name, getattr(src, name))
-    # The mapping from the driver's value: the source's keys and modifiers (driver_add gives a new curve its
-    # version's default mapping: a Generator modifier, or two keys in newer Blenders).
-    if len(source.keyframe_points) or not len(source.modifiers):
-        for modifier in list(curve.modifiers):
-            curve.modifiers.remove(modifier)
-        for point in reversed(list(curve.keyframe_points)):
-            curve.keyframe_points.remove(point, fast=True)
-        curve.keyframe_points.add(len(source.keyframe_points))
-        for src, dst in zip(source.keyframe_points, curve.keyframe_points, strict=True):
-            for name in ("co", "handle_left", "handle_right", "interpolation"):
-                setattr(dst, name, getattr(src, name))
+    # The mapping from the driver's value: the source's keys and modifiers, in place of the default mapping
+    # driver_add gives a new curve in this version (a Generator modifier, or keys).
+    for point in reversed(list(curve.keyframe_points)):
+        curve.keyframe_points.remove(point, fast=True)
+    curve.keyframe_points.add(len(source.keyframe_points))
+    for src, dst in zip(source.keyframe_points, curve.keyframe_points, strict=True):
+        for name in ("co", "handle_left", "handle_right", "handle_left_type", "handle_right_type", "interpolation"):
+            setattr(dst, name, getattr(src, name))
+    copy_modifiers(source, curve)
     curve.mute = source.mute
     curve.update()
     return curve

@@ -128,13 +128,19 @@ def test_live_reapply_keeps_the_slider_keys_and_the_sockets_own(addon):
     # The artist edits the slider's second key, then applies again.
     [curve] = [c for c in anim.fcurves(material) if c.data_path == "spectral_skin.hemoglobin"]
     curve.keyframe_points[1].co = (2.0, 0.08)
+    curve.modifiers.new("CYCLES")  # and loops them
     _apply(scene, material)
     curves = {c.data_path: c for c in anim.fcurves(tree)}
     assert oiliness in curves and hemoglobin in curves
     assert [tuple(p.co) for p in curves[hemoglobin].keyframe_points] == [pytest.approx((1.0, 0.005)),
                                                                          pytest.approx((2.0, 0.08))]
+    assert [m.type for m in curves[hemoglobin].modifiers] == ["CYCLES"]
     scene.frame_set(2)
     assert group.inputs["Hemoglobin"].default_value == pytest.approx(0.08)
+    # The copy evaluates as the slider's curve, loop included (past frame 2 the keys repeat, below 0.08).
+    for frame in np.arange(0.0, 6.0, 0.25):
+        assert curves[hemoglobin].evaluate(frame) == pytest.approx(curve.evaluate(frame), abs=1e-9)
+    assert curve.evaluate(3.5) < 0.07
     material.spectral_skin.mode = "BAKED"
     _apply(scene, material)
     assert not addon_nodes.tagged_nodes(tree, "live")
