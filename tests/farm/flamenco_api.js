@@ -1,6 +1,6 @@
 // A stand-in for the job-compiler API of Flamenco 3 (the globals a job type's script sees), written from Flamenco's
-// documentation (flamenco.blender.org/usage/job-types) and source, Flamenco 3.x (the 3.6/3.7 releases):
-// internal/manager/job_compilers/ (author.go: author.Task(name, type), author.Command(type, parameters[, frameCount]),
+// documentation (flamenco.blender.org/usage/job-types) and source, Flamenco 3.x (projects.blender.org/studio/flamenco,
+// mirrored as github.com/blender/flamenco): internal/manager/job_compilers/ (author.go: author.Task(name, type), author.Command(type, parameters[, frameCount]),
 // task.addCommand, task.addDependency, job.addTask; js_globals.go: frameChunker (jsFrameChunker, frameRangeExplode,
 // frameRangeMerge), path (Go's path/filepath with forward slashes), print, formatTimestampLocal) and the built-in
 // scripts/simple_blender_render.js. It records what a compiler authors so that a test can check the task graph.
