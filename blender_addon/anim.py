@@ -87,10 +87,12 @@ def write_keys(target: Any, prop: str, index: int, frames: Sequence[int], values
     return curve
 
 
-def copy_keys(source: Any, target: Any, prop: str, index: int = -1) -> Any:
+def copy_keys(source: Any, target: Any, prop: str, index: int = -1) -> Any | None:
     """Copy the F-curve ``source`` (its keys, handles, interpolation, extrapolation, modifiers) onto
-    ``target.prop[index]``."""
+    ``target.prop[index]``; None (nothing changed) for a curve without keys."""
     points = source.keyframe_points
+    if len(points) == 0:
+        return None
     curve = _new_curve(target, prop, index, points[0].co[0] if len(points) else 0.0)
     curve.keyframe_points.add(len(points) - 1)
     for src, dst in zip(points, curve.keyframe_points, strict=True):

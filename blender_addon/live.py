@@ -284,8 +284,7 @@ def carry_animation(material: Any, param: str, socket: Any) -> list[str]:
     path = f"spectral_skin.{param}"
     copied = []
     for curve in anim.fcurves(material):
-        if curve.data_path == path:
-            anim.copy_keys(curve, socket, "default_value")
+        if curve.data_path == path and anim.copy_keys(curve, socket, "default_value") is not None:
             copied.append("keys")
     for driver in anim.drivers(material):
         if driver.data_path == path:
