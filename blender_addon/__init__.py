@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import frame_values, masks, ops, panels, props
+from . import masks, ops, panels, props
 
 classes = (*props.classes, *ops.classes, *masks.classes, *panels.classes)
 
@@ -11,11 +11,9 @@ def register() -> None:
     for cls in classes:
         bpy.utils.register_class(cls)
     bpy.types.Material.spectral_skin = bpy.props.PointerProperty(type=props.SpectralSkinSettings)
-    frame_values.install()
 
 
 def unregister() -> None:
-    frame_values.uninstall()
     del bpy.types.Material.spectral_skin
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)

@@ -20,7 +20,7 @@ Apply is the operator's own path (ops.apply_skins): the scene decides which effe
 (blender_addon/core/scene.py: subsurface scattering no camera can resolve is dropped, zero oiliness writes no specular
 map, ...); the decisions are printed, one line each, and stored on the material. A parameter keyframed or driven on a
 material's Spectral Skin settings follows that animation (the value given here for it is not used): a
-constant-parameter material gets its values per frame, which the render sets at each frame change (frame_values.py).
+constant-parameter material gets its values per frame as F-curves (frame_values.py), which plain Blender renders.
 Every material's plan is computed, then every map written, before any material changes; on an error nothing is
 saved. The saved .blend refers to the textures by paths relative to itself, or packs them with ``pack=True``.
 

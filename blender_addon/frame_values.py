@@ -1,76 +1,61 @@
-"""Per-frame values of an animated constant-parameter material, set by a frame-change handler (bpy only).
+"""Per-frame values of an animated constant-parameter material as Blender data: F-curves on the add-on's Principled
+BSDF (bpy only; no frame-change handler).
 
-Apply stores the plan's ``animation`` (core/scene.py: Base Color, Subsurface Radius × Scale and Specular IOR Level
-at every frame of the scene's range, computed by the core) on the material as the custom property
-:data:`PROPERTY` (JSON), so it is saved with the .blend. :func:`frame_change` (``bpy.app.handlers.frame_change_pre``,
-persistent: it stays through loading other files) sets those values on the add-on's Principled BSDF at each frame
-change; a frame outside the range takes the nearest frame's values. No numerics here, and nothing but bpy: the
-headless render script (scripts/render_blend.py, outside the extension) loads this file and installs the handler
-without the add-on or ``spectral_skin``.
+Apply writes the plan's ``animation`` (core/scene.py: Base Color, Subsurface Radius and Specular IOR Level at every
+frame of the scene's range, computed by the core) as one key per frame (CONSTANT interpolation) on those sockets'
+``default_value`` in the material's node tree (anim.py), so the .blend renders every frame right on a render node
+with plain Blender: no add-on, no script, Python auto-run off. Re-applying replaces these F-curves; a plan without
+animation, or a socket a texture now feeds, removes them; other F-curves of the tree are kept.
 """
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import bpy
 
-PROPERTY = "spectral_skin_frames"
-TAG = "spectral_skin"  # nodes.TAG: the role of the add-on's nodes
+from . import anim
+
+# Per-frame values of an Apply before they became F-curves (JSON on the material): removed at the next Apply.
+LEGACY_PROPERTY = "spectral_skin_frames"
 # Plan key -> Principled input.
 SOCKETS = {"base_color": "Base Color", "radius": "Subsurface Radius", "specular_ior_level": "Specular IOR Level"}
-HANDLER_NAME = "spectral_skin_frame_change"
 
 
-def store(material: bpy.types.Material, plan: dict[str, Any]) -> None:
-    """Keep the plan's per-frame values on the material (or remove stale ones when the plan has none)."""
-    animation = plan.get("animation")
-    if animation:
-        material[PROPERTY] = json.dumps(animation)
-    elif PROPERTY in material:
-        del material[PROPERTY]
+def _paths(node: bpy.types.Node) -> set[str]:
+    return {s.path_from_id("default_value") for s in node.inputs if s.name in SOCKETS.values()}
 
 
-def set_frame(material: bpy.types.Material, frame: int) -> bool:
-    """Set the material's stored values of ``frame`` on its Spectral Skin Principled BSDF; False when it has none."""
-    text = material.get(PROPERTY)
+def clear(material: bpy.types.Material, node: bpy.types.Node | None) -> int:
+    """Remove the per-frame F-curves of ``node`` (the add-on's Principled) and the legacy property."""
+    if LEGACY_PROPERTY in material:
+        del material[LEGACY_PROPERTY]
     tree = material.node_tree
-    if not text or tree is None:
-        return False
-    animation = json.loads(text)
-    frames = animation["frames"]
-    index = min(max(int(frame) - int(frames[0]), 0), len(frames) - 1)
-    changed = False
-    for node in tree.nodes:
-        if node.get(TAG) != "principled":
+    if node is None or tree is None:
+        return 0
+    paths = _paths(node)
+    return anim.remove(tree, lambda path, _index: path not in paths, with_drivers=False)
+
+
+def store(material: bpy.types.Material, node: bpy.types.Node, plan: dict[str, Any]) -> int:
+    """Write the plan's per-frame values as keys on ``node``'s sockets (the old ones removed first); returns the
+    number of F-curves written (0 without animation)."""
+    clear(material, node)
+    animation = plan.get("animation")
+    if not animation:
+        return 0
+    frames = [int(f) for f in animation["frames"]]
+    written = 0
+    for key, name in SOCKETS.items():
+        values = animation[key]
+        socket = next((s for s in node.inputs if s.name == name), None)
+        if socket is None or socket.is_linked or any(v is None for v in values):
             continue
-        for key, name in SOCKETS.items():
-            value = animation[key][index]
-            if value is None:
-                continue
-            socket = next((s for s in node.inputs if s.name == name), None)
-            if socket is not None and not socket.is_linked:
-                socket.default_value = [*value, 1.0] if key == "base_color" else value
-                changed = True
-    return changed
-
-
-@bpy.app.handlers.persistent
-def spectral_skin_frame_change(scene: bpy.types.Scene, _depsgraph: Any = None) -> None:
-    """frame_change_pre handler: every material with stored per-frame values gets those of the scene's frame."""
-    for material in bpy.data.materials:
-        if PROPERTY in material:
-            set_frame(material, scene.frame_current)
-
-
-def install() -> None:
-    """Add the handler once (a copy of this module loaded under another name replaces the earlier one)."""
-    uninstall()
-    bpy.app.handlers.frame_change_pre.append(spectral_skin_frame_change)
-
-
-def uninstall() -> None:
-    handlers = bpy.app.handlers.frame_change_pre
-    for handler in [h for h in handlers if getattr(h, "__name__", "") == HANDLER_NAME]:
-        handlers.remove(handler)
+        if key == "specular_ior_level":
+            anim.write_keys(socket, "default_value", -1, frames, values)
+            written += 1
+            continue
+        for channel in range(3):
+            anim.write_keys(socket, "default_value", channel, frames, [v[channel] for v in values])
+            written += 1
+    return written

@@ -16,6 +16,8 @@ constants, or an Image Texture of the parameter's map: the image itself where Bl
 (PNG/TIFF files, painted or generated images; 8/16-bit values scaled onto the parameter's range by a Math node), else
 a float copy of the core's reading packed into the .blend (EXR files: Blender reads an EXR channel named ``melanin``
 as zeros). Anything else can drive the inputs: colour attributes, drivers and keyframes on the group node's sockets.
+Keys and a driver on a panel slider are copied onto the input at Apply (:func:`carry_animation`): the slider's own
+property exists only where the add-on is registered, the socket's animation renders anywhere.
 Masks (masks.py) sit between an input and what feeds it; Apply then sets the constant or map at the head of their
 chain (:func:`chain_head`).
 """
@@ -28,7 +30,7 @@ from typing import Any
 import bpy
 import numpy as np
 
-from . import nodes
+from . import anim, nodes
 from .core import PARAMETER_INFO, PARAMETERS
 
 GROUP_NAME = "Spectral Skin"
@@ -78,12 +80,15 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | Non
     }
     group = bpy.data.node_groups.get(name) or bpy.data.node_groups.new(name, "ShaderNodeTree")
     group.nodes.clear()
-    group.interface.clear()
+    # The interface is kept when it is already this one: clearing it would cut the links and reset the inputs of
+    # every group node using the group (another material's, or one applied earlier in the same batch).
+    wanted = [(s, "INPUT", "NodeSocketFloat") for s in INPUTS] + [(s, "OUTPUT", t) for s, t in OUTPUTS]
+    have = [(i.name, i.in_out, i.socket_type) for i in group.interface.items_tree if i.item_type == "SOCKET"]
+    if sorted(have) != sorted(wanted) or [h for h in have if h[1] == "INPUT"] != wanted[:len(INPUTS)]:
+        group.interface.clear()
+        for socket, in_out, socket_type in wanted:
+            group.interface.new_socket(name=socket, in_out=in_out, socket_type=socket_type)
     group[LAYOUT_KEY] = LAYOUT_VERSION
-    for socket in INPUTS:
-        group.interface.new_socket(name=socket, in_out="INPUT", socket_type="NodeSocketFloat")
-    for socket, socket_type in OUTPUTS:
-        group.interface.new_socket(name=socket, in_out="OUTPUT", socket_type=socket_type)
     nodes, links = group.nodes, group.links
     group_in = nodes.new("NodeGroupInput")
     group_out = nodes.new("NodeGroupOutput")
@@ -211,9 +216,12 @@ def _roles(param: str) -> tuple[str, str, str]:
 
 def remove_nodes(tree: Any) -> None:
     """Delete the live nodes (group node, parameter textures) from a material's tree: Apply in Baked mode."""
-    for node in nodes.tagged_nodes(tree):
-        if str(node[nodes.TAG]).startswith("live"):
-            tree.nodes.remove(node)
+    gone = [node for node in nodes.tagged_nodes(tree) if str(node[nodes.TAG]).startswith("live")]
+    prefixes = tuple(f'nodes["{bpy.utils.escape_identifier(node.name)}"]' for node in gone)
+    # Keys and drivers on the removed nodes' sockets (carry_animation's copies) would dangle in the tree's action.
+    anim.remove(tree, lambda path, _index: not path.startswith(prefixes))
+    for node in gone:
+        tree.nodes.remove(node)
 
 
 def _direct(image: Any) -> bool | None:
@@ -255,6 +263,36 @@ def chain_head(socket: Any) -> Any:
     return socket
 
 
+def pack_painted(tree: Any) -> list[str]:
+    """Pack again every painted image the material's nodes read (a generated or packed image with unsaved
+    changes: a painted parameter map or mask), so that the saved .blend carries the painting to a render node
+    (Blender saves a generated image as its generator, and a packed one as last packed). Returns their names."""
+    packed = []
+    for node in tree.nodes:
+        image = getattr(node, "image", None) if node.type == "TEX_IMAGE" else None
+        if image is not None and image.is_dirty and (image.source == "GENERATED" or image.packed_file is not None):
+            image.pack()
+            packed.append(image.name)
+    return packed
+
+
+def carry_animation(material: Any, param: str, socket: Any) -> list[str]:
+    """The keys and the driver of the panel's slider ``spectral_skin.<param>`` copied onto the group's input
+    ``socket`` (anim.py), so that they animate the shader in the session and on a render node without the add-on
+    (where the slider's own property does not exist); each replaces what the socket had of its kind, and keys or a
+    driver the artist put on the socket itself stay when the slider has none. Returns what was copied."""
+    path = f"spectral_skin.{param}"
+    copied = []
+    for curve in anim.fcurves(material):
+        if curve.data_path == path and anim.copy_keys(curve, socket, "default_value") is not None:
+            copied.append("keys")
+    for driver in anim.drivers(material):
+        if driver.data_path == path:
+            anim.copy_driver(driver, socket, "default_value")
+            copied.append("driver")
+    return copied
+
+
 def wire(material: Any, plan: dict[str, Any]) -> Any:
     """Live mode's last step (main thread): the group (built from ``plan["live"]["table"]``, its images packed, or
     the blend file's), its node wired into the tagged Principled BSDF, its inputs set (see the module's docstring).
@@ -285,6 +323,7 @@ def wire(material: Any, plan: dict[str, Any]) -> Any:
                 tree.nodes.remove(stale)
         socket = chain_head(node.inputs[socket_name])
         socket.default_value = float(info["constants"][param])
+        carry_animation(material, param, socket)
         source = _parameter_image(material, param, info["maps"])
         if source is None:
             continue
@@ -314,6 +353,7 @@ def wire(material: Any, plan: dict[str, Any]) -> Any:
             tree.links.new(value, scale.inputs[0])
             value = scale.outputs[0]
         tree.links.new(value, socket)
+    pack_painted(tree)
     outputs = [("Base Color", True), ("Subsurface Radius", info["subsurface"]),
                ("Specular IOR Level", info["specular"])]
     for output, used in outputs:

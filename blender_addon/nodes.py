@@ -165,8 +165,8 @@ def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.
         output[PREVIOUS_SURFACE] = previous[0] if previous else []
         _unlink(tree, surface)
         tree.links.new(node.outputs["BSDF"], surface)
-    # An animated constant material: its values per frame, set by the frame-change handler (frame_values.py).
-    frame_values.store(material, plan)
+    # An animated constant material: its values per frame as F-curves on these sockets (frame_values.py).
+    frame_values.store(material, node, plan)
     return node
 
 
@@ -180,8 +180,8 @@ def remove_skin(material: bpy.types.Material) -> int:
     images = [n.image for n in tagged_nodes(tree) if n.type == "TEX_IMAGE" and n.image is not None]
     outputs = [n for n in tree.nodes if n.type == "OUTPUT_MATERIAL" and PREVIOUS_SURFACE in n]
     removed = 0
-    if frame_values.PROPERTY in material:
-        del material[frame_values.PROPERTY]
+    for principled in tagged_nodes(tree, "principled"):
+        frame_values.clear(material, principled)
     for node in tagged_nodes(tree):
         tree.nodes.remove(node)
         removed += 1

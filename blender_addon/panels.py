@@ -31,6 +31,9 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
             row = layout.row(align=True)
             row.active = getattr(props, f"{name}_map") is None and props.params_map is None
             row.prop(props, name, slider=True)
+        if props.mode == "LIVE":
+            # live.carry_animation: the slider's own property exists only where the add-on is registered.
+            layout.label(text="Keys and drivers on these sliders reach the shader at Apply", icon="INFO")
         # The albedo of the constant values, as the sliders move (props.update_swatch; read-only).
         layout.prop(props, "swatch")
         box = layout.box()

@@ -15,6 +15,7 @@ from typing import Any
 
 import bpy
 
+from . import anim
 from .core import PARAMETER_INFO, PARAMETERS
 from .core import scene as analysis
 
@@ -122,20 +123,6 @@ def _shape(obj: bpy.types.Object, depsgraph: Any, scale_length: float) -> analys
                                sampled_faces=sampled)
 
 
-def _fcurves(animation_data: Any) -> list[Any]:
-    """The F-curves of an ID's action: ``action.fcurves`` before Blender 5.0, the channel bag of the ID's action slot
-    from 4.4 on (5.0 removed ``action.fcurves``)."""
-    action = animation_data.action
-    if action is None:
-        return []
-    if hasattr(action, "fcurves"):
-        return list(action.fcurves)
-    from bpy_extras import anim_utils
-
-    bag = anim_utils.action_get_channelbag_for_slot(action, animation_data.action_slot)
-    return list(bag.fcurves) if bag is not None else []
-
-
 def gather_animation(scene: bpy.types.Scene, material: bpy.types.Material) -> analysis.AnimationFacts | None:
     """The material's keyframed or driven Spectral Skin parameters and their values at every frame of the scene's
     range, clamped into the parameters' ranges as Blender clamps the property; None when none is animated. Muted
@@ -144,7 +131,7 @@ def gather_animation(scene: bpy.types.Scene, material: bpy.types.Material) -> an
     if animation_data is None:
         return None
     paths = {f"spectral_skin.{name}": name for name in PARAMETERS}
-    curves = {paths[c.data_path]: c for c in _fcurves(animation_data) if c.data_path in paths and not c.mute}
+    curves = {paths[c.data_path]: c for c in anim.fcurves(material) if c.data_path in paths and not c.mute}
     drivers = {paths[d.data_path] for d in animation_data.drivers if d.data_path in paths and not d.mute}
     how = {name: "keyframed" for name in curves} | {name: "driven" for name in drivers}
     if not how:

@@ -6,13 +6,14 @@ From Python with bpy (``import bpy`` as a module, or Blender's own Python)::
     python scripts/render_blend.py out.blend --out DIR [--frames 1-3,7] [--samples N] [--resolution 640x480]
         [--engine CYCLES] [--format EXR|PNG] [--seed N] [--allow-missing-textures]
 
-or, imported, :func:`render_frames`. Cycles on the CPU (or the engine named), the .blend's own settings unless
-overridden. Animated constant-parameter materials (Apply stores their per-frame values on the material) get those
-values at each frame change from the add-on's frame-change handler, loaded from the file
-``blender_addon/frame_values.py`` (bpy only; found next to this script, else in the repository's ``blender_addon/``:
-copy it along with this script onto a render node), never by importing the add-on. A texture file that is neither
-packed nor on disk is an error before anything renders (Blender would render it magenta). Errors exit with status 2
-and one line on stderr.
+or, imported, :func:`render_frames`. Cycles always on the CPU; the .blend's own settings unless overridden. The
+engine is the one Apply computed the skin materials for (stored on them, and the scene's engine at Apply) unless
+``--engine`` names another; which one renders, and why, is said on stderr, with a warning when the materials were
+computed for another engine. Animated skin materials need nothing here: Apply writes their per-frame values as
+F-curves (blender_addon/frame_values.py), which plain Blender evaluates; a material with per-frame values from an
+older Apply (a JSON property, no F-curves) is reported: apply again. A texture file that is neither packed nor on
+disk is an error before anything renders (Blender would render it magenta). Errors exit with status 2 and one line
+on stderr.
 """
 
 from __future__ import annotations
@@ -20,15 +21,8 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Iterable, Sequence
-from importlib import util
-from types import ModuleType
 
 import bpy
-
-_HERE = os.path.dirname(os.path.abspath(__file__))
-# Where frame_values.py is looked for, in this order.
-FRAME_VALUES_PATHS = (os.path.join(_HERE, "frame_values.py"),
-                      os.path.join(os.path.dirname(_HERE), "blender_addon", "frame_values.py"))
 
 # Render output formats: name accepted here -> (Blender file_format, file extension).
 FORMATS = {"EXR": ("OPEN_EXR", ".exr"), "OPEN_EXR": ("OPEN_EXR", ".exr"), "PNG": ("PNG", ".png")}
@@ -39,18 +33,65 @@ class RenderError(ValueError):
     """A render job that cannot run as asked (bad frame range, resolution, engine, ...)."""
 
 
-def frame_values() -> ModuleType:
-    """The add-on's frame_values.py (bpy only) loaded from its file under its own module name: the add-on package,
-    which needs ``spectral_skin``, is never imported."""
-    for path in FRAME_VALUES_PATHS:
-        if os.path.isfile(path):
-            spec = util.spec_from_file_location("spectral_skin_frame_values", path)
-            assert spec is not None and spec.loader is not None
-            module = util.module_from_spec(spec)
-            spec.loader.exec_module(module)
-            return module
-    raise FileNotFoundError("frame_values.py (the add-on's frame-change handler) not found at "
-                            + " nor ".join(FRAME_VALUES_PATHS))
+# What Apply stores on a material (the add-on's settings, an ID property group readable without the add-on):
+# the target it computed for, "Blender 5.3, CYCLES" (props.store_result); and the per-frame values of an Apply from
+# before they became F-curves.
+SETTINGS_PROPERTY, TARGET_KEY, LEGACY_FRAMES = "spectral_skin", "result_target", "spectral_skin_frames"
+# The engine word of a stored target -> the render engine.
+TARGET_ENGINES = {"CYCLES": "CYCLES", "EEVEE": "BLENDER_EEVEE"}
+
+
+def stored_engines() -> dict[str, str]:
+    """{material name: render engine} of every material Apply set up, from the target stored on it."""
+    found = {}
+    for material in bpy.data.materials:
+        # Blender 5.0+ keeps properties an add-on registered apart from custom properties (system properties).
+        system = material.bl_system_properties_get() if hasattr(material, "bl_system_properties_get") else None
+        group = (system or material).get(SETTINGS_PROPERTY)
+        target = group.get(TARGET_KEY) if hasattr(group, "get") else None
+        if isinstance(target, str) and "," in target:
+            word = target.rsplit(",", 1)[1].strip().upper()
+            if word in TARGET_ENGINES:
+                found[material.name] = TARGET_ENGINES[word]
+    return found
+
+
+def _kind(engine: str) -> str:
+    """CYCLES, BLENDER_EEVEE (also for 4.2-4.5's BLENDER_EEVEE_NEXT) or the engine itself."""
+    return "BLENDER_EEVEE" if engine.startswith("BLENDER_EEVEE") else engine
+
+
+def engine_id(engine: str) -> str:
+    """The running Blender's identifier of an engine: EEVEE is BLENDER_EEVEE_NEXT in Blender 4.2-4.5."""
+    if _kind(engine) == "BLENDER_EEVEE":
+        return "BLENDER_EEVEE_NEXT" if bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
+    return engine
+
+
+def choose_engine(asked: str | None, scene_engine: str, stored: dict[str, str]) -> tuple[str, str]:
+    """The engine to render with (CYCLES, BLENDER_EEVEE or BLENDER_WORKBENCH; :func:`engine_id` names it for the
+    running Blender) and the sentence that says why: ``asked`` if given, else the one the skin materials were computed
+    for (``stored``: :func:`stored_engines`), else the scene's; with a warning naming each material computed for
+    another engine than the one that renders."""
+    kinds = sorted(set(stored.values()))
+    if asked is not None:
+        engine, why = _kind(asked), "as asked (--engine)"
+    elif len(kinds) == 1:
+        engine, why = kinds[0], "the engine Apply computed the skin materials for"
+    else:
+        engine, why = _kind(scene_engine), "the .blend's scene engine"
+    message = f"render_blend: rendering with {engine}, {why}"
+    others = sorted(name for name, kind in stored.items() if kind != engine)
+    if others:
+        message += (f"; warning: {', '.join(others)} {'was' if len(others) == 1 else 'were'} computed for "
+                    f"{' and '.join(k for k in kinds if k != engine)}, which renders it differently: apply again "
+                    "for this engine, or render with the one it was computed for")
+    return engine, message
+
+
+def legacy_frame_values() -> list[str]:
+    """Materials with per-frame values of an older Apply (a JSON property, no F-curves): not animated here."""
+    return sorted(m.name for m in bpy.data.materials if LEGACY_FRAMES in m)
 
 
 def _open(blend_path: str) -> None:
@@ -101,14 +142,15 @@ def _parse_resolution(text: str) -> tuple[int, int]:
 
 
 def render_frames(blend_path: str, out_dir: str, frames: Iterable[int] | None = None, samples: int | None = None,
-                  resolution: Sequence[int] | None = None, engine: str = "CYCLES", file_format: str | None = None,
+                  resolution: Sequence[int] | None = None, engine: str | None = None, file_format: str | None = None,
                   seed: int | None = None, allow_missing_textures: bool = False) -> list[str]:
     """Open ``blend_path`` and render each frame to ``out_dir``; returns the written paths (in frame order).
 
     - ``frames``: frame numbers; None renders the scene's current frame only.
     - ``samples``: render samples (Cycles ``samples``, EEVEE ``taa_render_samples``); None keeps the .blend's.
     - ``resolution``: (width, height) in pixels at 100 %; None keeps the .blend's.
-    - ``engine``: "CYCLES" (always on the CPU), "BLENDER_EEVEE" or "BLENDER_WORKBENCH".
+    - ``engine``: "CYCLES" (always on the CPU), "BLENDER_EEVEE" or "BLENDER_WORKBENCH"; None: the engine Apply
+      computed the skin materials for (:func:`choose_engine`; the choice is printed on stderr).
     - ``file_format``: "EXR" (32-bit float, scene-linear) or "PNG" (display-referred, through the view transform);
       None keeps the .blend's when it is one of those, else EXR.
     - ``seed``: Cycles seed (and no animated seed); None keeps the .blend's.
@@ -117,10 +159,10 @@ def render_frames(blend_path: str, out_dir: str, frames: Iterable[int] | None = 
     ``allow_missing_textures``) for textures neither packed nor on disk, RenderError (a ValueError) for bad
     arguments, RuntimeError when Blender fails to render.
     """
-    engine = engine.upper()
-    if engine == "EEVEE":
-        engine = "BLENDER_EEVEE"
-    if engine not in ENGINES:
+    if engine is not None:
+        engine = engine.upper()
+        engine = "BLENDER_EEVEE" if engine == "EEVEE" else _kind(engine)
+    if engine is not None and engine not in ENGINES:
         raise RenderError(f"engine must be one of {', '.join(ENGINES)}; got {engine!r}")
     if file_format is not None and file_format.upper() not in FORMATS:
         raise RenderError(f"file format must be EXR or PNG; got {file_format!r}")
@@ -130,9 +172,13 @@ def render_frames(blend_path: str, out_dir: str, frames: Iterable[int] | None = 
         if len(resolution) != 2 or min(int(v) for v in resolution) < 1:
             raise RenderError(f"resolution must be (width, height) >= 1; got {tuple(resolution)}")
     _open(blend_path)
-    # Animated constant materials: their per-frame values are set at each frame change (frame_values.py).
-    frame_values().install()
     scene = bpy.context.scene
+    engine, message = choose_engine(engine, scene.render.engine, stored_engines())
+    print(message, file=sys.stderr)
+    legacy = legacy_frame_values()
+    if legacy:
+        print(f"render_blend: warning: {', '.join(legacy)} keep per-frame values of an older Apply, which plain "
+              "Blender does not animate: apply again (the values become F-curves)", file=sys.stderr)
     if scene.camera is None:
         raise RenderError(f"{blend_path}: scene {scene.name!r} has no camera")
     if not allow_missing_textures:
@@ -141,7 +187,7 @@ def render_frames(blend_path: str, out_dir: str, frames: Iterable[int] | None = 
             raise FileNotFoundError(f"{blend_path}: {len(missing)} texture(s) neither packed nor found on disk: "
                                     + ", ".join(missing))
     render = scene.render
-    render.engine = engine
+    render.engine = engine = engine_id(engine)
     if engine == "CYCLES":
         scene.cycles.device = "CPU"
         if samples is not None:
@@ -149,7 +195,7 @@ def render_frames(blend_path: str, out_dir: str, frames: Iterable[int] | None = 
         if seed is not None:
             scene.cycles.seed = int(seed)
             scene.cycles.use_animated_seed = False
-    elif samples is not None and engine == "BLENDER_EEVEE":
+    elif samples is not None and _kind(engine) == "BLENDER_EEVEE":
         scene.eevee.taa_render_samples = int(samples)
     if resolution is not None:
         render.resolution_x, render.resolution_y = (int(v) for v in resolution)
@@ -190,7 +236,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", help="frames, e.g. 1-3,7 (default: the scene's current frame)")
     parser.add_argument("--samples", type=int, help="render samples (default: the .blend's)")
     parser.add_argument("--resolution", help="WIDTHxHEIGHT in pixels (default: the .blend's)")
-    parser.add_argument("--engine", default="CYCLES", help="CYCLES (CPU), BLENDER_EEVEE or BLENDER_WORKBENCH")
+    parser.add_argument("--engine", help="CYCLES (CPU), BLENDER_EEVEE or BLENDER_WORKBENCH (default: the engine "
+                        "Apply computed the skin materials for, else the .blend's)")
     parser.add_argument("--format", dest="file_format", choices=["EXR", "PNG"], type=str.upper,
                         help="output format (default: the .blend's if EXR or PNG, else EXR)")
     parser.add_argument("--seed", type=int, help="Cycles seed")

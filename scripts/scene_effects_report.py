@@ -329,13 +329,11 @@ A Spectral Skin parameter (melanin, melanin blend, haemoglobin, oiliness) keyfra
   (`plan["animation"]`: Base Color, Subsurface Radius, Specular IOR Level per frame), each computed by the core
   (`spectral_skin.evaluate`, once per distinct parameter set) and changed by the same decisions, which hold over
   every frame (subsurface from the largest radius over the frames, specular dropped only if the oiliness is zero at
-  every frame). Apply stores them on the material (custom property `spectral_skin_frames`, saved with the .blend);
-  a persistent `frame_change_pre` handler (`blender_addon/frame_values.py`, bpy only) sets them on the add-on's
-  Principled BSDF at each frame change. The add-on installs it when registered; the headless render
-  script (`scripts/render_blend.py`, not part of the extension) loads it from its file and installs it, so a render
-  node needs neither the add-on nor `spectral_skin`. Frames
-  outside the range take the nearest frame's values. An F-curve is evaluated directly; a driver (which may read
-  anything) by setting each frame of the range. Muted curves are left out; NLA strips are not read.
+  every frame). Apply writes them as F-curves on the add-on's Principled BSDF (`blender_addon/frame_values.py`: one
+  key per frame, CONSTANT interpolation, on Base Color, Subsurface Radius and Specular IOR Level), plain Blender
+  data, so a render node with only Blender renders every frame (no handler, no add-on, no `spectral_skin`, Python
+  auto-run off: docs/farm.md). Frames outside the range keep the nearest frame's values. An F-curve of the panel is
+  evaluated directly; a driver (which may read anything) by setting each frame of the range. Muted curves are left out; NLA strips are not read.
 - Material with parameter maps: the maps are computed once, with the values at the current frame; the decision says
   that its animation needs per-frame maps or the live shader (`enabled` false).
 - The batch apply follows the material's animation for an animated parameter, whatever constant it was given.
@@ -345,8 +343,9 @@ run with `-s` to print the figures): haemoglobin keyframed 0.005 at frame 1 and 
 slab under a white world, applied through the operator, saved, and rendered at frames 1 and 2 by
 `scripts/render_blend.py` with the add-on unregistered (512 samples, central 32 × 32 of 64 × 64 px): the rendered mean
 is the core's albedo of each frame within 0.2 % (measured: −0.005, −0.004, +0.009 % at frame 1; −0.022, +0.008,
-+0.014 % at frame 2, the same in Blender 4.2.23, 5.0.1 and 5.3.0). Without the handler frame 2 renders frame 1's
-albedo (+22 %, +33 %, +9 %).
++0.014 % at frame 2, the same in Blender 4.2.23, 5.0.1 and 5.3.0). When the values lived in a frame-change handler,
+a worker without it rendered frame 1's albedo at frame 2 (+22 %, +33 %, +9 %); tests/blender/test_farm_animation.py
+now renders both frames on such a worker.
 """
 
 

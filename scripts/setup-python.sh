@@ -5,7 +5,8 @@
 #   bash scripts/setup-python.sh          # what the main job needs: scripts/requirements.txt (maturin, numpy)
 #   bash scripts/setup-python.sh --test   # and the test and lint tools: scripts/requirements-test.txt (pytest, mypy,
 #                                         # OpenImageIO) and scripts/requirements-dev.txt (ruff, check-jsonschema,
-#                                         # ziglang, auditwheel, bpy 5.0.1); the module is then the extension's wheel
+#                                         # ziglang, auditwheel, bpy 5.0.1, openjd-cli) and Node.js where
+#                                         # missing (apt, as root); the module is then the extension's wheel
 #
 # Needs only the Rust toolchain and Python 3.11+ with pip (PYTHON=... picks the interpreter; default python3).
 # The module (cargo feature `python`) and the CLI (feature `cli`) are compiled with different features, so each has its
@@ -31,6 +32,15 @@ say "installing the pinned Python packages"
 requirements=(-r scripts/requirements.txt)
 [ "$test_tools" -eq 0 ] || requirements+=(-r scripts/requirements-test.txt -r scripts/requirements-dev.txt)
 .venv/bin/python -m pip install "${requirements[@]}"
+if [ "$test_tools" -eq 1 ] && ! command -v node >/dev/null && ! command -v nodejs >/dev/null; then
+    # The farm tests compile the Flamenco job type under Node (tests/python/test_farm_jobs.py).
+    say "installing Node.js (Debian's nodejs) for the Flamenco job-type test"
+    if [ "$(id -u)" -eq 0 ]; then
+        apt-get update -qq && apt-get install -y -qq nodejs >/dev/null
+    else
+        echo "setup-python: node is missing: install Node.js (e.g. sudo apt-get install nodejs)" >&2; exit 1
+    fi
+fi
 
 if [ "$test_tools" -eq 0 ]; then
     say "building the Python module into .venv (maturin develop --release; the first build compiles ~85 crates: minutes)"

@@ -278,8 +278,8 @@ fn failures_leave_no_output() {
 /// A cache file with a correct checksum but a node value no build stores (a logarithm whose exp overflows f32, or
 /// NaN) is refused, so a table read back never interpolates to an infinite or NaN output; the same file with
 /// values a build can store is read, and looks up exp(value). The file is assembled here from the format's
-/// description (magic line, FNV-1a of the body, axis sizes, nine f32 per node), with FNV-1a written from its
-/// definition.
+/// description (magic line, FNV-1a of the body; the body: the key's length and the key, axis sizes, nine f32 per
+/// node), with FNV-1a written from its definition.
 #[test]
 fn cache_file_values_a_build_cannot_store_are_refused() {
     use spectral_skin::maps::lut::CACHE_MAGIC;
@@ -287,15 +287,18 @@ fn cache_file_values_a_build_cannot_store_are_refused() {
         bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3))
     };
     let resolution = TableResolution { melanin: 2, melanin_blend: 2, hemoglobin: 2 };
+    let key = "a request";
     let file = |value: f32| {
-        let mut body: Vec<u8> = [2u32, 2, 2].iter().flat_map(|n| n.to_le_bytes()).collect();
+        let mut body: Vec<u8> = (key.len() as u32).to_le_bytes().to_vec();
+        body.extend(key.as_bytes());
+        body.extend([2u32, 2, 2].iter().flat_map(|n| n.to_le_bytes()));
         body.extend((0..8 * 9).flat_map(|_| value.to_le_bytes()));
         let mut file = CACHE_MAGIC.to_vec();
         file.extend(fnv1a(&body).to_le_bytes());
         file.extend(body);
         file
     };
-    let read = |value: f32| MaterialTable::from_cache_bytes(&file(value), SubsurfaceMethod::Burley, resolution);
+    let read = |value: f32| MaterialTable::from_cache_bytes(&file(value), key, SubsurfaceMethod::Burley, resolution);
     let table = read(0.5f32.ln()).expect("a table of ln 0.5 everywhere");
     let t = table.lookup(0.2, 0.3, 0.05);
     assert!(t.albedo.iter().chain(&t.radius_mm).all(|v| (v - 0.5).abs() < 1e-6), "{t:?}");
@@ -306,7 +309,48 @@ fn cache_file_values_a_build_cannot_store_are_refused() {
     let mut flipped = file(0.0);
     let last = flipped.len() - 1;
     flipped[last] ^= 1;
-    assert!(MaterialTable::from_cache_bytes(&flipped, SubsurfaceMethod::Burley, resolution).is_none());
+    assert!(MaterialTable::from_cache_bytes(&flipped, key, SubsurfaceMethod::Burley, resolution).is_none());
+    // A whole, undamaged file of another request is not this request's table.
+    assert!(
+        MaterialTable::from_cache_bytes(&file(0.0), "another request", SubsurfaceMethod::Burley, resolution).is_none()
+    );
+}
+
+/// A valid table file of another request (another method, boundaries or extended physiology) put under a request's
+/// cache name is not used: the file carries the request that built it, and a mismatch rebuilds (issue 23: such a
+/// file used to give Base Colours off by up to 0.16).
+#[test]
+fn cache_file_of_another_request_is_rebuilt() {
+    use spectral_skin::diffusion::Boundaries;
+    use spectral_skin::maps::lut::cache_key;
+    use spectral_skin::skin::params::EXTENDED_DEFAULTS;
+    let small = TableResolution { melanin: 4, melanin_blend: 3, hemoglobin: 3 };
+    let paper = Prepared::new(&Request::new(Outputs::material())).unwrap();
+    let capped =
+        Prepared::new(&Request { boundaries: Boundaries::Capped, ..Request::new(Outputs::material()) }).unwrap();
+    let thin = [0.05, EXTENDED_DEFAULTS[1], EXTENDED_DEFAULTS[2]];
+    let cases = [
+        ("another method", &paper, SubsurfaceMethod::RandomWalk, EXTENDED_DEFAULTS),
+        ("other boundaries", &capped, SubsurfaceMethod::Burley, EXTENDED_DEFAULTS),
+        ("another epidermis", &paper, SubsurfaceMethod::Burley, thin),
+    ];
+    for (what, prepared, method, extended) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let build = |p: &Prepared, m, e| {
+            MaterialTable::load_or_build_outputs(p, m, small, true, e, Some(dir.path()), &Default::default(), None)
+                .unwrap()
+        };
+        // The other request's table, written by the cache, renamed to the file name of the paper's Burley table.
+        build(prepared, method, extended);
+        let name = |p: &Prepared, m, e| dir.path().join(format!("table-{:016x}.bin", cache_key(p, m, small, true, e)));
+        let ours = name(&paper, SubsurfaceMethod::Burley, EXTENDED_DEFAULTS);
+        std::fs::rename(name(prepared, method, extended), &ours).unwrap();
+        let (table, from_cache) = build(&paper, SubsurfaceMethod::Burley, EXTENDED_DEFAULTS);
+        assert!(!from_cache, "{what}: the other request's table was read as ours");
+        let fresh = MaterialTable::build(&paper, SubsurfaceMethod::Burley, small).unwrap();
+        let (a, b) = (table.lookup(0.2, 0.5, 0.02), fresh.lookup(0.2, 0.5, 0.02));
+        assert_eq!(a.albedo, b.albedo, "{what}: {a:?} vs {b:?}");
+    }
 }
 
 /// A table kept in the cache folder is reused and equals a fresh one; a damaged cache file is rebuilt.

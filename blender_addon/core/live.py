@@ -11,8 +11,8 @@ Scale, IOR, Roughness, the scene analysis).
 
 Subsurface and specular are kept in Live mode unless forced off: the inputs can change per texel and per frame with no
 Apply, so neither the scene analysis's radius bound nor "oiliness zero everywhere" can be decided from the constants.
-Animated panel parameters are not evaluated per frame (the frame-change values of the baked path): in Live mode an
-artist keys the group node's input sockets instead, which the shader follows.
+Animated panel parameters are not evaluated per frame (the per-frame values of the baked path): their keys and
+drivers are copied onto the group node's input sockets at Apply (live.carry_animation), which the shader follows.
 """
 
 from __future__ import annotations

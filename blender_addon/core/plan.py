@@ -189,6 +189,9 @@ def _plan_from_constants(settings: SkinSettings, radius: bool, specular: bool) -
     return {
         "base_color": base_color,
         "radius": radius_mm,
+        # The same skin's Burley radius: the physical extent the scene analysis compares for every method
+        # (core/scene.py, extent_mm).
+        "extent_radius_mm": _rgb(ev["methods"]["burley"]["subsurface_radius_mm"]) if radius else None,
         "albedo": albedo,
         "ior": float(surface["ior"]),
         "subsurface_ior": float(surface["ior"]),

@@ -10,7 +10,9 @@ computed: the plan's ``work`` (the core's count) shows no radius fit or no specu
 Effects:
 
 - ``subsurface``: the smallest pixel footprint on the skin (mm per pixel) over every view (object, camera, frame),
-  compared with the material's largest Subsurface Radius × Scale (mm). When the largest radius is below
+  compared with the material's largest extent (mm): the skin's Burley Subsurface Radius × Scale, whatever the
+  method (:func:`extent_mm`; the threshold was measured with Burley's radius, and a random walk's radius is a mean
+  free path, several times shorter for the same skin in Blender 5.2+). When the largest extent is below
   :data:`SUBSURFACE_MIN_RADIUS_PX` pixels everywhere, subsurface scattering is dropped: Subsurface Weight 0 with the
   skin's total diffuse reflectance (the albedo) as Base Color, which keeps the total reflectance exact and only
   loses the blur no pixel can show (Subsurface Weight 0 is a diffuse closure of weight Base Color:
@@ -33,7 +35,7 @@ Effects:
   (a random walk leaks out through the holes). ``enabled``: the material's method suits every object.
 - ``animation``: a parameter keyframed or driven on the material's Spectral Skin settings. A constant-parameter
   material gets its values per frame (``plan["animation"]``: computed by the core for each distinct parameter set,
-  with the same decisions), set by a frame-change handler (blender_addon/frame_values.py); a material with parameter
+  with the same decisions), written as F-curves by blender_addon/frame_values.py; a material with parameter
   maps renders the current frame's values (``enabled`` False): its animation needs per-frame maps or the live
   shader.
 """
@@ -236,10 +238,25 @@ def _largest(values: Any) -> float:
     return float(np.max(np.asarray(values, dtype=np.float64)))
 
 
-def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: float) -> dict[str, Any]:
+def extent_mm(plan: dict[str, Any], settings: Any) -> float:
+    """The largest physical extent of the plan's profile, mm, as the Burley radius of the same skin: what
+    :data:`SUBSURFACE_MIN_RADIUS_PX` was measured with, whatever the material's method (a random walk's radius is
+    a mean free path, several times shorter than Burley's for the same skin in Blender 5.2+, longer before). A
+    constant plan has it from its one evaluation (``extent_radius_mm``); a map plan's method radius is scaled by the
+    largest Burley-to-method ratio over the bound grid (:func:`radius_bound_mm`), an upper bound."""
+    if plan.get("extent_radius_mm") is not None:
+        return _largest(plan["extent_radius_mm"])
+    radius = plan["images"]["radius"] if plan.get("radius") is None else plan["radius"]
+    return _largest(radius) * (1.0 if settings is None else extent_ratio(settings))
+
+
+def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: float,
+                settings: Any = None) -> dict[str, Any]:
     radius = plan["images"]["radius"] if plan.get("radius") is None else plan["radius"]
     largest_mm = _largest(radius)
-    figures: dict[str, Any] = {"largest_radius_mm": largest_mm, "threshold_px": threshold_px}
+    extent = extent_mm(plan, settings) if plan.get("extent_radius_mm") is not None or settings is not None \
+        else largest_mm
+    figures: dict[str, Any] = {"largest_radius_mm": largest_mm, "extent_mm": extent, "threshold_px": threshold_px}
     if facts is None:
         return _entry("subsurface", True, "no scene facts: kept", figures)
     try:
@@ -249,7 +266,7 @@ def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: fl
     if best is None:
         return _entry("subsurface", True, f"kept: {facts.note or 'no camera sees an object using the material'}",
                       figures)
-    radius_px = largest_mm / best["footprint_mm"]
+    radius_px = extent / best["footprint_mm"]
     figures.update(best, largest_radius_px=radius_px)
     where = f"at frame {best['frame']}, camera {best['camera']}, object {best['object']}"
     thin = thin_objects(facts, largest_mm) if radius_px < threshold_px else []
@@ -260,10 +277,10 @@ def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: fl
                       f"diffuse would lose it at any distance), although the largest radius is {radius_px:.3g} px "
                       f"{where}", figures)
     if radius_px < threshold_px:
-        return _entry("subsurface", False, f"largest radius {radius_px:.3g} px {where} (under {threshold_px:g} px): "
-                      "plain diffuse with the same albedo", figures)
-    return _entry("subsurface", True, f"largest radius {radius_px:.3g} px {where} (at least {threshold_px:g} px)",
-                  figures)
+        return _entry("subsurface", False, f"largest extent (Burley radius) {radius_px:.3g} px {where} (under "
+                      f"{threshold_px:g} px): plain diffuse with the same albedo", figures)
+    return _entry("subsurface", True, f"largest extent (Burley radius) {radius_px:.3g} px {where} (at least "
+                  f"{threshold_px:g} px)", figures)
 
 
 # Where the largest radius of any skin is sought: a grid over melanin (dense at small fractions, as fractions of its
@@ -272,19 +289,22 @@ def _subsurface(plan: dict[str, Any], facts: SceneFacts | None, threshold_px: fl
 # (a filter on top, absorbing the short paths first) widens the fitted radius before more narrows it, so the least
 # absorbing skin alone is no bound. Checked on a denser, offset grid over all three fractions for every method and
 # engine, with the paper's and a widening extended physiology, by
-# tests/python/test_addon_scene.py::test_bound_grid_bounds_the_radius. With the exact totals (issue 20) the random
-# walk's largest radii fell between the earlier 14 fractions (up to 0.35 % above the bound): hence 24.
-BOUND_MELANIN_FRACTIONS = (0.0, 0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.04, 0.05, 0.06, 0.075, 0.09, 0.11, 0.125, 0.15,
-                           0.17, 0.2, 0.225, 0.25, 0.3, 0.35, 0.5, 0.7, 1.0)
+# tests/python/test_addon_scene.py::test_bound_grid_bounds_the_radius.
+BOUND_MELANIN_FRACTIONS = (0.0, 0.005, 0.01, 0.02, 0.04, 0.06, 0.09, 0.125, 0.17, 0.25, 0.35, 0.5, 0.7, 1.0)
 BOUND_MELANIN_BLENDS = (0.0, 0.5, 1.0)
 
-_BOUNDS: dict[tuple[Any, ...], tuple[float, dict[str, int]]] = {}
+_BOUNDS: dict[tuple[Any, ...], tuple[float, float, dict[str, int]]] = {}
+
+
+def _bound_key(settings: Any) -> tuple[Any, ...]:
+    return (settings.method, settings.blender, settings.engine, settings.accuracy, settings.transport,
+            settings.working_space, tuple(sorted(settings.changed_extended().items())))
 
 
 def radius_bound_mm(settings: Any) -> tuple[float, dict[str, int]]:
-    """The largest Subsurface Radius × Scale (mm) any skin parameters give for the settings' method, target,
-    accuracy, transport, working space and extended physiology (one value per material: a thinner epidermis or less baseline
-    absorption widens the radius): the largest over the grid of :data:`BOUND_MELANIN_FRACTIONS` ×
+    """The largest extent (mm: Burley's Subsurface Radius × Scale, :func:`extent_mm`) any skin parameters give for
+    the settings' target, accuracy, transport, working space and extended physiology (one value per material: a thinner
+    epidermis or less baseline absorption widens the radius): the largest over the grid of :data:`BOUND_MELANIN_FRACTIONS` ×
     :data:`BOUND_MELANIN_BLENDS`, no blood; and the core's work for it (summed over the grid; computed once per
     process and key)."""
     import spectral_skin
@@ -292,22 +312,31 @@ def radius_bound_mm(settings: Any) -> tuple[float, dict[str, int]]:
     from .settings import ACCURACY_LEVELS, PARAMETER_INFO
     from .targets import method_name
 
+    key = _bound_key(settings)
     extended = settings.changed_extended()
-    key = (settings.method, settings.blender, settings.engine, settings.accuracy, settings.transport,
-           settings.working_space, tuple(sorted(extended.items())))
     if key not in _BOUNDS:
         melanin_max = PARAMETER_INFO["melanin"].high
-        largest, work = 0.0, dict[str, int]()
+        largest, ratio, work = 0.0, 0.0, dict[str, int]()
         for fraction in BOUND_MELANIN_FRACTIONS:
             for blend in BOUND_MELANIN_BLENDS if fraction > 0 else (0.0,):
                 ev = spectral_skin.evaluate(fraction * melanin_max, blend, 0.0, 0.0,
                                             outputs=["radius"], accuracy=ACCURACY_LEVELS[settings.accuracy],
                                             working_space=settings.working_space, blender=settings.blender,
                                             engine=settings.engine, **settings.transport_keywords(), **extended)
-                largest = max(largest, _largest(ev["methods"][method_name(settings.method)]["subsurface_radius_mm"]))
+                burley = ev["methods"]["burley"]["subsurface_radius_mm"]
+                own = ev["methods"][method_name(settings.method)]["subsurface_radius_mm"]
+                largest = max(largest, _largest(burley))
+                ratio = max(ratio, *(b / o for b, o in zip(burley, own, strict=True) if o > 0))
                 work = {k: work.get(k, 0) + v for k, v in ev["work"].items()}
-        _BOUNDS[key] = (largest, work)
-    return _BOUNDS[key]
+        _BOUNDS[key] = (largest, ratio, work)
+    return _BOUNDS[key][0], _BOUNDS[key][2]
+
+
+def extent_ratio(settings: Any) -> float:
+    """The largest ratio of Burley's radius to the settings' method's over the bound grid (1 for Burley): what
+    turns a map plan's method radius into an upper bound on its extent (:func:`extent_mm`)."""
+    radius_bound_mm(settings)
+    return _BOUNDS[_bound_key(settings)][1]
 
 
 def subsurface_before(settings: Any, facts: SceneFacts | None,
@@ -472,7 +501,7 @@ def _animation(settings: Any, facts: SceneFacts | None) -> dict[str, Any]:
                       f"values of frame {animation.current_frame}: animation needs per-frame maps or the live shader",
                       figures)
     return _entry("animation", True, f"{names}: values per frame for frames {animation.frames[0]}-"
-                  f"{animation.frames[-1]}, set by a frame-change handler", figures)
+                  f"{animation.frames[-1]}, keyed on the material's nodes", figures)
 
 
 def decide(plan: dict[str, Any], settings: Any, facts: SceneFacts | None,
@@ -483,7 +512,7 @@ def decide(plan: dict[str, Any], settings: Any, facts: SceneFacts | None,
     {"subsurface": "AUTO" | "ON" | "OFF", "specular": ...}; an override other than AUTO wins over the decision and
     is recorded in the entry ("override") and its reason. ``subsurface``: the subsurface decision when it was taken
     before the plan was computed (:func:`subsurface_before`; the plan then has no radius)."""
-    sub = subsurface if subsurface is not None else _subsurface(plan, facts, threshold_px)
+    sub = subsurface if subsurface is not None else _subsurface(plan, facts, threshold_px, settings)
     effects = [_engine(plan), sub, _specular(plan, settings), _constant_maps(plan, settings)]
     for entry in effects:
         choice = (overrides or {}).get(entry["effect"], "AUTO")
@@ -661,7 +690,9 @@ def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str
             import numpy as np
 
             largest = np.max([p["radius"] for p in plans.values()], axis=0)
-            decision_plan = {**plan, "radius": [float(v) for v in largest]}
+            extent = np.max([p["extent_radius_mm"] for p in plans.values()], axis=0)
+            decision_plan = {**plan, "radius": [float(v) for v in largest],
+                             "extent_radius_mm": [float(v) for v in extent]}
     else:
         plan = decision_plan = make_plan(settings, progress, radius=radius, specular=specular)
     effects = decide(decision_plan, decision_settings, facts, overrides, subsurface=before)

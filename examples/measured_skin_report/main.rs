@@ -275,6 +275,52 @@ fn main() {
         );
     }
 
+    // Skin-type groups by the individual typology angle ITA = atan((L* - 50) / b*) of the measured colour, with
+    // Chardon, Cretois & Hourseau's bounds (Int. J. Cosmet. Sci. 13:191, 1991): fit quality and fitted physiology per
+    // group, for the paper's three parameters and the default set.
+    println!("\nBy skin type (ITA of the measured colour; Chardon et al. 1991):\n");
+    println!(
+        "| group (ITA) | spectra | paper set: median / p90 ΔE00 | default set: median / p90 ΔE00 | melanin (p10 / median / p90) | \
+         epidermis mm (median) | haemoglobin (median) |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    let ita = |lab: [f64; 3]| (lab[0] - 50.0).atan2(lab[2]).to_degrees();
+    let groups = [
+        ("very light (> 55°)", 55.0, f64::INFINITY),
+        ("light (41–55°)", 41.0, 55.0),
+        ("intermediate (28–41°)", 28.0, 41.0),
+        ("tan (10–28°)", 10.0, 28.0),
+        ("brown (−30–10°)", -30.0, 10.0),
+        ("dark (< −30°)", f64::NEG_INFINITY, -30.0),
+    ];
+    for (name, lo, hi) in groups {
+        let pick = |r: &Run| -> Vec<SpectrumFit> {
+            r.fits.iter().filter(|f| (lo..hi).contains(&ita(f.lab_measured))).cloned().collect()
+        };
+        let (paper_fits, fits) = (pick(&runs[0]), pick(default_run));
+        if fits.is_empty() {
+            println!("| {name} | 0 | | | | | |");
+            continue;
+        }
+        let q = |fits: &[SpectrumFit], f: &dyn Fn(&SpectrumFit) -> f64, p: f64| {
+            quantile(&fits.iter().map(f).collect::<Vec<_>>(), p)
+        };
+        let de = |f: &SpectrumFit| f.delta_e00;
+        println!(
+            "| {name} | {} | {:.2} / {:.2} | {:.2} / {:.2} | {:.3} / {:.3} / {:.3} | {:.3} | {:.4} |",
+            fits.len(),
+            q(&paper_fits, &de, 0.5),
+            q(&paper_fits, &de, 0.9),
+            q(&fits, &de, 0.5),
+            q(&fits, &de, 0.9),
+            q(&fits, &|f| f.params.melanin, 0.1),
+            q(&fits, &|f| f.params.melanin, 0.5),
+            q(&fits, &|f| f.params.melanin, 0.9),
+            q(&fits, &|f| f.params.epidermis_thickness_mm, 0.5),
+            q(&fits, &|f| f.params.hemoglobin, 0.5),
+        );
+    }
+
     // Plots.
     let rms_series: Vec<Series> =
         runs.iter().map(|r| (r.label.clone(), cdf(&r.fits.iter().map(|f| f.rms).collect::<Vec<_>>(), 0.06))).collect();

@@ -25,10 +25,17 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     h
 }
 
+/// The request key the fuzzed files carry (the reader compares it with the one it is asked for).
+const KEY: &str = "fuzzed request";
+
+/// A file around `body`: the magic, the checksum, the key's length and the key, then `body`.
 fn wrap(body: &[u8]) -> Vec<u8> {
+    let mut keyed = (KEY.len() as u32).to_le_bytes().to_vec();
+    keyed.extend_from_slice(KEY.as_bytes());
+    keyed.extend_from_slice(body);
     let mut file = CACHE_MAGIC.to_vec();
-    file.extend_from_slice(&fnv1a(body).to_le_bytes());
-    file.extend_from_slice(body);
+    file.extend_from_slice(&fnv1a(&keyed).to_le_bytes());
+    file.extend_from_slice(&keyed);
     file
 }
 
@@ -54,7 +61,7 @@ fuzz_target!(|data: &[u8]| {
             wrap(&body)
         }
     };
-    let Some(table) = MaterialTable::from_cache_bytes(&file, method, resolution) else { return };
+    let Some(table) = MaterialTable::from_cache_bytes(&file, KEY, method, resolution) else { return };
     assert_eq!(table.resolution(), resolution);
     assert_eq!(table.method(), method);
     // Nodes and cell centres of the warped axes (the domain is [0, 0.5] x [0, 1] x [0, 0.1], cube-root warped for

@@ -519,26 +519,29 @@ impl MaterialTable {
         cancel: &AtomicBool,
         tick: Option<&(dyn Fn() + Sync)>,
     ) -> Result<(MaterialTable, bool), SkinError> {
-        let key = cache_key(prepared, method, resolution, radius, extended);
-        let path = cache_dir.map(|d| d.join(format!("table-{key:016x}.bin")));
-        if let Some(table) = path.as_deref().and_then(|p| MaterialTable::read(p, method, resolution)) {
+        let key = cache_key_text(prepared, method, resolution, radius, extended);
+        let path = cache_dir.map(|d| d.join(format!("table-{:016x}.bin", fnv1a(key.as_bytes()))));
+        if let Some(table) = path.as_deref().and_then(|p| MaterialTable::read(p, &key, method, resolution)) {
             return Ok((MaterialTable { radius, extended, ..table }, true));
         }
         let table = MaterialTable::build_outputs(prepared, method, resolution, radius, extended, cancel, tick)?;
         if let Some(p) = &path {
             // A cache that cannot be written is no error: the table is still good.
             if std::fs::create_dir_all(p.parent().unwrap_or(Path::new("."))).is_ok() {
-                let _ = write_atomic(p, &table.to_bytes());
+                let _ = write_atomic(p, &table.to_cache_bytes(&key));
             }
         }
         Ok((table, false))
     }
 
-    /// The cache file: magic, the FNV-1a checksum of the body (8 bytes, little endian), then the body: the three
-    /// axis sizes (u32) and the node values (f32), little endian.
-    fn to_bytes(&self) -> Vec<u8> {
+    /// The cache file: magic, the length of the key (u32) and the key (the whole request that built the table,
+    /// [`cache_key_text`]), the FNV-1a checksum of the body (8 bytes), then the body: the three axis sizes (u32) and
+    /// the node values (f32); numbers little endian. The checksum covers the key too.
+    pub fn to_cache_bytes(&self, key: &str) -> Vec<u8> {
         let r = self.resolution;
-        let mut body = Vec::with_capacity(12 + self.log_values.len() * STORED * 4);
+        let mut body = Vec::with_capacity(key.len() + 16 + self.log_values.len() * STORED * 4);
+        body.extend_from_slice(&(key.len() as u32).to_le_bytes());
+        body.extend_from_slice(key.as_bytes());
         for n in [r.melanin, r.melanin_blend, r.hemoglobin] {
             body.extend_from_slice(&(n as u32).to_le_bytes());
         }
@@ -554,19 +557,21 @@ impl MaterialTable {
         bytes
     }
 
-    /// A cached table, or None if the file is missing or not a table of `resolution` (see
+    /// A cached table, or None if the file is missing or not the table of `key` (see
     /// [`MaterialTable::from_cache_bytes`]), so that the caller rebuilds it.
-    fn read(path: &Path, method: SubsurfaceMethod, resolution: TableResolution) -> Option<MaterialTable> {
-        MaterialTable::from_cache_bytes(&std::fs::read(path).ok()?, method, resolution)
+    fn read(path: &Path, key: &str, method: SubsurfaceMethod, resolution: TableResolution) -> Option<MaterialTable> {
+        MaterialTable::from_cache_bytes(&std::fs::read(path).ok()?, key, method, resolution)
     }
 
-    /// The table in the bytes of a cache file (the format of `load_or_build`'s cache: the magic line, the FNV-1a
-    /// checksum of the body, the axis sizes and the node values), or None if they are not a whole, undamaged table
-    /// of `resolution`: another magic or size, a checksum mismatch (any flipped byte), or a value a build cannot
+    /// The table in the bytes of a cache file (the format of [`MaterialTable::to_cache_bytes`]), or None if they are
+    /// not a whole, undamaged table of the request `key` at `resolution`: another magic or size, a checksum mismatch
+    /// (any flipped byte), a table another request built (its stored key differs: another method, boundaries,
+    /// transport, accuracy or extended physiology, even under this request's file name), or a value a build cannot
     /// have stored (not finite, or a logarithm outside [ln 1e-30, ln 1e30]). A table it returns interpolates to
     /// finite positive values everywhere.
     pub fn from_cache_bytes(
         bytes: &[u8],
+        key: &str,
         method: SubsurfaceMethod,
         resolution: TableResolution,
     ) -> Option<MaterialTable> {
@@ -576,6 +581,11 @@ impl MaterialTable {
         if fnv1a(body) != checksum {
             return None;
         }
+        let key_len = u32::from_le_bytes(body.get(..4)?.try_into().ok()?) as usize;
+        if body.get(4..4 + key_len)? != key.as_bytes() {
+            return None;
+        }
+        let body = &body[4 + key_len..];
         let header: Vec<usize> =
             body.get(..12)?.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize).collect();
         let r = resolution;
@@ -591,9 +601,9 @@ impl MaterialTable {
     }
 }
 
-/// First bytes of a cached table file (v3: one method per table, with a checksum; older files are not read and get
-/// rebuilt).
-pub const CACHE_MAGIC: &[u8] = b"spectral-skin table v3
+/// First bytes of a cached table file (v4: the file carries the whole request that built it, checked on reading;
+/// v3 and older files are not read and get rebuilt).
+pub const CACHE_MAGIC: &[u8] = b"spectral-skin table v4
 ";
 
 /// The error of a build or check stopped by its cancel flag.
@@ -618,6 +628,18 @@ pub fn cache_key(
     radius: bool,
     extended: [f64; 3],
 ) -> u64 {
+    fnv1a(cache_key_text(prepared, method, resolution, radius, extended).as_bytes())
+}
+
+/// The text [`cache_key`] hashes: the whole request a table is built for. A cache file stores it and is read only
+/// for the same text.
+pub fn cache_key_text(
+    prepared: &Prepared,
+    method: SubsurfaceMethod,
+    resolution: TableResolution,
+    radius: bool,
+    extended: [f64; 3],
+) -> String {
     let mut text = format!(
         "{}|{}|{}|{:?}",
         env!("CARGO_PKG_VERSION"),
@@ -630,7 +652,7 @@ pub fn cache_key(
         let bits: Vec<String> = extended.iter().map(|v| format!("{:016x}", v.to_bits())).collect();
         text.push_str(&format!("|extended {}", bits.join(" ")));
     }
-    fnv1a(text.as_bytes())
+    text
 }
 
 /// `p` with the extended physiology `extended` (`EXTENDED_PARAMS` order).

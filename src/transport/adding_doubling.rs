@@ -8,7 +8,9 @@
 //! reflects each upward stream by its Fresnel reflectance (totally below the critical cosine). In flux form these are
 //! ordinary matrix products, so the operators of this module are plain `n x n` matrices.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
+use std::rc::Rc;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use super::matrix::Matrix;
@@ -82,18 +84,94 @@ pub fn slab_reflectance(slabs: &[OpticalSlab], ior: f64, streams: usize) -> Resu
     if slabs.is_empty() {
         return Err(SkinError::invalid("layers", "need at least one layer"));
     }
+    let (upper, last) = slabs.split_at(slabs.len() - 1);
     with_quadrature(streams, ior, |q| {
-        let mut stack: Option<Operators> = None;
-        for slab in slabs {
-            let ops = Operators::of_slab(q, slab);
-            stack = Some(match stack {
-                None => ops,
-                Some(upper) => upper.add(&ops),
-            });
-        }
-        let stack = stack.expect("at least one slab");
-        Ok(stack.reflectance_under_boundary(q))
+        let above = UpperSystem::cached(q, upper, ior);
+        Ok(above.total_over(&Operators::of_slab(q, &last[0]).r_down))
     })
+}
+
+/// What the top boundary and every layer above the last do to the light, seen from the last layer's top face: the
+/// part of a stack that many evaluations share (a table varies the dermis's blood under one epidermis; a fit's
+/// derivative in the blood keeps the epidermis), so it is kept per thread, keyed by those layers' bits.
+#[derive(Debug)]
+struct UpperSystem {
+    /// Flux that leaves through the top without reaching the last layer (per unit refracted into the normal stream).
+    escaped: f64,
+    /// Downward flux per stream arriving at the last layer.
+    down: Vec<f64>,
+    /// Reflection of light arriving from below (from the last layer).
+    r_from_below: Matrix,
+    /// Share of each upward stream, arriving from below, that leaves through the top.
+    escape_from_below: Vec<f64>,
+}
+
+/// Upper systems kept per thread before the cache is cleared (a table row of one epidermis over every wavelength
+/// fits many times over).
+const UPPER_CACHE_ENTRIES: usize = 1024;
+
+impl UpperSystem {
+    /// With `E` the upper layers' operators and `F` the streams' Fresnel reflectance under the boundary:
+    /// `d = (I - F R_E)^-1 e_N` goes down at E's top, `(1 - F) . R_E d` escapes, `T_E d` reaches the last layer;
+    /// from below, `R = R_E' + T_E (I - F R_E)^-1 F T_E'` and the escaping share is
+    /// `(1 - F)^T (I - R_E F)^-1 T_E'` (primes: the operators for light from below). No upper layers: `d = e_N`,
+    /// `R = F`, share `1 - F`.
+    fn of(q: &Quadrature, upper: &[OpticalSlab]) -> UpperSystem {
+        let n = q.n();
+        let normal: Vec<f64> = (0..n).map(|i| if i == n - 1 { 1.0 } else { 0.0 }).collect();
+        let not_reflected: Vec<f64> = q.fresnel.iter().map(|f| 1.0 - f).collect();
+        let Some(e) = upper.iter().map(|s| Operators::of_slab(q, s)).reduce(|above, below| above.add(&below)) else {
+            return UpperSystem {
+                escaped: 0.0,
+                down: normal,
+                r_from_below: Matrix::diagonal(&q.fresnel),
+                escape_from_below: not_reflected,
+            };
+        };
+        let i_minus_f_r = Matrix::identity(n).minus(&e.r_down.scale_rows(&q.fresnel));
+        let d = i_minus_f_r.solve_vector(&normal);
+        let escaped = dot(&not_reflected, &e.r_down.mul_vector(&d));
+        let down = e.t_down.mul_vector(&d);
+        let r_from_below = e.r_up.plus(&e.t_down.mul(&i_minus_f_r.solve(&e.t_up.scale_rows(&q.fresnel))));
+        // (1 - F)^T (I - R_E F)^-1 T_E' = ((I - R_E F)^-T (1 - F))^T T_E', and (I - R_E F)^T = I - F R_E^T.
+        let y = Matrix::identity(n).minus(&e.r_down.transpose().scale_rows(&q.fresnel)).solve_vector(&not_reflected);
+        let escape_from_below = e.t_up.transpose().mul_vector(&y);
+        UpperSystem { escaped, down, r_from_below, escape_from_below }
+    }
+
+    /// [`UpperSystem::of`], from this thread's cache when the same layers were seen before.
+    fn cached(q: &Quadrature, upper: &[OpticalSlab], ior: f64) -> Rc<UpperSystem> {
+        thread_local! {
+            static CACHE: RefCell<HashMap<Vec<u64>, Rc<UpperSystem>>> = RefCell::new(HashMap::new());
+        }
+        let mut key = vec![q.n() as u64, ior.to_bits()];
+        key.extend(upper.iter().flat_map(|s| [s.albedo.to_bits(), s.optical_thickness.to_bits(), s.g.to_bits()]));
+        CACHE.with(|cache| {
+            if let Some(hit) = cache.borrow().get(&key) {
+                return Rc::clone(hit);
+            }
+            let fresh = Rc::new(UpperSystem::of(q, upper));
+            let mut cache = cache.borrow_mut();
+            if cache.len() >= UPPER_CACHE_ENTRIES {
+                cache.clear();
+            }
+            cache.insert(key, Rc::clone(&fresh));
+            fresh
+        })
+    }
+
+    /// The total leaving through the top over a last layer that reflects `r_last` (from above): the flux going down
+    /// onto it is `v = (I - R r_last)^-1 down`, and of what it sends back up, `escape_from_below` leaves.
+    fn total_over(&self, r_last: &Matrix) -> f64 {
+        let n = r_last.n();
+        let v = Matrix::identity(n).minus(&self.r_from_below.mul(r_last)).solve_vector(&self.down);
+        let total = self.escaped + dot(&self.escape_from_below, &r_last.mul_vector(&v));
+        total.clamp(0.0, 1.0)
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// Reflection and transmission of the whole slab stack and their mirror images, as flux operators (see the module
@@ -167,24 +245,6 @@ impl Operators {
         let t_up = self.t_up.mul(&x_up);
         let r_up = lower.r_up.plus(&lower.t_down.mul(&self.r_up.mul(&x_up)));
         Operators { r_down, t_down, r_up, t_up }
-    }
-
-    /// The total flux leaving through the top boundary for unit flux refracted into the normal stream: with `F` the
-    /// internal Fresnel reflectance of each stream (1 below the critical cosine), the upward flux under the boundary
-    /// is `u = (I - R F)^-1 R e_N` and `(1 - F) . u` leaves.
-    fn reflectance_under_boundary(&self, q: &Quadrature) -> f64 {
-        let n = q.n();
-        let r = &self.r_down;
-        let mut a = Matrix::identity(n);
-        for i in 0..n {
-            for j in 0..n {
-                a[(i, j)] -= r[(i, j)] * q.fresnel[j];
-            }
-        }
-        let rhs: Vec<f64> = (0..n).map(|i| r[(i, n - 1)]).collect();
-        let u = a.solve_vector(&rhs);
-        let total: f64 = u.iter().zip(&q.fresnel).map(|(ui, fi)| ui * (1.0 - fi)).sum();
-        total.clamp(0.0, 1.0)
     }
 }
 
@@ -578,6 +638,38 @@ mod tests {
         let top = Layer { thickness_mm: 0.1, ior: 1.3, ..layer };
         let e = total_diffuse_reflectance(&[top, layer], 8).unwrap_err().to_string();
         assert!(e.contains("layer 1") && e.contains("diffusion"), "{e}");
+    }
+
+    /// The whole stack added into one set of operators, then the boundary: `u = (I - R F)^-1 R e_N` leaves as
+    /// `(1 - F) . u`. Another order of the same algebra than `UpperSystem`'s, which the solver uses.
+    fn total_by_whole_stack(slabs: &[OpticalSlab], ior: f64, streams: usize) -> f64 {
+        with_quadrature(streams, ior, |q| {
+            let n = q.n();
+            let r = slabs.iter().map(|s| Operators::of_slab(q, s)).reduce(|u, l| u.add(&l)).unwrap().r_down;
+            let a = Matrix::identity(n).minus(&r.transpose().scale_rows(&q.fresnel).transpose());
+            let u = a.solve_vector(&(0..n).map(|i| r[(i, n - 1)]).collect::<Vec<_>>());
+            u.iter().zip(&q.fresnel).map(|(ui, fi)| ui * (1.0 - fi)).sum()
+        })
+    }
+
+    #[test]
+    fn upper_system_is_the_whole_stack() {
+        let stacks = [
+            vec![slab(0.8, f64::INFINITY, 0.0)],
+            vec![slab(0.5, 3.0, 0.0)],
+            vec![slab(0.4, 1.5, 0.0), slab(0.97, f64::INFINITY, 0.0)],
+            vec![slab(0.9, 0.2, 0.7), slab(0.3, 4.0, 0.0), slab(0.99, 30.0, 0.5)],
+            vec![slab(0.6, 0.5, 0.0), slab(0.95, 2.0, 0.0), slab(0.2, 0.1, 0.0), slab(0.9, f64::INFINITY, 0.0)],
+        ];
+        for stack in &stacks {
+            for (ior, streams) in [(1.4, 8), (1.0, 6), (1.33, 16)] {
+                let a = slab_reflectance(stack, ior, streams).unwrap();
+                let b = total_by_whole_stack(stack, ior, streams);
+                assert!((a - b).abs() < 1e-12 * b.max(1e-3), "{stack:?} n {ior} {streams}: {a} vs {b}");
+                // A second call is served by the cache and gives the same bits.
+                assert_eq!(slab_reflectance(stack, ior, streams).unwrap(), a);
+            }
+        }
     }
 
     #[test]

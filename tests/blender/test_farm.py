@@ -310,3 +310,20 @@ def test_apply_2048_map_timing(addon, tmp_path):
     print(f"\napply 2048x2048 melanin + haemoglobin maps via bpy.ops.spectral_skin.apply: {seconds:.2f} s "
           f"(core: {props.result_seconds:.2f} s, {props.result_computed})")
     assert seconds < 120
+
+
+def test_render_script_takes_the_engine_apply_computed_for(addon, tmp_path):
+    """A .blend whose scene engine was changed after Apply: render_blend.py renders with the engine the skin was
+    computed for (stored on the material by Apply), says so on stderr, and warns when told to render another."""
+    blend = _skin_blend(tmp_path, "job", pack=True)
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    bpy.context.scene.render.engine = "BLENDER_WORKBENCH"
+    bpy.ops.wm.save_mainfile()
+    args = ("--out", str(tmp_path / "out"), "--samples", "1", "--resolution", "8x8")
+    proc = _run_render(str(blend), *args, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "render_blend: rendering with CYCLES, the engine Apply computed the skin materials for" in proc.stderr
+    assert "warning" not in proc.stderr, proc.stderr
+    proc = _run_render(str(blend), *args, "--engine", "BLENDER_WORKBENCH", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "rendering with BLENDER_WORKBENCH, as asked (--engine); warning: Skin was computed for CYCLES" in proc.stderr

@@ -31,7 +31,7 @@ sys.path.insert(0, str(REPO / "scripts"))
 import render_blend  # noqa: E402  (scripts/render_blend.py)
 from blender_scenes import add_box, assign  # noqa: E402
 
-from blender_addon import batch  # noqa: E402
+from blender_addon import anim, batch  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 from blender_addon.ops import apply_skin  # noqa: E402
@@ -309,9 +309,8 @@ def test_per_part_thickness_finds_the_thin_part_of_a_thick_object(addon):
 
 def test_driven_haemoglobin_stores_the_cores_values_per_frame(addon):
     """A driver (hemoglobin = 0.01 × frame, a simple expression Blender evaluates without Python) over frames 1-3:
-    the stored values are the core's Burley Base Color and radius of each frame's haemoglobin, and changing frame
-    sets them on the Principled BSDF."""
-    from blender_addon import frame_values
+    the F-curves Apply writes on the Principled BSDF hold the core's Burley Base Color and radius of each frame's
+    haemoglobin, and changing frame sets them."""
 
     materials = _scene_with_far_and_close()
     material = materials["Close"]
@@ -325,8 +324,7 @@ def test_driven_haemoglobin_stores_the_cores_values_per_frame(addon):
     entry = _effect(material, "animation")
     assert entry["enabled"] and entry["figures"]["parameters"] == {"hemoglobin": "driven"}
     assert entry["figures"]["evaluations"] == 3
-    stored = json.loads(material[frame_values.PROPERTY])
-    assert stored["frames"] == [1, 2, 3]
+    stored = _keyed(material, [1, 2, 3])
     props = material.spectral_skin
     for index, frame in enumerate(stored["frames"]):
         burley = spectral_skin.evaluate(props.melanin, props.melanin_blend, 0.01 * frame, props.oiliness,
@@ -339,9 +337,20 @@ def test_driven_haemoglobin_stores_the_cores_values_per_frame(addon):
     scene.frame_set(1)
     np.testing.assert_allclose(_principled(material).inputs["Base Color"].default_value[:3], stored["base_color"][0],
                                rtol=1e-6)
-    # Remove takes the stored values away with the nodes.
+    # Remove takes the per-frame curves away with the nodes.
     assert bpy.ops.spectral_skin.remove(material="Close") == {"FINISHED"}
-    assert frame_values.PROPERTY not in material
+    assert not anim.fcurves(material.node_tree)
+
+
+def _keyed(material, frames: list[int]) -> dict:
+    """The per-frame values Apply wrote as F-curves on the add-on's Principled BSDF, evaluated at ``frames``."""
+    principled = _principled(material)
+    curves = {(c.data_path, c.array_index): c for c in anim.fcurves(material.node_tree)}
+    out: dict = {"frames": frames}
+    for key, name, size in (("base_color", "Base Color", 3), ("radius", "Subsurface Radius", 3)):
+        path = principled.inputs[name].path_from_id("default_value")
+        out[key] = [[curves[(path, i)].evaluate(f) for i in range(size)] for f in frames]
+    return out
 
 
 def test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon, tmp_path):
@@ -371,7 +380,7 @@ def test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon, tmp
     melanin, melanin_blend = props.melanin, props.melanin_blend  # the file is reloaded: no bpy data after this
     blend = tmp_path / "animated.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
-    addon.unregister()  # the render node: no add-on, the render script installs the handler itself
+    addon.unregister()  # the render node: no add-on; the per-frame values are F-curves in the .blend
     paths = render_blend.render_frames(str(blend), str(tmp_path / "renders"), frames=[1, 2], samples=512)
     for path, (frame, value) in zip(paths, hemoglobin.items(), strict=True):
         expected = np.asarray(spectral_skin.evaluate(melanin, melanin_blend, value, 0.0,
@@ -387,7 +396,6 @@ def test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon, tmp
 def test_batch_apply_follows_the_materials_animation(addon, tmp_path):
     """The batch apply, given another haemoglobin, follows the material's keyframes: the operator's per-frame values,
     also in the sidecar."""
-    from blender_addon import frame_values
 
     materials = _scene_with_far_and_close()
     scene = bpy.context.scene
@@ -400,7 +408,7 @@ def test_batch_apply_follows_the_materials_animation(addon, tmp_path):
     source = tmp_path / "scene.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(source))
     assert bpy.ops.spectral_skin.apply(material="Close") == {"FINISHED"}
-    operator = json.loads(bpy.data.materials["Close"][frame_values.PROPERTY])
+    operator = _keyed(bpy.data.materials["Close"], [1, 2])
     plans = batch.apply_to_materials(str(source), ["Close"], SkinSettings.from_preset("caucasian", hemoglobin=0.1),
                                      str(tmp_path / "out.blend"))
     headless = plans["Close"]["animation"]
