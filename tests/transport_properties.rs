@@ -79,8 +79,10 @@ proptest! {
         prop_assert!(after <= before * (1.0 + 1e-10) + 1e-15, "{} -> {} ({:?} -> {:?})", before, after, layers[k], more[k]);
     }
 
-    /// (c) Splitting any layer into two pieces of the same material changes nothing (1e-10 of the total): there is no
-    /// boundary between them.
+    /// (c) Splitting any layer into two pieces of the same material changes nothing: there is no boundary between
+    /// them. Into halves it is exact to round-off (the unit tests, 1e-12); cut anywhere, the two pieces start from
+    /// other thin layers than the whole, and the extrapolated start keeps that within 1e-7 of the total (4e-8 the
+    /// largest over 1000 random stacks, a thin index-matched layer; 1e-13 absolute for totals near 0).
     #[test]
     fn splitting_changes_nothing(layers in any_stack(1..=4), which in 0usize..4, fraction in 0.01f64..0.99) {
         let k = which % layers.len();
@@ -94,7 +96,7 @@ proptest! {
         split[k].thickness_mm = first;
         split.insert(k + 1, Layer { thickness_mm: rest, ..l });
         let (a, b) = (total(&layers), total(&split));
-        prop_assert!((a - b).abs() <= 1e-10 * a, "whole {} split {} (layer {} of {:?})", a, b, k, layers);
+        prop_assert!((a - b).abs() <= 1e-7 * a + 1e-13, "whole {} split {} (layer {} of {:?})", a, b, k, layers);
     }
 
     /// (d) Any number of layers (1 to 8) gives a finite total in [0, 1).
