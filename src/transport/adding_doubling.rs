@@ -634,8 +634,8 @@ mod tests {
     }
 
     /// A layer cut in halves is the same layer (both halves start from the thin layer the whole one starts from);
-    /// cut anywhere else, the halves' thin starts differ, by up to 2.2e-5 of the total at 8 streams (measured; the
-    /// quadrature's own error is 100 times that).
+    /// cut anywhere else, the halves' thin starts differ, within 1e-8 here (tests/transport_properties.rs tries random
+    /// stacks).
     #[test]
     fn splitting_a_layer_changes_nothing() {
         let dermis = slab(0.97, f64::INFINITY, 0.0);
