@@ -10,12 +10,16 @@ fn albedo(p: SkinParams) -> [f64; 3] {
         .unwrap()
 }
 
-/// More melanin darkens every channel, and blue most (melanin absorbs most at short wavelengths).
+/// More melanin darkens every channel, and blue most (melanin absorbs most at short wavelengths), from light to
+/// medium skin (C_m 0.02 -> 0.1; ratios dark/light R G B at blend 1: 0.303 0.302 0.294). Further, the exact totals
+/// saturate in the blue: once the epidermis hides the dermis, what is left is the epidermis's own scattering near the
+/// surface, which more melanin lowers only slowly, while red still loses its dermal light (C_m 0.02 -> 0.2 at blend
+/// 1: 0.153 0.163 0.159; diffusion, which overstates that near-surface light, kept blue the most darkened there).
 #[test]
 fn melanin_darkens_blue_most() {
     for blend in [0.0, 0.5, 1.0] {
         let light = albedo(SkinParams::new(0.02, blend, 0.01, 0.3).unwrap());
-        let dark = albedo(SkinParams::new(0.2, blend, 0.01, 0.3).unwrap());
+        let dark = albedo(SkinParams::new(0.1, blend, 0.01, 0.3).unwrap());
         let ratio: Vec<f64> = (0..3).map(|c| dark[c] / light[c]).collect();
         assert!(ratio.iter().all(|r| *r < 1.0), "blend {blend}: {ratio:?}");
         assert!(ratio[2] < ratio[1] && ratio[2] < ratio[0], "blend {blend}: {ratio:?}");

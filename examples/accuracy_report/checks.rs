@@ -1,9 +1,10 @@
-//! The references' own checks: the converged reference against a further refinement, and diffusion itself against
-//! the project's Monte Carlo photon walk.
+//! The references' own checks: the converged reference against a further refinement, and the transports (diffusion,
+//! adding-doubling at several stream counts) against the project's Monte Carlo photon walk.
 
 use serde::Serialize;
 use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
 use spectral_skin::skin::skin_layers;
+use spectral_skin::transport::total_diffuse_reflectance;
 use spectral_skin::{evaluate, Accuracy, SkinModel};
 
 #[path = "../../tests/support/mc.rs"]
@@ -46,13 +47,19 @@ pub fn convergence(refs: &[PresetReference]) -> Convergence {
     c
 }
 
-/// Diffusion's total diffuse reflectance against Monte Carlo for one preset and wavelength.
+/// Stream counts of the adding-doubling totals set beside the Monte Carlo.
+pub const MC_STREAMS: [usize; 4] = [4, 8, 16, 32];
+
+/// The total diffuse reflectance by diffusion and by adding-doubling against Monte Carlo for one preset and
+/// wavelength.
 #[derive(Debug, Clone, Serialize)]
 pub struct McRow {
     pub preset: &'static str,
     pub wavelength_nm: f64,
     pub epidermis_albedo: f64,
     pub diffusion: f64,
+    /// Adding-doubling totals at [`MC_STREAMS`] streams.
+    pub adding_doubling: Vec<f64>,
     pub monte_carlo: f64,
     pub monte_carlo_se: f64,
     pub relative_difference: f64,
@@ -85,11 +92,14 @@ pub fn diffusion_vs_monte_carlo(refs: &[PresetReference], photons: u64) -> Vec<M
             let start = std::time::Instant::now();
             let result = mc::simulate(&mc_layers, &mc::McConfig::new(photons, 1000 + 10 * k as u64 + j as u64, vec![]));
             let epi = layers[0];
+            let adding_doubling =
+                MC_STREAMS.iter().map(|&n| total_diffuse_reflectance(&layers, n).expect("adding-doubling")).collect();
             rows.push(McRow {
                 preset: r.name,
                 wavelength_nm,
                 epidermis_albedo: epi.sigma_s_reduced_per_mm / (epi.sigma_a_per_mm + epi.sigma_s_reduced_per_mm),
                 diffusion,
+                adding_doubling,
                 monte_carlo: result.reflectance,
                 monte_carlo_se: result.reflectance_se,
                 relative_difference: diffusion / result.reflectance - 1.0,

@@ -31,7 +31,7 @@ struct Args {
     /// Folder that receives accuracy-vs-time.md, images/accuracy/*.png and data/accuracy.json.
     #[arg(long, default_value = "docs")]
     out_dir: PathBuf,
-    /// Run only these sweeps (comma-separated keys: wavelengths, multipole, hankel, radius_fit, fft, table, levels),
+    /// Run only these sweeps (comma-separated keys: streams, wavelengths, multipole, hankel, radius_fit, fft, table, levels),
     /// skipping the references' checks: for working on one knob. The report then lacks the other sections.
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
@@ -91,11 +91,12 @@ fn run(args: &Args) -> Result<bool, Box<dyn std::error::Error>> {
         .iter()
         .all(|d| d.material["albedo_rel"] < DEFAULT_ALBEDO_BOUND && d.material["radius_rel"] < DEFAULT_RADIUS_BOUND);
     let monte_carlo = if args.only.is_empty() { checks::diffusion_vs_monte_carlo(&refs, photons) } else { Vec::new() };
-    step("diffusion vs Monte Carlo", start);
+    step("transport vs Monte Carlo", start);
 
     let mut all = Vec::new();
     for (name, f) in [
-        ("wavelengths", sweeps::wavelengths as fn(&[reference::PresetReference], &sweeps::Settings) -> sweeps::Sweep),
+        ("streams", sweeps::streams as fn(&[reference::PresetReference], &sweeps::Settings) -> sweeps::Sweep),
+        ("wavelengths", sweeps::wavelengths),
         ("multipole", sweeps::multipole),
         ("hankel", sweeps::hankel),
         ("radius_fit", sweeps::radius_fit),

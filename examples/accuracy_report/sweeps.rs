@@ -70,6 +70,26 @@ pub fn wavelengths(refs: &[PresetReference], s: &Settings) -> Sweep {
     }
 }
 
+/// The adding-doubling stream count (the transport of the totals): error against the reference (32 streams) and time.
+/// What the streams cost in accuracy against the Monte Carlo is the "Transport against Monte Carlo" table.
+pub fn streams(refs: &[PresetReference], s: &Settings) -> Sweep {
+    let counts: &[usize] = if s.quick { &[4, 8] } else { &[4, 6, 8, 12, 16, 24] };
+    let rows = counts
+        .iter()
+        .map(|&n| {
+            let acc = Accuracy { streams: n, ..Accuracy::default() };
+            row(refs, "adding-doubling streams", format!("{n}"), acc, Task::Material, s.budget)
+        })
+        .collect();
+    Sweep {
+        key: "streams",
+        title: "Adding-doubling streams (exact transport)",
+        timed: "albedo + radius",
+        plot_metric: "albedo_rel",
+        rows,
+    }
+}
+
 pub fn multipole(refs: &[PresetReference], s: &Settings) -> Sweep {
     let pairs: &[u32] = if s.quick { &[0, 2] } else { &[0, 1, 2, 3, 5, 10, 20] };
     let mut rows: Vec<Row> = pairs
