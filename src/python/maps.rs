@@ -28,7 +28,7 @@ use super::convert::{
     target_from, to_py, type_name, FloatArray, Knobs,
 };
 use super::detach::{detached, detached_interruptible};
-use super::errors::{internal, invalid};
+use super::errors::{internal, invalid, warn_notes};
 
 /// The fields of `SpecularParams` that do not depend on the oiliness: what `maps` returns in "specular" when the
 /// oiliness varies (beside the per-texel "specular_ior_level").
@@ -221,6 +221,7 @@ pub(super) fn read_parameter_map_py<'py>(
         }
     };
     let image = detached(py, move || read_params(&inputs))?;
+    warn_notes(py, &image.notes)?;
     let dict = PyDict::new(py);
     let (height, width) = (image.height, image.width);
     let channels = PARAM_CHANNELS.iter().chain(EXTENDED_CHANNELS.iter());
@@ -489,7 +490,7 @@ pub(super) fn maps_py<'py>(
         });
     }
     let [p0, p1, p2, p3, e0, e1, e2]: [Plane; 7] = planes.try_into().map_err(|_| internal("not seven planes"))?;
-    let mut image = ParamImage { width, height, planes: [p0, p1, p2, p3], extended: [e0, e1, e2] };
+    let mut image = ParamImage { width, height, planes: [p0, p1, p2, p3], extended: [e0, e1, e2], notes: Vec::new() };
     drop(params);
     drop(inputs);
 
