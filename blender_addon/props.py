@@ -250,7 +250,7 @@ def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str,
             with open(path, "wb") as file:
                 file.write(image.packed_file.data)
             maps = read_map_file(path, name)
-        return {p: ParameterMap(m.pixels, m.normalized, f"{image.name} (packed)") for p, m in maps.items()}
+        return {p: ParameterMap(m.pixels, m.normalized, f"{image.name} (packed)", m.notes) for p, m in maps.items()}
     if image.source == "GENERATED" or image.is_dirty:
         if name is None:
             raise ValueError(f"{what} {image.name!r} is not a file: a four-channel parameter map must be an EXR file")

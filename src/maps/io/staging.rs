@@ -156,20 +156,34 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SkinError> {
 /// what is wrong, so a run fails in a second rather than after its whole computation; a failed run leaves no folder.
 pub fn check_output_dir(dir: &Path) -> Result<(), SkinError> {
     let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    // The nearest existing ancestor (the folder itself if it exists); the operating system's error (a file in the
+    // way: "not a directory") is kept as the source, with its code.
     let mut existing = dir;
-    while !existing.exists() {
-        existing = match existing.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-    }
-    if !existing.is_dir() {
-        let reason = if existing == dir {
-            "cannot use it as the output folder: expected a folder, found a file".to_string()
-        } else {
-            format!("cannot create the output folder: {} is a file, not a folder", existing.display())
-        };
-        return Err(SkinError::io(dir, reason));
+    loop {
+        match std::fs::metadata(existing) {
+            Ok(meta) if meta.is_dir() => break,
+            Ok(_) => {
+                let reason = if existing == dir {
+                    "cannot use it as the output folder: expected a folder, found a file".to_string()
+                } else {
+                    format!("cannot create the output folder: {} is a file, not a folder", existing.display())
+                };
+                return Err(SkinError::io(dir, reason));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                existing = match existing.parent() {
+                    Some(p) if !p.as_os_str().is_empty() => p,
+                    _ => Path::new("."),
+                };
+            }
+            Err(e) => {
+                let reason = format!(
+                    "cannot create the output folder: {e} (expected a path whose existing part is folders; a file \
+                     is in the way, or it cannot be reached)"
+                );
+                return Err(SkinError::io_caused(dir, reason, e));
+            }
+        }
     }
     tempfile::Builder::new().prefix(".spectral-skin-check.").suffix(".tmp").tempfile_in(existing).map(drop).map_err(
         |e| {
