@@ -617,7 +617,8 @@ fn extended_map_help(spec: &ParamSpec) -> String {
 /// The help of a parameter's map for `maps`.
 fn map_help(spec: &ParamSpec) -> String {
     format!(
-        "{} map (single-channel EXR, or 8/16-bit PNG/TIFF mapped 0..1 onto {}..{}), or use --{}",
+        "{} map (single-channel or grey RGB EXR, or 8/16-bit greyscale or grey RGB PNG/TIFF/JPEG mapped 0..1 onto \
+         {}..{}), or use --{}",
         spec.label,
         spec.min,
         spec.max,

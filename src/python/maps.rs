@@ -179,8 +179,9 @@ impl Progress {
 ///     name: None for the four-channel parameter EXR (as ``spectral-skin maps --params``; ``spectral-skin
 ///         example`` writes one): channels named melanin, melanin_blend, hemoglobin and oiliness, all required.
 ///         A parameter name ("melanin", "melanin_blend", "hemoglobin" or "oiliness") for that parameter's own map
-///         (as ``--melanin`` etc.): an EXR with exactly one channel (any name) or with a channel named like the
-///         parameter, whose values are the parameter itself; or an 8/16-bit greyscale PNG or TIFF, whose 0..1
+///         (as ``--melanin`` etc.): an EXR with exactly one channel (any name), with a channel named like the
+///         parameter, or with R, G, B (A) whose R = G = B (a grey image as Blender saves one), whose values are the
+///         parameter itself; or an 8/16-bit PNG, TIFF or JPEG, greyscale or RGB(A) with R = G = B, whose 0..1
 ///         values map linearly onto the parameter's range (:func:`parameter_ranges`). An extended parameter's name
 ///         ("epidermis_thickness_mm", "baseline_absorption_scale", "blood_oxygenation") reads its own map the same
 ///         way.
@@ -192,8 +193,12 @@ impl Progress {
 ///
 /// Raises:
 ///     SpectralSkinError: a missing or unreadable file, an unsupported format, a missing channel or a multi-channel
-///         file without the parameter's channel (the message names the file and the channels found), an unknown
-///         name.
+///         file without the parameter's channel, an RGB image that is not grey (the message names the file, what it
+///         found and what is accepted), an unknown name.
+///
+/// Warns:
+///     SpectralSkinWarning: what was accepted but ignored (an alpha channel; a channel of no parameter's name in
+///         the four-channel file, with the known names), once per file.
 #[pyfunction]
 #[pyo3(name = "read_parameter_map", signature = (path, name = None))]
 pub(super) fn read_parameter_map_py<'py>(

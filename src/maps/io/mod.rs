@@ -37,7 +37,7 @@ use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, PAPER_PARAMS as PA
 pub const PARAM_CHANNELS: [&str; 4] = [PARAMS[0].name, PARAMS[1].name, PARAMS[2].name, PARAMS[3].name];
 
 /// The allowed range `(min, max)` of each parameter ([`PARAMS`]), in [`PARAM_CHANNELS`] order (unitless volume fractions and
-/// shares). An integer PNG/TIFF value `v` of bit depth `b` maps to `min + (max - min) * v / (2^b - 1)`.
+/// shares). An integer PNG/TIFF/JPEG value `v` of bit depth `b` maps to `min + (max - min) * v / (2^b - 1)`.
 pub const PARAM_RANGES: [(f64, f64); 4] = [PARAMS[0].range(), PARAMS[1].range(), PARAMS[2].range(), PARAMS[3].range()];
 
 /// The names of the extended physiology ([`EXTENDED_PARAMS`]: epidermis_thickness_mm, baseline_absorption_scale,
@@ -45,8 +45,8 @@ pub const PARAM_RANGES: [(f64, f64); 4] = [PARAMS[0].range(), PARAMS[1].range(),
 /// it, else its default (the paper's value).
 pub const EXTENDED_CHANNELS: [&str; 3] = [EXTENDED_PARAMS[0].name, EXTENDED_PARAMS[1].name, EXTENDED_PARAMS[2].name];
 
-/// The allowed range of each extended parameter, in [`EXTENDED_CHANNELS`] order; an integer PNG/TIFF value maps onto
-/// it as for [`PARAM_RANGES`].
+/// The allowed range of each extended parameter, in [`EXTENDED_CHANNELS`] order; an integer PNG/TIFF/JPEG value maps
+/// onto it as for [`PARAM_RANGES`].
 pub const EXTENDED_RANGES: [(f64, f64); 3] =
     [EXTENDED_PARAMS[0].range(), EXTENDED_PARAMS[1].range(), EXTENDED_PARAMS[2].range()];
 

@@ -982,15 +982,27 @@ pub fn read_albedo_texture(path: &Path) -> Result<AlbedoTexture, SkinError> {
             notes,
         });
     }
+    // The header first: colour type and size checked before any pixel is decoded.
     let reader = image_reader(src, what)?;
     let format = reader.format().map(|f| format!("{f:?}").to_uppercase()).unwrap_or_default();
+    let ((w, h), color) = guard(|| {
+        reader.into_decoder().map(|d| (image::ImageDecoder::dimensions(&d), image::ImageDecoder::color_type(&d)))
+    })
+    .and_then(|r| r.map_err(|e| e.to_string()))
+    .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image header ({e})")))?;
+    check_color(path, what, color, ALBEDO_IMAGE_FORMS)?;
+    let (width, height) = (w as usize, h as usize);
+    check_size(path, what, width, height)?;
+    let reader = image_reader(src, what)?;
     let img = guard(|| reader.decode())
         .and_then(|r| r.map_err(|e| e.to_string()))
         .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image ({e})")))?;
-    let color = img.color();
-    check_color(path, what, color, ALBEDO_IMAGE_FORMS)?;
-    let (width, height) = (img.width() as usize, img.height() as usize);
-    check_size(path, what, width, height)?;
+    if (img.width() as usize, img.height() as usize, img.color()) != (width, height, color) {
+        return Err(SkinError::invalid(
+            what,
+            format!("{}: the image changed while being read (header and pixels disagree)", path.display()),
+        ));
+    }
     if color.has_alpha() {
         notes.push(alpha_note(path, what));
     }
