@@ -533,6 +533,19 @@ fn maps_into_an_unwritable_place_fails_before_reading() {
 }
 
 #[test]
+fn shader_table_into_an_unwritable_place_fails_before_building() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a_file"), "not a folder").unwrap();
+    let out = dir.path().join("a_file/table");
+    // --no-cache and a fine table: one would be built (about 9 s on 2 cores) before a check at the write.
+    let start = std::time::Instant::now();
+    let o = run(&["shader-table", "--out", out.to_str().unwrap(), "--no-cache", "--resolution", "65", "13", "33"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("a_file/table") && err.contains("output folder"), "{err}");
+    assert!(start.elapsed().as_secs_f64() < 1.0, "failed after {:?}: the table was built first", start.elapsed());
+}
+
+#[test]
 fn maps_warns_about_an_unknown_channel_of_its_parameter_exr() {
     let dir = tempfile::tempdir().unwrap();
     let params = dir.path().join("params.exr");

@@ -715,6 +715,8 @@ fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Err
     let request = Request { target, ..args.accuracy.request(Outputs::material()) };
     let prepared = spectral_skin::evaluate::Prepared::new(&request)?;
     let cache = if args.no_cache { None } else { spectral_skin::maps::lut::default_cache_dir() };
+    // The output folder is checked before the table is built (and created only to write).
+    spectral_skin::maps::io::check_output_dir(&args.out)?;
     ctrl_c::catch();
     let started = std::time::Instant::now();
     let table = ShaderTable::load_or_build_cancellable(
