@@ -104,6 +104,10 @@ fn fit_maps_takes_an_srgb_png_albedo_into_a_folder_it_creates() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(read_exr_channels(&out_png).unwrap(), read_exr_channels(&out_exr).unwrap());
+    // sRGB has Rec.709's primaries: another working space is refused for it, naming the file.
+    let o = cli(&["fit-maps", "--albedo", d.join("albedo.png").to_str().unwrap(), "--working-space", "acescg"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("albedo.png") && err.contains("linear_rec709"), "{err}");
 }
 
 #[test]

@@ -807,8 +807,8 @@ mod fit_maps {
         }
         if albedo.srgb_decoded && !matches!(args.working_space, Space::LinearRec709) {
             return Err(format!(
-                "{}: an sRGB-encoded {} has sRGB's primaries; --working-space must be linear_rec709 for it (or give \
-                 a linear EXR in the working space)",
+                "{} ({}) is sRGB-encoded, with Rec.709 primaries; --working-space must be linear_rec709 for it (or \
+                 give a linear EXR in the working space)",
                 args.albedo.display(),
                 albedo.encoding
             )
