@@ -42,6 +42,7 @@ fn bench_maps(c: &mut Criterion) {
         height: 256,
         planes: [Plane::Texels(mask), Plane::Constant(0.6), Plane::Constant(0.01), Plane::Constant(0.2)],
         extended: default_extended(),
+        notes: Vec::new(),
     };
     group.bench_function("pipeline_distinct_256", |b| {
         b.iter(|| compute_maps(&masked, &MapSettings::default(), None).unwrap())

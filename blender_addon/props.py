@@ -147,8 +147,8 @@ def _parameter_map(name: str) -> bpy.props.PointerProperty:
     return bpy.props.PointerProperty(
         type=bpy.types.Image, name=f"{label} Map",
         description=f"Optional image of {label} per texel (replaces the constant), read as `spectral-skin maps` reads "
-        "it: a one-channel EXR (any channel name) holds the value itself; an 8/16-bit greyscale PNG or TIFF maps 0..1 "
-        "onto the parameter's range")
+        "it: a one-channel or grey RGB EXR holds the value itself; an 8/16-bit greyscale or grey RGB PNG, TIFF or JPEG "
+        "maps 0..1 onto the parameter's range")
 
 
 MODE_ITEMS = [
@@ -265,7 +265,7 @@ def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str,
             with open(path, "wb") as file:
                 file.write(image.packed_file.data)
             maps = read_map_file(path, name)
-        return {p: ParameterMap(m.pixels, m.normalized, f"{image.name} (packed)") for p, m in maps.items()}
+        return {p: ParameterMap(m.pixels, m.normalized, f"{image.name} (packed)", m.notes) for p, m in maps.items()}
     if image.source == "GENERATED" or image.is_dirty:
         if name is None:
             raise ValueError(f"{what} {image.name!r} is not a file: a four-channel parameter map must be an EXR file")
@@ -278,7 +278,7 @@ def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str,
         return {name: ParameterMap(pixels=np.ascontiguousarray(pixels), normalized=not image.is_float,
                                    name=image.name)}
     raise ValueError(f"{what} {image.name!r}: a {image.source.lower()} image is not supported; use a single image file "
-                     "(EXR, PNG or TIFF)")
+                     "(EXR, PNG, TIFF or JPEG)")
 
 
 def material_maps(material: bpy.types.Material) -> dict[str, ParameterMap]:

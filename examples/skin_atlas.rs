@@ -35,7 +35,8 @@ fn measured_colours(path: &PathBuf) -> Vec<(usize, [f64; 3])> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let grid = WavelengthGrid::uniform(10.0);
     let weights = spectral_rgb_weights(&grid, WorkingSpace::LinearRec709);
-    text.lines()
+    spectral_skin::strip_utf8_bom(&text)
+        .lines()
         .filter(|l| !l.starts_with('#') && !l.starts_with("index"))
         .map(|l| {
             let v: Vec<f64> = l.split(',').map(|x| x.trim().parse().unwrap()).collect();

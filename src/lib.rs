@@ -27,6 +27,7 @@ pub use accuracy::{Accuracy, AccuracyLevel};
 pub use error::SkinError;
 pub use evaluate::{evaluate, Evaluation, MaterialOutput, Outputs, Request, ALL_MATERIAL_OUTPUTS};
 pub use skin::{SkinModel, SkinParams, PRESETS};
+pub use table::strip_utf8_bom;
 
 /// One spelling of every value in every front: the CLI's value names (clap) are the serde names Python takes and
 /// JSON writes.

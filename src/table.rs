@@ -8,10 +8,16 @@ pub struct SpectralTable {
     pub names: Vec<String>,
 }
 
+/// CSV text as every CSV reader of the project takes it: a leading UTF-8 byte-order mark (U+FEFF, which spreadsheet
+/// programs write at the start of a "CSV UTF-8" file) removed, the rest unchanged.
+pub fn strip_utf8_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
 impl SpectralTable {
     /// Parse a bundled CSV. The files are compiled in, so a parse failure is a build defect and panics in tests.
     pub(crate) fn parse(text: &str) -> SpectralTable {
-        let mut lines = text.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#'));
+        let mut lines = strip_utf8_bom(text).lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#'));
         let header: Vec<String> =
             lines.next().expect("table header").split(',').map(|s| s.trim().to_string()).collect();
         let n = header.len() - 1;

@@ -569,3 +569,64 @@ fn transport_on_every_front() {
         assert_eq!(sidecar["report"]["request"]["accuracy"]["streams"], DEFAULT_STREAMS);
     }
 }
+
+#[test]
+fn fit_spectrum_csv_with_a_utf8_bom_is_read() {
+    // Spreadsheet programs' "CSV UTF-8" starts with a byte-order mark. The header must be recognised through it: the
+    // error is then about the bad number on line 3, not about the header.
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("bom.csv");
+    std::fs::write(&csv, "\u{feff}wavelength_nm,reflectance\n400,0.3\n410,abc\n").unwrap();
+    let out = run(&["fit", "--spectrum", csv.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("line 3") && err.contains("\"abc\" is not a number"), "{err}");
+}
+
+#[test]
+fn maps_into_an_unwritable_place_fails_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a_file"), "not a folder").unwrap();
+    let out = dir.path().join("a_file/maps");
+    let missing = dir.path().join("missing.exr");
+    let o = run(&["maps", "--params", missing.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("a_file/maps") && err.contains("output folder"), "{err}");
+    assert!(!err.contains("missing.exr"), "the folder is checked before the inputs are read: {err}");
+}
+
+#[test]
+fn shader_table_into_an_unwritable_place_fails_before_building() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a_file"), "not a folder").unwrap();
+    let out = dir.path().join("a_file/table");
+    // --no-cache and a fine table: one would be built (about 9 s on 2 cores) before a check at the write.
+    let start = std::time::Instant::now();
+    let o = run(&["shader-table", "--out", out.to_str().unwrap(), "--no-cache", "--resolution", "65", "13", "33"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("a_file/table") && err.contains("output folder"), "{err}");
+    assert!(start.elapsed().as_secs_f64() < 1.0, "failed after {:?}: the table was built first", start.elapsed());
+}
+
+#[test]
+fn maps_warns_about_an_unknown_channel_of_its_parameter_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("params.exr");
+    let mut channels: Vec<(&str, &[f32])> = Vec::new();
+    let values = [[0.05f32; 2], [0.7; 2], [0.01; 2], [0.3; 2], [0.9; 2]];
+    for (name, v) in ["melanin", "melanin_blend", "hemoglobin", "oiliness", "hemoglobn"].iter().zip(&values) {
+        channels.push((name, v.as_slice()));
+    }
+    spectral_skin::maps::io::write_channels_exr(
+        &params,
+        2,
+        1,
+        &channels,
+        spectral_skin::maps::io::ExrOptions::FLOAT_PIZ,
+    )
+    .unwrap();
+    let out = dir.path().join("maps");
+    let o = run(&["maps", "--params", params.to_str().unwrap(), "--out", out.to_str().unwrap(), "--outputs", "albedo"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("warning:") && err.contains("hemoglobn") && err.contains("melanin_blend"), "{err}");
+}

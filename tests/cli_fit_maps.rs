@@ -66,3 +66,59 @@ fn fit_maps_names_a_nan_texel_and_writes_nothing() {
     assert!(!o.status.success() && err.contains("(x, y) = (1, 1)"), "{err}");
     assert!(!out.exists() && !dir.path().join("residual.exr").exists());
 }
+
+/// The sRGB decoding formula (IEC 61966-2-1), written out here.
+fn srgb_formula(encoded: f64) -> f64 {
+    if encoded <= 0.04045 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+#[test]
+fn fit_maps_takes_an_srgb_png_albedo_into_a_folder_it_creates() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Skin-like sRGB codes, 3 x 2.
+    let codes: [[u8; 3]; 6] =
+        [[224, 172, 150], [200, 150, 120], [150, 100, 80], [110, 70, 55], [240, 200, 180], [180, 120, 100]];
+    image::RgbImage::from_raw(3, 2, codes.concat()).unwrap().save(d.join("albedo.png")).unwrap();
+    // The same texture as a linear EXR, decoded here with the formula.
+    let plane = |c: usize| -> Vec<f32> { codes.iter().map(|t| srgb_formula(f64::from(t[c]) / 255.0) as f32).collect() };
+    let (r, g, b) = (plane(0), plane(1), plane(2));
+    write_rgb_exr(&d.join("albedo.exr"), 3, 2, [&r, &g, &b], ExrOptions::FLOAT_PIZ).unwrap();
+    let out_png = d.join("new/deeper/params.exr");
+    let o = cli(&["fit-maps", "--albedo", d.join("albedo.png").to_str().unwrap(), "--out", out_png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out_png.exists() && d.join("new/deeper/residual.exr").exists());
+    let out_exr = d.join("params_exr.exr");
+    let o = cli(&[
+        "fit-maps",
+        "--albedo",
+        d.join("albedo.exr").to_str().unwrap(),
+        "--out",
+        out_exr.to_str().unwrap(),
+        "--residual",
+        d.join("residual_exr.exr").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(read_exr_channels(&out_png).unwrap(), read_exr_channels(&out_exr).unwrap());
+    // sRGB has Rec.709's primaries: another working space is refused for it, naming the file.
+    let o = cli(&["fit-maps", "--albedo", d.join("albedo.png").to_str().unwrap(), "--working-space", "acescg"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("albedo.png") && err.contains("linear_rec709"), "{err}");
+}
+
+#[test]
+fn fit_maps_into_an_unwritable_place_fails_before_reading_or_fitting() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a_file"), "not a folder").unwrap();
+    // The albedo does not even exist: the output folder is checked first, so the error is about it.
+    let out = d.join("a_file/sub/params.exr");
+    let o = cli(&["fit-maps", "--albedo", d.join("missing.png").to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("a_file/sub") && err.contains("output folder") && !err.contains("missing.png"), "{err}");
+}

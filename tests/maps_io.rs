@@ -221,16 +221,18 @@ fn single_channel_exrs_of_any_sample_type_and_layout() {
     assert_eq!(texels(&img.planes[2]), hem.as_slice());
     assert_eq!(img.planes[3], Plane::Constant(0.3));
 
-    // A multi-channel file without a channel named like the parameter is refused.
+    // A multi-channel file without a channel named like the parameter is refused, unless it is a grey RGB image
+    // (tests/image_inputs.rs): this one's channels differ.
     let p_rgb = dir.path().join("rgb.exr");
-    write_rgb_exr(&p_rgb, w, h, [&mel, &mel, &mel], ExrOptions::FLOAT_PIZ).unwrap();
+    write_rgb_exr(&p_rgb, w, h, [&mel, &blend, &mel], ExrOptions::FLOAT_PIZ).unwrap();
     let e = err_text(read_params(&ParamInputs::Separate([
         file(&p_rgb),
         ParamSource::Constant(0.5),
         ParamSource::Constant(0.01),
         ParamSource::Constant(0.3),
     ])));
-    assert!(e.contains("rgb.exr") && e.contains("single-channel") && e.contains("found channels: B, G, R"), "{e}");
+    assert!(e.contains("rgb.exr") && e.contains("single-channel") && e.contains("found channels R, G, B"), "{e}");
+    assert!(e.contains("not grey"), "{e}");
 }
 
 #[test]
@@ -341,7 +343,7 @@ fn mismatched_sizes_list_every_file() {
 fn rgb_png_and_other_formats_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let rgb = dir.path().join("colour.png");
-    image::RgbImage::from_raw(2, 2, vec![0; 12]).unwrap().save(&rgb).unwrap();
+    image::RgbImage::from_raw(2, 2, vec![0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]).unwrap().save(&rgb).unwrap();
     let good = dir.path().join("good.png");
     save_l8(&good, 2, 2, vec![0; 4]);
     let e = err_text(read_params(&ParamInputs::Separate([
@@ -351,9 +353,10 @@ fn rgb_png_and_other_formats_are_refused() {
         ParamSource::Constant(0.0),
     ])));
     assert!(e.contains("colour.png") && e.contains("melanin_blend map"), "{e}");
-    assert!(e.contains("single-channel") && e.contains("found RGB"), "{e}");
+    // RGB is taken only as a grey image (R = G = B): this one differs at texel (1, 0).
+    assert!(e.contains("R, G, B") && e.contains("(x, y) = (1, 0)") && e.contains("not grey"), "{e}");
 
-    // Greyscale + alpha is accepted; the alpha is ignored.
+    // Greyscale + alpha is accepted; the alpha is ignored, with a note.
     let la = dir.path().join("la.png");
     image::GrayAlphaImage::from_raw(2, 1, vec![255, 0, 0, 255]).unwrap().save(&la).unwrap();
     let img = read_params(&ParamInputs::Separate([
@@ -364,6 +367,7 @@ fn rgb_png_and_other_formats_are_refused() {
     ]))
     .unwrap();
     assert_eq!(texels(&img.planes[0]), [0.5, 0.0]);
+    assert!(img.notes.len() == 1 && img.notes[0].contains("alpha"), "{:?}", img.notes);
 
     // Something that is not an image at all, whatever its extension.
     let text = dir.path().join("notes.png");
@@ -622,6 +626,7 @@ fn param_image_helpers() {
             Plane::Texels(vec![0.3, 0.4]),
         ],
         extended: default_extended(),
+        notes: Vec::new(),
     };
     assert_eq!(img.texel_count(), 2);
     assert_eq!(img.texel(1), [0.2, 0.5, 0.01, 0.4]);
@@ -662,7 +667,7 @@ fn bytes_reader_equals_file_reader() {
     }
 
     let e = err_text(read_params_from_bytes(b"not an image", "packed image", Some(0)));
-    assert!(e.contains("packed image") && e.contains("EXR, PNG or TIFF"), "{e}");
+    assert!(e.contains("packed image") && e.contains("EXR, PNG, TIFF or JPEG"), "{e}");
     let e = err_text(read_params_from_bytes(&std::fs::read(&multi).unwrap(), "multi", Some(4)));
     assert!(e.contains("parameter index") && e.contains("got 4"), "{e}");
 }

@@ -33,6 +33,7 @@ fn cases() -> Vec<(&'static str, ParamImage, StrategyChoice)> {
         height: 8,
         planes: [Plane::Constant(0.1), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.3)],
         extended: default_extended(),
+        notes: Vec::new(),
     };
     let mask: Vec<f32> = (0..16 * 8).map(|i| [0.01, 0.2, 0.4][(i / 16) % 3]).collect();
     let oil: Vec<f32> = (0..16 * 8).map(|i| (i % 7) as f32 / 6.0).collect();
@@ -41,6 +42,7 @@ fn cases() -> Vec<(&'static str, ParamImage, StrategyChoice)> {
         height: 8,
         planes: [Plane::Texels(mask), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Texels(oil)],
         extended: default_extended(),
+        notes: Vec::new(),
     };
     vec![
         ("constant", constant, StrategyChoice::Auto),

@@ -156,6 +156,9 @@ def make_plan(settings: SkinSettings, progress: Any = None, *, radius: bool = Tr
     plan["scale"] = subsurface_scale(settings.scale_length)
     target = plan["target"]
     plan["summary"]["computed"] += f" for Blender {target['blender']} {target['engine'].upper()}"
+    # What the core's reader ignored in the map files (an alpha channel, a misspelt channel), once per note.
+    for note in dict.fromkeys(n for m in settings.maps.values() for n in m.notes):
+        plan["summary"]["warnings"].append(note)
     if not target["tested"]:
         plan["summary"]["warnings"].append(
             f"Blender {target['blender']} is newer than the versions Spectral Skin was tested with: it uses the "

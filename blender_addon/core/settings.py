@@ -7,6 +7,7 @@ core's own message (``melanin must be in [0, 0.5] ...``).
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -84,22 +85,31 @@ class ParameterMap:
     """One parameter's map: pixel values as an (H, W) float32 array, row 0 at the top.
 
     ``normalized`` is True for 8/16-bit images, whose 0..1 values map linearly onto the parameter's range; False for
-    float images, whose values are the parameter itself.
+    float images, whose values are the parameter itself. ``notes``: what the core's reader accepted but ignored (an
+    alpha channel, a channel of no parameter's name), one sentence each naming the file: Apply reports them.
     """
 
     pixels: object  # numpy.ndarray, (H, W)
     normalized: bool
     name: str = ""
+    notes: tuple[str, ...] = ()
 
 
 def read_map_file(path: str, name: str | None = None) -> dict[str, ParameterMap]:
     """Parameter maps from a file, read by the core with the CLI's rules (``spectral_skin.read_parameter_map``):
     ``name`` None for the four-channel parameter EXR (channels melanin, melanin_blend, hemoglobin, oiliness), else
-    that parameter's own map (a one-channel EXR of any channel name, or an 8/16-bit greyscale PNG/TIFF mapped onto
-    the parameter's range). Values come back in the parameter's own unit. Raises ``spectral_skin.SpectralSkinError``
-    naming the file and the channels it has."""
-    planes = spectral_skin.read_parameter_map(path, name)
-    return {p: ParameterMap(pixels=pixels, normalized=False, name=path) for p, pixels in planes.items()}
+    that parameter's own map (any form the core accepts: a one-channel EXR of any channel name, a grey RGB(A) EXR as
+    Blender saves one, an 8/16-bit greyscale or grey RGB PNG/TIFF/JPEG mapped onto the parameter's range). Values
+    come back in the parameter's own unit; the core's warnings (``SpectralSkinWarning``) become the maps' ``notes``.
+    Raises ``spectral_skin.SpectralSkinError`` naming the file, what it found and what is accepted."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", spectral_skin.SpectralSkinWarning)
+        planes = spectral_skin.read_parameter_map(path, name)
+    notes = tuple(str(w.message) for w in caught if issubclass(w.category, spectral_skin.SpectralSkinWarning))
+    for w in caught:  # anything else goes on as it came
+        if not issubclass(w.category, spectral_skin.SpectralSkinWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return {p: ParameterMap(pixels=pixels, normalized=False, name=path, notes=notes) for p, pixels in planes.items()}
 
 
 @dataclass

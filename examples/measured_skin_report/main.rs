@@ -27,7 +27,7 @@ const COLORS: [RGBColor; 6] = [
 /// The wavelengths and spectra of the data file (comment lines start with '#'; then a header `index,R400,...`).
 fn read_data(path: &str) -> (Vec<f64>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).expect("read the data file");
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let mut lines = spectral_skin::strip_utf8_bom(&text).lines().filter(|l| !l.starts_with('#'));
     let header = lines.next().expect("header");
     let wavelengths: Vec<f64> = header.split(',').skip(1).map(|h| h.trim_start_matches('R').parse().unwrap()).collect();
     let spectra = lines

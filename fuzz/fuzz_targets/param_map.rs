@@ -1,7 +1,7 @@
 //! The parameter-map reader (`maps::io::read_params_from_bytes`, the code `read_params` runs on files) on arbitrary
-//! bytes: the first byte picks the four-channel parameter EXR or a one-parameter file (EXR, PNG or TIFF) for one of
-//! the four parameters. Asserts: Ok gives an image of 1 to MAX_TEXELS texels with every plane read of that size
-//! (the others NaN constants), and a PNG/TIFF's values inside the parameter's range; an error has a message;
+//! bytes: the first byte picks the four-channel parameter EXR or a one-parameter file (EXR, PNG, TIFF or JPEG) for
+//! one of the four parameters. Asserts: Ok gives an image of 1 to MAX_TEXELS texels with every plane read of that size
+//! (the others NaN constants), and a PNG/TIFF/JPEG's values inside the parameter's range; an error has a message;
 //! nothing panics or aborts.
 
 #![no_main]

@@ -15,7 +15,7 @@ Functions:
     layered_reflectance: the layered solver alone (exact total, multipole profile), for checks against other solvers.
     maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
     blender_targets: the Blender versions, engines and subsurface methods the mappings target.
-    read_parameter_map: parameter maps read from an EXR, PNG or TIFF file by the CLI's rules.
+    read_parameter_map: parameter maps read from an EXR, PNG, TIFF or JPEG file by the CLI's rules.
     write_maps: a maps() result written as EXRs, atomically, by the CLI's writer.
     shader_table: Base Color and Subsurface Radius tabulated as images for a live node group in Blender.
     write_shader_table: a shader_table() result written as EXRs and a JSON sidecar.
@@ -26,7 +26,8 @@ Functions:
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
 :class:`OSError` whose message names the file. A result changed on its way out (a negative radial-profile lobe of the model set to 0)
-is reported by a :class:`SpectralSkinWarning`.
+is reported by a :class:`SpectralSkinWarning`, and so is an input read with something ignored (an alpha channel, an
+unknown channel).
 """
 
 from ._core import (

@@ -82,6 +82,10 @@ class SpectralSkinWarning(UserWarning):
     own lobe, not round-off (docs/robustness.md, "Negative profile lobes"). The profile returned is clamped to 0 and
     this warning says where and how deep; ``boundaries="capped"`` gives a profile that is non-negative by
     construction. No preset has such a lobe.
+
+    Also raised by :func:`read_parameter_map` for what it read but ignored: an alpha channel, or a channel of the
+    four-channel file named like no parameter (a misspelt ``hemoglobn``), the message naming the file and the known
+    channel names.
     """
 
 class _Preset(TypedDict):

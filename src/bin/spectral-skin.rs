@@ -456,7 +456,10 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
     use spectral_skin::inverse::{fit_spectrum, FitOptions, Specular};
     let path = args.spectrum.display().to_string();
     let text = std::fs::read_to_string(&args.spectrum).map_err(|e| format!("{path}: {e}"))?;
-    let mut rows = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+    let mut rows = spectral_skin::strip_utf8_bom(&text)
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
     let header = rows.next().map(|(_, l)| l.trim()).unwrap_or("");
     if header.replace(' ', "") != "wavelength_nm,reflectance" {
         return Err(
@@ -578,6 +581,9 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
     )
     .map_err(|e| e.with_clamp_advice("use --clamp"))?;
     bar.finish_and_clear();
+    for note in &report.input_notes {
+        eprintln!("warning: {note}");
+    }
     println!(
         "{}x{} texels, strategy {}, {:.2} s (read {:.2}, compute {:.2}, write {:.2}); wrote {}",
         report.width,
@@ -642,7 +648,8 @@ fn extended_map_help(spec: &ParamSpec) -> String {
 /// The help of a parameter's map for `maps`.
 fn map_help(spec: &ParamSpec) -> String {
     format!(
-        "{} map (single-channel EXR, or 8/16-bit PNG/TIFF mapped 0..1 onto {}..{}), or use --{}",
+        "{} map (single-channel or grey RGB EXR, or 8/16-bit greyscale or grey RGB PNG/TIFF/JPEG mapped 0..1 onto \
+         {}..{}), or use --{}",
         spec.label,
         spec.min,
         spec.max,
@@ -744,6 +751,8 @@ fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Err
     let request = Request { target, ..args.accuracy.request(Outputs::material()) };
     let prepared = spectral_skin::evaluate::Prepared::new(&request)?;
     let cache = if args.no_cache { None } else { spectral_skin::maps::lut::default_cache_dir() };
+    // The output folder is checked before the table is built (and created only to write).
+    spectral_skin::maps::io::check_output_dir(&args.out)?;
     ctrl_c::catch();
     let started = std::time::Instant::now();
     let table = ShaderTable::load_or_build_cancellable(
@@ -771,10 +780,12 @@ fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Err
 
 #[derive(Args)]
 struct FitMapsArgs {
-    /// The albedo texture: an EXR with channels R, G, B, linear RGB in --working-space.
+    /// The albedo texture: an EXR with channels R, G, B (linear in --working-space), or an 8/16-bit PNG, TIFF or JPEG
+    /// (sRGB-encoded, decoded to linear; --working-space must then be linear_rec709, sRGB's primaries).
     #[arg(long)]
     albedo: PathBuf,
-    /// The parameter map to write (channels melanin, melanin_blend, hemoglobin, oiliness).
+    /// The parameter map to write (channels melanin, melanin_blend, hemoglobin, oiliness); its folder is created if
+    /// missing.
     #[arg(long, default_value = "params.exr")]
     out: PathBuf,
     /// The residual map to write (ΔE00 per texel, channel Y); default: residual.exr beside --out.
@@ -803,12 +814,15 @@ struct FitMapsArgs {
     json: bool,
 }
 
-/// `fit-maps`: albedo EXR -> parameter EXR + residual EXR, both staged and renamed into place together.
+/// `fit-maps`: albedo texture -> parameter EXR + residual EXR, both staged and renamed into place together.
 mod fit_maps {
     use spectral_skin::color::WorkingSpace;
     use spectral_skin::inverse::albedo::AlbedoFitOptions;
     use spectral_skin::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness};
-    use spectral_skin::maps::io::{commit_all, read_exr_channels, stage_channels_exr, ExrOptions, PARAM_CHANNELS};
+    use spectral_skin::maps::io::{
+        check_output_dir, commit_all, create_output_dir, output_folder_of, read_albedo_texture, stage_channels_exr,
+        ExrOptions, PARAM_CHANNELS,
+    };
 
     #[derive(Clone, Copy, clap::ValueEnum)]
     #[value(rename_all = "snake_case")]
@@ -819,14 +833,26 @@ mod fit_maps {
     }
 
     pub fn run(args: super::FitMapsArgs) -> Result<(), Box<dyn std::error::Error>> {
-        let (width, height, channels) = read_exr_channels(&args.albedo)?;
-        let plane = |name: &str| {
-            channels.iter().find(|(n, _)| n == name).map(|(_, p)| p).ok_or_else(|| {
-                format!("{}: no channel {name} (an albedo texture needs R, G and B)", args.albedo.display())
-            })
-        };
-        let (r, g, b) = (plane("R")?, plane("G")?, plane("B")?);
-        let texels: Vec<[f32; 3]> = (0..width * height).map(|i| [r[i], g[i], b[i]]).collect();
+        // The output folders first (checked now, created only to write): one that cannot be written fails now, not
+        // after the fit.
+        let residual_path = args.residual.clone().unwrap_or_else(|| args.out.with_file_name("residual.exr"));
+        for file in [&args.out, &residual_path] {
+            check_output_dir(output_folder_of(file))?;
+        }
+        let albedo = read_albedo_texture(&args.albedo)?;
+        for note in &albedo.notes {
+            eprintln!("warning: {note}");
+        }
+        if albedo.srgb_decoded && !matches!(args.working_space, Space::LinearRec709) {
+            return Err(format!(
+                "{} ({}) is sRGB-encoded, with Rec.709 primaries; --working-space must be linear_rec709 for it (or \
+                 give a linear EXR in the working space)",
+                args.albedo.display(),
+                albedo.encoding
+            )
+            .into());
+        }
+        let (width, height, texels) = (albedo.width, albedo.height, albedo.texels);
         let mut options = AlbedoFitOptions {
             working_space: match args.working_space {
                 Space::LinearRec709 => WorkingSpace::LinearRec709,
@@ -859,7 +885,9 @@ mod fit_maps {
         let seconds = start.elapsed().as_secs_f64();
         let params: Vec<Vec<f32>> = (0..4).map(|c| fit.params.iter().map(|p| p[c]).collect()).collect();
         let named: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().copied().zip(params.iter().map(Vec::as_slice)).collect();
-        let residual_path = args.residual.clone().unwrap_or_else(|| args.out.with_file_name("residual.exr"));
+        for file in [&args.out, &residual_path] {
+            create_output_dir(output_folder_of(file))?;
+        }
         let staged = vec![
             stage_channels_exr(&args.out, width, height, &named, ExrOptions::FLOAT_PIZ)?,
             stage_channels_exr(

@@ -12,8 +12,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::io::{
-    commit_all, read_params, stage_bytes, stage_channels_exr, Compression, ExrOptions, ParamImage, ParamInputs, Plane,
-    Staged, ALL_CHANNELS, ALL_RANGES, EXTENDED_CHANNELS, PARAM_CHANNELS,
+    check_output_dir, commit_all, create_output_dir, read_params, stage_bytes, stage_channels_exr, Compression,
+    ExrOptions, ParamImage, ParamInputs, Plane, Staged, ALL_CHANNELS, ALL_RANGES, EXTENDED_CHANNELS, PARAM_CHANNELS,
 };
 use super::lut::{measure_error_cancellable, MaterialTable, TableError, TableResolution, TexelMaterial};
 use crate::error::SkinError;
@@ -157,6 +157,10 @@ pub struct MapReport {
     /// What was computed, counted (so a front can show that an effect it dropped was not computed).
     pub work: MapWork,
     pub seconds: Timings,
+    /// What the reader accepted but a user should know ([`ParamImage::notes`]: an ignored alpha, channels of no
+    /// parameter's name), one sentence each; fronts show them as warnings. Absent from the sidecar when empty.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub input_notes: Vec<String>,
 }
 
 /// The work of a map run. Every direct evaluation and every table node built is one material: the albedo, and when
@@ -489,6 +493,7 @@ pub fn compute_maps_cancellable(
         request: *prepared.request(),
         work,
         seconds: Timings { compute: start.elapsed().as_secs_f64(), ..Timings::default() },
+        input_notes: image.notes.clone(),
     };
     Ok(MapResult {
         width: w,
@@ -625,6 +630,9 @@ pub fn run_maps_cancellable(
 ) -> Result<MapReport, SkinError> {
     let cancelled = || SkinError::invalid("maps", "interrupted before the outputs were written; nothing was changed");
     let start = Instant::now();
+    // The output folder first (not created yet: a failed run leaves none): one that cannot be written fails now, not
+    // after the computation.
+    check_output_dir(out_dir)?;
     let mut image = read_params(inputs)?;
     let clamped = check_planes(&mut image, settings.clamp)?;
     let read = start.elapsed().as_secs_f64();
@@ -702,8 +710,7 @@ pub fn stage_map_files(
     files: &MapFiles,
     exr: ExrOptions,
 ) -> Result<Vec<Staged>, SkinError> {
-    std::fs::create_dir_all(out_dir)
-        .map_err(|e| SkinError::io_caused(out_dir, format!("cannot create the output folder: {e}"), e))?;
+    create_output_dir(out_dir)?;
     let (w, h) = (files.width, files.height);
     let path = |file: &str| out_dir.join(output_name(prefix, file));
     // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs

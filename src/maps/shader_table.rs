@@ -33,7 +33,7 @@ use std::sync::atomic::AtomicBool;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::io::{commit_all, stage_bytes, stage_rgb_exr, ExrOptions, Staged};
+use super::io::{commit_all, create_output_dir, stage_bytes, stage_rgb_exr, ExrOptions, Staged};
 use super::lut::{check_point_params, check_points, with_extended, MaterialTable, TableResolution, TexelMaterial};
 use super::pipeline::{check_prefix, output_name};
 use crate::error::SkinError;
@@ -340,8 +340,7 @@ impl ShaderTable {
     /// named with `prefix` as `pipeline::output_name` does; dropping the result deletes them.
     pub fn stage_files(&self, out_dir: &Path, prefix: Option<&str>, exr: ExrOptions) -> Result<Vec<Staged>, SkinError> {
         check_prefix(prefix)?;
-        std::fs::create_dir_all(out_dir)
-            .map_err(|e| SkinError::io(out_dir, format!("cannot create the output folder: {e}")))?;
+        create_output_dir(out_dir)?;
         let path = |file: &str| out_dir.join(output_name(prefix, file));
         let (w, h) = (self.meta.width, self.meta.height);
         let mut staged = vec![

@@ -18,8 +18,8 @@ create_exception!(
     spectral_skin,
     SpectralSkinWarning,
     PyUserWarning,
-    "A result spectral-skin computed but changed on its way out (a negative profile lobe set to 0); the message says \
-     what and how to avoid it."
+    "A result spectral-skin computed but changed on its way out (a negative profile lobe set to 0), or an input it \
+     read with something ignored (an alpha channel, a channel of no parameter's name); the message says what."
 );
 
 create_exception!(
@@ -29,6 +29,16 @@ create_exception!(
     "A file spectral-skin could not read or write (missing, unreadable, corrupt, or a folder it cannot write to). \
      An OSError whose message names the file and says what went wrong."
 );
+
+/// Warn (SpectralSkinWarning) once per note of a reader (an input accepted with something ignored: the note names the
+/// file and what).
+pub(super) fn warn_notes(py: Python<'_>, notes: &[String]) -> PyResult<()> {
+    for note in notes {
+        let message = std::ffi::CString::new(note.as_str()).map_err(internal)?;
+        PyErr::warn(py, &py.get_type::<SpectralSkinWarning>(), &message, 1)?;
+    }
+    Ok(())
+}
 
 /// Warn (SpectralSkinWarning) about a negative lobe the clamp removed, so it is never hidden.
 pub(super) fn warn_lobe(py: Python<'_>, lobe: Option<impl std::fmt::Display>) -> PyResult<()> {

@@ -28,7 +28,7 @@ use super::convert::{
     streams_arg, target_from, to_py, type_name, FloatArray, Knobs,
 };
 use super::detach::{detached, detached_interruptible};
-use super::errors::{internal, invalid};
+use super::errors::{internal, invalid, warn_notes};
 
 /// The fields of `SpecularParams` that do not depend on the oiliness: what `maps` returns in "specular" when the
 /// oiliness varies (beside the per-texel "specular_ior_level").
@@ -179,8 +179,9 @@ impl Progress {
 ///     name: None for the four-channel parameter EXR (as ``spectral-skin maps --params``; ``spectral-skin
 ///         example`` writes one): channels named melanin, melanin_blend, hemoglobin and oiliness, all required.
 ///         A parameter name ("melanin", "melanin_blend", "hemoglobin" or "oiliness") for that parameter's own map
-///         (as ``--melanin`` etc.): an EXR with exactly one channel (any name) or with a channel named like the
-///         parameter, whose values are the parameter itself; or an 8/16-bit greyscale PNG or TIFF, whose 0..1
+///         (as ``--melanin`` etc.): an EXR with exactly one channel (any name), with a channel named like the
+///         parameter, or with R, G, B (A) whose R = G = B (a grey image as Blender saves one), whose values are the
+///         parameter itself; or an 8/16-bit PNG, TIFF or JPEG, greyscale or RGB(A) with R = G = B, whose 0..1
 ///         values map linearly onto the parameter's range (:func:`parameter_ranges`). An extended parameter's name
 ///         ("epidermis_thickness_mm", "baseline_absorption_scale", "blood_oxygenation") reads its own map the same
 ///         way.
@@ -192,8 +193,12 @@ impl Progress {
 ///
 /// Raises:
 ///     SpectralSkinError: a missing or unreadable file, an unsupported format, a missing channel or a multi-channel
-///         file without the parameter's channel (the message names the file and the channels found), an unknown
-///         name.
+///         file without the parameter's channel, an RGB image that is not grey (the message names the file, what it
+///         found and what is accepted), an unknown name.
+///
+/// Warns:
+///     SpectralSkinWarning: what was accepted but ignored (an alpha channel; a channel of no parameter's name in
+///         the four-channel file, with the known names), once per file.
 #[pyfunction]
 #[pyo3(name = "read_parameter_map", signature = (path, name = None))]
 pub(super) fn read_parameter_map_py<'py>(
@@ -221,6 +226,7 @@ pub(super) fn read_parameter_map_py<'py>(
         }
     };
     let image = detached(py, move || read_params(&inputs))?;
+    warn_notes(py, &image.notes)?;
     let dict = PyDict::new(py);
     let (height, width) = (image.height, image.width);
     let channels = PARAM_CHANNELS.iter().chain(EXTENDED_CHANNELS.iter());
@@ -494,7 +500,7 @@ pub(super) fn maps_py<'py>(
         });
     }
     let [p0, p1, p2, p3, e0, e1, e2]: [Plane; 7] = planes.try_into().map_err(|_| internal("not seven planes"))?;
-    let mut image = ParamImage { width, height, planes: [p0, p1, p2, p3], extended: [e0, e1, e2] };
+    let mut image = ParamImage { width, height, planes: [p0, p1, p2, p3], extended: [e0, e1, e2], notes: Vec::new() };
     drop(params);
     drop(inputs);
 

@@ -149,8 +149,8 @@ def test_unusable_parameter_file_is_a_clear_error(addon, tmp_path):
     with pytest.raises(RuntimeError, match=r"rgb\.exr.*missing channels melanin.*found channels"):
         bpy.ops.spectral_skin.apply(material="Skin")
     material.spectral_skin.params_map = None
-    material.spectral_skin.melanin_map = bpy.data.images.load(str(rgb))  # three channels, none named melanin
-    with pytest.raises(RuntimeError, match=r"melanin map.*rgb\.exr.*channel named melanin"):
+    material.spectral_skin.melanin_map = bpy.data.images.load(str(rgb))  # R, G, B that differ: not a grey image
+    with pytest.raises(RuntimeError, match=r"melanin map.*rgb\.exr.*found channels R, G, B that differ.*not grey"):
         bpy.ops.spectral_skin.apply(material="Skin")
     assert material_snapshot(material) == before
     assert not (tmp_path / "skin_maps").exists()
@@ -296,6 +296,50 @@ def test_8_bit_png_maps_onto_the_range_once(addon, tmp_path):
                                hemoglobin=(low + (high - low) * grey / 255.0).astype(np.float32),
                                oiliness=caucasian["oiliness"])
     np.testing.assert_allclose(albedo, reference["base_color"], rtol=1e-6)
+
+
+def _save_grey_exr_from_blender(path: pathlib.Path, grey: np.ndarray, color_mode: str) -> None:
+    """Save ``grey`` (H, W, row 0 at the top) as Blender saves a grey image: an OpenEXR written by Blender itself
+    (``save_render``, half floats, ``color_mode`` "RGB" or "RGBA"), R = G = B."""
+    height, width = grey.shape
+    image = bpy.data.images.new("grey_map", width, height, float_buffer=True)
+    image.colorspace_settings.name = "Non-Color"
+    rgba = np.ones((height, width, 4), dtype=np.float32)
+    rgba[:, :, :3] = grey[::-1, :, None]  # Blender's pixels start at the bottom row
+    image.pixels.foreach_set(rgba.ravel())
+    settings = bpy.context.scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_mode = color_mode
+    settings.color_depth = "16"
+    image.save_render(str(path), scene=bpy.context.scene)
+    bpy.data.images.remove(image)
+
+
+def test_grey_rgb_exr_saved_from_blender_applies(addon, tmp_path):
+    melanin = face()[:, :, 0]
+    material = saved_material(tmp_path)
+    path = tmp_path / "melanin_grey.exr"
+    _save_grey_exr_from_blender(path, melanin, "RGB")
+    channels = read_channels(path)  # OpenImageIO's reading of Blender's file: the reference
+    assert sorted(channels) == ["B", "G", "R"]
+    assert np.array_equal(channels["R"], channels["G"]) and np.array_equal(channels["R"], channels["B"])
+    np.testing.assert_allclose(channels["R"], melanin, rtol=1e-3)  # half floats
+    material.spectral_skin.preset = "ASIAN"
+    material.spectral_skin.melanin_map = bpy.data.images.load(str(path))
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    assert material.spectral_skin.result_warning == ""
+    albedo, _ = written(tmp_path, "scene_Skin")
+    asian = spectral_skin.presets()["asian"]
+    reference = reference_maps(melanin=channels["R"], melanin_blend=asian["melanin_blend"],
+                               hemoglobin=asian["hemoglobin"], oiliness=asian["oiliness"])
+    np.testing.assert_array_equal(albedo, reference["base_color"])
+    # RGBA: applies too, and Apply reports the ignored alpha.
+    rgba = tmp_path / "melanin_rgba.exr"
+    _save_grey_exr_from_blender(rgba, melanin, "RGBA")
+    material.spectral_skin.melanin_map = bpy.data.images.load(str(rgba))
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    assert "melanin_rgba.exr" in material.spectral_skin.result_warning
+    assert "alpha" in material.spectral_skin.result_warning
 
 
 @pytest.mark.skipif(not CLI.exists(), reason="build the CLI first: cargo build --release")

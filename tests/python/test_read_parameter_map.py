@@ -71,12 +71,37 @@ def test_png_maps_onto_the_range(tmp_path: Path) -> None:
     np.testing.assert_allclose(planes["melanin"], low + (high - low) * grey / 255.0, rtol=1e-6)
 
 
+def test_grey_rgb_exr_as_blender_saves_it(tmp_path: Path) -> None:
+    grey = params()[:, :, 0]
+    path = tmp_path / "melanin_grey.exr"
+    write(path, np.stack([grey, grey, grey], axis=-1), ("R", "G", "B"))
+    planes = spectral_skin.read_parameter_map(path, "melanin")
+    np.testing.assert_array_equal(planes["melanin"], grey)
+    # RGBA: the alpha is ignored, with a warning naming the file.
+    rgba = tmp_path / "melanin_rgba.exr"
+    write(rgba, np.stack([grey, grey, grey, np.ones_like(grey)], axis=-1), ("R", "G", "B", "A"))
+    with pytest.warns(spectral_skin.SpectralSkinWarning, match=r"melanin_rgba\.exr.*alpha"):
+        planes = spectral_skin.read_parameter_map(rgba, "melanin")
+    np.testing.assert_array_equal(planes["melanin"], grey)
+
+
+def test_unknown_channel_of_a_parameter_exr_warns(tmp_path: Path) -> None:
+    values = params()
+    path = tmp_path / "face.exr"
+    write(path, np.concatenate([values, values[:, :, :1]], axis=-1), (*PARAMETERS, "hemoglobn"))
+    with pytest.warns(spectral_skin.SpectralSkinWarning, match=r"face\.exr.*hemoglobn.*melanin, melanin_blend"):
+        planes = spectral_skin.read_parameter_map(path)
+    np.testing.assert_array_equal(planes["hemoglobin"], values[:, :, 2])
+
+
 def test_errors_name_the_file_and_channels(tmp_path: Path) -> None:
     rgb = tmp_path / "rgb.exr"
     write(rgb, params()[:, :, :3], ("R", "G", "B"))
     with pytest.raises(SpectralSkinError, match=r"rgb\.exr.*missing channels melanin.*found channels: [RGB], [RGB], [RGB]"):
         spectral_skin.read_parameter_map(rgb)
-    with pytest.raises(SpectralSkinError, match=r"melanin map.*rgb\.exr.*channel named melanin.*found channels"):
+    # RGB is a parameter map only when grey (R = G = B): this one is not; the accepted forms are listed.
+    with pytest.raises(SpectralSkinError, match=r"melanin map.*rgb\.exr.*found channels R, G, B that differ.*not grey"
+                       r".*channel named like the parameter"):
         spectral_skin.read_parameter_map(rgb, "melanin")
     with pytest.raises(OSError, match=r"missing\.exr") as info:  # an I/O failure, not bad input
         spectral_skin.read_parameter_map(tmp_path / "missing.exr", "melanin")

@@ -1,5 +1,5 @@
-//! Parameter maps in, texture maps out: reading the four parameter planes (EXR, PNG, TIFF or constants) and writing
-//! scene-linear EXR outputs atomically.
+//! Images in, texture maps out: reading the parameter planes (EXR, PNG, TIFF, JPEG or constants) and albedo textures
+//! (EXR, PNG, TIFF, JPEG), and writing scene-linear EXR outputs atomically.
 //!
 //! Conventions shared by every function here:
 //! - Planes are row-major, `width * height` long, row 0 at the top (the first row of the EXR data window, the first
@@ -11,7 +11,8 @@
 //! - Outputs are written to a hidden temporary file beside the destination (`.<name>.<random>.tmp`) and renamed into
 //!   place only once complete, so a failure never leaves a half-written or clobbered file.
 //!
-//! Files, along the seams: `read.rs` (input sources: EXR, PNG, TIFF or bytes in memory, checked before decoding),
+//! Files, along the seams: `read.rs` (the one reader of input images for every front: parameter maps and albedo
+//! textures from EXR, PNG, TIFF, JPEG or bytes in memory, checked before decoding),
 //! `encode.rs` (EXR encoding of output planes) and `staging.rs` (temporary files renamed into place together).
 
 mod encode;
@@ -24,8 +25,10 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 pub use encode::{resolve_compression, stage_channels_exr, stage_rgb_exr, write_channels_exr, write_rgb_exr};
-pub use read::{read_exr_channels, read_params, read_params_from_bytes};
-pub use staging::{commit_all, stage_bytes, write_atomic, Staged};
+pub use read::{read_albedo_texture, read_exr_channels, read_params, read_params_from_bytes, AlbedoTexture};
+pub use staging::{
+    check_output_dir, commit_all, create_output_dir, output_folder_of, stage_bytes, write_atomic, Staged,
+};
 
 use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, PAPER_PARAMS as PARAMS};
 
@@ -34,7 +37,7 @@ use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, PAPER_PARAMS as PA
 pub const PARAM_CHANNELS: [&str; 4] = [PARAMS[0].name, PARAMS[1].name, PARAMS[2].name, PARAMS[3].name];
 
 /// The allowed range `(min, max)` of each parameter ([`PARAMS`]), in [`PARAM_CHANNELS`] order (unitless volume fractions and
-/// shares). An integer PNG/TIFF value `v` of bit depth `b` maps to `min + (max - min) * v / (2^b - 1)`.
+/// shares). An integer PNG/TIFF/JPEG value `v` of bit depth `b` maps to `min + (max - min) * v / (2^b - 1)`.
 pub const PARAM_RANGES: [(f64, f64); 4] = [PARAMS[0].range(), PARAMS[1].range(), PARAMS[2].range(), PARAMS[3].range()];
 
 /// The names of the extended physiology ([`EXTENDED_PARAMS`]: epidermis_thickness_mm, baseline_absorption_scale,
@@ -42,8 +45,8 @@ pub const PARAM_RANGES: [(f64, f64); 4] = [PARAMS[0].range(), PARAMS[1].range(),
 /// it, else its default (the paper's value).
 pub const EXTENDED_CHANNELS: [&str; 3] = [EXTENDED_PARAMS[0].name, EXTENDED_PARAMS[1].name, EXTENDED_PARAMS[2].name];
 
-/// The allowed range of each extended parameter, in [`EXTENDED_CHANNELS`] order; an integer PNG/TIFF value maps onto
-/// it as for [`PARAM_RANGES`].
+/// The allowed range of each extended parameter, in [`EXTENDED_CHANNELS`] order; an integer PNG/TIFF/JPEG value maps
+/// onto it as for [`PARAM_RANGES`].
 pub const EXTENDED_RANGES: [(f64, f64); 3] =
     [EXTENDED_PARAMS[0].range(), EXTENDED_PARAMS[1].range(), EXTENDED_PARAMS[2].range()];
 
@@ -69,6 +72,21 @@ pub(crate) const ALL_RANGES: [(f64, f64); 7] = [
     EXTENDED_RANGES[2],
 ];
 
+/// The forms a one-parameter image may take, for every refusal's message (fronts show it as it is).
+///
+/// Integer images (PNG, TIFF, JPEG) are data, not colour: a value `v` of bit depth `b` maps to
+/// `min + (max - min) * v / (2^b - 1)` of the parameter's range with no sRGB decoding, whatever colour profile the
+/// file declares (the convention of greyscale maps since the first release, kept for RGB files with R = G = B).
+pub const PARAM_IMAGE_FORMS: &str = "a single-channel EXR (values are the parameter itself), an EXR with a channel \
+     named like the parameter, an RGB or RGBA EXR with R = G = B in every texel (a grey image, as Blender saves one; \
+     alpha ignored), or an 8- or 16-bit PNG, TIFF or JPEG that is greyscale or RGB(A) with R = G = B (values mapped \
+     0..1 onto the parameter's range, no sRGB decoding; alpha ignored)";
+
+/// The forms an albedo texture may take, for every refusal's message.
+pub const ALBEDO_IMAGE_FORMS: &str = "an EXR with channels R, G, B (or <layer>.R, <layer>.G, <layer>.B of one \
+     layer; A ignored), linear in the working space; or an 8- or 16-bit RGB(A) or greyscale PNG, TIFF or JPEG, \
+     sRGB-encoded (decoded to linear with the sRGB formula, IEC 61966-2-1; alpha ignored)";
+
 /// The largest image accepted or written, in texels (16384 x 16384). Larger headers are rejected before any
 /// allocation, so a corrupt size field gives an error instead of an out-of-memory abort.
 pub const MAX_TEXELS: usize = 1 << 28;
@@ -76,8 +94,8 @@ pub const MAX_TEXELS: usize = 1 << 28;
 /// One parameter's source.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ParamSource {
-    /// A single-channel image: an EXR (values taken as the parameter itself) or an 8/16-bit greyscale PNG or TIFF
-    /// (mapped 0..1 onto the parameter's range, see [`PARAM_RANGES`]).
+    /// A one-parameter image, any of [`PARAM_IMAGE_FORMS`]: an EXR (values taken as the parameter itself) or an
+    /// 8/16-bit PNG, TIFF or JPEG (mapped 0..1 onto the parameter's range, see [`PARAM_RANGES`]).
     File(PathBuf),
     /// The same value everywhere, in the parameter's own unit (not range-checked here).
     Constant(f64),
@@ -134,6 +152,9 @@ pub struct ParamImage {
     /// The extended physiology, in [`EXTENDED_CHANNELS`] order (constants at the defaults unless a map or value gave
     /// them).
     pub extended: [Plane; 3],
+    /// What the reader accepted but a user should know (an alpha channel ignored, channels of no parameter's name):
+    /// one sentence each, naming the file; fronts show them as warnings.
+    pub notes: Vec<String>,
 }
 
 /// The extended physiology at its defaults (the paper's values), as constant planes.
@@ -144,7 +165,7 @@ pub fn default_extended() -> [Plane; 3] {
 impl ParamImage {
     /// The paper's four planes, the extended physiology at its defaults.
     pub fn new(width: usize, height: usize, planes: [Plane; 4]) -> ParamImage {
-        ParamImage { width, height, planes, extended: default_extended() }
+        ParamImage { width, height, planes, extended: default_extended(), notes: Vec::new() }
     }
 
     /// Plane `p` of all seven, indexed as `crate::skin::params::PARAMS` (the four, then the extended physiology).

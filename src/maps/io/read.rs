@@ -1,4 +1,7 @@
-//! Reading the parameter inputs: every file's header checked before any pixel data is decoded (see [`read_params`]).
+//! The one reader of input images, for every front (CLI, Python, add-on): parameter maps ([`read_params`],
+//! [`read_params_from_bytes`]: one value per texel) and albedo textures ([`read_albedo_texture`]: linear RGB per
+//! texel). Every file's header is checked before any pixel data is decoded; every refusal names the file, what was
+//! found and what is accepted ([`PARAM_IMAGE_FORMS`], [`ALBEDO_IMAGE_FORMS`]).
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Cursor, Read, Seek, SeekFrom};
@@ -11,25 +14,31 @@ use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::f16;
 
 use super::{
-    guard, ParamImage, ParamInputs, ParamSource, Plane, ALL_CHANNELS, ALL_RANGES, EXTENDED_CHANNELS, MAX_TEXELS,
-    PARAM_CHANNELS,
+    guard, ParamImage, ParamInputs, ParamSource, Plane, ALBEDO_IMAGE_FORMS, ALL_CHANNELS, ALL_RANGES,
+    EXTENDED_CHANNELS, MAX_TEXELS, PARAM_CHANNELS, PARAM_IMAGE_FORMS,
 };
 use crate::error::SkinError;
 use crate::skin::params::EXTENDED_DEFAULTS;
 
 /// Read and check the parameter inputs.
 ///
-/// Every file is opened and its header checked before any pixel data is decoded: all files exist and are EXR, PNG or
-/// TIFF (recognised by content, not extension); their sizes agree (the error lists each file's size); a multi-channel
-/// EXR has every channel not given as a constant (the error lists the channels found); one-parameter files are
-/// single-channel.
+/// Every file is opened and its header checked before any pixel data is decoded: all files exist and are EXR, PNG,
+/// TIFF or JPEG (recognised by content, not extension); their sizes agree (the error lists each file's size); a
+/// multi-channel EXR has every channel not given as a constant (the error lists the channels found); one-parameter
+/// files are one of [`PARAM_IMAGE_FORMS`].
 ///
 /// - A one-parameter EXR must have exactly one channel (any name, any sample type), or else a channel named like the
-///   parameter (so a multi-channel parameter EXR can also serve as a separate source). Values are taken as the
-///   parameter itself; f16 and u32 samples are converted to f32.
-/// - A one-parameter PNG or TIFF must be greyscale, 8 or 16 bits (greyscale + alpha is accepted; the alpha is
-///   ignored). RGB(A) and float images are rejected. A value `v` maps to `min + (max - min) * v / (2^bits - 1)` of
-///   the parameter's range ([`PARAM_RANGES`]), computed in f64 (so 255 in an 8-bit melanin map gives exactly 0.5).
+///   parameter (so a multi-channel parameter EXR can also serve as a separate source), or else be R, G, B (optionally
+///   A; bare or as `<layer>.R` etc. of one layer) with R = G = B exactly in every texel: a grey image as Blender saves
+///   one (the alpha is ignored, with a note). RGB with differing channels is refused naming the first texel that
+///   differs. Values are taken as the parameter itself; f16 and u32 samples are converted to f32.
+/// - A one-parameter PNG, TIFF or JPEG must be 8 or 16 bits, greyscale or RGB with R = G = B exactly in every texel
+///   (an alpha channel is ignored, with a note). Float images are rejected. The values are data, not colour (no sRGB
+///   decoding): `v` maps to `min + (max - min) * v / (2^bits - 1)` of the parameter's range ([`PARAM_RANGES`]),
+///   computed in f64 (so 255 in an 8-bit melanin map gives exactly 0.5).
+/// - A multi-channel parameter EXR's channels of no parameter's name (a misspelt `hemoglobn`) are ignored with a note
+///   naming them and the known names.
+/// - The notes go into [`ParamImage::notes`], one sentence each naming the file, for fronts to show as warnings.
 /// - Constants are used as given (converted to f32).
 ///
 /// - Before an EXR's pixel data is read, its offset table and every chunk's declared size are checked against the
@@ -238,6 +247,18 @@ fn read_multi(
             }
         }
     }
+    let mut notes = Vec::new();
+    let unknown: Vec<&str> =
+        probe.channels.iter().map(|(c, _)| c.as_str()).filter(|c| !ALL_CHANNELS.contains(c)).collect();
+    if !unknown.is_empty() {
+        notes.push(format!(
+            "{}: ignored channel{} {} (not a parameter's name); a parameter EXR's channels are named exactly {}",
+            path.display(),
+            if unknown.len() > 1 { "s" } else { "" },
+            unknown.join(", "),
+            ALL_CHANNELS.join(", ")
+        ));
+    }
     let indices: Vec<usize> = wanted.iter().map(|&(_, c)| c).collect();
     let mut read = read_exr_planes(src, what, &probe, &indices)?.into_iter();
     let mut planes: [Plane; 7] = std::array::from_fn(|p| {
@@ -258,25 +279,82 @@ fn read_multi(
         }
     }
     for (p, file, file_probe) in &extended_files {
-        planes[*p] = Plane::Texels(read_probed(*file, *p, file_probe)?);
+        planes[*p] = Plane::Texels(read_probed(*file, *p, file_probe, &mut notes)?);
     }
-    Ok(image_of(probe.width, probe.height, planes))
+    Ok(image_of(probe.width, probe.height, planes, notes))
 }
 
 /// The four planes and the extended physiology's three as a [`ParamImage`].
-fn image_of(width: usize, height: usize, planes: [Plane; 7]) -> ParamImage {
+fn image_of(width: usize, height: usize, planes: [Plane; 7], notes: Vec<String>) -> ParamImage {
     let [m, b, h, o, e0, e1, e2] = planes;
-    ParamImage { width, height, planes: [m, b, h, o], extended: [e0, e1, e2] }
+    ParamImage { width, height, planes: [m, b, h, o], extended: [e0, e1, e2], notes }
 }
 
-/// Decode a one-parameter file whose header `probe` has been checked.
-fn read_probed(src: Source<'_>, p: usize, probe: &FileProbe) -> Result<Vec<f32>, SkinError> {
+/// The note for an ignored alpha channel.
+fn alpha_note(path: &Path, what: &str) -> String {
+    format!("{}: the alpha channel of the {what} is ignored", path.display())
+}
+
+/// Decode a one-parameter file whose header `probe` has been checked; notes (an ignored alpha) go to `notes`.
+fn read_probed(src: Source<'_>, p: usize, probe: &FileProbe, notes: &mut Vec<String>) -> Result<Vec<f32>, SkinError> {
     let what = map_name(p);
+    let path = src.label();
     match probe {
-        FileProbe::Exr { probe, channel } => {
-            Ok(read_exr_planes(src, &what, probe, &[*channel])?.pop().unwrap_or_default())
+        FileProbe::Exr { probe, channels, alpha } => {
+            let mut planes = read_exr_planes(src, &what, probe, channels)?;
+            if let [r, g, b] = planes.as_slice() {
+                let names: Vec<&str> = channels.iter().map(|&c| probe.channels[c].0.as_str()).collect();
+                check_grey(path, &what, probe.width, &names, |i| [r[i], g[i], b[i]], r.len())?;
+            }
+            if *alpha {
+                notes.push(alpha_note(path, &what));
+            }
+            Ok(planes.swap_remove(0))
         }
-        FileProbe::Integer { width, height, .. } => read_integer_image(src, &what, p, *width, *height),
+        FileProbe::Integer { width, height, color } => {
+            if color.has_alpha() {
+                notes.push(alpha_note(path, &what));
+            }
+            read_integer_image(src, &what, p, *width, *height)
+        }
+    }
+}
+
+/// An error unless `texel(i)`'s three values are equal for every texel `i < count` (a grey RGB image): the message
+/// names the channels and the first texel (x, y) that differs.
+fn check_grey(
+    path: &Path,
+    what: &str,
+    width: usize,
+    names: &[&str],
+    texel: impl Fn(usize) -> [f32; 3],
+    count: usize,
+) -> Result<(), SkinError> {
+    // Equal as numbers (0 = -0), NaN with NaN (the range check reports NaN texels later, naming them).
+    let same = |a: f32, b: f32| a == b || (a.is_nan() && b.is_nan());
+    let differs = |i: usize| {
+        let [r, g, b] = texel(i);
+        !(same(r, g) && same(r, b))
+    };
+    match (0..count).find(|&i| differs(i)) {
+        None => Ok(()),
+        Some(i) => {
+            let [r, g, b] = texel(i);
+            Err(SkinError::invalid(
+                what,
+                format!(
+                    "{}: found channels {} that differ (first at texel (x, y) = ({}, {}): {} {r}, {} {g}, {} {b}), so \
+                     the image is not grey; expected {PARAM_IMAGE_FORMS}",
+                    path.display(),
+                    names.join(", "),
+                    i % width.max(1),
+                    i / width.max(1),
+                    names[0],
+                    names[1],
+                    names[2],
+                ),
+            ))
+        }
     }
 }
 
@@ -313,10 +391,11 @@ fn read_separate(sources: &[Input<'_>; 7]) -> Result<ParamImage, SkinError> {
         Input::Constant(value) => Plane::Constant(*value as f32),
         Input::File(_) => Plane::Constant(f32::NAN), // replaced below
     });
+    let mut notes = Vec::new();
     for (p, src, probe) in &probes {
-        planes[*p] = Plane::Texels(read_probed(*src, *p, probe)?);
+        planes[*p] = Plane::Texels(read_probed(*src, *p, probe, &mut notes)?);
     }
-    Ok(image_of(width, height, planes))
+    Ok(image_of(width, height, planes, notes))
 }
 
 fn map_name(p: usize) -> String {
@@ -325,10 +404,10 @@ fn map_name(p: usize) -> String {
 
 /// What phase 1 learnt about one file.
 enum FileProbe {
-    /// An EXR and the index of the channel to read.
-    Exr { probe: ExrProbe, channel: usize },
-    /// A greyscale PNG or TIFF.
-    Integer { width: usize, height: usize },
+    /// An EXR and the indices of the channels to read: one, or R, G, B of a grey image (`alpha`: it has an A too).
+    Exr { probe: ExrProbe, channels: Vec<usize>, alpha: bool },
+    /// An 8/16-bit PNG, TIFF or JPEG of colour type `color` (greyscale or RGB, with or without alpha).
+    Integer { width: usize, height: usize, color: image::ColorType },
 }
 
 impl FileProbe {
@@ -460,22 +539,27 @@ fn probe_param_file(src: Source<'_>, p: usize) -> Result<FileProbe, SkinError> {
     let path = src.label();
     if is_exr(src, &what)? {
         let probe = probe_exr(src, &what)?;
-        let channel = if probe.channels.len() == 1 {
-            0
+        let (channels, alpha) = if probe.channels.len() == 1 {
+            (vec![0], false)
         } else if let Some(c) = probe.channels.iter().position(|(c, _)| c == ALL_CHANNELS[p]) {
-            c
+            (vec![c], false)
         } else {
-            return Err(SkinError::invalid(
-                what,
-                format!(
-                    "{}: expected a single-channel EXR or one with a channel named {}; found channels: {}",
-                    path.display(),
-                    ALL_CHANNELS[p],
-                    probe.channel_list()
-                ),
-            ));
+            match rgb_layout(&probe) {
+                Ok(Some(layout)) if layout.others.is_empty() => (layout.rgb.to_vec(), layout.alpha.is_some()),
+                _ => {
+                    return Err(SkinError::invalid(
+                        what,
+                        format!(
+                            "{}: found channels {}; expected {PARAM_IMAGE_FORMS} (here: a channel named {})",
+                            path.display(),
+                            probe.channel_list(),
+                            ALL_CHANNELS[p],
+                        ),
+                    ))
+                }
+            }
         };
-        return Ok(FileProbe::Exr { probe, channel });
+        return Ok(FileProbe::Exr { probe, channels, alpha });
     }
     let reader = image_reader(src, &what)?;
     let decoder = guard(|| {
@@ -484,10 +568,46 @@ fn probe_param_file(src: Source<'_>, p: usize) -> Result<FileProbe, SkinError> {
     .and_then(|r| r.map_err(|e| e.to_string()))
     .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image header ({e})")))?;
     let ((w, h), color) = decoder;
-    check_color(path, &what, color)?;
+    check_color(path, &what, color, PARAM_IMAGE_FORMS)?;
     let (width, height) = (w as usize, h as usize);
     check_size(path, &what, width, height)?;
-    Ok(FileProbe::Integer { width, height })
+    Ok(FileProbe::Integer { width, height, color })
+}
+
+/// Where the R, G, B (and A) channels of an EXR are: bare `R`, `G`, `B`, else `<layer>.R` etc. of the one layer that
+/// has all three. `others`: the channels that are none of them. `Ok(None)`: no such channels; `Err`: several layers
+/// have them (the message lists the layers).
+struct RgbLayout {
+    rgb: [usize; 3],
+    alpha: Option<usize>,
+    others: Vec<usize>,
+}
+
+fn rgb_layout(probe: &ExrProbe) -> Result<Option<RgbLayout>, String> {
+    let find = |name: &str| probe.channels.iter().position(|(c, _)| c == name);
+    let mut prefixes: Vec<&str> = probe
+        .channels
+        .iter()
+        .filter_map(|(c, _)| c.strip_suffix('R'))
+        .filter(|prefix| prefix.is_empty() || prefix.ends_with('.'))
+        .filter(|prefix| find(&format!("{prefix}G")).is_some() && find(&format!("{prefix}B")).is_some())
+        .collect();
+    prefixes.sort_unstable();
+    let prefix = match prefixes.as_slice() {
+        [] => return Ok(None),
+        [one] => *one,
+        several if several.contains(&"") => "",
+        several => {
+            let layers: Vec<&str> = several.iter().map(|p| p.trim_end_matches('.')).collect();
+            return Err(format!("several layers have R, G, B channels ({}): which one is meant", layers.join(", ")));
+        }
+    };
+    let at = |c: &str| find(&format!("{prefix}{c}"));
+    let (Some(r), Some(g), Some(b)) = (at("R"), at("G"), at("B")) else { return Ok(None) };
+    let alpha = at("A");
+    let others =
+        (0..probe.channels.len()).filter(|i| ![Some(r), Some(g), Some(b), alpha].contains(&Some(*i))).collect();
+    Ok(Some(RgbLayout { rgb: [r, g, b], alpha, others }))
 }
 
 /// An image reader for a PNG or TIFF, recognised by content.
@@ -497,27 +617,28 @@ fn image_reader<'a>(src: Source<'a>, what: &str) -> Result<image::ImageReader<So
         .with_guessed_format()
         .map_err(|e| SkinError::io_caused(path, format!("cannot read {what}: {e}"), e))?;
     match reader.format() {
-        Some(image::ImageFormat::Png) | Some(image::ImageFormat::Tiff) => Ok(reader),
+        Some(image::ImageFormat::Png) | Some(image::ImageFormat::Tiff) | Some(image::ImageFormat::Jpeg) => Ok(reader),
         Some(other) => Err(SkinError::invalid(
             what,
-            format!("{}: expected an EXR, PNG or TIFF file; found {other:?}", path.display()),
+            format!("{}: expected an EXR, PNG, TIFF or JPEG file; found {other:?}", path.display()),
         )),
         None => Err(SkinError::invalid(
             what,
-            format!("{}: expected an EXR, PNG or TIFF file; found an unrecognised format", path.display()),
+            format!("{}: expected an EXR, PNG, TIFF or JPEG file; found an unrecognised format", path.display()),
         )),
     }
 }
 
-fn check_color(path: &Path, what: &str, color: image::ColorType) -> Result<(), SkinError> {
+/// An error (naming the file, what it is and `accepted`) unless `color` is 8- or 16-bit greyscale or RGB, with or
+/// without alpha.
+fn check_color(path: &Path, what: &str, color: image::ColorType, accepted: &str) -> Result<(), SkinError> {
     use image::ColorType as C;
     match color {
-        C::L8 | C::L16 | C::La8 | C::La16 => Ok(()),
+        C::L8 | C::L16 | C::La8 | C::La16 | C::Rgb8 | C::Rgb16 | C::Rgba8 | C::Rgba16 => Ok(()),
         other => Err(SkinError::invalid(
             what,
             format!(
-                "{}: expected a single-channel (greyscale) 8- or 16-bit image; found {} ({} channels, {} bits); \
-                 save it as greyscale or use a single-channel EXR",
+                "{}: found {} ({} channels, {} bits); expected {accepted}",
                 path.display(),
                 color_name(other),
                 other.channel_count(),
@@ -567,14 +688,36 @@ fn read_integer_image(
     let (min, max) = ALL_RANGES[p];
     let map8 = |v: u8| (min + (max - min) * f64::from(v) / 255.0) as f32;
     let map16 = |v: u16| (min + (max - min) * f64::from(v) / 65535.0) as f32;
+    // RGB(A): R = G = B exactly in every texel, else an error naming the first texel that differs.
+    let grey = |raw: &[u16], step: usize| {
+        let texel = |i: usize| [raw[i * step], raw[i * step + 1], raw[i * step + 2]].map(f32::from);
+        check_grey(path, what, width, &["R", "G", "B"], texel, raw.len() / step)
+    };
+    let widen = |raw: &[u8]| raw.iter().map(|&v| u16::from(v)).collect::<Vec<u16>>();
     let values: Vec<f32> = match img {
         image::DynamicImage::ImageLuma8(buf) => buf.as_raw().iter().map(|&v| map8(v)).collect(),
         image::DynamicImage::ImageLumaA8(buf) => buf.as_raw().chunks_exact(2).map(|la| map8(la[0])).collect(),
         image::DynamicImage::ImageLuma16(buf) => buf.as_raw().iter().map(|&v| map16(v)).collect(),
         image::DynamicImage::ImageLumaA16(buf) => buf.as_raw().chunks_exact(2).map(|la| map16(la[0])).collect(),
+        image::DynamicImage::ImageRgb8(buf) => {
+            grey(&widen(buf.as_raw()), 3)?;
+            buf.as_raw().chunks_exact(3).map(|c| map8(c[0])).collect()
+        }
+        image::DynamicImage::ImageRgba8(buf) => {
+            grey(&widen(buf.as_raw()), 4)?;
+            buf.as_raw().chunks_exact(4).map(|c| map8(c[0])).collect()
+        }
+        image::DynamicImage::ImageRgb16(buf) => {
+            grey(buf.as_raw(), 3)?;
+            buf.as_raw().chunks_exact(3).map(|c| map16(c[0])).collect()
+        }
+        image::DynamicImage::ImageRgba16(buf) => {
+            grey(buf.as_raw(), 4)?;
+            buf.as_raw().chunks_exact(4).map(|c| map16(c[0])).collect()
+        }
         other => {
-            return Err(check_color(path, what, other.color()).err().unwrap_or_else(|| {
-                SkinError::invalid(what, format!("{}: expected a greyscale image", path.display()))
+            return Err(check_color(path, what, other.color(), PARAM_IMAGE_FORMS).err().unwrap_or_else(|| {
+                SkinError::invalid(what, format!("{}: expected {PARAM_IMAGE_FORMS}", path.display()))
             }))
         }
     };
@@ -777,4 +920,108 @@ pub fn read_exr_channels(path: &Path) -> Result<(usize, usize, Vec<(String, Vec<
     let planes = read_exr_planes(src, what, &probe, &indices)?;
     let named = probe.channels.iter().map(|(name, _)| name.clone()).zip(planes).collect();
     Ok((probe.width, probe.height, named))
+}
+
+/// An albedo texture as the fits take it: linear RGB per texel, row-major, row 0 at the top.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AlbedoTexture {
+    pub width: usize,
+    pub height: usize,
+    /// Linear RGB of each texel (`width * height`), in the working space the caller says the file is in.
+    pub texels: Vec<[f32; 3]>,
+    /// How the file was read, for messages: "linear EXR", "8-bit sRGB PNG" and the like.
+    pub encoding: String,
+    /// True for an integer image decoded from sRGB (whose primaries are Rec.709's); false for a linear EXR.
+    pub srgb_decoded: bool,
+    /// What was accepted but a user should know (an ignored alpha or other channels), one sentence each naming the
+    /// file; fronts show them as warnings.
+    pub notes: Vec<String>,
+}
+
+/// The sRGB transfer function's inverse (IEC 61966-2-1): an encoded value in 0..1 to linear.
+fn srgb_to_linear(encoded: f64) -> f64 {
+    if encoded <= 0.04045 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Read an albedo texture, any of [`ALBEDO_IMAGE_FORMS`] (recognised by content, not extension): an EXR's R, G, B
+/// (bare, or `<layer>.R` etc. of the one layer that has them) taken as linear; an 8- or 16-bit PNG, TIFF or JPEG
+/// (greyscale or RGB) decoded from sRGB to linear with the sRGB formula, computed in f64. An alpha channel and an
+/// EXR's other channels are ignored with a note. Values are not range-checked here (the fit checks them).
+pub fn read_albedo_texture(path: &Path) -> Result<AlbedoTexture, SkinError> {
+    let what = "albedo texture";
+    let src = Source::Path(path);
+    let mut notes = Vec::new();
+    if is_exr(src, what)? {
+        let probe = probe_exr(src, what)?;
+        let refuse = |found: String| {
+            SkinError::invalid(what, format!("{}: {found}; expected {ALBEDO_IMAGE_FORMS}", path.display()))
+        };
+        let layout = rgb_layout(&probe)
+            .map_err(|several| refuse(format!("found channels {}: {several}", probe.channel_list())))?
+            .ok_or_else(|| refuse(format!("found channels {}, no R, G, B", probe.channel_list())))?;
+        let ignored: Vec<&str> =
+            layout.alpha.iter().chain(&layout.others).map(|&c| probe.channels[c].0.as_str()).collect();
+        if !ignored.is_empty() {
+            notes.push(format!(
+                "{}: channel{} {} of the {what} ignored (only R, G, B are read)",
+                path.display(),
+                if ignored.len() > 1 { "s" } else { "" },
+                ignored.join(", ")
+            ));
+        }
+        let planes = read_exr_planes(src, what, &probe, &layout.rgb)?;
+        let texels = (0..probe.width * probe.height).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
+        return Ok(AlbedoTexture {
+            width: probe.width,
+            height: probe.height,
+            texels,
+            encoding: "linear EXR".to_string(),
+            srgb_decoded: false,
+            notes,
+        });
+    }
+    // The header first: colour type and size checked before any pixel is decoded.
+    let reader = image_reader(src, what)?;
+    let format = reader.format().map(|f| format!("{f:?}").to_uppercase()).unwrap_or_default();
+    let ((w, h), color) = guard(|| {
+        reader.into_decoder().map(|d| (image::ImageDecoder::dimensions(&d), image::ImageDecoder::color_type(&d)))
+    })
+    .and_then(|r| r.map_err(|e| e.to_string()))
+    .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image header ({e})")))?;
+    check_color(path, what, color, ALBEDO_IMAGE_FORMS)?;
+    let (width, height) = (w as usize, h as usize);
+    check_size(path, what, width, height)?;
+    let reader = image_reader(src, what)?;
+    let img = guard(|| reader.decode())
+        .and_then(|r| r.map_err(|e| e.to_string()))
+        .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image ({e})")))?;
+    if (img.width() as usize, img.height() as usize, img.color()) != (width, height, color) {
+        return Err(SkinError::invalid(
+            what,
+            format!("{}: the image changed while being read (header and pixels disagree)", path.display()),
+        ));
+    }
+    if color.has_alpha() {
+        notes.push(alpha_note(path, what));
+    }
+    let bits = color.bits_per_pixel() / u16::from(color.channel_count());
+    let texels: Vec<[f32; 3]> = if bits == 8 {
+        let table: Vec<f32> = (0..=255u8).map(|v| srgb_to_linear(f64::from(v) / 255.0) as f32).collect();
+        img.into_rgb8().as_raw().chunks_exact(3).map(|c| [c[0], c[1], c[2]].map(|v| table[usize::from(v)])).collect()
+    } else {
+        let table: Vec<f32> = (0..=65535u16).map(|v| srgb_to_linear(f64::from(v) / 65535.0) as f32).collect();
+        img.into_rgb16().as_raw().chunks_exact(3).map(|c| [c[0], c[1], c[2]].map(|v| table[usize::from(v)])).collect()
+    };
+    Ok(AlbedoTexture {
+        width,
+        height,
+        texels,
+        encoding: format!("{bits}-bit sRGB {format}"),
+        srgb_decoded: true,
+        notes,
+    })
 }

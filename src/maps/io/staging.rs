@@ -149,3 +149,63 @@ pub fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<Staged, SkinError> {
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SkinError> {
     stage_bytes(path, bytes)?.commit()
 }
+
+/// Check, before any work starts and without creating anything, that outputs can be written in `dir`: it is a
+/// folder where a file can be created (a hidden temporary file, removed at once), or it is missing and its nearest
+/// existing ancestor is such a folder (so [`create_output_dir`] can make it). The error names the folder and says
+/// what is wrong, so a run fails in a second rather than after its whole computation; a failed run leaves no folder.
+pub fn check_output_dir(dir: &Path) -> Result<(), SkinError> {
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    // The nearest existing ancestor (the folder itself if it exists); the operating system's error (a file in the
+    // way: "not a directory") is kept as the source, with its code.
+    let mut existing = dir;
+    loop {
+        match std::fs::metadata(existing) {
+            Ok(meta) if meta.is_dir() => break,
+            Ok(_) => {
+                let reason = if existing == dir {
+                    "cannot use it as the output folder: expected a folder, found a file".to_string()
+                } else {
+                    format!("cannot create the output folder: {} is a file, not a folder", existing.display())
+                };
+                return Err(SkinError::io(dir, reason));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                existing = match existing.parent() {
+                    Some(p) if !p.as_os_str().is_empty() => p,
+                    _ => Path::new("."),
+                };
+            }
+            Err(e) => {
+                let reason = format!(
+                    "cannot create the output folder: {e} (expected a path whose existing part is folders; a file \
+                     is in the way, or it cannot be reached)"
+                );
+                return Err(SkinError::io_caused(dir, reason, e));
+            }
+        }
+    }
+    tempfile::Builder::new().prefix(".spectral-skin-check.").suffix(".tmp").tempfile_in(existing).map(drop).map_err(
+        |e| {
+            let reason = if existing == dir {
+                format!("cannot write in the output folder: {e} (expected a folder where files can be created)")
+            } else {
+                format!("cannot create the output folder in {}: {e}", existing.display())
+            };
+            SkinError::io_caused(dir, reason, e)
+        },
+    )
+}
+
+/// [`check_output_dir`], then create `dir` (and its parents) if missing: what a writer calls just before staging.
+pub fn create_output_dir(dir: &Path) -> Result<(), SkinError> {
+    check_output_dir(dir)?;
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    std::fs::create_dir_all(dir)
+        .map_err(|e| SkinError::io_caused(dir, format!("cannot create the output folder: {e}"), e))
+}
+
+/// The folder that will hold `file` (`.` for a bare file name).
+pub fn output_folder_of(file: &Path) -> &Path {
+    parent_dir(file)
+}
