@@ -1,6 +1,9 @@
-//! Time of one `evaluate` for albedo only, albedo + radius, and a full RGB profile (criterion; median reported).
+//! Time of one `evaluate` for albedo only, albedo + radius, and a full RGB profile (criterion; median reported), with
+//! the default transport (exact totals) and with the paper's diffusion totals, so that the transport's cost reads as a
+//! ratio within one run.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use spectral_skin::transport::ALL_TRANSPORTS;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
 fn bench_evaluate(c: &mut Criterion) {
@@ -12,8 +15,11 @@ fn bench_evaluate(c: &mut Criterion) {
     ];
     let mut group = c.benchmark_group("evaluate/caucasian");
     for (name, outputs) in cases {
-        let request = Request::new(outputs);
-        group.bench_function(name, |b| b.iter(|| evaluate(&params, &request).unwrap()));
+        for transport in ALL_TRANSPORTS {
+            let request = Request { transport, ..Request::new(outputs) };
+            let id = format!("{name}/{}", transport.name());
+            group.bench_function(id, |b| b.iter(|| evaluate(&params, &request).unwrap()));
+        }
     }
     group.finish();
 }

@@ -389,8 +389,9 @@ def test_dropped_effects_with_maps_are_not_kept(tmp_path, method):
     assert work["outputs"] == {"base_color": 16, "radius": 0, "specular": 0}, work
     assert plan["specular_ior_level"] == 0.0 and plan["roughness"] > 0.0
     c = settings.constants()
-    albedo = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], float(levels.flat[5]), 0.0,
-                                    outputs=("albedo",))["diffuse_reflectance_rgb"]
+    # A map run holds every parameter as float32, the constants too: evaluate() gets the same float32 values.
+    as_map = [float(np.float32(v)) for v in (c["melanin"], c["melanin_blend"], levels.flat[5])]
+    albedo = spectral_skin.evaluate(*as_map, 0.0, outputs=("albedo",))["diffuse_reflectance_rgb"]
     np.testing.assert_array_equal(np.asarray(plan["images"]["albedo"]).reshape(-1, 3)[5], np.float32(albedo))
 
 
