@@ -2,7 +2,8 @@
 Blender (no add-on, no handler, Python auto-run off) renders every frame as the session does.
 
 Blender 4.2 keeps an action's F-curves in ``action.fcurves``; from 4.4 on actions are layered and slotted (the
-F-curves of an ID live in the channel bag of its slot) and 5.0 removed ``action.fcurves``: :func:`curve_collection`
+F-curves of an ID live in the channel bag of its slot; 4.4-4.5's ``action.fcurves`` shows the first slot's only) and
+5.0 removed ``action.fcurves``: :func:`curve_collection`
 hides the difference. Keys are inserted with Blender's own ``keyframe_insert`` (which makes the action, slot, layer
 and strip as each version needs), then their points are set in bulk. Drivers are copied as they are: a driver of
 type Average/Sum/Min/Max, or a scripted one whose expression is a "simple expression" (``var``, ``var * 2``, ...),
@@ -25,7 +26,9 @@ def curve_collection(id_data: Any) -> Any:
     if animation_data is None or animation_data.action is None:
         return None
     action = animation_data.action
-    if hasattr(action, "fcurves"):
+    # 4.4 and 4.5 keep ``action.fcurves`` for layered actions too, but it shows the first slot's curves only: a node
+    # tree keyed into its material's action (as 4.4+ do) has its curves in its own slot's channel bag.
+    if hasattr(action, "fcurves") and not getattr(action, "is_action_layered", False):
         return action.fcurves
     from bpy_extras import anim_utils
 
