@@ -26,33 +26,24 @@ fn figures(e: &Evaluation) -> ([f64; 3], [f64; 3]) {
 fn default_is_within_bounds_of_the_converged_reference() {
     for preset in PRESETS {
         let streams = Accuracy::default().streams;
-        let reference = run(&preset.params, Accuracy::reference());
-        let at_default_streams = run(&preset.params, Accuracy { streams, ..Accuracy::reference() });
-        let (ra, rr) = figures(&reference);
-        let (sa, sr) = figures(&at_default_streams);
-        let (albedo_error, radius_error) = (max_relative(sa, ra), max_relative(sr, rr));
-        println!(
-            "{}: {streams} streams vs the reference's: albedo {:.4} %, radius {:.4} %",
-            preset.name,
-            100.0 * albedo_error,
-            100.0 * radius_error
-        );
+        let at_default_streams = Accuracy { streams, ..Accuracy::reference() };
+        let what = format!("{streams} streams vs the reference's 32");
+        let (albedo_error, radius_error) = errors(preset, &what, at_default_streams, Accuracy::reference());
         assert!(albedo_error < 0.0075, "{}: streams: albedo {albedo_error}", preset.name);
         assert!(radius_error < 0.01, "{}: streams: radius {radius_error}", preset.name);
-        let reference = at_default_streams;
-        let default = run(&preset.params, Accuracy::default());
-        let (ra, rr) = figures(&reference);
-        let (da, dr) = figures(&default);
-        let (albedo_error, radius_error) = (max_relative(da, ra), max_relative(dr, rr));
-        println!(
-            "{}: default vs reference: albedo {:.4} %, radius {:.4} %",
-            preset.name,
-            100.0 * albedo_error,
-            100.0 * radius_error
-        );
+        let (albedo_error, radius_error) =
+            errors(preset, "default vs reference", Accuracy::default(), at_default_streams);
         assert!(albedo_error < 0.002, "{}: albedo {albedo_error}", preset.name);
         assert!(radius_error < 0.01, "{}: radius {radius_error}", preset.name);
     }
+}
+
+/// The largest relative albedo and radius differences of `a` against `b` for `preset`, printed as `what`.
+fn errors(preset: &spectral_skin::skin::Preset, what: &str, a: Accuracy, b: Accuracy) -> (f64, f64) {
+    let ((aa, ar), (ba, br)) = (figures(&run(&preset.params, a)), figures(&run(&preset.params, b)));
+    let (albedo_error, radius_error) = (max_relative(aa, ba), max_relative(ar, br));
+    println!("{}: {what}: albedo {:.4} %, radius {:.4} %", preset.name, 100.0 * albedo_error, 100.0 * radius_error);
+    (albedo_error, radius_error)
 }
 
 /// Refining every knob of the reference once more (half the wavelength step, twice the fit frequencies, a finer
@@ -112,19 +103,11 @@ fn named_levels() {
     assert!(e.contains("accuracy") && e.contains("draft") && e.contains("reference"), "{e}");
     for preset in PRESETS {
         let streams = Accuracy::draft().streams;
-        let reference = run(&preset.params, Accuracy::reference());
-        let at_draft_streams = run(&preset.params, Accuracy { streams, ..Accuracy::reference() });
-        let ((ra, rr), (sa, sr)) = (figures(&reference), figures(&at_draft_streams));
-        let (albedo_error, radius_error) = (max_relative(sa, ra), max_relative(sr, rr));
-        println!(
-            "{}: {streams} streams vs 32: albedo {:.4} %, radius {:.4} %",
-            preset.name,
-            100.0 * albedo_error,
-            100.0 * radius_error
-        );
+        let at_draft_streams = Accuracy { streams, ..Accuracy::reference() };
+        let (albedo_error, radius_error) =
+            errors(preset, &format!("{streams} streams vs 32"), at_draft_streams, Accuracy::reference());
         assert!(albedo_error < 0.035, "{}: streams: albedo {albedo_error}", preset.name);
         assert!(radius_error < 0.02, "{}: streams: radius {radius_error}", preset.name);
-        let reference = at_draft_streams;
         let draft = run(&preset.params, Accuracy::draft());
         let default = run(&preset.params, Accuracy::default());
         assert!(
@@ -133,15 +116,7 @@ fn named_levels() {
             draft.work,
             default.work
         );
-        let (ra, rr) = figures(&reference);
-        let (da, dr) = figures(&draft);
-        let (albedo_error, radius_error) = (max_relative(da, ra), max_relative(dr, rr));
-        println!(
-            "{}: draft vs reference: albedo {:.4} %, radius {:.4} %",
-            preset.name,
-            100.0 * albedo_error,
-            100.0 * radius_error
-        );
+        let (albedo_error, radius_error) = errors(preset, "draft vs reference", Accuracy::draft(), at_draft_streams);
         assert!(albedo_error < 0.005, "{}: albedo {albedo_error}", preset.name);
         assert!(radius_error < 0.02, "{}: radius {radius_error}", preset.name);
     }
