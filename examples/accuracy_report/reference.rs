@@ -100,14 +100,27 @@ impl PresetReference {
 
 /// The RGB transfer function, normalised by the albedo, on the dense reference frequency grid.
 fn transfer_function(params: &SkinParams, accuracy: Accuracy, albedo: [f64; 3]) -> (Vec<f64>, [Vec<f64>; 3]) {
-    let prepared = Prepared::new(&request(accuracy, Task::Material)).expect("prepared");
+    let request = request(accuracy, Task::Material);
+    let prepared = Prepared::new(&request).expect("prepared");
     let stacks = prepared.stacks(params).expect("skin layers");
+    // Each wavelength's transform scaled to its total, as the core's radius fit sees it (the exact totals over the
+    // multipole's; 1 with the diffusion transport).
+    let totals =
+        spectral_skin::evaluate::diffuse_reflectance_at(params, &request, prepared.wavelengths_nm()).expect("totals");
+    let scale: Vec<f64> = stacks
+        .iter()
+        .zip(&totals)
+        .map(|(st, t)| t / st.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All))
+        .collect();
     let s = fit_frequencies(REFERENCE_FIT_PER_DECADE);
     let rgb: Vec<[f64; 3]> = s
         .iter()
         .map(|&x| {
-            let spectrum: Vec<f64> =
-                stacks.iter().map(|st| st.reflectance_hat(x, Combination::Directional, MultipoleTerms::All)).collect();
+            let spectrum: Vec<f64> = stacks
+                .iter()
+                .zip(&scale)
+                .map(|(st, k)| k * st.reflectance_hat(x, Combination::Directional, MultipoleTerms::All))
+                .collect();
             spectrum_to_rgb(&spectrum, prepared.rgb_weights())
         })
         .collect();
