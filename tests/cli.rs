@@ -195,8 +195,7 @@ fn eval_and_maps_take_a_target() {
     assert!(String::from_utf8_lossy(&legacy_in_5_0.stderr).contains("random_walk_legacy is not offered by Blender 5.0"));
     assert!(!out_dir.exists(), "nothing written on a refused target");
     // The sidecar names the target.
-    let params = dir.path().join("uniform.exr");
-    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "4", "--kind", "uniform"]).status.success());
+    let params = uniform_example(dir.path());
     let out = run(&[
         "maps",
         "--params",
@@ -548,8 +547,7 @@ fn transport_on_every_front() {
 
     // The maps sidecar names the transport and streams of its request.
     let dir = tempfile::tempdir().unwrap();
-    let params = dir.path().join("uniform.exr");
-    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "4", "--kind", "uniform"]).status.success());
+    let params = uniform_example(dir.path());
     for transport in ALL_TRANSPORTS {
         let out_dir = dir.path().join(transport.name());
         let out = run(&[
@@ -629,4 +627,11 @@ fn maps_warns_about_an_unknown_channel_of_its_parameter_exr() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(err.contains("warning:") && err.contains("hemoglobn") && err.contains("melanin_blend"), "{err}");
+}
+
+/// A 4x4 uniform parameter map written by `spectral-skin example` into `dir`.
+fn uniform_example(dir: &std::path::Path) -> std::path::PathBuf {
+    let params = dir.join("uniform.exr");
+    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "4", "--kind", "uniform"]).status.success());
+    params
 }
