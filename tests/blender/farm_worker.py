@@ -10,6 +10,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 from blender_scenes import read_exr
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
@@ -26,6 +27,12 @@ def edge_versions() -> tuple[tuple[int, int], tuple[int, int]]:
 
 def is_edge_version(version: tuple[int, ...]) -> bool:
     return tuple(version[:2]) in edge_versions()
+
+
+def only_in_edge_versions(version: tuple[int, ...]) -> pytest.MarkDecorator:
+    """The module mark of a farm test: skipped in every Blender but the oldest and the newest supported."""
+    return pytest.mark.skipif(not is_edge_version(version),
+                              reason=f"farm tests run in the oldest and newest Blender {edge_versions()}")
 
 
 def worker_render(blend: pathlib.Path, out_dir: pathlib.Path, frames: str, *extra: str) -> dict[int, np.ndarray]:

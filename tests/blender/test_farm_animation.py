@@ -22,14 +22,13 @@ pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
-from farm_worker import edge_versions, is_edge_version, worker_render  # noqa: E402
+from farm_worker import only_in_edge_versions, worker_render  # noqa: E402
 from test_live_mode import BURLEY_SPP, _apply, _centre, _core_albedo, _skin, _slab_scene  # noqa: E402
 
 from blender_addon import anim  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
 
-pytestmark = pytest.mark.skipif(not is_edge_version(bpy.app.version),
-                                reason=f"farm tests run in the oldest and newest Blender {edge_versions()}")
+pytestmark = only_in_edge_versions(bpy.app.version)
 
 BOUND = 0.005
 KEYS = ((1, 0.005), (2, 0.05))

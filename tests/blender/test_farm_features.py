@@ -27,14 +27,13 @@ pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
 from blender_scenes import add_box, add_top_camera, assign, set_world, write_exr  # noqa: E402
-from farm_worker import edge_versions, is_edge_version, worker_render  # noqa: E402
+from farm_worker import only_in_edge_versions, worker_render  # noqa: E402
 
 from blender_addon import masks  # noqa: E402
 from blender_addon.ops import apply_skins  # noqa: E402
 from blender_addon.props import settings_from_material  # noqa: E402
 
-pytestmark = pytest.mark.skipif(not is_edge_version(bpy.app.version),
-                                reason=f"farm tests run in the oldest and newest Blender {edge_versions()}")
+pytestmark = only_in_edge_versions(bpy.app.version)
 
 FEATURES = ("baked constants", "baked parameter map", "baked keys", "live constants", "live painted map",
             "live mask", "live keys", "live driver")

@@ -26,13 +26,12 @@ pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
-from farm_worker import REPO, edge_versions, is_edge_version, worker_render  # noqa: E402
+from farm_worker import REPO, only_in_edge_versions, worker_render  # noqa: E402
 from test_live_mode import _apply, _skin, _slab_scene  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 
-pytestmark = pytest.mark.skipif(not is_edge_version(bpy.app.version),
-                                reason=f"farm tests run in the oldest and newest Blender {edge_versions()}")
+pytestmark = only_in_edge_versions(bpy.app.version)
 
 # A worker's Blender with the extension installed and enabled: the add-on under its extension module name, registered;
 # then Blender's own order: open the .blend, run --python-expr with sys.argv as Blender leaves it.

@@ -23,15 +23,14 @@ pytest.importorskip("OpenImageIO")
 pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
-from farm_worker import BLENDER_CLI, REPO, edge_versions, is_edge_version  # noqa: E402
+from farm_worker import BLENDER_CLI, REPO, only_in_edge_versions  # noqa: E402
 
 if str(REPO / "scripts") not in sys.path:
     sys.path.insert(0, str(REPO / "scripts"))
 import render_blend  # noqa: E402  (scripts/render_blend.py)
 from test_live_mode import _apply, _skin, _slab_scene  # noqa: E402
 
-pytestmark = pytest.mark.skipif(not is_edge_version(bpy.app.version),
-                                reason=f"farm tests run in the oldest and newest Blender {edge_versions()}")
+pytestmark = only_in_edge_versions(bpy.app.version)
 
 TEMPLATE = REPO / "farm" / "spectral_skin_render.openjd.yaml"
 
