@@ -76,8 +76,12 @@ impl Matrix {
         let mut out = Matrix::zeros(n);
         match n {
             4 => mul_fixed::<4>(&self.a, &other.a, &mut out.a),
+            6 => mul_fixed::<6>(&self.a, &other.a, &mut out.a),
             8 => mul_fixed::<8>(&self.a, &other.a, &mut out.a),
+            10 => mul_fixed::<10>(&self.a, &other.a, &mut out.a),
+            12 => mul_fixed::<12>(&self.a, &other.a, &mut out.a),
             16 => mul_fixed::<16>(&self.a, &other.a, &mut out.a),
+            32 => mul_fixed::<32>(&self.a, &other.a, &mut out.a),
             _ => {
                 for i in 0..n {
                     let row = &mut out.a[i * n..(i + 1) * n];
@@ -190,8 +194,8 @@ impl IndexMut<(usize, usize)> for Matrix {
 }
 
 /// `out = a b` for `N x N` row-major matrices, the size known at compile time: each output row is accumulated in
-/// registers (the stream counts of the accuracy levels, 4, 8 and 16, take this path; measured 2-3 times faster than
-/// the loop over a run-time size, `cargo bench --bench adding_doubling`).
+/// registers (the levels' stream counts 4, 10 and 32 and the even counts near them take this path; measured 2-3 times
+/// faster than the loop over a run-time size, `cargo bench --bench adding_doubling`).
 fn mul_fixed<const N: usize>(a: &[f64], b: &[f64], out: &mut [f64]) {
     for (out_row, a_row) in out.chunks_exact_mut(N).zip(a.chunks_exact(N)) {
         let mut acc = [0.0; N];
