@@ -26,7 +26,7 @@ fn bench_adding_doubling(c: &mut Criterion) {
             group.bench_with_input(id, &layers, |b, layers| {
                 b.iter(|| {
                     k += 1;
-                    let mut fresh = layers.clone();
+                    let mut fresh = *layers;
                     fresh[0].sigma_a_per_mm *= 1.0 + 1e-12 * (k % 1_000_000) as f64;
                     total_diffuse_reflectance(std::hint::black_box(&fresh), streams).unwrap()
                 })

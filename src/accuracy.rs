@@ -66,6 +66,9 @@ fn default_streams() -> usize {
     DEFAULT_STREAMS
 }
 
+/// The most radii of a profile (`profile_count`) or of a `layered_reflectance` call.
+pub const MAX_PROFILE_RADII: usize = 100_000;
+
 /// Streams of the draft level (half the default's; not yet on the fronts of docs/accuracy-vs-time.md).
 pub const DRAFT_STREAMS: usize = 4;
 /// Streams of the reference level (four times the default's; `reference().refined()` doubles them again).
@@ -134,7 +137,7 @@ impl Accuracy {
         let g = &self.profile_grid;
         check_range("profile_r_min_mm", "smallest profile radius", g.r_min_mm, 1e-6, 1e4)?;
         check_range("profile_r_max_mm", "largest profile radius", g.r_max_mm, g.r_min_mm, 1e4)?;
-        check_range("profile_count", "number of profile radii", g.count as f64, 1.0, 100_000.0)?;
+        check_range("profile_count", "number of profile radii", g.count as f64, 1.0, MAX_PROFILE_RADII as f64)?;
         check_range("hankel_gauss_order", "nodes per panel", self.hankel.gauss_order as f64, 2.0, 64.0)?;
         check_range("hankel_refinement", "panel refinement", self.hankel.refinement, 0.1, 100.0)?;
         check_range("hankel_cutoff", "transform cutoff", self.hankel.cutoff, 1e-20, 1e-3)?;

@@ -217,11 +217,21 @@ fn eval_and_maps_take_a_target() {
 /// otherwise report an unknown argument '-0').
 #[test]
 fn negative_values_reach_the_range_check() {
-    let out =
-        run(&["eval", "--melanin", "-0.1", "--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("melanin must be in [0, 0.5]") && err.contains("-0.1"), "{err}");
+    // Plain, with an exponent (clap alone read `-1e-3` as the flags `-1`, `-e`, ...), and with `=`.
+    for (args, shown) in [
+        (["--melanin", "-0.1"].as_slice(), "-0.1"),
+        (&["--melanin", "-1e-3"], "-0.001"),
+        (&["--melanin", "-2.5E-2"], "-0.025"),
+        (&["--melanin=-1e-3"], "-0.001"),
+    ] {
+        let mut argv = vec!["eval"];
+        argv.extend_from_slice(args);
+        argv.extend_from_slice(&["--melanin-blend", "0.5", "--hemoglobin", "0.02", "--oiliness", "0.3"]);
+        let out = run(&argv);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{argv:?}: {err}");
+        assert!(err.contains("melanin must be in [0, 0.5]") && err.contains(shown), "{argv:?}: {err}");
+    }
     let dir = tempfile::tempdir().unwrap();
     let params = dir.path().join("face.exr");
     assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]).status.success());
@@ -578,6 +588,23 @@ fn fit_spectrum_csv_with_a_utf8_bom_is_read() {
     let out = run(&["fit", "--spectrum", csv.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("line 3") && err.contains("\"abc\" is not a number"), "{err}");
+}
+
+/// A CSV of a million rows (it ran past 300 s at 1.1 GB) is refused at the first row past the limit.
+#[test]
+fn fit_spectrum_csv_rows_are_bounded() {
+    use spectral_skin::inverse::spectrum::MAX_SPECTRUM_WAVELENGTHS;
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("long.csv");
+    let mut text = String::from("wavelength_nm,reflectance\n");
+    for i in 0..1_000_000 {
+        text.push_str(&format!("{},{}\n", 380.0 + 4e-4 * i as f64, 0.3));
+    }
+    std::fs::write(&csv, text).unwrap();
+    let out = run(&["fit", "--spectrum", csv.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains(&format!("more than {MAX_SPECTRUM_WAVELENGTHS} data rows")), "{err}");
 }
 
 #[test]

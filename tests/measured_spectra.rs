@@ -49,7 +49,7 @@ fn synthetic_round_trip() {
 #[test]
 fn bad_input_names_the_input() {
     let wl = wavelengths();
-    let r = vec![0.3; wl.len()];
+    let r: Vec<f64> = (0..wl.len()).map(|i| 0.2 + 0.01 * i as f64).collect();
     let opts = FitOptions::default();
     let err = |w: &[f64], r: &[f64], o: &FitOptions| fit_spectrum(w, r, o).unwrap_err().to_string();
     let mut nan = r.clone();
@@ -74,6 +74,38 @@ fn bad_input_names_the_input() {
     assert!(e.contains("melanin_blend is not free, so it needs a fixed value"), "{e}");
     let e = err(&wl, &r, &FitOptions { specular: Specular::Fixed(0.5), ..opts.clone() });
     assert!(e.contains("specular") && e.contains("0.5"), "{e}");
+}
+
+/// Degenerate spectra are refused before any work (they were fitted with confidence): wavelengths closer than the
+/// least spacing, more wavelengths than the visible range holds at it (1e5 gave no answer in 180 s), and flat
+/// spectra (white, grey, black).
+#[test]
+fn degenerate_spectra_are_refused() {
+    use spectral_skin::inverse::spectrum::{
+        MAX_SPECTRUM_WAVELENGTHS, MIN_SPECTRUM_VARIATION, MIN_WAVELENGTH_SPACING_NM,
+    };
+    let err = |w: &[f64], r: &[f64]| fit_spectrum(w, r, &FitOptions::default()).unwrap_err().to_string();
+    let crowded: Vec<f64> = (0..31).map(|i| 550.0 + 1e-9 * i as f64).collect();
+    let skin_like: Vec<f64> = (0..31).map(|i| 0.2 + 0.01 * i as f64).collect();
+    let e = err(&crowded, &skin_like);
+    assert!(e.contains("wavelengths_nm") && e.contains(&format!("{MIN_WAVELENGTH_SPACING_NM} nm apart")), "{e}");
+    let n = 100_000;
+    let many: Vec<f64> = (0..n).map(|i| 380.0 + 400.0 * i as f64 / n as f64).collect();
+    let started = std::time::Instant::now();
+    let e = err(&many, &(0..n).map(|i| 0.2 + 0.3 * i as f64 / n as f64).collect::<Vec<_>>());
+    assert!(e.contains("wavelengths_nm") && e.contains(&MAX_SPECTRUM_WAVELENGTHS.to_string()), "{e}");
+    assert!(started.elapsed().as_secs_f64() < 5.0, "refused only after {:?}", started.elapsed());
+    let wl = wavelengths();
+    for flat in [1.0, 0.4, 0.0] {
+        let e = err(&wl, &vec![flat; wl.len()]);
+        assert!(
+            e.contains("reflectance") && e.contains("flat") && e.contains(&MIN_SPECTRUM_VARIATION.to_string()),
+            "{flat}: {e}"
+        );
+    }
+    // The least spacing and a small variation are accepted.
+    let spaced: Vec<f64> = (0..31).map(|i| 500.0 + MIN_WAVELENGTH_SPACING_NM * i as f64).collect();
+    assert!(fit_spectrum(&spaced, &skin_like, &FitOptions::default()).is_ok());
 }
 
 /// The fit quality on every 20th Xiao spectrum (220 spectra). The bounds sit well outside today's figures

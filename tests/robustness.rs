@@ -310,6 +310,11 @@ fn extreme_magnitudes_are_clear_errors() {
     }
     let e = layered_reflectance(&[layer(INF, 0.1, 1.0, 1.4)], &[1.0, 1e7]).unwrap_err().to_string();
     assert!(e.contains("radii_mm[1]"), "{e}");
+    // A million radii ran 27 s (and ignored Ctrl-C): refused before any work, with the limit profiles have.
+    let many = vec![1.0; 1_000_000];
+    let e = layered_reflectance(&[layer(INF, 0.1, 1.0, 1.4)], &many).unwrap_err().to_string();
+    let most = spectral_skin::accuracy::MAX_PROFILE_RADII;
+    assert!(e.contains("radii_mm") && e.contains(&format!("at most {most}")), "{e}");
     // The edges of the accepted ranges give finite values.
     for l in [
         layer(INF, 1e-12, 1e6, 1.4),

@@ -148,7 +148,8 @@ fn bad_streams_are_clear_errors() {
         let mut fit = FitOptions::default();
         fit.request.accuracy.streams = bad;
         let wavelengths: Vec<f64> = (0..9).map(|i| 400.0 + 40.0 * i as f64).collect();
-        named(fit_spectrum(&wavelengths, &[0.3; 9], &fit).unwrap_err().to_string());
+        let rising: Vec<f64> = (0..9).map(|i| 0.2 + 0.02 * i as f64).collect();
+        named(fit_spectrum(&wavelengths, &rising, &fit).unwrap_err().to_string());
     }
     // Diffusion does not use the streams, but a bad value is still refused (one rule for the knob, as `Accuracy`'s).
     let options = LayeredOptions { transport: Transport::Diffusion, streams: 0, ..LayeredOptions::default() };

@@ -35,7 +35,7 @@ struct Cli {
 }
 
 // Every subcommand reads a negative number after an option as its value (so `--melanin -0.1` reaches the range
-// check and its message), not as an unknown flag `-0`.
+// check and its message), not as an unknown flag `-0`; `main` joins those clap does not know as numbers (`-1e-3`).
 #[derive(Subcommand)]
 enum Command {
     /// Albedo, Base Color and Subsurface Radius per subsurface method, and specular inputs, for one set of
@@ -367,7 +367,7 @@ impl AccuracyArgs {
 }
 
 fn main() -> ExitCode {
-    match run(Cli::parse()) {
+    match run(Cli::parse_from(joined_negative_numbers(std::env::args_os()))) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
@@ -375,6 +375,27 @@ fn main() -> ExitCode {
             ExitCode::from(if ctrl_c::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) { 130 } else { 2 })
         }
     }
+}
+
+/// `--option -1e-3` as `--option=-1e-3`: clap's `allow_negative_numbers` knows `-0.1` and `-1e3` but not a negative
+/// exponent, and would take `-1e-3` for the short flags `-1`, `-e`, ... A token that parses as a number and follows a
+/// long option without `=` is joined to it; every other token passes unchanged.
+fn joined_negative_numbers(args: impl Iterator<Item = std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let mut out: Vec<std::ffi::OsString> = Vec::new();
+    for arg in args {
+        let negative_number = arg.to_str().is_some_and(|s| s.starts_with('-') && s.parse::<f64>().is_ok());
+        match out.last_mut() {
+            Some(option)
+                if negative_number
+                    && option.to_str().is_some_and(|o| o.starts_with("--") && o.len() > 2 && !o.contains('=')) =>
+            {
+                option.push("=");
+                option.push(&arg);
+            }
+            _ => out.push(arg),
+        }
+    }
+    out
 }
 
 /// Ctrl-C for `maps`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the pipeline reads before each row and
@@ -467,7 +488,16 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     let (mut wavelengths, mut reflectance) = (Vec::new(), Vec::new());
+    let most = spectral_skin::inverse::spectrum::MAX_SPECTRUM_WAVELENGTHS;
     for (i, line) in rows {
+        if wavelengths.len() == most {
+            return Err(format!(
+                "{path}: more than {most} data rows; a spectrum has at most {most} wavelengths (the visible range every \
+                 {} nm): resample the measurement",
+                spectral_skin::inverse::spectrum::MIN_WAVELENGTH_SPACING_NM
+            )
+            .into());
+        }
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let parse = |c: &str| c.parse::<f64>().map_err(|_| format!("{path}, line {}: {c:?} is not a number", i + 1));
         match cells.as_slice() {

@@ -99,8 +99,18 @@ pub fn layered_reflectance_with(
     Ok(LayeredReflectance { total, profile_per_mm2, negative_lobe: profiles.negative_lobe })
 }
 
-/// Radii must be in [0, `MAX_RADIUS_MM`].
+/// Radii must be in [0, `MAX_RADIUS_MM`], at most [`crate::accuracy::MAX_PROFILE_RADII`] of them.
 pub fn validate_radii(radii_mm: &[f64]) -> Result<(), SkinError> {
+    if radii_mm.len() > crate::accuracy::MAX_PROFILE_RADII {
+        return Err(SkinError::invalid(
+            "radii_mm",
+            format!(
+                "{} radii; at most {} (the profile's own limit: a profile that fine is a few seconds of work)",
+                radii_mm.len(),
+                crate::accuracy::MAX_PROFILE_RADII
+            ),
+        ));
+    }
     if let Some((i, r)) = radii_mm.iter().enumerate().find(|(_, r)| !(**r >= 0.0 && **r <= MAX_RADIUS_MM)) {
         return Err(SkinError::invalid(
             "radii_mm",

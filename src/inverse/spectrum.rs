@@ -422,12 +422,32 @@ pub fn fit_spectrum(
     SpectrumFitter::new(wavelengths_nm, options)?.fit(reflectance)
 }
 
-/// Wavelengths must be finite, strictly increasing and inside the visible range the colour is integrated over
-/// ([`VISIBLE_RANGE_NM`]), at least three of them.
+/// The closest two measured wavelengths may be: spectrophotometers report every 1-10 nm; closer points carry no
+/// independent skin information (skin's chromophores vary over tens of nm) and only multiply the work.
+pub const MIN_WAVELENGTH_SPACING_NM: f64 = 0.5;
+/// The most wavelengths a spectrum may have: the visible range at [`MIN_WAVELENGTH_SPACING_NM`] (801).
+pub const MAX_SPECTRUM_WAVELENGTHS: usize =
+    ((VISIBLE_RANGE_NM.1 - VISIBLE_RANGE_NM.0) / MIN_WAVELENGTH_SPACING_NM) as usize + 1;
+/// A spectrum whose values span less than this (flat white, grey or black) has no chromophore's mark to fit.
+pub const MIN_SPECTRUM_VARIATION: f64 = 1e-3;
+
+/// Wavelengths must be finite, strictly increasing, at least [`MIN_WAVELENGTH_SPACING_NM`] apart and inside the
+/// visible range the colour is integrated over ([`VISIBLE_RANGE_NM`]), at least three and at most
+/// [`MAX_SPECTRUM_WAVELENGTHS`] of them.
 fn check_wavelengths(w: &[f64]) -> Result<(), SkinError> {
     let (lo, hi) = VISIBLE_RANGE_NM;
     if w.len() < 3 {
         return Err(SkinError::invalid("wavelengths_nm", format!("need at least 3 wavelengths, got {}", w.len())));
+    }
+    if w.len() > MAX_SPECTRUM_WAVELENGTHS {
+        return Err(SkinError::invalid(
+            "wavelengths_nm",
+            format!(
+                "{} wavelengths; at most {MAX_SPECTRUM_WAVELENGTHS} (the visible range every {MIN_WAVELENGTH_SPACING_NM} \
+                 nm): resample the measurement",
+                w.len()
+            ),
+        ));
     }
     if let Some((i, v)) = w.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= lo && **v <= hi)) {
         return Err(SkinError::invalid(
@@ -439,6 +459,17 @@ fn check_wavelengths(w: &[f64]) -> Result<(), SkinError> {
         return Err(SkinError::invalid(
             "wavelengths_nm",
             format!("must be strictly increasing; wavelength {i} ({}) follows {}", w[i], w[i - 1]),
+        ));
+    }
+    if let Some(i) = (1..w.len()).find(|&i| w[i] - w[i - 1] < MIN_WAVELENGTH_SPACING_NM) {
+        return Err(SkinError::invalid(
+            "wavelengths_nm",
+            format!(
+                "wavelength {i} ({} nm) is {:e} nm after the one before; they must be at least \
+                 {MIN_WAVELENGTH_SPACING_NM} nm apart: resample the measurement",
+                w[i],
+                w[i] - w[i - 1]
+            ),
         ));
     }
     Ok(())
@@ -454,6 +485,16 @@ fn check_reflectance(r: &[f64], wavelengths: usize) -> Result<(), SkinError> {
     }
     if let Some((i, v)) = r.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v >= 0.0 && **v <= 1.0)) {
         return Err(SkinError::invalid("reflectance", format!("value {i} is {v}; each must be in [0, 1]")));
+    }
+    let (min, max) = r.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    if max - min < MIN_SPECTRUM_VARIATION {
+        return Err(SkinError::invalid(
+            "reflectance",
+            format!(
+                "is flat ({min} to {max}); a spectrum that varies by less than {MIN_SPECTRUM_VARIATION} (white, grey or \
+                 black) has no mark of melanin or blood to fit"
+            ),
+        ));
     }
     Ok(())
 }

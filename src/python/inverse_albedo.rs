@@ -179,6 +179,8 @@ pub(super) fn fit_albedo_map_py<'py>(
         return Err(invalid("albedo", format!("must be {EXPECTED}; got shape {}", shape_text(&shape))));
     }
     let (height, width) = (shape[0], shape[1]);
+    // Before any copy: a broadcast view of any size costs nothing until its planes are gathered.
+    crate::maps::io::check_texel_count("albedo", width, height)?;
     let planes = [array.plane(Some(0))?, array.plane(Some(1))?, array.plane(Some(2))?];
     let texels: Vec<[f32; 3]> = (0..height * width).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
     let mut options = options_from(

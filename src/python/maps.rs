@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{
     default_extended, read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, ALL_CHANNELS,
-    ALL_COMPRESSIONS, ALL_PRECISIONS, ALL_RANGES, EXTENDED_CHANNELS, MAX_TEXELS, PARAM_CHANNELS,
+    ALL_COMPRESSIONS, ALL_PRECISIONS, ALL_RANGES, EXTENDED_CHANNELS, PARAM_CHANNELS,
 };
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
@@ -469,12 +469,7 @@ pub(super) fn maps_py<'py>(
         let listed: Vec<String> = shapes.iter().map(|(n, s)| format!("{n} {}", shape_text(s))).collect();
         return Err(invalid("shapes", format!("the arrays must agree in (H, W); got {}", listed.join(", "))));
     }
-    if height == 0 || width == 0 || height.saturating_mul(width) > MAX_TEXELS {
-        return Err(invalid(
-            "shapes",
-            format!("a map needs 1 to {MAX_TEXELS} texels; got (H, W) = ({height}, {width})"),
-        ));
-    }
+    crate::maps::io::check_texel_count("shapes", width, height)?;
     // Constants are checked here, with their own message; clamp=True leaves them to the check of the planes.
     if !clamp {
         for (c, input) in inputs.iter().enumerate() {

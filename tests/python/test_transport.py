@@ -118,7 +118,8 @@ def test_fits_report_their_transport():
     lambda **k: spectral_skin.layered_reflectance(LAYERS, [1.0], **k),
     lambda **k: spectral_skin.maps(np.zeros((1, 1, 4), np.float32), **k),
     lambda **k: spectral_skin.shader_table(resolution=(2, 2, 2), **k),
-    lambda **k: spectral_skin.fit_spectrum([400.0, 450.0, 500.0, 550.0, 600.0, 650.0], [0.3] * 6, **k),
+    lambda **k: spectral_skin.fit_spectrum([400.0, 450.0, 500.0, 550.0, 600.0, 650.0],
+                                           [0.2, 0.25, 0.3, 0.35, 0.4, 0.45], **k),
     lambda **k: spectral_skin.fit_albedo([0.3, 0.2, 0.1], **k),
     lambda **k: spectral_skin.fit_albedo_map(np.full((1, 1, 3), 0.2, np.float32), **k),
 ])

@@ -14,7 +14,7 @@ use exr::meta::BlockDescription;
 use exr::prelude::f16;
 
 use super::staging::{create_temp, Staged};
-use super::{guard, Compression, ExrOptions, Precision, AUTO_MIN_SAVING, MAX_TEXELS};
+use super::{guard, Compression, ExrOptions, Precision, AUTO_MIN_SAVING};
 use crate::error::SkinError;
 
 /// Stage an RGB EXR (channels `R`, `G`, `B`) from three row-major planes of `width * height` values each (row 0 at
@@ -41,12 +41,7 @@ pub fn stage_channels_exr(
     options: ExrOptions,
 ) -> Result<Staged, SkinError> {
     let what = format!("output {}", path.display());
-    if width == 0 || height == 0 || width.checked_mul(height).map_or(true, |n| n > MAX_TEXELS) {
-        return Err(SkinError::invalid(
-            what,
-            format!("expected a size of 1 to {MAX_TEXELS} texels; got {width}x{height}"),
-        ));
-    }
+    super::check_texel_count(&what, width, height)?;
     if channels.is_empty() {
         return Err(SkinError::invalid(what, "expected at least one channel; got none"));
     }

@@ -91,6 +91,18 @@ pub const ALBEDO_IMAGE_FORMS: &str = "an EXR with channels R, G, B (or <layer>.R
 /// allocation, so a corrupt size field gives an error instead of an out-of-memory abort.
 pub const MAX_TEXELS: usize = 1 << 28;
 
+/// Every image, array and map of `width x height` texels, read, given or written, must have 1 to [`MAX_TEXELS`]
+/// texels; `what` names it in the error.
+pub fn check_texel_count(what: impl Into<String>, width: usize, height: usize) -> Result<(), crate::error::SkinError> {
+    if width == 0 || height == 0 || width.checked_mul(height).map_or(true, |n| n > MAX_TEXELS) {
+        return Err(crate::error::SkinError::invalid(
+            what,
+            format!("expected 1 to {MAX_TEXELS} texels (16384 x 16384); got {width} x {height}"),
+        ));
+    }
+    Ok(())
+}
+
 /// One parameter's source.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ParamSource {

@@ -15,7 +15,7 @@ use exr::prelude::f16;
 
 use super::{
     guard, ParamImage, ParamInputs, ParamSource, Plane, ALBEDO_IMAGE_FORMS, ALL_CHANNELS, ALL_RANGES,
-    EXTENDED_CHANNELS, MAX_TEXELS, PARAM_CHANNELS, PARAM_IMAGE_FORMS,
+    EXTENDED_CHANNELS, PARAM_CHANNELS, PARAM_IMAGE_FORMS,
 };
 use crate::error::SkinError;
 use crate::skin::params::EXTENDED_DEFAULTS;
@@ -470,13 +470,7 @@ fn is_exr(src: Source<'_>, what: &str) -> Result<bool, SkinError> {
 }
 
 fn check_size(path: &Path, what: &str, width: usize, height: usize) -> Result<(), SkinError> {
-    if width == 0 || height == 0 || width.checked_mul(height).map_or(true, |n| n > MAX_TEXELS) {
-        return Err(SkinError::invalid(
-            what,
-            format!("{}: expected an image of 1 to {MAX_TEXELS} texels; found {width}x{height}", path.display()),
-        ));
-    }
-    Ok(())
+    super::check_texel_count(format!("{what} ({})", path.display()), width, height)
 }
 
 /// Header of an EXR: single part, flat, full-resolution channels.
