@@ -215,6 +215,21 @@ fn version_table_rules() {
     for v in &tested {
         assert_eq!(target(v, "eevee").info().tested, v != "4.2", "{v} eevee");
     }
+    // Each untested target says why, in the words every front shows (4.2's EEVEE was told it was "newer than the
+    // versions tested").
+    for (v, engine, reason) in [
+        ("4.2", "eevee", "EEVEE in Blender 4.2 was not validated by renders"),
+        ("4.3", "cycles", "Blender 4.3 was not tested: it uses the behaviour of Blender 4.2"),
+        ("5.9", "eevee", "Blender 5.9 is newer than the versions Spectral Skin was tested with (up to 5.3)"),
+    ] {
+        let info = target(v, engine).info();
+        let said = info.untested_reason().unwrap_or_default();
+        assert!(said.starts_with(reason), "{v} {engine}: {said:?}");
+        let json = serde_json::to_value(info).unwrap();
+        assert_eq!(json["untested_reason"].as_str(), Some(said.as_str()), "{json}");
+    }
+    let json = serde_json::to_value(target("5.3", "cycles").info()).unwrap();
+    assert!(target("5.3", "cycles").untested_reason().is_none() && json.get("untested_reason").is_none(), "{json}");
     for (v, resolves_to) in [("4.3", "4.2"), ("5.1", "5.0"), ("5.9", "5.3"), ("6.0", "5.3"), ("5.2.3", "5.2")] {
         let t = target(v, "cycles");
         assert_eq!(t.blender.entry().version.to_string(), resolves_to, "{v}");

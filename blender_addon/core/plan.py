@@ -160,9 +160,7 @@ def make_plan(settings: SkinSettings, progress: Any = None, *, radius: bool = Tr
     for note in dict.fromkeys(n for m in settings.maps.values() for n in m.notes):
         plan["summary"]["warnings"].append(note)
     if not target["tested"]:
-        plan["summary"]["warnings"].append(
-            f"Blender {target['blender']} is newer than the versions Spectral Skin was tested with: it uses the "
-            "newest known behaviour")
+        plan["summary"]["warnings"].append(target["untested_reason"])
     plan["summary"]["seconds"] = time.perf_counter() - start
     return plan
 

@@ -406,7 +406,7 @@ def _constant_maps(plan: dict[str, Any], settings: Any) -> dict[str, Any]:
 
 def _engine(plan: dict[str, Any]) -> dict[str, Any]:
     target = plan["target"]
-    tested = "" if target["tested"] else " (newer than tested: newest known behaviour)"
+    tested = "" if target["tested"] else f" ({target['untested_reason']})"
     return _entry("engine/version", True, f"mapping for Blender {target['blender']} {target['engine'].upper()}"
                   f"{tested}", dict(target))
 

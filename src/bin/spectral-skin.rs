@@ -692,7 +692,7 @@ fn print_summary(ev: &Evaluation, only: Option<SubsurfaceMethod>) {
     println!("parameters: {}", values.join(" "));
     println!("colour space: {}", ev.color_space);
     let t = ev.target;
-    let tested = if t.tested { "tested" } else { "untested: newest known behaviour" };
+    let tested = t.untested_reason().unwrap_or_else(|| "tested".into());
     println!("target: Blender {} {} ({tested})", t.blender, t.engine.name());
     let streams = match ev.transport {
         Transport::AddingDoubling => format!(", {} streams", ev.accuracy.streams),

@@ -257,12 +257,34 @@ impl Default for Target {
     }
 }
 
-/// A target as results report it: version, engine and whether renders validated that engine in that version.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+/// A target as results report it: version, engine and whether renders validated that engine in that version;
+/// serialized with `untested_reason` ([`Target::untested_reason`]) when they have not.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TargetInfo {
     pub blender: BlenderVersion,
     pub engine: Engine,
     pub tested: bool,
+}
+
+impl TargetInfo {
+    pub fn untested_reason(&self) -> Option<String> {
+        Target { blender: self.blender, engine: self.engine }.untested_reason()
+    }
+}
+
+impl Serialize for TargetInfo {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let reason = self.untested_reason();
+        let mut st = s.serialize_struct("TargetInfo", 3 + usize::from(reason.is_some()))?;
+        st.serialize_field("blender", &self.blender)?;
+        st.serialize_field("engine", &self.engine)?;
+        st.serialize_field("tested", &self.tested)?;
+        if let Some(reason) = reason {
+            st.serialize_field("untested_reason", &reason)?;
+        }
+        st.end()
+    }
 }
 
 impl Target {
@@ -273,6 +295,34 @@ impl Target {
 
     pub fn info(&self) -> TargetInfo {
         TargetInfo { blender: self.blender, engine: self.engine, tested: self.blender.tested(self.engine) }
+    }
+
+    /// Why renders have not validated this target and what it uses instead (`None` when they have): the one wording
+    /// every front shows.
+    pub fn untested_reason(&self) -> Option<String> {
+        let (version, engine) = (self.blender, self.engine);
+        if version.tested(engine) {
+            return None;
+        }
+        let entry = version.entry();
+        let newest = VERSION_TABLE[VERSION_TABLE.len() - 1].version;
+        let engine_name = match engine {
+            Engine::Cycles => "Cycles",
+            Engine::Eevee => "EEVEE",
+        };
+        Some(if version > newest {
+            format!(
+                "Blender {version} is newer than the versions Spectral Skin was tested with (up to {newest}): it uses \
+                 the newest known behaviour"
+            )
+        } else if entry.version != version {
+            format!("Blender {version} was not tested: it uses the behaviour of Blender {}", entry.version)
+        } else {
+            format!(
+                "{engine_name} in Blender {version} was not validated by renders: it uses the same mapping as \
+                 {engine_name} in the versions that were"
+            )
+        })
     }
 
     /// The methods this version's Principled BSDF offers (EEVEE offers the same menu and renders each as Burley).

@@ -136,7 +136,8 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 /// Returns:
 ///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy" (with "streams"), "model"
 ///     (model["dermis_thickness_mm"] is float("inf") for a semi-infinite dermis), "combination", "boundaries",
-///     "transport", "target" ({"blender": "5.3", "engine": "cycles", "tested": True}), "default_method", "work"
+///     "transport", "target" ({"blender": "5.3", "engine": "cycles", "tested": True}; with "untested_reason", the
+///     sentence a front shows, when tested is False), "default_method", "work"
 ///     ({"wavelengths", "transform_samples", "radial_profiles", "radius_fits", "specular_evaluations",
 ///     "transport_solves"}: what was computed),
 ///     "surface" ({"roughness", "ior", "beckmann_m"}: the inputs no parameter changes), "seconds". Per requested

@@ -22,6 +22,13 @@ def test_version_spellings(blender):
 
 def test_untested_newer_version_and_methods_per_version():
     assert spectral_skin.evaluate(preset="asian", blender="5.9")["target"]["tested"] is False
+    # The reason comes with the result, in the core's words (4.2's EEVEE was told it was "newer than tested").
+    newer = spectral_skin.evaluate(preset="asian", blender="5.9")["target"]["untested_reason"]
+    assert newer.startswith("Blender 5.9 is newer than the versions")
+    old_eevee = spectral_skin.evaluate(preset="asian", blender="4.2", engine="eevee")["target"]
+    assert old_eevee["tested"] is False and "newer" not in old_eevee["untested_reason"]
+    assert old_eevee["untested_reason"].startswith("EEVEE in Blender 4.2 was not validated")
+    assert "untested_reason" not in spectral_skin.evaluate(preset="asian", blender="5.3")["target"]
     assert "random_walk_legacy" not in spectral_skin.evaluate(preset="asian", blender="4.5")["methods"]
 
 
