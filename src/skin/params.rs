@@ -336,17 +336,17 @@ pub const PRESETS: &[Preset] = &[
     measured(
         "measured-light",
         "lightest third of in-vivo spectra (Xiao et al. 2016), median fit; docs/measured-skin.md",
-        [0.0609, 0.0, 0.0084, 0.031, 1.77],
+        [0.0606, 0.0, 0.0083, 0.031, 1.75],
     ),
     measured(
         "measured-medium",
         "middle third of in-vivo spectra (Xiao et al. 2016), median fit; docs/measured-skin.md",
-        [0.0485, 0.0, 0.0099, 0.052, 1.32],
+        [0.0478, 0.0, 0.0099, 0.053, 1.31],
     ),
     measured(
         "measured-dark",
         "darkest third of in-vivo spectra (Xiao et al. 2016), median fit; docs/measured-skin.md",
-        [0.1027, 0.272, 0.0143, 0.061, 1.39],
+        [0.0799, 0.266, 0.0142, 0.064, 1.36],
     ),
 ];
 
