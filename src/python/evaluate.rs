@@ -364,7 +364,8 @@ pub(super) fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<L
 ///     radii_mm: 1-D radii in mm, finite and >= 0.
 ///     boundaries: "paper" (the default) or "capped": the multipole's boundary conditions.
 ///     transport: "adding_doubling" (the default) or "diffusion" (the multipole alone), as for :func:`evaluate`.
-///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; None: 8.
+///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; None: the default
+///         level's (10).
 ///
 /// Returns:
 ///     (total diffuse reflectance, R(r) at radii_mm in mm^-2 as a float64 array of the same length).

@@ -40,7 +40,7 @@ use super::errors::invalid;
 ///         (docs/measured-skin.md, the restart check).
 ///     transport: the model fitted, "adding_doubling" (exact totals; the default) or "diffusion" (the paper's), as
 ///         for :func:`evaluate`.
-///     streams: adding-doubling streams per hemisphere, even, 2..64; None: the default level's (8).
+///     streams: adding-doubling streams per hemisphere, even, 2..64; None: the default level's (10).
 ///
 /// Returns:
 ///     A dict: "params" (every model parameter, fitted and fixed, by name), "free" (the fitted names), "specular"

@@ -69,7 +69,7 @@ fn options_from(
 ///         None: 0.5.
 ///     transport: the model whose albedo is fitted, "adding_doubling" (exact totals; the default) or "diffusion"
 ///         (the paper's), as for :func:`evaluate`.
-///     streams: adding-doubling streams per hemisphere, even, 2..64; None: the default level's (8).
+///     streams: adding-doubling streams per hemisphere, even, 2..64; None: the default level's (10).
 ///
 /// Returns:
 ///     A dict: "params" (the seven parameters by name), "target_rgb", "albedo_rgb" (the fit's model albedo, direct

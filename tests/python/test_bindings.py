@@ -312,7 +312,7 @@ def test_accuracy_levels():
     draft = spectral_skin.evaluate(preset="asian", accuracy="draft")
     default = spectral_skin.evaluate(preset="asian")
     reference = spectral_skin.evaluate(preset="asian", accuracy="reference")
-    assert (draft["accuracy"]["streams"], default["accuracy"]["streams"], reference["accuracy"]["streams"]) == (4, 8, 32)
+    assert (draft["accuracy"]["streams"], default["accuracy"]["streams"], reference["accuracy"]["streams"]) == (4, 10, 32)
     assert draft["accuracy"]["wavelength_placement"] == "cmf_adapted"
     assert (draft["work"]["wavelengths"], default["work"]["wavelengths"], reference["work"]["wavelengths"]) == (21, 41, 401)
     assert default["accuracy"] == spectral_skin.evaluate(preset="asian", accuracy="default")["accuracy"]

@@ -85,7 +85,7 @@ def test_texture_size_is_bounded_before_any_copy() -> None:
     # A (100000, 100000, 3) broadcast view costs 12 bytes; gathering its planes aborted the interpreter ("memory
     # allocation of 40000000000 bytes failed"). The size rule is the one maps() and the image reader use.
     huge = np.broadcast_to(np.full(3, 0.3, dtype=np.float32), (100_000, 100_000, 3))
-    with pytest.raises(spectral_skin.SpectralSkinError, match=r"albedo.*268435456 texels.*100000 x 100000"):
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"albedo.*268435456 texels.*100000 wide x 100000 high"):
         spectral_skin.fit_albedo_map(huge)
     with pytest.raises(spectral_skin.SpectralSkinError, match=r"shapes.*268435456 texels"):
         spectral_skin.maps(np.broadcast_to(np.full(4, 0.1, dtype=np.float32), (100_000, 100_000, 4)))

@@ -256,7 +256,7 @@ SHAPE_ERRORS = [
     (lambda: spectral_skin.maps(np.zeros((8, 8, 3), np.float32)), ["params", "(8, 8, 3)", "(H, W, 4)"]),
     (lambda: spectral_skin.maps(np.zeros((8, 8), np.float32)), ["params", "(8, 8)", "(H, W, 4)"]),
     (lambda: spectral_skin.maps(random_params(2, 2), melanin=np.zeros(4, np.float32)), ["melanin", "(4,)", "(H, W)"]),
-    (lambda: spectral_skin.maps(np.zeros((0, 8, 4), np.float32)), ["(0, 8)"]),
+    (lambda: spectral_skin.maps(np.zeros((0, 8, 4), np.float32)), ["8 wide x 0 high"]),
     (lambda: spectral_skin.maps(melanin=0.1, melanin_blend=0.5, hemoglobin=0.01, oiliness=0.3), ["at least one array"]),
     (lambda: spectral_skin.maps(melanin=np.zeros((2, 2), np.float32), melanin_blend=0.5), ["missing", "hemoglobin",
                                                                                           "oiliness"]),

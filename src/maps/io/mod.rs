@@ -97,7 +97,7 @@ pub fn check_texel_count(what: impl Into<String>, width: usize, height: usize) -
     if width == 0 || height == 0 || width.checked_mul(height).map_or(true, |n| n > MAX_TEXELS) {
         return Err(crate::error::SkinError::invalid(
             what,
-            format!("expected 1 to {MAX_TEXELS} texels (16384 x 16384); got {width} x {height}"),
+            format!("expected 1 to {MAX_TEXELS} texels (16384 x 16384); got {width} wide x {height} high"),
         ));
     }
     Ok(())
