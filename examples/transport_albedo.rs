@@ -1,5 +1,6 @@
-//! The README's table of albedo per preset before and after issue 20: the paper's diffusion totals against the exact
-//! adding-doubling ones, at the default accuracy and target (linear Rec.709, D65, CIE 1931 2°).
+//! The table of albedo per preset before and after issue 20 (docs/model.md, "What changes for artists"): the paper's
+//! diffusion totals against the exact adding-doubling ones, at the default accuracy and target (linear Rec.709, D65,
+//! CIE 1931 2°).
 //!
 //! `cargo run --release --example transport_albedo` prints the markdown table.
 

@@ -492,7 +492,7 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         "a few hundredths of a second, which a large map's apply dwarfs. Most of the apply is writing the maps "
         "and Blender loading them (the plan itself, with the lookup table cached, is the *plan* column); far away, "
         "where subsurface is dropped, the apply with the analysis writes one map fewer. Larger maps cost the "
-        "apply more (a 2048² pair: seconds, README) and *decide* proportionally to their texels.",
+        "apply more (a 2048² pair: seconds, docs/blender-addon.md) and *decide* proportionally to their texels.",
         f"The add-on's threshold (`SUBSURFACE_MIN_RADIUS_PX`) for these decisions: "
         f"{analysis.SUBSURFACE_MIN_RADIUS_PX:g} px.",
     ]

@@ -22,7 +22,7 @@ stage python; bash scripts/test-python.sh
 # each version of scripts/blender-versions.txt.
 stage extension; bash scripts/build_addon.sh
 stage blender; bash scripts/setup-blender.sh && bash scripts/test-blender.sh
-# The map performance report in its reduced form, so the report code cannot rot (the full one: see README).
+# The map performance report in its reduced form, so the report code cannot rot (the full one: docs/maps-performance.md).
 stage reports
 .venv/bin/python scripts/maps_report.py --quick --out "$run_tmp/maps-performance.md"
 # The Live-mode cost report, reduced (the full one: .venv-blender/5.0/bin/python scripts/live_mode_report.py).

@@ -151,7 +151,7 @@ pub struct RadialProfile {
     pub radii_mm: Vec<f64>,
     /// R(r) per RGB channel, mm^-2 (if requested), formed as `Request::rgb_mapping` says. With the default
     /// [`RgbMapping::Linear`] a channel is negative at radii whose light lies outside the working space's gamut (in
-    /// the far tail only red light is left; README.md, "Radial profiles", gives the figures per preset); with
+    /// the far tail only red light is left; docs/cli.md, "Radial profiles", gives the figures per preset); with
     /// [`RgbMapping::NonNegative`] no value is negative. The spectral profiles are never negative.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rgb_per_mm2: Option<Vec<[f64; 3]>>,

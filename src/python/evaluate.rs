@@ -232,7 +232,7 @@ pub(super) fn evaluate_py<'py>(
 /// The RGB profile is the spectral profile mapped into ``working_space``. With ``rgb_mapping="linear"`` (the
 /// default) that map is linear: the exact colour at each radius, additive, and it integrates (2 pi r dr) to the RGB
 /// albedo; but where the light is outside the space's gamut a channel is **negative**. Every preset has such radii:
-/// in the far tail only red light is left, more saturated than the red primary (README.md, "Radial profiles", lists
+/// in the far tail only red light is left, more saturated than the red primary (docs/cli.md, "Radial profiles", lists
 /// the radii and sizes). ``rgb_mapping="non_negative"`` moves each such colour along the line towards the grey of the same
 /// luminance (R = G = B = Y) until its most negative channel is 0: no value is negative, luminance and hue are kept,
 /// radii inside the gamut are unchanged, but the profile no longer integrates exactly to the albedo. The spectral
