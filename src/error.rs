@@ -40,6 +40,20 @@ pub enum SkinError {
 }
 
 impl SkinError {
+    /// Long work stopped by its cancel flag (Ctrl-C, a progress callback): what stopped, and that nothing it would
+    /// have produced was kept. The fronts turn it into their own interruption (Python's KeyboardInterrupt, exit 130).
+    pub(crate) fn interrupted(what: &str) -> Self {
+        SkinError::invalid(what, "interrupted (cancelled) before it finished; nothing was kept")
+    }
+
+    /// `Err(interrupted(what))` once `cancel` is set.
+    pub(crate) fn check_cancel(cancel: &std::sync::atomic::AtomicBool, what: &str) -> Result<(), SkinError> {
+        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(SkinError::interrupted(what));
+        }
+        Ok(())
+    }
+
     pub(crate) fn io(path: &std::path::Path, reason: impl std::fmt::Display) -> Self {
         SkinError::Io { path: path.display().to_string(), reason: reason.to_string(), source: None }
     }

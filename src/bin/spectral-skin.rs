@@ -398,8 +398,9 @@ fn joined_negative_numbers(args: impl Iterator<Item = std::ffi::OsString>) -> Ve
     out
 }
 
-/// Ctrl-C for `maps`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the pipeline reads before each row and
-/// before renaming its outputs into place, so the run stops without leaving partial files; a second Ctrl-C ends the
+/// Ctrl-C for `maps`, `shader-table` and `fit`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the work reads
+/// (the map pipeline before each row and before renaming its outputs into place, so the run stops without leaving
+/// partial files; the spectrum fit at each forward spectrum); a second Ctrl-C ends the
 /// process at once (the default action is restored by the first).
 mod ctrl_c {
     use std::sync::atomic::AtomicBool;
@@ -474,7 +475,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
-    use spectral_skin::inverse::{fit_spectrum, FitOptions, Specular};
+    use spectral_skin::inverse::{FitOptions, Specular};
     let path = args.spectrum.display().to_string();
     let text = std::fs::read_to_string(&args.spectrum).map_err(|e| format!("{path}: {e}"))?;
     let mut rows = spectral_skin::strip_utf8_bom(&text)
@@ -526,7 +527,13 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
             v.parse().map_err(|_| format!("--specular: expected free, fresnel or a number; got {v:?}"))?,
         ),
     };
-    let fit = fit_spectrum(&wavelengths, &reflectance, &options)?;
+    ctrl_c::catch();
+    let fit = spectral_skin::inverse::spectrum::fit_spectrum_cancellable(
+        &wavelengths,
+        &reflectance,
+        &options,
+        &ctrl_c::INTERRUPTED,
+    )?;
     println!("{}", serde_json::to_string_pretty(&fit)?);
     Ok(())
 }

@@ -2,7 +2,7 @@
 //! (src/inverse/albedo.rs), on the forward table only (coarse nearest node, then Levenberg-Marquardt in table
 //! coordinates), each distinct colour once.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -122,9 +122,7 @@ fn fit_colours(
     colours
         .par_iter()
         .map(|c| {
-            if cancel.load(Ordering::Relaxed) {
-                return Err(SkinError::invalid("albedo map fit", "interrupted (cancelled) before it finished"));
-            }
+            SkinError::check_cancel(cancel, "albedo map fit")?;
             let (u, de) = fit_on_table(table, c.map(f64::from), options);
             let p = options.params_at(u);
             Ok(([p.melanin, p.melanin_blend, p.hemoglobin].map(f32_not_above), de as f32))

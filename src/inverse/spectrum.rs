@@ -10,6 +10,8 @@
 //! a bounded Levenberg-Marquardt ([`super::lm`]). The table depends on the wavelengths and on what is fixed, not on the
 //! measurement: [`SpectrumFitter`] builds it once for many spectra.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -148,6 +150,9 @@ pub struct SpectrumFit {
     pub streams: usize,
 }
 
+/// One spectrum of the start table: the free parameters' values and the diffuse spectrum there.
+type StartSpectrum = (Vec<f64>, Vec<f64>);
+
 /// A fitter for spectra on one wavelength grid with one set of options: the validated options, the colour weights
 /// and the table of forward spectra the starts come from.
 #[derive(Debug, Clone)]
@@ -181,6 +186,16 @@ fn table_values(name: &str) -> &'static [f64] {
 impl SpectrumFitter {
     /// Validate the wavelengths and options and build the start table.
     pub fn new(wavelengths_nm: &[f64], options: &FitOptions) -> Result<SpectrumFitter, SkinError> {
+        SpectrumFitter::new_cancellable(wavelengths_nm, options, &AtomicBool::new(false))
+    }
+
+    /// [`SpectrumFitter::new`] whose table build (up to 16,000 forward spectra) stops once `cancel` is set, with
+    /// [`SkinError::interrupted`].
+    pub fn new_cancellable(
+        wavelengths_nm: &[f64],
+        options: &FitOptions,
+        cancel: &AtomicBool,
+    ) -> Result<SpectrumFitter, SkinError> {
         check_wavelengths(wavelengths_nm)?;
         let mut free = Vec::new();
         for name in &options.free {
@@ -256,7 +271,7 @@ impl SpectrumFitter {
             white_xyz,
             table: Vec::new(),
         };
-        fitter.table = fitter.build_table();
+        fitter.table = fitter.build_table(cancel)?;
         if fitter.table.is_empty() {
             return Err(SkinError::invalid("fixed", "the fixed values leave no valid forward spectrum"));
         }
@@ -273,12 +288,13 @@ impl SpectrumFitter {
         diffuse_reflectance_at(&params, &self.options.request, &self.wavelengths_nm).ok()
     }
 
-    fn build_table(&self) -> Vec<(Vec<f64>, Vec<f64>)> {
+    fn build_table(&self, cancel: &AtomicBool) -> Result<Vec<StartSpectrum>, SkinError> {
         let axes: Vec<&[f64]> = self.free.iter().map(|&k| table_values(PARAMS[k].name)).collect();
         let count: usize = axes.iter().map(|a| a.len()).product();
-        (0..count)
+        let spectra: Vec<Option<StartSpectrum>> = (0..count)
             .into_par_iter()
-            .filter_map(|mut index| {
+            .map(|mut index| {
+                SkinError::check_cancel(cancel, "fit_spectrum's start table")?;
                 let x: Vec<f64> = axes
                     .iter()
                     .map(|a| {
@@ -287,9 +303,10 @@ impl SpectrumFitter {
                         v
                     })
                     .collect();
-                self.forward(&x).map(|r| (x, r))
+                Ok(self.forward(&x).map(|r| (x, r)))
             })
-            .collect()
+            .collect::<Result<_, SkinError>>()?;
+        Ok(spectra.into_iter().flatten().collect())
     }
 
     /// The wavelengths the fitter was built for.
@@ -320,6 +337,12 @@ impl SpectrumFitter {
 
     /// Fit one measured spectrum (on the fitter's wavelengths).
     pub fn fit(&self, reflectance: &[f64]) -> Result<SpectrumFit, SkinError> {
+        self.fit_cancellable(reflectance, &AtomicBool::new(false))
+    }
+
+    /// [`SpectrumFitter::fit`] that stops once `cancel` is set (read before each start's refinement and at every
+    /// forward spectrum inside it), with [`SkinError::interrupted`].
+    pub fn fit_cancellable(&self, reflectance: &[f64], cancel: &AtomicBool) -> Result<SpectrumFit, SkinError> {
         check_reflectance(reflectance, self.wavelengths_nm.len())?;
         let n_free = self.free.len();
         let fit_offset = self.options.specular == Specular::Free;
@@ -346,6 +369,10 @@ impl SpectrumFitter {
         }
         let lab_measured = self.lab(reflectance);
         let residuals = |x: &[f64]| -> Vec<f64> {
+            // Cancelled: a NaN residual ends the refinement at once (the solver takes no step to it).
+            if cancel.load(Ordering::Relaxed) {
+                return vec![f64::NAN; reflectance.len()];
+            }
             let Some(diffuse) = self.forward(&x[..n_free]) else {
                 return vec![f64::NAN; reflectance.len()];
             };
@@ -363,6 +390,7 @@ impl SpectrumFitter {
         let mut best: Option<super::lm::LmResult> = None;
         let mut evaluations = 0;
         for &(_, i) in &scored[..starts] {
+            SkinError::check_cancel(cancel, "fit_spectrum")?;
             let (x_table, diffuse) = &self.table[i];
             let mut x0 = x_table.clone();
             if fit_offset {
@@ -374,6 +402,7 @@ impl SpectrumFitter {
                 best = Some(result);
             }
         }
+        SkinError::check_cancel(cancel, "fit_spectrum")?;
         let best = best.expect("at least one start");
         let diffuse = self.forward(&best.x[..n_free]).ok_or_else(|| {
             SkinError::invalid("reflectance", "the fit ended on parameters the model rejects (please report this)")
@@ -418,8 +447,19 @@ pub fn fit_spectrum(
     reflectance: &[f64],
     options: &FitOptions,
 ) -> Result<SpectrumFit, SkinError> {
+    fit_spectrum_cancellable(wavelengths_nm, reflectance, options, &AtomicBool::new(false))
+}
+
+/// [`fit_spectrum`] that stops once `cancel` is set (in the start table's build and in the refinements), with
+/// [`SkinError::interrupted`].
+pub fn fit_spectrum_cancellable(
+    wavelengths_nm: &[f64],
+    reflectance: &[f64],
+    options: &FitOptions,
+    cancel: &AtomicBool,
+) -> Result<SpectrumFit, SkinError> {
     check_reflectance(reflectance, wavelengths_nm.len())?;
-    SpectrumFitter::new(wavelengths_nm, options)?.fit(reflectance)
+    SpectrumFitter::new_cancellable(wavelengths_nm, options, cancel)?.fit_cancellable(reflectance, cancel)
 }
 
 /// The closest two measured wavelengths may be: spectrophotometers report every 1-10 nm; closer points carry no

@@ -249,7 +249,7 @@ impl MaterialTable {
             .into_par_iter()
             .map(|n| {
                 if cancel.load(Ordering::Relaxed) {
-                    return Err(interrupted("table build"));
+                    return Err(SkinError::interrupted("table build"));
                 }
                 if let Some(tick) = tick.filter(|_| n % every == 0) {
                     tick();
@@ -606,11 +606,6 @@ impl MaterialTable {
 pub const CACHE_MAGIC: &[u8] = b"spectral-skin table v4
 ";
 
-/// The error of a build or check stopped by its cancel flag.
-fn interrupted(what: &str) -> SkinError {
-    SkinError::invalid(what, "interrupted (cancelled) before it finished; nothing was stored")
-}
-
 /// 64-bit FNV-1a (Fowler, Noll & Vo; offset basis 0xcbf29ce484222325, prime 0x100000001b3): detects any single
 /// flipped byte and, with probability 1 - 2^-64, any other corruption.
 fn fnv1a(bytes: &[u8]) -> u64 {
@@ -793,7 +788,7 @@ pub fn measure_error_cancellable(
         .par_iter()
         .map(|u| {
             if cancel.load(Ordering::Relaxed) {
-                return Err(interrupted("table check"));
+                return Err(SkinError::interrupted("table check"));
             }
             let p = with_extended(check_point_params(*u), table.extended);
             let exact = texel_material(prepared, &p, table.method, table.radius)?;

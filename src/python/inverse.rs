@@ -10,7 +10,7 @@ use crate::skin::params::{PARAMS, PARAM_COUNT};
 use super::convert::{
     by_name, count_arg, real_of, real_vector, reject_string, streams_arg, to_py, transport_arg, type_name,
 };
-use super::detach::detached;
+use super::detach::detached_interruptible;
 use super::errors::invalid;
 
 /// Fit the model to a measured diffuse reflectance spectrum (docs/measured-skin.md).
@@ -120,7 +120,10 @@ pub(super) fn fit_spectrum_py<'py>(
     if let Some(n) = streams_arg(streams)? {
         options.request.accuracy.streams = n;
     }
-    let fit = detached(py, move || crate::inverse::fit_spectrum(&wavelengths, &measured, &options))?;
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let fit = detached_interruptible(py, &cancel, || {
+        crate::inverse::spectrum::fit_spectrum_cancellable(&wavelengths, &measured, &options, &cancel)
+    })?;
     let dict = to_py(py, &fit)?.cast_into::<PyDict>()?;
     dict.set_item("wavelengths_nm", PyArray1::from_slice(py, &fit.wavelengths_nm))?;
     dict.set_item("fitted_reflectance", PyArray1::from_slice(py, &fit.fitted_reflectance))?;

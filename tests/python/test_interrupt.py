@@ -106,3 +106,16 @@ def test_progress_callback_cancels_a_table_build(tmp_path, monkeypatch):
     assert time.monotonic() - start < 10.0, "the build did not stop"
     assert all(c == (0, 64 * 64) for c in calls), calls
     assert list(tmp_path.iterdir()) == []
+
+
+# 2000 starts of the default fit (a 4000-spectrum start table, then each start's refinement): minutes of work.
+FIT_CHILD = child_script(
+    1, "spectral_skin.fit_spectrum(np.arange(400.0, 701.0, 10.0), np.linspace(0.15, 0.45, 31), starts=2000)")
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+def test_ctrl_c_stops_a_spectrum_fit():
+    # It ran on for 13.8 s after SIGINT: the table build and the refinements now read the cancel flag.
+    returncode, out, elapsed = interrupt_child(FIT_CHILD)
+    assert returncode == 3, (returncode, out)
+    assert elapsed < 5.0, f"the fit took {elapsed:.1f} s to stop after SIGINT"
