@@ -398,7 +398,7 @@ fn joined_negative_numbers(args: impl Iterator<Item = std::ffi::OsString>) -> Ve
     out
 }
 
-/// Ctrl-C for `maps`, `shader-table` and `fit`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the work reads
+/// Ctrl-C for `maps`, `shader-table`, `fit` and `fit-albedo`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the work reads
 /// (the map pipeline before each row and before renaming its outputs into place, so the run stops without leaving
 /// partial files; the spectrum fit at each forward spectrum); a second Ctrl-C ends the
 /// process at once (the default action is restored by the first).
@@ -855,7 +855,7 @@ struct FitMapsArgs {
 mod fit_maps {
     use spectral_skin::color::WorkingSpace;
     use spectral_skin::inverse::albedo::AlbedoFitOptions;
-    use spectral_skin::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness};
+    use spectral_skin::inverse::albedo_maps::{fit_albedo_map_cancellable, fit_epidermis_thickness_cancellable};
     use spectral_skin::maps::io::{
         check_output_dir, commit_all, create_output_dir, output_folder_of, read_albedo_texture, stage_channels_exr,
         ExrOptions, PARAM_CHANNELS,
@@ -913,12 +913,14 @@ mod fit_maps {
         }
         let mut options = options.validated()?;
         let start = std::time::Instant::now();
+        crate::ctrl_c::catch();
         if args.fit_epidermis_thickness {
-            let (best, means) = fit_epidermis_thickness(&texels, width, height, &options)?;
+            let (best, means) =
+                fit_epidermis_thickness_cancellable(&texels, width, height, &options, &crate::ctrl_c::INTERRUPTED)?;
             eprintln!("epidermis thickness: {best} mm (mean ΔE00 per candidate [mm, ΔE00]: {means:?})");
             options.extended[0] = best;
         }
-        let fit = fit_albedo_map(&texels, width, height, &options)?;
+        let fit = fit_albedo_map_cancellable(&texels, width, height, &options, &crate::ctrl_c::INTERRUPTED)?;
         let seconds = start.elapsed().as_secs_f64();
         let params: Vec<Vec<f32>> = (0..4).map(|c| fit.params.iter().map(|p| p[c]).collect()).collect();
         let named: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().copied().zip(params.iter().map(Vec::as_slice)).collect();

@@ -16,6 +16,7 @@
 //! reported; nothing returns NaN.
 
 use std::collections::HashMap;
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
@@ -144,13 +145,22 @@ pub struct AlbedoTable {
 impl AlbedoTable {
     /// Evaluate every node (in parallel).
     pub fn build(options: &AlbedoFitOptions) -> Result<AlbedoTable, SkinError> {
+        AlbedoTable::build_cancellable(options, &AtomicBool::new(false))
+    }
+
+    /// [`AlbedoTable::build`] that stops once `cancel` is set (read before each node), with
+    /// [`SkinError::interrupted`].
+    pub fn build_cancellable(options: &AlbedoFitOptions, cancel: &AtomicBool) -> Result<AlbedoTable, SkinError> {
         let options = options.validated()?;
         let prepared = options.prepared()?;
         let n = ALBEDO_TABLE_RESOLUTION;
         let count = n[0] * n[1] * n[2];
         let albedo = (0..count)
             .into_par_iter()
-            .map(|i| prepared.albedo(&options.params_at(node_u(n, i))))
+            .map(|i| {
+                SkinError::check_cancel(cancel, "albedo fit table")?;
+                prepared.albedo(&options.params_at(node_u(n, i)))
+            })
             .collect::<Result<Vec<_>, SkinError>>()?;
         let converter = LabConverter::new(options.working_space);
         Ok(AlbedoTable {
@@ -215,12 +225,20 @@ fn node_u(n: [usize; 3], i: usize) -> [f64; 3] {
 /// The forward table for `options`, from an in-process cache of the last few (keyed by working space, extended
 /// physiology, transport and streams), else built. Returns whether it came from the cache.
 pub fn cached_albedo_table(options: &AlbedoFitOptions) -> Result<(Arc<AlbedoTable>, bool), SkinError> {
+    cached_albedo_table_cancellable(options, &AtomicBool::new(false))
+}
+
+/// [`cached_albedo_table`] whose build stops once `cancel` is set (a stopped build is not cached).
+pub fn cached_albedo_table_cancellable(
+    options: &AlbedoFitOptions,
+    cancel: &AtomicBool,
+) -> Result<(Arc<AlbedoTable>, bool), SkinError> {
     static CACHE: Mutex<Vec<(String, Arc<AlbedoTable>)>> = Mutex::new(Vec::new());
     let key = albedo_table_key(options);
     if let Some((_, t)) = CACHE.lock().map_err(|_| poisoned())?.iter().find(|(k, _)| *k == key) {
         return Ok((t.clone(), true));
     }
-    let table = Arc::new(AlbedoTable::build(options)?);
+    let table = Arc::new(AlbedoTable::build_cancellable(options, cancel)?);
     let mut cache = CACHE.lock().map_err(|_| poisoned())?;
     if cache.len() >= 4 {
         cache.remove(0);

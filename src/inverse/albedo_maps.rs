@@ -7,7 +7,7 @@ use std::sync::atomic::AtomicBool;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::albedo::{cached_albedo_table, distinct_colours, fit_on_table, AlbedoFitOptions, AlbedoTable};
+use super::albedo::{cached_albedo_table_cancellable, distinct_colours, fit_on_table, AlbedoFitOptions, AlbedoTable};
 use crate::error::SkinError;
 use crate::skin::params::{EPIDERMIS_THICKNESS, EXTENDED_DEFAULTS};
 
@@ -81,7 +81,7 @@ pub fn fit_albedo_map_cancellable(
 ) -> Result<AlbedoMapFit, SkinError> {
     let options = options.validated()?;
     check_texels(texels, width, height)?;
-    let (table, table_from_cache) = cached_albedo_table(&options)?;
+    let (table, table_from_cache) = cached_albedo_table_cancellable(&options, cancel)?;
     let (colours, of_texel) = distinct_colours(texels);
     let fits = fit_colours(&table, &colours, &options, cancel)?;
     let oil = options.oiliness as f32;
@@ -154,6 +154,17 @@ pub fn fit_epidermis_thickness(
     height: usize,
     options: &AlbedoFitOptions,
 ) -> Result<(f64, Vec<[f64; 2]>), SkinError> {
+    fit_epidermis_thickness_cancellable(texels, width, height, options, &AtomicBool::new(false))
+}
+
+/// [`fit_epidermis_thickness`] that stops once `cancel` is set (its six tables' builds and fits read it).
+pub fn fit_epidermis_thickness_cancellable(
+    texels: &[[f32; 3]],
+    width: usize,
+    height: usize,
+    options: &AlbedoFitOptions,
+    cancel: &AtomicBool,
+) -> Result<(f64, Vec<[f64; 2]>), SkinError> {
     check_texels(texels, width, height)?;
     let (colours, _) = distinct_colours(texels);
     let step = colours.len().div_ceil(THICKNESS_SAMPLE).max(1);
@@ -162,8 +173,8 @@ pub fn fit_epidermis_thickness(
     for t in THICKNESS_CANDIDATES_MM {
         debug_assert!((EPIDERMIS_THICKNESS.min..=EPIDERMIS_THICKNESS.max).contains(&t));
         let o = AlbedoFitOptions { extended: [t, options.extended[1], options.extended[2]], ..*options }.validated()?;
-        let (table, _) = cached_albedo_table(&o)?;
-        let fits = fit_colours(&table, &sample, &o, &AtomicBool::new(false))?;
+        let (table, _) = cached_albedo_table_cancellable(&o, cancel)?;
+        let fits = fit_colours(&table, &sample, &o, cancel)?;
         means.push([t, fits.iter().map(|f| f.1 as f64).sum::<f64>() / fits.len() as f64]);
     }
     let best = means.iter().fold(means[0], |b, m| if m[1] < b[1] { *m } else { b });

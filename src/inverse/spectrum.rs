@@ -166,7 +166,7 @@ pub struct SpectrumFitter {
     xyz_weights: Vec<[f64; 3]>,
     white_xyz: [f64; 3],
     /// (free parameter values, diffuse spectrum) for the coarse start.
-    table: Vec<(Vec<f64>, Vec<f64>)>,
+    table: Vec<StartSpectrum>,
 }
 
 /// The start table's values of a parameter: spread over the range where measured skin lies, denser where the

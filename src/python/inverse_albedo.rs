@@ -7,7 +7,9 @@ use pyo3::types::PyDict;
 
 use crate::color::ALL_WORKING_SPACES;
 use crate::inverse::albedo::{fit_albedo, AlbedoFitOptions};
-use crate::inverse::albedo_maps::{fit_albedo_map, fit_epidermis_thickness as choose_thickness, is_paper_extended};
+use crate::inverse::albedo_maps::{
+    fit_albedo_map_cancellable, fit_epidermis_thickness_cancellable as choose_thickness, is_paper_extended,
+};
 use crate::skin::params::EXTENDED_PARAMS;
 
 use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg};
@@ -194,13 +196,16 @@ pub(super) fn fit_albedo_map_py<'py>(
         streams,
     )?;
     let mut thickness_means = None;
+    // Ctrl-C stops the thickness choice, the table builds and the texels' fits (the flag was not passed before).
+    let cancel = std::sync::atomic::AtomicBool::new(false);
     if fit_epidermis_thickness {
-        let (best, means) = detached(py, || choose_thickness(&texels, width, height, &options))?;
+        let (best, means) =
+            detached_interruptible(py, &cancel, || choose_thickness(&texels, width, height, &options, &cancel))?;
         options.extended[0] = best;
         thickness_means = Some(means);
     }
-    let cancel = std::sync::atomic::AtomicBool::new(false);
-    let fit = detached_interruptible(py, &cancel, || fit_albedo_map(&texels, width, height, &options))?;
+    let fit =
+        detached_interruptible(py, &cancel, || fit_albedo_map_cancellable(&texels, width, height, &options, &cancel))?;
     let channels = if is_paper_extended(&options) { 4 } else { 7 };
     let mut values = Vec::with_capacity(fit.params.len() * channels);
     for p in &fit.params {

@@ -119,3 +119,16 @@ def test_ctrl_c_stops_a_spectrum_fit():
     returncode, out, elapsed = interrupt_child(FIT_CHILD)
     assert returncode == 3, (returncode, out)
     assert elapsed < 5.0, f"the fit took {elapsed:.1f} s to stop after SIGINT"
+
+
+# The thickness choice builds six albedo tables (each about 20 s on a small machine) before the texels' fit.
+ALBEDO_CHILD = child_script(
+    64, "spectral_skin.fit_albedo_map(params[..., :3] * 0.5, fit_epidermis_thickness=True)")
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+def test_ctrl_c_stops_an_albedo_map_fit():
+    # The table build ran on for 19 s after SIGINT: the builds, the thickness choice and the fit read the flag.
+    returncode, out, elapsed = interrupt_child(ALBEDO_CHILD)
+    assert returncode == 3, (returncode, out)
+    assert elapsed < 5.0, f"the fit took {elapsed:.1f} s to stop after SIGINT"
