@@ -9,7 +9,7 @@ pub use crate::accuracy::{Accuracy, AccuracyLevel, ProfileGrid};
 use crate::color::{
     placement_rgb_weights, rgb_luminance_weights, spectrum_to_rgb, RgbMapping, WavelengthGrid, WorkingSpace,
 };
-use crate::diffusion::{clamped_reflectance_profiles, Boundaries, Combination, Layer, LayerStack};
+use crate::diffusion::{clamped_reflectance_profiles_cancellable, Boundaries, Combination, Layer, LayerStack};
 use crate::error::{check_range, SkinError};
 use crate::fit::blender_target::{Target, TargetInfo};
 use crate::fit::burley::{
@@ -345,6 +345,16 @@ impl Prepared {
 
 /// Compute what `request.outputs` asks for, and nothing else.
 pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, SkinError> {
+    evaluate_cancellable(params, request, &std::sync::atomic::AtomicBool::new(false))
+}
+
+/// [`evaluate`] whose radial profile (the one output that can take long: up to 10^5 radii) stops once `cancel` is
+/// set, with [`SkinError::interrupted`].
+pub fn evaluate_cancellable(
+    params: &SkinParams,
+    request: &Request,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<Evaluation, SkinError> {
     let start = Instant::now();
     let prepared = Prepared::new(request)?;
     let params = params.validated()?;
@@ -373,8 +383,14 @@ pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, Sk
 
     let profile = if out.profile_rgb || out.profile_spectral {
         let radii = acc.profile_grid.radii_mm();
-        let clamped =
-            clamped_reflectance_profiles(stacks, &radii, request.combination, acc.multipole_terms, &acc.hankel);
+        let clamped = clamped_reflectance_profiles_cancellable(
+            stacks,
+            &radii,
+            request.combination,
+            acc.multipole_terms,
+            &acc.hankel,
+            cancel,
+        )?;
         let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
             wavelength_nm: prepared.grid.wavelengths_nm[l.profile],
             radius_mm: l.radius_mm,

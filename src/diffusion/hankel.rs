@@ -15,12 +15,14 @@
 //! per radius is thus the same for 1 mm and 10^4 mm, and no radius limits the grid of another.
 
 use std::f64::consts::PI;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::layered::{Combination, LayerStack};
 use super::multipole::MultipoleTerms;
+use crate::error::SkinError;
 use crate::numeric::{clamp_zero, gauss_legendre, legendre_table, spherical_bessel_j};
 
 /// Accuracy of the inverse Hankel quadrature.
@@ -132,6 +134,21 @@ pub fn clamped_reflectance_profiles(
     ClampedProfiles::from_raw(raw_reflectance_profiles(stacks, radii_mm, combination, terms, quadrature), radii_mm)
 }
 
+/// [`clamped_reflectance_profiles`] that stops once `cancel` is set (read before each radius: 10^5 radii at 401
+/// wavelengths are a minute and a half of work), with [`SkinError::interrupted`].
+pub fn clamped_reflectance_profiles_cancellable(
+    stacks: &[LayerStack],
+    radii_mm: &[f64],
+    combination: Combination,
+    terms: MultipoleTerms,
+    quadrature: &HankelQuadrature,
+    cancel: &AtomicBool,
+) -> Result<ClampedProfiles, SkinError> {
+    raw_profiles(stacks, radii_mm, combination, terms, quadrature, cancel)
+        .map(|raw| ClampedProfiles::from_raw(raw, radii_mm))
+        .ok_or_else(|| SkinError::interrupted("reflectance profile"))
+}
+
 /// [`clamped_reflectance_profiles`]' values alone, for callers that check the lobe another way or not at all.
 pub fn reflectance_profiles(
     stacks: &[LayerStack],
@@ -151,6 +168,19 @@ pub fn raw_reflectance_profiles(
     terms: MultipoleTerms,
     quadrature: &HankelQuadrature,
 ) -> Vec<Vec<f64>> {
+    // A flag nobody sets: the profiles always come back.
+    raw_profiles(stacks, radii_mm, combination, terms, quadrature, &AtomicBool::new(false)).unwrap_or_default()
+}
+
+/// [`raw_reflectance_profiles`], `None` once `cancel` is set.
+fn raw_profiles(
+    stacks: &[LayerStack],
+    radii_mm: &[f64],
+    combination: Combination,
+    terms: MultipoleTerms,
+    quadrature: &HankelQuadrature,
+    cancel: &AtomicBool,
+) -> Option<Vec<Vec<f64>>> {
     let remainder = |stack: &LayerStack, s: f64| stack.below_top_hat(s, combination, terms);
     // Where each stack's remainder stops mattering.
     let cuts: Vec<f64> = stacks
@@ -179,19 +209,23 @@ pub fn raw_reflectance_profiles(
     let per_radius: Vec<Vec<f64>> = radii_mm
         .par_iter()
         .map(|&r| {
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
             let kernel = grid.kernel(r);
-            stacks
+            let row = stacks
                 .iter()
                 .zip(&samples)
                 .map(|(stack, v)| {
                     let tail: f64 = v.iter().zip(&kernel).map(|(a, b)| a * b).sum::<f64>() / (2.0 * PI);
                     stack.top().reflectance(r, terms) + tail
                 })
-                .collect()
+                .collect();
+            Some(row)
         })
-        .collect();
+        .collect::<Option<_>>()?;
     // Transpose to per stack.
-    (0..stacks.len()).map(|k| per_radius.iter().map(|row| row[k]).collect()).collect()
+    Some((0..stacks.len()).map(|k| per_radius.iter().map(|row| row[k]).collect()).collect())
 }
 
 /// The frequency beyond which |f(s)| s^2 stays below `tolerance` on the probe grid (0 if it never exceeds it).

@@ -8,8 +8,8 @@ pub mod multipole;
 
 pub use fft_route::{fft_reflectance_profiles, fft_reflectance_profiles_with, FftGrid, FftProfiles, PixelSampling};
 pub use hankel::{
-    clamped_reflectance_profiles, raw_reflectance_profiles, reflectance_profiles, ClampedProfiles, HankelQuadrature,
-    NegativeLobe, MAX_RADIUS_MM, ROUND_OFF_OF_PEAK,
+    clamped_reflectance_profiles, clamped_reflectance_profiles_cancellable, raw_reflectance_profiles,
+    reflectance_profiles, ClampedProfiles, HankelQuadrature, NegativeLobe, MAX_RADIUS_MM, ROUND_OFF_OF_PEAK,
 };
 pub use layered::{
     Boundaries, Combination, Layer, LayerStack, ALL_BOUNDARIES, ALL_COMBINATIONS, COEFFICIENT_RANGE_PER_MM, IOR_RANGE,
@@ -76,6 +76,17 @@ pub fn layered_reflectance_with(
     radii_mm: &[f64],
     options: &LayeredOptions,
 ) -> Result<LayeredReflectance, SkinError> {
+    layered_reflectance_cancellable(layers, radii_mm, options, &std::sync::atomic::AtomicBool::new(false))
+}
+
+/// [`layered_reflectance_with`] that stops once `cancel` is set (read before each radius), with
+/// [`SkinError::interrupted`].
+pub fn layered_reflectance_cancellable(
+    layers: &[Layer],
+    radii_mm: &[f64],
+    options: &LayeredOptions,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<LayeredReflectance, SkinError> {
     validate_radii(radii_mm)?;
     crate::transport::adding_doubling::validate_streams(options.streams)?;
     let stack = LayerStack::with_boundaries(layers, options.boundaries)?;
@@ -84,13 +95,14 @@ pub fn layered_reflectance_with(
         Transport::Diffusion => multipole_total,
         Transport::AddingDoubling => total_diffuse_reflectance(layers, options.streams)?,
     };
-    let mut profiles = clamped_reflectance_profiles(
+    let mut profiles = clamped_reflectance_profiles_cancellable(
         std::slice::from_ref(&stack),
         radii_mm,
         Combination::Directional,
         MultipoleTerms::All,
         &HankelQuadrature::default(),
-    );
+        cancel,
+    )?;
     let mut profile_per_mm2 = profiles.per_mm2.pop().unwrap_or_default();
     if options.transport != Transport::Diffusion {
         let scale = safe_div(total, multipole_total, 1.0);

@@ -1,5 +1,7 @@
 //! `evaluate`, `profile` and `layered_reflectance`: one point of the model, or one stack of layers.
 
+use std::sync::atomic::AtomicBool;
+
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -14,7 +16,7 @@ use super::convert::{
     by_name, json_to_py, nested_rows, params_arg, parse_outputs, real_sequence, real_vector, reject_string, rgb_rows,
     streams_arg, target_from, to_py, transport_arg, Knobs,
 };
-use super::detach::detached;
+use super::detach::detached_interruptible;
 use super::errors::{internal, invalid, warn_lobe};
 
 /// The fields of one layer tuple, in order.
@@ -222,7 +224,9 @@ pub(super) fn evaluate_py<'py>(
         streams,
     )?;
     let request = knobs.request(parse_outputs(outputs)?)?;
-    let evaluation = detached(py, move || crate::evaluate(&params, &request))?;
+    let cancel = AtomicBool::new(false);
+    let evaluation =
+        detached_interruptible(py, &cancel, || crate::evaluate::evaluate_cancellable(&params, &request, &cancel))?;
     warn_lobe(py, evaluation.profile.as_ref().and_then(|p| p.negative_lobe))?;
     evaluation_dict(py, &evaluation)
 }
@@ -318,7 +322,9 @@ pub(super) fn profile_py<'py>(
     )?;
     let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
     let request = knobs.request(outputs)?;
-    let evaluation = detached(py, move || crate::evaluate(&params, &request))?;
+    let cancel = AtomicBool::new(false);
+    let evaluation =
+        detached_interruptible(py, &cancel, || crate::evaluate::evaluate_cancellable(&params, &request, &cancel))?;
     let p = evaluation.profile.as_ref().ok_or_else(|| internal("no profile in the evaluation"))?;
     warn_lobe(py, p.negative_lobe)?;
     let dict = PyDict::new(py);
@@ -398,7 +404,10 @@ pub(super) fn layered_reflectance_py<'py>(
         transport: transport_arg(transport)?,
         streams: streams_arg(streams)?.unwrap_or(defaults.streams),
     };
-    let r = detached(py, move || crate::diffusion::layered_reflectance_with(&layers, &radii, &options))?;
+    let cancel = AtomicBool::new(false);
+    let r = detached_interruptible(py, &cancel, || {
+        crate::diffusion::layered_reflectance_cancellable(&layers, &radii, &options, &cancel)
+    })?;
     warn_lobe(py, r.negative_lobe)?;
     Ok((r.total, PyArray1::from_vec(py, r.profile_per_mm2)))
 }

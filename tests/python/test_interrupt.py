@@ -132,3 +132,22 @@ def test_ctrl_c_stops_an_albedo_map_fit():
     returncode, out, elapsed = interrupt_child(ALBEDO_CHILD)
     assert returncode == 3, (returncode, out)
     assert elapsed < 5.0, f"the fit took {elapsed:.1f} s to stop after SIGINT"
+
+
+# 10^5 radii at every nanometre: a minute and a half of profile on a small machine.
+PROFILE_CHILD = child_script(
+    1, "spectral_skin.evaluate(preset='caucasian', accuracy='reference', outputs=('profile_spectral',), "
+       "profile_count=100000)")
+# 10^5 radii of one layer: seconds (a million, 27 s, is refused now: MAX_PROFILE_RADII), checked before each radius.
+LAYERED_CHILD = child_script(
+    1, "[spectral_skin.layered_reflectance([(float('inf'), 0.01, 1.0, 1.4)], np.linspace(0.0, 50.0, 100000)) "
+       "for _ in range(100)]")
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+@pytest.mark.parametrize("script", [PROFILE_CHILD, LAYERED_CHILD], ids=["evaluate_profile", "layered_reflectance"])
+def test_ctrl_c_stops_a_long_profile(script):
+    # evaluate's profile ignored SIGINT for 90 s.
+    returncode, out, elapsed = interrupt_child(script)
+    assert returncode == 3, (returncode, out)
+    assert elapsed < 5.0, f"the profile took {elapsed:.1f} s to stop after SIGINT"
