@@ -476,9 +476,18 @@ pub fn check_rgb(name: &str, rgb: [f64; 3]) -> Result<[f64; 3], SkinError> {
 
 /// Fit one colour (see the module's text). `target_rgb` is linear RGB in `options.working_space`.
 pub fn fit_albedo(target_rgb: [f64; 3], options: &AlbedoFitOptions) -> Result<AlbedoFit, SkinError> {
+    fit_albedo_cancellable(target_rgb, options, &AtomicBool::new(false))
+}
+
+/// [`fit_albedo`] whose table build (the first call for its options: seconds) stops once `cancel` is set.
+pub fn fit_albedo_cancellable(
+    target_rgb: [f64; 3],
+    options: &AlbedoFitOptions,
+    cancel: &AtomicBool,
+) -> Result<AlbedoFit, SkinError> {
     let options = options.validated()?;
     let target_rgb = check_rgb("target albedo", target_rgb)?;
-    let (table, from_cache) = cached_albedo_table(&options)?;
+    let (table, from_cache) = cached_albedo_table_cancellable(&options, cancel)?;
     let prepared = options.prepared()?;
     let conv = *table.converter();
     let target_lab = conv.lab(target_rgb);

@@ -6,14 +6,14 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::color::ALL_WORKING_SPACES;
-use crate::inverse::albedo::{fit_albedo, AlbedoFitOptions};
+use crate::inverse::albedo::{fit_albedo_cancellable, AlbedoFitOptions};
 use crate::inverse::albedo_maps::{
     fit_albedo_map_cancellable, fit_epidermis_thickness_cancellable as choose_thickness, is_paper_extended,
 };
 use crate::skin::params::EXTENDED_PARAMS;
 
 use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg};
-use super::detach::{detached, detached_interruptible};
+use super::detach::detached_interruptible;
 use super::errors::{internal, invalid};
 
 /// The options from the keyword arguments (None: the defaults of src/inverse/albedo.rs).
@@ -121,7 +121,8 @@ pub(super) fn fit_albedo_py<'py>(
         transport,
         streams,
     )?;
-    let fit = detached(py, || fit_albedo(target, &options))?;
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let fit = detached_interruptible(py, &cancel, || fit_albedo_cancellable(target, &options, &cancel))?;
     to_py(py, &fit)
 }
 
