@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerate docs/accuracy-vs-time.md: Cycles samples through bpy (docs/data/cycles_samples.json), then every accuracy
-# knob of the core measured and timed (examples/accuracy_report). About 5 minutes on 2 cores.
+# knob of the core measured and timed (examples/accuracy_report). About 35 minutes on 2 cores shared with other jobs.
 #   bash scripts/accuracy_report.sh            # the full report, written to docs/
 #   bash scripts/accuracy_report.sh --quick    # the reduced run CI does, written to a temporary folder
 set -euo pipefail
