@@ -168,7 +168,7 @@ pub struct RadialProfile {
 impl std::fmt::Display for SpectralLobe {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let place = format!("at {} mm and {} nm", self.radius_mm, self.wavelength_nm);
-        f.write_str(&crate::diffusion::NegativeLobe::message(&place, self.relative_to_peak))
+        f.write_str(&crate::diffusion::NegativeLobe::message(&place, self.relative_to_peak, self.boundaries))
     }
 }
 
@@ -176,6 +176,8 @@ impl std::fmt::Display for SpectralLobe {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SpectralLobe {
     pub wavelength_nm: f64,
+    /// The request's boundaries (what the lobe comes from differs: `NegativeLobe::message`).
+    pub boundaries: Boundaries,
     pub radius_mm: f64,
     /// The most negative value over that wavelength's largest magnitude on the profile grid.
     pub relative_to_peak: f64,
@@ -393,6 +395,7 @@ pub fn evaluate_cancellable(
         )?;
         let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
             wavelength_nm: prepared.grid.wavelengths_nm[l.profile],
+            boundaries: l.boundaries,
             radius_mm: l.radius_mm,
             relative_to_peak: l.relative_to_peak,
         });

@@ -401,6 +401,7 @@ fn a_clamped_lobe_is_reported_not_hidden() {
     assert!((lobe.relative_to_peak - min / peak).abs() < 1e-15 && lobe.relative_to_peak < -1e-4, "{lobe:?}");
     assert!(paper.profile_per_mm2.iter().all(|&v| v >= 0.0));
     assert!(lobe.to_string().contains("capped"), "the message names the way out: {lobe}");
+    assert_eq!(lobe.boundaries, Boundaries::Paper, "the lobe names the boundaries of its stack");
 
     let capped = layered_reflectance_with(&layers, &radii, &with(Boundaries::Capped)).unwrap();
     assert_eq!(capped.negative_lobe, None);
@@ -417,14 +418,17 @@ fn a_clamped_lobe_is_reported_not_hidden() {
 #[test]
 fn lobes_are_told_apart_from_round_off() {
     let radii = [0.1, 1.0, 10.0];
-    let none = ClampedProfiles::from_raw(vec![vec![1.0, -0.5 * ROUND_OFF_OF_PEAK, 0.0]], &radii);
+    let none = ClampedProfiles::from_raw(vec![vec![1.0, -0.5 * ROUND_OFF_OF_PEAK, 0.0]], &radii, &[]);
     assert_eq!(none.negative_lobe, None);
     assert_eq!(none.per_mm2, vec![vec![1.0, 0.0, 0.0]]);
-    let two =
-        ClampedProfiles::from_raw(vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3], vec![-1.0, -2.0, -0.5]], &radii);
+    let two = ClampedProfiles::from_raw(
+        vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3], vec![-1.0, -2.0, -0.5]],
+        &radii,
+        &[],
+    );
     let lobe = two.negative_lobe.unwrap();
     assert_eq!((lobe.profile, lobe.radius_mm, lobe.relative_to_peak), (2, 1.0, -1.0));
-    let one = ClampedProfiles::from_raw(vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3]], &radii);
+    let one = ClampedProfiles::from_raw(vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3]], &radii, &[]);
     let lobe = one.negative_lobe.unwrap();
     assert_eq!((lobe.profile, lobe.radius_mm), (1, 10.0));
     assert!((lobe.relative_to_peak + 3e-3).abs() < 1e-15);
@@ -508,4 +512,22 @@ fn diffusion_against_monte_carlo_by_top_layer_thickness() {
         assert_eq!(r.len(), PER_CLASS, "{name}: too few stacks drawn");
         assert!(worst(0) <= *bound_paper && worst(1) <= *bound_capped, "{name}: past the stated bound");
     }
+}
+
+/// A lobe's message names the boundaries it came under: the paper's recommend the capped ones; the capped ones (whose
+/// exact profiles are non-negative) blame the numerical transform and do not recommend themselves. Before, every
+/// lobe blamed "the paper's boundaries" and recommended capped, also to callers using capped.
+#[test]
+fn lobe_messages_name_the_boundaries_used() {
+    use spectral_skin::diffusion::{Boundaries, NegativeLobe};
+    let lobe =
+        |boundaries| NegativeLobe { profile: 0, boundaries, radius_mm: 0.1, relative_to_peak: -0.01 }.to_string();
+    let paper = lobe(Boundaries::Paper);
+    assert!(paper.contains("the paper's boundaries") && paper.contains("boundaries \"capped\""), "{paper}");
+    let capped = lobe(Boundaries::Capped);
+    assert!(
+        capped.contains("with the capped boundaries") && capped.contains("numerical inverse transform"),
+        "{capped}"
+    );
+    assert!(!capped.contains("the paper's boundaries") && !capped.contains("boundaries \"capped\""), "{capped}");
 }

@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::layered::{Combination, LayerStack};
+use super::layered::{Boundaries, Combination, LayerStack};
 use super::multipole::MultipoleTerms;
 use crate::error::SkinError;
 use crate::numeric::{clamp_zero, gauss_legendre, legendre_table, spherical_bessel_j};
@@ -69,6 +69,8 @@ pub const ROUND_OFF_OF_PEAK: f64 = 1e-8;
 pub struct NegativeLobe {
     /// Which profile of the call (the stack's index; in `evaluate`, the wavelength's).
     pub profile: usize,
+    /// The boundaries of that profile's stack: what the lobe comes from differs (see [`NegativeLobe::message`]).
+    pub boundaries: Boundaries,
     /// Where the most negative value is, mm.
     pub radius_mm: f64,
     /// The most negative value over the profile's largest magnitude at the radii asked for (-1 when all are negative).
@@ -76,20 +78,28 @@ pub struct NegativeLobe {
 }
 
 impl NegativeLobe {
-    /// What a front tells its user about a lobe at `place` (e.g. "at 0.1 mm"), the one text for every front.
-    pub fn message(place: &str, relative_to_peak: f64) -> String {
-        format!(
-            "the radial profile had a negative lobe {place}, {relative_to_peak:.2e} of its peak, set to 0: the \
-             paper's boundaries on a layer thinner than its extrapolation distances (docs/robustness.md, \"Negative \
-             profile lobes\"); the capped boundaries give a profile that is non-negative by construction"
-        )
+    /// What a front tells its user about a lobe at `place` (e.g. "at 0.1 mm") under `boundaries`, the one text for
+    /// every front: with the paper's boundaries it is the model's (a layer thinner than its extrapolation distances),
+    /// with the capped ones, whose exact profiles are non-negative, the numerical inverse transform's.
+    pub fn message(place: &str, relative_to_peak: f64, boundaries: Boundaries) -> String {
+        let cause = match boundaries {
+            Boundaries::Paper => {
+                "the paper's boundaries on a layer thinner than its extrapolation distances (docs/robustness.md, \
+                 \"Negative profile lobes\"); with boundaries \"capped\" every exact profile is non-negative"
+            }
+            Boundaries::Capped => {
+                "with the capped boundaries every exact profile is non-negative, so this is the error of the numerical \
+                 inverse transform (docs/robustness.md, \"Negative profile lobes\"); accuracy \"reference\" reduces it"
+            }
+        };
+        format!("the radial profile had a negative lobe {place}, {relative_to_peak:.2e} of its peak, set to 0: {cause}")
     }
 }
 
 impl std::fmt::Display for NegativeLobe {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let place = format!("at {} mm (profile {})", self.radius_mm, self.profile);
-        f.write_str(&NegativeLobe::message(&place, self.relative_to_peak))
+        f.write_str(&NegativeLobe::message(&place, self.relative_to_peak, self.boundaries))
     }
 }
 
@@ -101,8 +111,9 @@ pub struct ClampedProfiles {
 }
 
 impl ClampedProfiles {
-    /// Clamp raw profiles (one per stack, at `radii_mm`) to zero and find the deepest lobe beyond round-off.
-    pub fn from_raw(raw: Vec<Vec<f64>>, radii_mm: &[f64]) -> ClampedProfiles {
+    /// Clamp raw profiles (one per stack, at `radii_mm`) to zero and find the deepest lobe beyond round-off; `stacks`
+    /// are the profiles' stacks, whose boundaries the lobe names (a profile without its stack counts as the paper's).
+    pub fn from_raw(raw: Vec<Vec<f64>>, radii_mm: &[f64], stacks: &[LayerStack]) -> ClampedProfiles {
         let mut negative_lobe: Option<NegativeLobe> = None;
         for (profile, values) in raw.iter().enumerate() {
             let peak = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -112,7 +123,8 @@ impl ClampedProfiles {
                 && relative_to_peak < -ROUND_OFF_OF_PEAK
                 && negative_lobe.map_or(true, |l| relative_to_peak < l.relative_to_peak)
             {
-                negative_lobe = Some(NegativeLobe { profile, radius_mm: radii_mm[i], relative_to_peak });
+                let boundaries = stacks.get(profile).map_or(Boundaries::Paper, LayerStack::boundaries);
+                negative_lobe = Some(NegativeLobe { profile, boundaries, radius_mm: radii_mm[i], relative_to_peak });
             }
         }
         let per_mm2 = raw.into_iter().map(|p| p.into_iter().map(clamp_zero).collect()).collect();
@@ -131,7 +143,11 @@ pub fn clamped_reflectance_profiles(
     terms: MultipoleTerms,
     quadrature: &HankelQuadrature,
 ) -> ClampedProfiles {
-    ClampedProfiles::from_raw(raw_reflectance_profiles(stacks, radii_mm, combination, terms, quadrature), radii_mm)
+    ClampedProfiles::from_raw(
+        raw_reflectance_profiles(stacks, radii_mm, combination, terms, quadrature),
+        radii_mm,
+        stacks,
+    )
 }
 
 /// [`clamped_reflectance_profiles`] that stops once `cancel` is set (read before each radius: 10^5 radii at 401
@@ -145,7 +161,7 @@ pub fn clamped_reflectance_profiles_cancellable(
     cancel: &AtomicBool,
 ) -> Result<ClampedProfiles, SkinError> {
     raw_profiles(stacks, radii_mm, combination, terms, quadrature, cancel)
-        .map(|raw| ClampedProfiles::from_raw(raw, radii_mm))
+        .map(|raw| ClampedProfiles::from_raw(raw, radii_mm, stacks))
         .ok_or_else(|| SkinError::interrupted("reflectance profile"))
 }
 

@@ -120,7 +120,8 @@ pub enum Boundaries {
     #[default]
     Paper,
     /// Every slab capped (`Slab::capped`): every slab's R(r) and T(r), from either side, is >= 0, and so is every
-    /// stack's profile (the adding series is a sum of convolutions of them). And the blend weight is the share that
+    /// stack's exact profile (the adding series is a sum of convolutions of them); the numerical inverse transform can
+    /// still dip below zero, which is reported as a lobe of these boundaries (`NegativeLobe`). And the blend weight is the share that
     /// crosses without scattering, w = (1 - sigma_s' d)^2 below sigma_s' d = 1, which absorption does not change (light
     /// absorbed in a thin layer reveals no index): with both, more absorption never gives more reflectance
     /// (tests/robustness_properties.rs). Where no cap acts and every finite layer has sigma_s' d >= 1 it is the paper's
@@ -147,6 +148,7 @@ impl Boundaries {
 #[derive(Debug, Clone)]
 pub struct LayerStack {
     down: Vec<Slab>,
+    boundaries: Boundaries,
 }
 
 impl LayerStack {
@@ -210,7 +212,12 @@ impl LayerStack {
                 }
             })
             .collect();
-        Ok(LayerStack { down })
+        Ok(LayerStack { down, boundaries })
+    }
+
+    /// How the stack's boundaries were set up.
+    pub fn boundaries(&self) -> Boundaries {
+        self.boundaries
     }
 
     /// The top layer's slab, seen from above.

@@ -126,9 +126,10 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///         :func:`profile`: "linear" (exact; negative in a channel where the light is outside the gamut) or
 ///         "non_negative".
 ///     boundaries: the layers' boundary conditions: "paper" (DJ2005's extrapolated boundaries, the default) or
-///         "capped" (each layer's extrapolation distances capped so that every radial profile is non-negative and
-///         the total reflectance never rises with absorption, by construction; it moves a thin or red-lit epidermis
-///         away from Monte Carlo: docs/robustness.md, "Negative profile lobes").
+///         "capped" (each layer's extrapolation distances capped so that every exact radial profile is non-negative
+///         and the total reflectance never rises with absorption; the numerical transform can still dip below zero,
+///         reported as a lobe of these boundaries; it moves a thin or red-lit epidermis away from Monte Carlo:
+///         docs/robustness.md, "Negative profile lobes").
 ///     transport: how each wavelength's total diffuse reflectance (the albedo, and the scale of the radial profile
 ///         and of the radius fit's transform) is computed, a name from :func:`transports`: "adding_doubling" (exact
 ///         radiative transfer; the default) or "diffusion" (the paper's layered multipole: reproduces DJ2006).
@@ -153,7 +154,8 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///     "directional_albedo_normal", "hemispherical_albedo"};
 ///     spectrum: "wavelengths_nm" (K,), "spectral_reflectance" (K,);
 ///     profile_rgb / profile_spectral: "profile" {"radii_mm" (N,), "rgb_per_mm2" (N, 3) and/or
-///     "spectral_per_mm2" (K, N), mm^-2, and "negative_lobe" {"wavelength_nm", "radius_mm", "relative_to_peak"}
+///     "spectral_per_mm2" (K, N), mm^-2, and "negative_lobe" {"wavelength_nm", "boundaries", "radius_mm",
+///     "relative_to_peak"}
 ///     when a spectral profile was negative beyond round-off before its clamp to 0, also reported by a
 ///     SpectralSkinWarning} (and "wavelengths_nm" (K,) with profile_spectral).
 ///
