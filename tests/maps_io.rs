@@ -510,7 +510,7 @@ fn bad_write_arguments_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("x.exr");
     let v = vec![0.0f32; 4];
-    assert!(err_text(write_channels_exr(&p, 0, 4, &[("Y", &[])], ExrOptions::FLOAT_PIZ)).contains("0x4"));
+    assert!(err_text(write_channels_exr(&p, 0, 4, &[("Y", &[])], ExrOptions::FLOAT_PIZ)).contains("0 wide x 4 high"));
     assert!(err_text(write_channels_exr(&p, 2, 2, &[], ExrOptions::FLOAT_PIZ)).contains("at least one channel"));
     assert!(err_text(write_channels_exr(&p, 2, 2, &[("Y", &v), ("Y", &v)], ExrOptions::FLOAT_PIZ)).contains("twice"));
     assert!(err_text(write_channels_exr(&p, 2, 2, &[("", &v)], ExrOptions::FLOAT_PIZ)).contains("channel name"));
