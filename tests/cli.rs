@@ -392,12 +392,7 @@ fn interrupt(argv: &[&str]) {
 #[test]
 fn ctrl_c_stops_fit() {
     let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("skin.csv");
-    let mut text = String::from("wavelength_nm,reflectance\n");
-    for i in 0..31 {
-        text.push_str(&format!("{},{}\n", 400 + 10 * i, 0.15 + 0.01 * i as f64));
-    }
-    std::fs::write(&csv, text).unwrap();
+    let csv = spectrum_csv(dir.path(), (0..31).map(|i| (400.0 + 10.0 * i as f64, 0.15 + 0.01 * i as f64)));
     interrupt(&["fit", "--spectrum", csv.to_str().unwrap(), "--starts", "2000"]);
 }
 
@@ -616,17 +611,23 @@ fn fit_spectrum_csv_with_a_utf8_bom_is_read() {
     assert!(!out.status.success() && err.contains("line 3") && err.contains("\"abc\" is not a number"), "{err}");
 }
 
+/// `dir/spectrum.csv` in the format `fit --spectrum` reads, with these (wavelength nm, reflectance) rows.
+fn spectrum_csv(dir: &std::path::Path, rows: impl Iterator<Item = (f64, f64)>) -> std::path::PathBuf {
+    let mut text = String::from("wavelength_nm,reflectance\n");
+    for (wavelength_nm, reflectance) in rows {
+        text.push_str(&format!("{wavelength_nm},{reflectance}\n"));
+    }
+    let path = dir.join("spectrum.csv");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
 /// A CSV of a million rows (it ran past 300 s at 1.1 GB) is refused at the first row past the limit.
 #[test]
 fn fit_spectrum_csv_rows_are_bounded() {
     use spectral_skin::inverse::spectrum::MAX_SPECTRUM_WAVELENGTHS;
     let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("long.csv");
-    let mut text = String::from("wavelength_nm,reflectance\n");
-    for i in 0..1_000_000 {
-        text.push_str(&format!("{},{}\n", 380.0 + 4e-4 * i as f64, 0.3));
-    }
-    std::fs::write(&csv, text).unwrap();
+    let csv = spectrum_csv(dir.path(), (0..1_000_000).map(|i| (380.0 + 4e-4 * i as f64, 0.3)));
     let out = run(&["fit", "--spectrum", csv.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");

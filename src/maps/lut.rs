@@ -7,7 +7,7 @@
 //! evaluation is measured, not assumed: see `measure_error` and `tests/maps_pipeline.rs`.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -248,9 +248,7 @@ impl MaterialTable {
         let log_values = (0..nodes)
             .into_par_iter()
             .map(|n| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Err(SkinError::interrupted("table build"));
-                }
+                SkinError::check_cancel(cancel, "table build")?;
                 if let Some(tick) = tick.filter(|_| n % every == 0) {
                     tick();
                 }
@@ -787,9 +785,7 @@ pub fn measure_error_cancellable(
     let errors = points
         .par_iter()
         .map(|u| {
-            if cancel.load(Ordering::Relaxed) {
-                return Err(SkinError::interrupted("table check"));
-            }
+            SkinError::check_cancel(cancel, "table check")?;
             let p = with_extended(check_point_params(*u), table.extended);
             let exact = texel_material(prepared, &p, table.method, table.radius)?;
             let approx = table.lookup(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
