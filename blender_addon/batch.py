@@ -183,7 +183,7 @@ def _apply_main(argv: list[str]) -> int:
         for n in core.PARAMETERS:
             if getattr(args, f"{n}_map"):
                 maps.update(_read_map(getattr(args, f"{n}_map"), n))
-        settings = settings.replace(maps=maps)
+        settings = settings.with_maps(maps)
         apply_to_materials(args.blend, args.material, settings, args.out_blend, pack=args.pack)
     except (spectral_skin.SpectralSkinError, ValueError, OSError) as error:
         print(f"spectral-skin batch: {core.describe_error(error)}", file=sys.stderr)

@@ -21,7 +21,7 @@ import bpy
 import spectral_skin
 
 from . import live, nodes, props, scene_facts
-from .core import EXTENDED_DEFAULTS, SkinSettings, describe_error, texture_prefix, write_textures
+from .core import SkinSettings, describe_error, texture_prefix, write_textures
 from .core import albedo as core_albedo
 from .core import live as core_live
 from .core import scene as analysis
@@ -298,29 +298,28 @@ def image_pixels(image: bpy.types.Image) -> Any:
     return flat.reshape(height, width, image.channels)[::-1]
 
 
-def from_albedo_texture(material: bpy.types.Material) -> dict[str, Any]:
-    """From Albedo Texture: the material's Base Color image fitted per texel by the core (core/albedo.py), the
-    parameter EXR written beside the .blend and set as the material's Parameter Map (a Non-Color image), the
-    Advanced sliders set to the extended physiology the fit holds for. Returns the fit's summary (core.albedo.fit
-    without the arrays, plus "path"). Raises ValueError / OSError / spectral_skin.SpectralSkinError; the material
-    is then unchanged."""
+def from_albedo_texture(material: bpy.types.Material, hold_thickness: bool = False) -> dict[str, Any]:
+    """From Albedo Texture: the material's Base Color image fitted per texel by the core (core/albedo.py; the
+    epidermis thickness chosen for the texture, or the material's held with ``hold_thickness``), the parameter EXR
+    written beside the .blend by the core and set as the material's Parameter Map (a Non-Color image), the Advanced
+    sliders set to the extended physiology the fit holds for. Returns the fit's summary (core.albedo.fit without the
+    fit object, plus "path"). Raises ValueError / OSError / spectral_skin.SpectralSkinError; the material is then
+    unchanged."""
     image = base_color_image(material)
     pixels, space = core_albedo.linear_albedo(image_pixels(image), image.colorspace_settings.name, image.is_float,
                                               scene_working_space())
     settings = material.spectral_skin
-    # The material's epidermis thickness when the artist set one, else the fit's choice.
-    chosen = float(settings.epidermis_thickness_mm)
-    result = core_albedo.fit(pixels, space, None if chosen == EXTENDED_DEFAULTS["epidermis_thickness_mm"] else chosen,
-                             settings.transport)
+    held = float(settings.epidermis_thickness_mm) if hold_thickness else None
+    result = core_albedo.fit(pixels, space, held, settings.transport)
     path = core_albedo.parameter_map_path(bpy.data.filepath, texture_prefix(bpy.data.filepath, material.name))
-    core_albedo.write_parameter_map(path, result["params"])
+    result["fit"].write(path)
     loaded = bpy.data.images.load(path, check_existing=True)
     loaded.reload()
     loaded.colorspace_settings.name = "Non-Color"
     settings.params_map = loaded
     for name, value in result["extended"].items():
         setattr(settings, name, value)
-    return {key: value for key, value in result.items() if key not in ("params", "residual_delta_e00")} | {
+    return {key: value for key, value in result.items() if key != "fit"} | {
         "path": path, "image": image.name, "working_space": space}
 
 
@@ -334,6 +333,10 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
 
     material: bpy.props.StringProperty(
         name="Material", description="Name of the material; empty: the active material")
+    hold_thickness: bpy.props.BoolProperty(
+        name="Hold Epidermis Thickness", default=False,
+        description="Fit at the material's Epidermis Thickness instead of choosing one for the texture (the "
+                    "default: the thickness of 0.05 to 0.5 mm that fits the texture best, never worse than 0.25)")
 
     @classmethod
     def poll(cls, context: bpy.types.Context) -> bool:
@@ -348,13 +351,16 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
             self.report({"ERROR"}, f"no material {self.material!r}" if self.material else "no active material")
             return {"CANCELLED"}
         try:
-            summary = from_albedo_texture(material)
+            summary = from_albedo_texture(material, self.hold_thickness)
         except ERRORS as error:
             self.report({"ERROR"}, f"Spectral Skin: From Albedo Texture: {describe_error(error)}")
             return {"CANCELLED"}
+        thickness = summary["extended"]["epidermis_thickness_mm"]
         self.report({"INFO"}, f"Spectral Skin: fitted {summary['image']!r} ({summary['working_space']}): ΔE00 median "
-                    f"{summary['median_delta_e00']:.2f}, max {summary['max_delta_e00']:.2f}; parameter map "
-                    f"{summary['path']} set (Apply to use it)")
+                    f"{summary['median_delta_e00']:.2f}, max {summary['max_delta_e00']:.2f}, "
+                    f"{summary['out_of_gamut_texels']} texel(s) outside skin's colours; epidermis thickness "
+                    f"{thickness:g} mm ({'held' if summary['thickness'] is None else 'chosen for the texture'}); "
+                    f"parameter map {summary['path']} set (Apply to use it)")
         return {"FINISHED"}
 
 

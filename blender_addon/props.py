@@ -316,10 +316,10 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
     target = scene_target(scene)
     return SkinSettings(
         **{name: getattr(props, name) for name in (*PARAMETERS, *EXTENDED_PARAMETERS)}, method=props.method, accuracy=props.accuracy,
-        transport=props.transport, maps=maps,
+        transport=props.transport,
         clamp=props.clamp, output_dir=output_dir, file_prefix=texture_prefix(bpy.data.filepath, material.name),
         scale_length=scene.unit_settings.scale_length, working_space=scene_working_space(),
-        blender=target["blender"], engine=target["engine"], mode=props.mode)
+        blender=target["blender"], engine=target["engine"], mode=props.mode).with_maps(maps)
 
 
 def store_result(material: bpy.types.Material, plan: dict) -> None:

@@ -9,7 +9,7 @@
 use std::time::Instant;
 
 use spectral_skin::inverse::albedo::{table_coordinates, AlbedoFitOptions, AlbedoTable};
-use spectral_skin::inverse::albedo_maps::fit_albedo_map;
+use spectral_skin::inverse::albedo_maps::{fit_albedo_map, EpidermisThickness};
 use spectral_skin::maps::example::face_params;
 use spectral_skin::skin::SkinParams;
 
@@ -43,17 +43,24 @@ fn main() {
         .collect();
     let eight: Vec<[f32; 3]> = float.iter().map(|c| c.map(|v| from_8bit(to_8bit(v)))).collect();
     println!("{size}x{size}, {} threads", rayon::current_num_threads());
+    let runs = [
+        ("held 0.25 mm, first (cold table, in-process cache empty)", EpidermisThickness::Held),
+        ("held 0.25 mm, second (table cached)", EpidermisThickness::Held),
+        ("thickness chosen (the default), first (six more tables built)", EpidermisThickness::Chosen),
+        ("thickness chosen (the default), second (tables cached)", EpidermisThickness::Chosen),
+    ];
     for (name, texels) in [("8-bit", &eight), ("float", &float)] {
-        for run in ["first (cold table, in-process cache empty)", "second (table cached)"] {
-            if name == "float" && run.starts_with("first") {
-                continue; // the table is cached by then
+        for (run, thickness) in runs {
+            if name == "float" && run.contains("first") {
+                continue; // the tables are cached by then
             }
             let start = Instant::now();
-            let fit = fit_albedo_map(texels, size, size, &options).unwrap();
+            let fit = fit_albedo_map(texels, size, size, &options, thickness).unwrap();
             let s = fit.stats;
             println!(
-                "{name} {run}: {:.2} s, {} distinct colours, table from cache {}, ΔE00 mean {:.4} max {:.4}, {} out of gamut",
+                "{name} {run}: {:.2} s, thickness {} mm, {} distinct colours, table from cache {}, ΔE00 mean {:.4} max {:.4}, {} out of gamut",
                 start.elapsed().as_secs_f64(),
+                fit.extended[0],
                 s.distinct_colours,
                 s.table_from_cache,
                 s.mean_delta_e00,

@@ -1,11 +1,11 @@
 """From Albedo Texture, without bpy: the albedo image's pixels as linear RGB, the core's per-texel fit
-(``spectral_skin.fit_albedo_map``), the four-channel parameter EXR written beside the .blend, and what the operator
-reports (the bpy glue is ``ops.SPECTRAL_SKIN_OT_from_albedo_texture``).
+(``spectral_skin.fit_albedo_map``) and what the operator reports (the bpy glue is
+``ops.SPECTRAL_SKIN_OT_from_albedo_texture``); the core's fit writes the parameter EXR itself.
 
 The fit inverts the model: per texel the four parameters whose albedo is nearest the texel's colour (CIEDE2000), with
-the extended physiology one value per texture (docs/model.md, Extended physiology). Its result's parameter map is
-what ``spectral-skin maps`` and the panel's *Parameter Map* read: channels melanin, melanin_blend, hemoglobin,
-oiliness.
+the extended physiology one value per texture, the epidermis thickness chosen for it (docs/model.md, Extended
+physiology). Its parameter map is what ``spectral-skin maps`` and the panel's *Parameter Map* read: channels
+melanin, melanin_blend, hemoglobin, oiliness per texel and the extended physiology as channels of one value.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import Any
 
 import spectral_skin
 
-from .settings import DEFAULT_TRANSPORT, EXTENDED_DEFAULTS, EXTENDED_PARAMETERS, PARAMETERS, TRANSPORTS, WORKING_SPACES
+from .settings import DEFAULT_TRANSPORT, EXTENDED_PARAMETERS, TRANSPORTS, WORKING_SPACES
 
 # Blender's names of the image colour spaces whose 8/16-bit values are sRGB-encoded Rec.709.
 SRGB_NAMES = ("sRGB",)
@@ -62,11 +62,11 @@ def linear_albedo(pixels: Any, colorspace: str, is_float: bool, scene_space: str
 def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
         transport: str = DEFAULT_TRANSPORT) -> dict[str, Any]:
     """The core's per-texel fit (``spectral_skin.fit_albedo_map``, of the model with ``transport``, a key of
-    TRANSPORTS) and what the operator needs of it:
-    {"params": (H, W, 4) float32, "residual_delta_e00": (H, W), "extended": the extended physiology the parameters
-    hold for (the fit's where it reports them, else the thickness given, else the defaults), "median_delta_e00",
-    "max_delta_e00"}. Raises spectral_skin.SpectralSkinError when the core refuses the input; RuntimeError when this
-    spectral_skin has no fit."""
+    TRANSPORTS; the epidermis thickness chosen for the texture when ``epidermis_thickness_mm`` is None, as the core's
+    default, else held) and what the operator needs of it: {"fit": the core's ``AlbedoMapFit`` (``write(path)``
+    writes the parameter EXR), "extended": the extended physiology the parameters hold for, "thickness": how the
+    thickness was chosen (None: held), "median_delta_e00", "max_delta_e00", "out_of_gamut_texels"}. Raises
+    spectral_skin.SpectralSkinError when the core refuses the input; RuntimeError when this spectral_skin has no fit."""
     import numpy as np
 
     fit_map: Any = getattr(spectral_skin, "fit_albedo_map", None)
@@ -74,15 +74,14 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
         raise RuntimeError(f"From Albedo Texture {UNAVAILABLE}")
     keywords: dict[str, Any] = {} if transport == DEFAULT_TRANSPORT else {"transport": TRANSPORTS[transport]}
     result = fit_map(albedo, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm, **keywords)
-    params = np.asarray(result["params"], dtype=np.float32)
-    residual = np.asarray(result["residual_delta_e00"], dtype=np.float32)
-    if params.shape != (*albedo.shape[:2], len(PARAMETERS)) or residual.shape != albedo.shape[:2]:
-        raise RuntimeError(f"spectral_skin.fit_albedo_map returned params {params.shape} and residual "
-                           f"{residual.shape} for an albedo of {albedo.shape}")
-    given = {} if epidermis_thickness_mm is None else {"epidermis_thickness_mm": float(epidermis_thickness_mm)}
-    extended = {name: float(result.get(name, given.get(name, EXTENDED_DEFAULTS[name]))) for name in EXTENDED_PARAMETERS}
-    return {"params": params, "residual_delta_e00": residual, "extended": extended,
-            "median_delta_e00": float(np.median(residual)), "max_delta_e00": float(np.max(residual))}
+    residual = np.asarray(result.residual_delta_e00, dtype=np.float32)
+    if tuple(result.shape) != tuple(albedo.shape[:2]) or residual.shape != albedo.shape[:2]:
+        raise RuntimeError(f"spectral_skin.fit_albedo_map returned a fit of {tuple(result.shape)} for an albedo of "
+                           f"{albedo.shape}")
+    extended = {name: float(result.extended[name]) for name in EXTENDED_PARAMETERS}
+    return {"fit": result, "extended": extended, "thickness": result.thickness,
+            "median_delta_e00": float(np.median(residual)), "max_delta_e00": float(np.max(residual)),
+            "out_of_gamut_texels": int(result.stats["out_of_gamut_texels"])}
 
 
 def parameter_map_path(blend_path: str, prefix: str) -> str:
@@ -91,35 +90,3 @@ def parameter_map_path(blend_path: str, prefix: str) -> str:
     if not blend_path:
         raise ValueError("the .blend is not saved yet, so the parameter map has no place beside it: save it first")
     return os.path.join(os.path.dirname(os.path.abspath(blend_path)), f"{prefix}_params.exr")
-
-
-def write_parameter_map(path: str, params: Any) -> None:
-    """Write (H, W, 4) parameters as the four-channel parameter EXR (float, channels melanin, melanin_blend,
-    hemoglobin, oiliness, row 0 at the top) that the core's reader takes (``spectral_skin.read_parameter_map``),
-    with OpenImageIO (the core's map writer writes only its outputs): first to a temporary file beside it, then
-    renamed into place, so a failure leaves an existing file as it was. Raises OSError naming the file."""
-    import numpy as np
-
-    try:
-        import OpenImageIO as oiio
-    except ImportError as error:
-        raise OSError(f"{path}: writing the parameter EXR needs the OpenImageIO Python module, which this Python "
-                      "lacks") from error
-    data = np.ascontiguousarray(params, dtype=np.float32)
-    height, width, channels = data.shape
-    spec = oiio.ImageSpec(width, height, channels, "float")
-    spec.channelnames = tuple(PARAMETERS)
-    spec.attribute("compression", "zip")
-    tmp = f"{path}.{os.getpid()}.tmp.exr"
-    out = oiio.ImageOutput.create(tmp)
-    if out is None or not out.open(tmp, spec):
-        raise OSError(f"{path}: cannot write the parameter EXR: {oiio.geterror()}")
-    try:
-        ok = out.write_image(data)
-        message = out.geterror()
-    finally:
-        out.close()
-    if not ok:
-        os.remove(tmp)
-        raise OSError(f"{path}: cannot write the parameter EXR: {message}")
-    os.replace(tmp, path)

@@ -22,7 +22,15 @@ import hashlib
 from typing import Any
 
 from .plan import extended_keywords
-from .settings import ACCURACY_LEVELS, DEFAULT_TRANSPORT, EXTENDED_PARAMETERS, PARAMETER_INFO, TRANSPORTS, SkinSettings
+from .settings import (
+    ACCURACY_LEVELS,
+    DEFAULT_TRANSPORT,
+    EXTENDED_PARAMETERS,
+    PARAMETER_INFO,
+    TRANSPORTS,
+    SkinSettings,
+    check,
+)
 from .targets import method_name
 
 
@@ -85,6 +93,7 @@ def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | No
     core read them (for the files Blender cannot read), "constants", "subsurface", "specular"}."""
     from .scene import scene_plan
 
+    check(settings)  # with its maps: a varying extended-physiology map has no place in a Live group
     forced = {**(overrides or {}),
               "subsurface": "ON" if kept(overrides, "subsurface") else "OFF",
               "specular": "ON" if kept(overrides, "specular") else "OFF"}

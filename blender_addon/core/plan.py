@@ -157,7 +157,7 @@ def make_plan(settings: SkinSettings, progress: Any = None, *, radius: bool = Tr
     target = plan["target"]
     plan["summary"]["computed"] += f" for Blender {target['blender']} {target['engine'].upper()}"
     # What the core's reader ignored in the map files (an alpha channel, a misspelt channel), once per note.
-    for note in dict.fromkeys(n for m in settings.maps.values() for n in m.notes):
+    for note in dict.fromkeys((*settings.notes, *(n for m in settings.maps.values() for n in m.notes))):
         plan["summary"]["warnings"].append(note)
     if not target["tested"]:
         plan["summary"]["warnings"].append(target["untested_reason"])
@@ -235,6 +235,8 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
     extended = extended_keywords(spectral_skin.maps, settings, "extended physiology with parameter maps")
+    # A varying extended map (SkinSettings.with_maps kept it) beats the material's value.
+    extended.update({name: _map_input(settings, name) for name in EXTENDED_PARAMETERS if name in settings.maps})
     # Without subsurface the core fits no radius and Base Color is the albedo (Burley's Base Color), whatever the
     # material's method.
     outputs = ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]

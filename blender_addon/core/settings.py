@@ -145,8 +145,8 @@ class SkinSettings:
     working_space: str = DEFAULT_WORKING_SPACE
     # "BAKED" or "LIVE" (MODES).
     mode: str = "BAKED"
-    # The extended physiology (EXTENDED_PARAMETERS: one value per material, never a map), the paper's values by
-    # default (the core's table).
+    # The extended physiology (EXTENDED_PARAMETERS: one value per material, unless a parameter EXR holds a varying
+    # channel of it: with_maps), the paper's values by default (the core's table).
     epidermis_thickness_mm: float = EXTENDED_DEFAULTS["epidermis_thickness_mm"]
     baseline_absorption_scale: float = EXTENDED_DEFAULTS["baseline_absorption_scale"]
     blood_oxygenation: float = EXTENDED_DEFAULTS["blood_oxygenation"]
@@ -168,8 +168,36 @@ class SkinSettings:
         values.update(overrides)
         return cls(**values)  # type: ignore[arg-type]
 
+    # What with_maps decided that an artist should read (an extended value taken from a map), one sentence each.
+    notes: tuple[str, ...] = ()
+
     def replace(self, **changes: object) -> SkinSettings:
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+    def with_maps(self, maps: dict[str, ParameterMap]) -> SkinSettings:
+        """The settings with parameter maps. An extended-physiology map (a channel of a parameter EXR, as the albedo
+        fit writes one) of one value everywhere is that parameter's value: it replaces the material's, with a note
+        where they differ, so a constant map costs one evaluation and Live mode can use it. A varying one stays a map:
+        Baked mode computes it per texel; Live mode refuses it (:func:`check`)."""
+        import numpy as np
+
+        kept: dict[str, ParameterMap] = {}
+        values: dict[str, float] = {}
+        notes = list(self.notes)
+        for name, pmap in maps.items():
+            pixels = np.asarray(pmap.pixels, dtype=np.float32)
+            if name in EXTENDED_PARAMETERS and pixels.size and bool(np.all(pixels == pixels.flat[0])):
+                value = float(pixels.flat[0])
+                if pmap.normalized:
+                    low, high = PARAMETER_INFO[name][:2]
+                    value = low + value * (high - low)
+                if value != float(getattr(self, name)):
+                    notes.append(f"{name} = {value:g} from the map {pmap.name} (not the material's "
+                                 f"{float(getattr(self, name)):g})")
+                values[name] = value
+                continue
+            kept[name] = pmap
+        return self.replace(maps=kept, notes=tuple(notes), **values)
 
     def constants(self) -> dict[str, float]:
         """The paper's four parameters' constants (a parameter with a map ignores its constant)."""
@@ -208,10 +236,16 @@ def check(settings: SkinSettings) -> None:
             f"working space must be one of {', '.join(WORKING_SPACES)}; got {settings.working_space!r}")
     if settings.mode not in MODES:
         raise spectral_skin.SpectralSkinError(f"mode must be one of {', '.join(MODES)}; got {settings.mode!r}")
-    unknown = set(settings.maps) - set(PARAMETERS)
+    unknown = set(settings.maps) - set(PARAMETERS) - set(EXTENDED_PARAMETERS)
     if unknown:
         raise spectral_skin.SpectralSkinError(
-            f"parameter maps must be among {', '.join(PARAMETERS)}; got {', '.join(sorted(unknown))}")
+            f"parameter maps must be among {', '.join((*PARAMETERS, *EXTENDED_PARAMETERS))}; got "
+            f"{', '.join(sorted(unknown))}")
+    varying = [name for name in EXTENDED_PARAMETERS if name in settings.maps]
+    if varying and settings.mode == "LIVE":
+        raise spectral_skin.SpectralSkinError(
+            f"Live mode takes one value of {', '.join(varying)} per material, but the map "
+            f"{settings.maps[varying[0]].name} varies over the texture: use Baked mode, or a map of one value")
     if settings.maps and not settings.output_dir and settings.mode == "BAKED":
         raise spectral_skin.SpectralSkinError("an output folder for the texture maps is required with parameter maps")
     # The parameter values themselves are validated by the core when the plan is computed.

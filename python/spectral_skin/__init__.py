@@ -31,6 +31,7 @@ unknown channel).
 """
 
 from ._core import (
+    AlbedoMapFit,
     SpectralSkinError,
     SpectralSkinIOError,
     SpectralSkinWarning,
@@ -55,6 +56,7 @@ from ._core import (
 )
 
 __all__ = [
+    "AlbedoMapFit",
     "SpectralSkinError",
     "SpectralSkinIOError",
     "SpectralSkinWarning",

@@ -9,12 +9,13 @@ except the images of :func:`maps` (float32). Every function releases the GIL whi
 import os
 import pathlib
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import Any, Literal, TypedDict
+from typing import Any, Literal, TypedDict, final
 
 import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "AlbedoMapFit",
     "SpectralSkinError",
     "SpectralSkinIOError",
     "SpectralSkinWarning",
@@ -359,11 +360,36 @@ def fit_albedo_map(
     melanin_blend_prior: float | None = None,
     prior_weight: float | None = None,
     ambiguity_delta_e: float | None = None,
-    fit_epidermis_thickness: bool = False,
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
-) -> dict[str, Any]:
+) -> AlbedoMapFit:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo_map)``."""
+
+class _ThicknessChoice(TypedDict):
+    screened: list[list[float]]
+    sampled_texels: int | None
+    whole_texture: list[list[float]]
+    chosen_mm: float
+
+@final
+class AlbedoMapFit:
+    """Documented once, in the compiled module: ``help(spectral_skin.AlbedoMapFit)``."""
+
+    @property
+    def params(self) -> _Float32Array: ...
+    @property
+    def residual_delta_e00(self) -> _Float32Array: ...
+    @property
+    def extended(self) -> dict[str, float]: ...
+    @property
+    def stats(self) -> dict[str, Any]: ...
+    @property
+    def thickness(self) -> _ThicknessChoice | None: ...
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    def write(
+        self, path: str | os.PathLike[str], residual_path: str | os.PathLike[str] | None = None
+    ) -> None: ...
 def fit_spectrum(
     wavelengths_nm: npt.ArrayLike,
     reflectance: npt.ArrayLike,

@@ -821,8 +821,9 @@ struct FitMapsArgs {
     /// (sRGB-encoded, decoded to linear; --working-space must then be linear_rec709, sRGB's primaries).
     #[arg(long)]
     albedo: PathBuf,
-    /// The parameter map to write (channels melanin, melanin_blend, hemoglobin, oiliness); its folder is created if
-    /// missing.
+    /// The parameter map to write (channels melanin, melanin_blend, hemoglobin, oiliness per texel, and the extended
+    /// physiology the fit holds for: epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation); its folder
+    /// is created if missing.
     #[arg(long, default_value = "params.exr")]
     out: PathBuf,
     /// The residual map to write (ΔE00 per texel, channel Y); default: residual.exr beside --out.
@@ -831,13 +832,11 @@ struct FitMapsArgs {
     /// The albedo's linear RGB working space.
     #[arg(long, value_enum, default_value_t = fit_maps::Space::LinearRec709)]
     working_space: fit_maps::Space,
-    /// Epidermis thickness held for every texel, mm (0.01..0.5); default the paper's 0.25. With a value other than
-    /// 0.25 the map is fitted at it, and `maps` must be run with the same thickness.
+    /// Epidermis thickness held for every texel, mm (0.01..0.5). Default: one thickness chosen for the whole texture
+    /// (0.05..0.5 mm, the least mean ΔE00 over its texels, never worse than the paper's 0.25 on it). Either way the
+    /// value is written into the parameter map as the channel epidermis_thickness_mm, which `maps --params` reads.
     #[arg(long)]
     epidermis_thickness_mm: Option<f64>,
-    /// Choose one epidermis thickness for the whole texture (0.05..0.5 mm, least mean ΔE00) instead.
-    #[arg(long, conflicts_with = "epidermis_thickness_mm")]
-    fit_epidermis_thickness: bool,
     /// Oiliness written into every texel (0..1; the albedo does not depend on it); default 0.3.
     #[arg(long)]
     oiliness: Option<f64>,
@@ -855,11 +854,8 @@ struct FitMapsArgs {
 mod fit_maps {
     use spectral_skin::color::WorkingSpace;
     use spectral_skin::inverse::albedo::AlbedoFitOptions;
-    use spectral_skin::inverse::albedo_maps::{fit_albedo_map_cancellable, fit_epidermis_thickness_cancellable};
-    use spectral_skin::maps::io::{
-        check_output_dir, commit_all, create_output_dir, output_folder_of, read_albedo_texture, stage_channels_exr,
-        ExrOptions, PARAM_CHANNELS,
-    };
+    use spectral_skin::inverse::albedo_maps::{fit_albedo_map_cancellable, EpidermisThickness};
+    use spectral_skin::maps::io::{check_output_dir, output_folder_of, read_albedo_texture};
 
     #[derive(Clone, Copy, clap::ValueEnum)]
     #[value(rename_all = "snake_case")]
@@ -911,36 +907,20 @@ mod fit_maps {
         if let Some(n) = args.transport.streams {
             options.streams = n;
         }
-        let mut options = options.validated()?;
+        let options = options.validated()?;
+        let thickness =
+            if args.epidermis_thickness_mm.is_some() { EpidermisThickness::Held } else { EpidermisThickness::Chosen };
         let start = std::time::Instant::now();
         crate::ctrl_c::catch();
-        if args.fit_epidermis_thickness {
-            let (best, means) =
-                fit_epidermis_thickness_cancellable(&texels, width, height, &options, &crate::ctrl_c::INTERRUPTED)?;
-            eprintln!("epidermis thickness: {best} mm (mean ΔE00 per candidate [mm, ΔE00]: {means:?})");
-            options.extended[0] = best;
-        }
-        let fit = fit_albedo_map_cancellable(&texels, width, height, &options, &crate::ctrl_c::INTERRUPTED)?;
+        let fit = fit_albedo_map_cancellable(&texels, width, height, &options, thickness, &crate::ctrl_c::INTERRUPTED)?;
         let seconds = start.elapsed().as_secs_f64();
-        let params: Vec<Vec<f32>> = (0..4).map(|c| fit.params.iter().map(|p| p[c]).collect()).collect();
-        let named: Vec<(&str, &[f32])> = PARAM_CHANNELS.iter().copied().zip(params.iter().map(Vec::as_slice)).collect();
-        for file in [&args.out, &residual_path] {
-            create_output_dir(output_folder_of(file))?;
-        }
-        let staged = vec![
-            stage_channels_exr(&args.out, width, height, &named, ExrOptions::FLOAT_PIZ)?,
-            stage_channels_exr(
-                &residual_path,
-                width,
-                height,
-                &[("Y", &fit.residual_delta_e00)],
-                ExrOptions::FLOAT_PIZ,
-            )?,
-        ];
-        commit_all(staged)?;
+        fit.write(&args.out, Some(&residual_path))?;
         let s = &fit.stats;
         if args.json {
-            println!("{}", serde_json::json!({ "stats": s, "seconds": seconds }));
+            println!(
+                "{}",
+                serde_json::json!({ "stats": s, "extended": fit.extended, "thickness": fit.thickness, "seconds": seconds })
+            );
         } else {
             println!(
                 "wrote {} and {} ({width}x{height}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
@@ -953,10 +933,14 @@ mod fit_maps {
                 s.out_of_gamut_texels,
                 options.ambiguity_delta_e
             );
-            if options.extended[0] != spectral_skin::skin::params::EXTENDED_DEFAULTS[0] {
+            if let Some(choice) = &fit.thickness {
                 println!(
-                    "the map is fitted at epidermis_thickness_mm = {}: use it for `maps` too",
-                    options.extended[0]
+                    "epidermis thickness {} mm chosen for the texture (mean ΔE00 per candidate [mm, ΔE00]: {:?}{}); \
+                     written into {} with the other extended physiology",
+                    choice.chosen_mm,
+                    choice.screened,
+                    choice.sampled_texels.map_or(String::new(), |n| format!(", screened on {n} texels")),
+                    args.out.display()
                 );
             }
         }

@@ -222,6 +222,10 @@ fn node_u(n: [usize; 3], i: usize) -> [f64; 3] {
     [m as f64 / (n[0] - 1) as f64, j as f64 / (n[1] - 1) as f64, k as f64 / (n[2] - 1) as f64]
 }
 
+/// How many forward tables [`cached_albedo_table`] keeps (about 0.3 MB each): a texture fit that chooses the
+/// epidermis thickness uses up to seven.
+const TABLE_CACHE_SIZE: usize = 8;
+
 /// The forward table for `options`, from an in-process cache of the last few (keyed by working space, extended
 /// physiology, transport and streams), else built. Returns whether it came from the cache.
 pub fn cached_albedo_table(options: &AlbedoFitOptions) -> Result<(Arc<AlbedoTable>, bool), SkinError> {
@@ -240,7 +244,7 @@ pub fn cached_albedo_table_cancellable(
     }
     let table = Arc::new(AlbedoTable::build_cancellable(options, cancel)?);
     let mut cache = CACHE.lock().map_err(|_| poisoned())?;
-    if cache.len() >= 4 {
+    if cache.len() >= TABLE_CACHE_SIZE {
         cache.remove(0);
     }
     cache.push((key, table.clone()));

@@ -2,6 +2,8 @@
 //! (src/inverse/albedo.rs), on the forward table only (coarse nearest node, then Levenberg-Marquardt in table
 //! coordinates), each distinct colour once.
 
+use std::collections::HashMap;
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use rayon::prelude::*;
@@ -9,7 +11,10 @@ use serde::Serialize;
 
 use super::albedo::{cached_albedo_table_cancellable, distinct_colours, fit_on_table, AlbedoFitOptions, AlbedoTable};
 use crate::error::SkinError;
-use crate::skin::params::{EPIDERMIS_THICKNESS, EXTENDED_DEFAULTS};
+use crate::maps::io::{
+    commit_all, create_output_dir, output_folder_of, stage_channels_exr, ExrOptions, EXTENDED_CHANNELS, PARAM_CHANNELS,
+};
+use crate::skin::params::EXTENDED_DEFAULTS;
 
 /// The fitted maps of an albedo texture, row-major like the input.
 #[derive(Debug, Clone, PartialEq)]
@@ -17,11 +22,50 @@ pub struct AlbedoMapFit {
     pub width: usize,
     pub height: usize,
     /// C_m, beta_m, C_h, oiliness per texel (the four channels of a parameter map; the extended physiology is
-    /// `options.extended` for every texel).
+    /// `extended` for every texel).
     pub params: Vec<[f32; 4]>,
     /// ΔE00 between each texel and the table's albedo of its parameters.
     pub residual_delta_e00: Vec<f32>,
+    /// The extended physiology the parameters hold for (the chosen or held epidermis thickness; the others held).
+    pub extended: [f64; 3],
+    /// How the epidermis thickness was chosen (None: held).
+    pub thickness: Option<ThicknessChoice>,
     pub stats: AlbedoMapStats,
+}
+
+impl AlbedoMapFit {
+    /// The parameter map's channels: the four of [`PARAM_CHANNELS`] per texel, then the extended physiology's
+    /// ([`EXTENDED_CHANNELS`], one value each), so that the map alone reproduces the fit (`maps --params`).
+    pub fn parameter_planes(&self) -> Vec<(&'static str, Vec<f32>)> {
+        let mut planes: Vec<(&'static str, Vec<f32>)> =
+            (0..4).map(|c| (PARAM_CHANNELS[c], self.params.par_iter().map(|p| p[c]).collect())).collect();
+        for (name, value) in EXTENDED_CHANNELS.iter().zip(self.extended) {
+            planes.push((name, vec![value as f32; self.params.len()]));
+        }
+        planes
+    }
+
+    /// Write the parameter EXR (float, PIZ; the channels of [`Self::parameter_planes`]) and, if asked, the residual
+    /// EXR (ΔE00, channel Y), both staged and renamed into place together; their folders are created. Nothing is
+    /// left behind on an error.
+    pub fn write(&self, params_path: &Path, residual_path: Option<&Path>) -> Result<(), SkinError> {
+        for file in std::iter::once(params_path).chain(residual_path) {
+            create_output_dir(output_folder_of(file))?;
+        }
+        let planes = self.parameter_planes();
+        let named: Vec<(&str, &[f32])> = planes.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+        let mut staged = vec![stage_channels_exr(params_path, self.width, self.height, &named, ExrOptions::FLOAT_PIZ)?];
+        if let Some(path) = residual_path {
+            staged.push(stage_channels_exr(
+                path,
+                self.width,
+                self.height,
+                &[("Y", &self.residual_delta_e00)],
+                ExrOptions::FLOAT_PIZ,
+            )?);
+        }
+        commit_all(staged)
+    }
 }
 
 /// Figures of a map fit.
@@ -61,14 +105,44 @@ fn check_texels(texels: &[[f32; 3]], width: usize, height: usize) -> Result<(), 
     Ok(())
 }
 
-/// Fit every texel of a linear-RGB albedo texture (`width * height` texels, row-major) in `options.working_space`.
+/// How a texture fit sets the epidermis thickness (the only extended parameter a texture's colours decide: the
+/// measured colours of docs/skin-atlas.md, "Fitting a texture", fit within 0.25 ΔE00 median with it chosen and 3.1 at
+/// the paper's 0.25 mm).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EpidermisThickness {
+    /// One value for the whole texture (the default): the candidate of [`THICKNESS_CANDIDATES_MM`] or the held value
+    /// (`options.extended[0]`) with the least mean ΔE00 over the texture's texels, never worse on the texture than the
+    /// held value ([`ThicknessChoice`] says how it was judged).
+    #[default]
+    Chosen,
+    /// `options.extended[0]` for every texel.
+    Held,
+}
+
+/// How [`EpidermisThickness::Chosen`] chose, for the fit's report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ThicknessChoice {
+    /// [mm, mean ΔE00] per candidate: over every texel of the texture when `sampled_texels` is None, else over that
+    /// many texels spread evenly over it (a texture of more than [`SCREEN_COLOURS`] distinct colours).
+    pub screened: Vec<[f64; 2]>,
+    pub sampled_texels: Option<usize>,
+    /// [mm, mean ΔE00 over every texel] of the candidates fitted in full (after a sampled screen: the screen's best
+    /// and the held value), the chosen one's the least.
+    pub whole_texture: Vec<[f64; 2]>,
+    pub chosen_mm: f64,
+}
+
+/// Fit every texel of a linear-RGB albedo texture (`width * height` texels, row-major) in `options.working_space`,
+/// with the epidermis thickness chosen for the texture or held (`thickness`).
 pub fn fit_albedo_map(
     texels: &[[f32; 3]],
     width: usize,
     height: usize,
     options: &AlbedoFitOptions,
+    thickness: EpidermisThickness,
 ) -> Result<AlbedoMapFit, SkinError> {
-    fit_albedo_map_cancellable(texels, width, height, options, &AtomicBool::new(false))
+    fit_albedo_map_cancellable(texels, width, height, options, thickness, &AtomicBool::new(false))
 }
 
 /// [`fit_albedo_map`] that stops once `cancel` is set, with an error.
@@ -77,13 +151,22 @@ pub fn fit_albedo_map_cancellable(
     width: usize,
     height: usize,
     options: &AlbedoFitOptions,
+    thickness: EpidermisThickness,
     cancel: &AtomicBool,
 ) -> Result<AlbedoMapFit, SkinError> {
     let options = options.validated()?;
     check_texels(texels, width, height)?;
-    let (table, table_from_cache) = cached_albedo_table_cancellable(&options, cancel)?;
     let (colours, of_texel) = distinct_colours(texels);
-    let fits = fit_colours(&table, &colours, &options, cancel)?;
+    let (options, fits, table_from_cache, choice) = match thickness {
+        EpidermisThickness::Held => {
+            let (table, cached) = cached_albedo_table_cancellable(&options, cancel)?;
+            (options, fit_colours(&table, &colours, &options, cancel)?, cached, None)
+        }
+        EpidermisThickness::Chosen => {
+            let (options, fits, cached, choice) = choose_thickness(&colours, &of_texel, &options, cancel)?;
+            (options, fits, cached, Some(choice))
+        }
+    };
     let oil = options.oiliness as f32;
     let (params, residual_delta_e00): (Vec<[f32; 4]>, Vec<f32>) = of_texel
         .par_iter()
@@ -100,6 +183,8 @@ pub fn fit_albedo_map_cancellable(
         height,
         params,
         residual_delta_e00,
+        extended: options.extended,
+        thickness: choice,
         stats: AlbedoMapStats {
             texels: texels.len(),
             distinct_colours: colours.len(),
@@ -140,45 +225,93 @@ fn f32_not_above(x: f64) -> f32 {
     }
 }
 
-/// The epidermis thicknesses [`fit_epidermis_thickness`] tries, mm: the range of `EPIDERMIS_THICKNESS`.
+/// The epidermis thicknesses [`EpidermisThickness::Chosen`] tries besides the held value, mm: the range of
+/// `EPIDERMIS_THICKNESS` (0.01 mm, its minimum, is thinner than any skin's colour asks for).
 pub const THICKNESS_CANDIDATES_MM: [f64; 6] = [0.05, 0.1, 0.15, 0.25, 0.35, 0.5];
-/// Most distinct colours [`fit_epidermis_thickness`] fits per candidate (an even sample of them).
-const THICKNESS_SAMPLE: usize = 2048;
+/// Up to this many distinct colours, every candidate is fitted on all of them and judged on every texel; a texture
+/// with more is screened on [`SCREEN_COLOURS`] texels spread over it, then the screen's best and the held value are
+/// fitted in full and the better on every texel is kept.
+pub const SCREEN_COLOURS: usize = 4096;
 
-/// One epidermis thickness for a whole texture: the candidate (`THICKNESS_CANDIDATES_MM`) whose fit has the
-/// smallest mean ΔE00 over an even sample of the texture's distinct colours, with each candidate's mean. The other
-/// options (including the other extended parameters) are held.
-pub fn fit_epidermis_thickness(
-    texels: &[[f32; 3]],
-    width: usize,
-    height: usize,
-    options: &AlbedoFitOptions,
-) -> Result<(f64, Vec<[f64; 2]>), SkinError> {
-    fit_epidermis_thickness_cancellable(texels, width, height, options, &AtomicBool::new(false))
+/// The mean over the texture's texels of per-colour values (`count[i]` texels of colour i).
+fn texel_mean(values: &[([f32; 3], f32)], counts: &[u32]) -> f64 {
+    let total: f64 = counts.iter().map(|&c| c as f64).sum();
+    values.iter().zip(counts).map(|(v, &c)| v.1 as f64 * c as f64).sum::<f64>() / total
 }
 
-/// [`fit_epidermis_thickness`] that stops once `cancel` is set (its six tables' builds and fits read it).
-pub fn fit_epidermis_thickness_cancellable(
-    texels: &[[f32; 3]],
-    width: usize,
-    height: usize,
+/// [`EpidermisThickness::Chosen`]: the options at the chosen thickness, every colour's fit at it, whether every
+/// table came from the cache, and the report.
+#[allow(clippy::type_complexity)]
+fn choose_thickness(
+    colours: &[[f32; 3]],
+    of_texel: &[u32],
     options: &AlbedoFitOptions,
     cancel: &AtomicBool,
-) -> Result<(f64, Vec<[f64; 2]>), SkinError> {
-    check_texels(texels, width, height)?;
-    let (colours, _) = distinct_colours(texels);
-    let step = colours.len().div_ceil(THICKNESS_SAMPLE).max(1);
-    let sample: Vec<[f32; 3]> = colours.iter().step_by(step).copied().collect();
-    let mut means = Vec::new();
-    for t in THICKNESS_CANDIDATES_MM {
-        debug_assert!((EPIDERMIS_THICKNESS.min..=EPIDERMIS_THICKNESS.max).contains(&t));
-        let o = AlbedoFitOptions { extended: [t, options.extended[1], options.extended[2]], ..*options }.validated()?;
-        let (table, _) = cached_albedo_table_cancellable(&o, cancel)?;
-        let fits = fit_colours(&table, &sample, &o, cancel)?;
-        means.push([t, fits.iter().map(|f| f.1 as f64).sum::<f64>() / fits.len() as f64]);
+) -> Result<(AlbedoFitOptions, Vec<([f32; 3], f32)>, bool, ThicknessChoice), SkinError> {
+    let held = options.extended[0];
+    let mut candidates: Vec<f64> = THICKNESS_CANDIDATES_MM.to_vec();
+    if !candidates.contains(&held) {
+        candidates.push(held);
+        candidates.sort_by(f64::total_cmp);
     }
-    let best = means.iter().fold(means[0], |b, m| if m[1] < b[1] { *m } else { b });
-    Ok((best[0], means))
+    let at = |t: f64| AlbedoFitOptions { extended: [t, options.extended[1], options.extended[2]], ..*options };
+    let all_cached = std::cell::Cell::new(true);
+    let fit_all = |t: f64, colours: &[[f32; 3]]| -> Result<Vec<([f32; 3], f32)>, SkinError> {
+        let o = at(t).validated()?;
+        let (table, cached) = cached_albedo_table_cancellable(&o, cancel)?;
+        all_cached.set(all_cached.get() && cached);
+        fit_colours(&table, colours, &o, cancel)
+    };
+    let mut counts = vec![0u32; colours.len()];
+    for &i in of_texel {
+        counts[i as usize] += 1;
+    }
+    if colours.len() <= SCREEN_COLOURS {
+        // Every colour at every candidate: the means are the texture's own, and the best's fits are the result.
+        let mut best: Option<(f64, f64, Vec<([f32; 3], f32)>)> = None;
+        let mut screened = Vec::new();
+        for &t in &candidates {
+            let fits = fit_all(t, colours)?;
+            let mean = texel_mean(&fits, &counts);
+            screened.push([t, mean]);
+            if !matches!(&best, Some(b) if b.1 <= mean) {
+                best = Some((t, mean, fits));
+            }
+        }
+        let (t, _, fits) = best.expect("at least one candidate");
+        let choice = ThicknessChoice { whole_texture: screened.clone(), screened, sampled_texels: None, chosen_mm: t };
+        return Ok((at(t), fits, all_cached.get(), choice));
+    }
+    // Screen on texels spread evenly over the texture (the golden-ratio sequence: no row or column pattern), each
+    // distinct colour fitted once with its multiplicity.
+    let golden = (5f64.sqrt() - 1.0) / 2.0;
+    let mut weight: HashMap<u32, u32> = HashMap::new();
+    for k in 0..SCREEN_COLOURS {
+        let texel = ((k as f64 * golden).fract() * of_texel.len() as f64) as usize;
+        *weight.entry(of_texel[texel.min(of_texel.len() - 1)]).or_default() += 1;
+    }
+    let mut sample: Vec<(u32, u32)> = weight.into_iter().collect();
+    sample.sort_unstable();
+    let sample_colours: Vec<[f32; 3]> = sample.iter().map(|&(i, _)| colours[i as usize]).collect();
+    let sample_counts: Vec<u32> = sample.iter().map(|&(_, c)| c).collect();
+    let mut screened = Vec::new();
+    for &t in &candidates {
+        screened.push([t, texel_mean(&fit_all(t, &sample_colours)?, &sample_counts)]);
+    }
+    let best = screened.iter().fold(screened[0], |b, m| if m[1] < b[1] { *m } else { b })[0];
+    let mut whole_texture = Vec::new();
+    let mut kept: Option<(f64, f64, Vec<([f32; 3], f32)>)> = None;
+    for t in if best == held { vec![held] } else { vec![best, held] } {
+        let fits = fit_all(t, colours)?;
+        let mean = texel_mean(&fits, &counts);
+        whole_texture.push([t, mean]);
+        if !matches!(&kept, Some(k) if k.1 <= mean) {
+            kept = Some((t, mean, fits));
+        }
+    }
+    let (t, _, fits) = kept.expect("at least one candidate");
+    let choice = ThicknessChoice { screened, sampled_texels: Some(SCREEN_COLOURS), whole_texture, chosen_mm: t };
+    Ok((at(t), fits, all_cached.get(), choice))
 }
 
 /// Whether the options' extended physiology is the paper's (a four-channel parameter map says everything).

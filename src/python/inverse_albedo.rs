@@ -2,18 +2,18 @@
 //! (src/inverse/albedo.rs).
 
 use numpy::{PyArray1, PyArrayMethods};
+use std::path::PathBuf;
+
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::color::ALL_WORKING_SPACES;
 use crate::inverse::albedo::{fit_albedo_cancellable, AlbedoFitOptions};
-use crate::inverse::albedo_maps::{
-    fit_albedo_map_cancellable, fit_epidermis_thickness_cancellable as choose_thickness, is_paper_extended,
-};
+use crate::inverse::albedo_maps::{fit_albedo_map_cancellable, AlbedoMapFit, EpidermisThickness};
 use crate::skin::params::EXTENDED_PARAMS;
 
 use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg};
-use super::detach::detached_interruptible;
+use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
 
 /// The options from the keyword arguments (None: the defaults of src/inverse/albedo.rs).
@@ -126,24 +126,22 @@ pub(super) fn fit_albedo_py<'py>(
     to_py(py, &fit)
 }
 
-/// Fit every texel of an albedo texture (docs/skin-atlas.md, "Fitting a texture"): a forward table at the held
-/// extended physiology, the nearest node and a Levenberg-Marquardt refinement per distinct colour.
+/// Fit every texel of an albedo texture (docs/skin-atlas.md, "Fitting a texture"): a forward table at the extended
+/// physiology, the nearest node and a Levenberg-Marquardt refinement per distinct colour. The epidermis thickness is
+/// chosen for the texture unless ``epidermis_thickness_mm`` holds it.
 ///
 /// Arguments:
 ///     albedo: (H, W, 3) float32 or float64, linear RGB in ``working_space``. A NaN or infinite texel is an error
 ///         naming it.
-///     fit_epidermis_thickness: if True, one epidermis thickness for the whole texture is chosen first (the
-///         candidate of 0.05..0.5 mm with the least mean ΔE00), instead of ``epidermis_thickness_mm``.
-///     working_space, epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation, oiliness,
-///     melanin_blend_prior, prior_weight, ambiguity_delta_e, transport, streams: as for :func:`fit_albedo`.
+///     epidermis_thickness_mm: None (the default): one thickness for the whole texture, the candidate of 0.05..0.5 mm
+///         with the least mean ΔE00 over its texels, never worse on it than the paper's 0.25; a number: held for
+///         every texel (mm, 0.01..0.5).
+///     working_space, baseline_absorption_scale, blood_oxygenation, oiliness, melanin_blend_prior, prior_weight,
+///     ambiguity_delta_e, transport, streams: as for :func:`fit_albedo`.
 ///
 /// Returns:
-///     A dict: "params" (H, W, 4) float32 (melanin, melanin_blend, hemoglobin, oiliness: the channels of a
-///     parameter map), or (H, W, 7) with the extended physiology appended when it is not the paper's;
-///     "residual_delta_e00" (H, W) float32 (ΔE00 between each texel and its fit, by the table); "extended"
-///     (the held values by name); "stats" ({"texels", "distinct_colours", "table_from_cache", "max_delta_e00",
-///     "mean_delta_e00", "out_of_gamut_texels", "options" (with "transport" and "streams")}); "thickness_means"
-///     ([[mm, mean ΔE00], ...]) when ``fit_epidermis_thickness``.
+///     An :class:`AlbedoMapFit`: the parameter maps, the extended physiology they hold for, the residual, the
+///     figures, and ``write(path)``, which writes the parameter EXR that ``maps`` and the add-on read.
 ///
 /// Raises:
 ///     SpectralSkinError: a non-finite texel, a value out of range, another shape.
@@ -155,25 +153,24 @@ pub(super) fn fit_albedo_py<'py>(
     signature = (
         albedo, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
         blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
-        ambiguity_delta_e = None, fit_epidermis_thickness = false, transport = "adding_doubling", streams = None
+        ambiguity_delta_e = None, transport = "adding_doubling", streams = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn fit_albedo_map_py<'py>(
-    py: Python<'py>,
-    albedo: &Bound<'py, PyAny>,
+pub(super) fn fit_albedo_map_py(
+    py: Python<'_>,
+    albedo: &Bound<'_, PyAny>,
     working_space: &str,
-    epidermis_thickness_mm: Option<&Bound<'py, PyAny>>,
-    baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
-    blood_oxygenation: Option<&Bound<'py, PyAny>>,
-    oiliness: Option<&Bound<'py, PyAny>>,
-    melanin_blend_prior: Option<&Bound<'py, PyAny>>,
-    prior_weight: Option<&Bound<'py, PyAny>>,
-    ambiguity_delta_e: Option<&Bound<'py, PyAny>>,
-    fit_epidermis_thickness: bool,
+    epidermis_thickness_mm: Option<&Bound<'_, PyAny>>,
+    baseline_absorption_scale: Option<&Bound<'_, PyAny>>,
+    blood_oxygenation: Option<&Bound<'_, PyAny>>,
+    oiliness: Option<&Bound<'_, PyAny>>,
+    melanin_blend_prior: Option<&Bound<'_, PyAny>>,
+    prior_weight: Option<&Bound<'_, PyAny>>,
+    ambiguity_delta_e: Option<&Bound<'_, PyAny>>,
     transport: &str,
-    streams: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyDict>> {
+    streams: Option<&Bound<'_, PyAny>>,
+) -> PyResult<AlbedoMapFitPy> {
     const EXPECTED: &str = "an (H, W, 3) float array of linear RGB";
     let array = float_array("albedo", albedo, 3, EXPECTED)?
         .ok_or_else(|| pyo3::exceptions::PyTypeError::new_err(format!("albedo must be {EXPECTED}")))?;
@@ -186,7 +183,7 @@ pub(super) fn fit_albedo_map_py<'py>(
     crate::maps::io::check_texel_count("albedo", width, height)?;
     let planes = [array.plane(Some(0))?, array.plane(Some(1))?, array.plane(Some(2))?];
     let texels: Vec<[f32; 3]> = (0..height * width).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
-    let mut options = options_from(
+    let options = options_from(
         working_space,
         [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation],
         oiliness,
@@ -196,39 +193,91 @@ pub(super) fn fit_albedo_map_py<'py>(
         transport,
         streams,
     )?;
-    let mut thickness_means = None;
-    // Ctrl-C stops the thickness choice, the table builds and the texels' fits (the flag was not passed before).
+    let thickness = if epidermis_thickness_mm.is_some_and(|t| !t.is_none()) {
+        EpidermisThickness::Held
+    } else {
+        EpidermisThickness::Chosen
+    };
+    // Ctrl-C stops the thickness choice, the table builds and the texels' fits.
     let cancel = std::sync::atomic::AtomicBool::new(false);
-    if fit_epidermis_thickness {
-        let (best, means) =
-            detached_interruptible(py, &cancel, || choose_thickness(&texels, width, height, &options, &cancel))?;
-        options.extended[0] = best;
-        thickness_means = Some(means);
+    let fit = detached_interruptible(py, &cancel, || {
+        fit_albedo_map_cancellable(&texels, width, height, &options, thickness, &cancel)
+    })?;
+    Ok(AlbedoMapFitPy { fit })
+}
+
+/// The result of :func:`fit_albedo_map`: the fitted parameter maps of an albedo texture, what they hold for, and how
+/// well they fit. Read-only; ``write`` saves it as the parameter EXR that ``spectral-skin maps --params``,
+/// :func:`read_parameter_map` and the add-on's Parameter Map read.
+#[pyclass(frozen, name = "AlbedoMapFit", module = "spectral_skin")]
+pub(super) struct AlbedoMapFitPy {
+    fit: AlbedoMapFit,
+}
+
+#[pymethods]
+impl AlbedoMapFitPy {
+    /// (H, W, 4) float32: melanin, melanin_blend, hemoglobin, oiliness per texel (row 0 at the top).
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let f = &self.fit;
+        let values: Vec<f32> = f.params.iter().flatten().copied().collect();
+        Ok(PyArray1::from_vec(py, values).reshape([f.height, f.width, 4]).map_err(internal)?.into_any())
     }
-    let fit =
-        detached_interruptible(py, &cancel, || fit_albedo_map_cancellable(&texels, width, height, &options, &cancel))?;
-    let channels = if is_paper_extended(&options) { 4 } else { 7 };
-    let mut values = Vec::with_capacity(fit.params.len() * channels);
-    for p in &fit.params {
-        values.extend_from_slice(p);
-        if channels == 7 {
-            values.extend(options.extended.map(|v| v as f32));
+
+    /// (H, W) float32: ΔE00 between each texel and the albedo of its parameters (by the fit's table).
+    #[getter]
+    fn residual_delta_e00<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let f = &self.fit;
+        Ok(PyArray1::from_slice(py, &f.residual_delta_e00).reshape([f.height, f.width]).map_err(internal)?.into_any())
+    }
+
+    /// The extended physiology every texel holds for, by name (epidermis_thickness_mm chosen or held; the others
+    /// held).
+    #[getter]
+    fn extended<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let extended = PyDict::new(py);
+        for (spec, v) in EXTENDED_PARAMS.iter().zip(self.fit.extended) {
+            extended.set_item(spec.name, v)?;
         }
+        Ok(extended)
     }
-    let dict = PyDict::new(py);
-    dict.set_item("params", PyArray1::from_vec(py, values).reshape([height, width, channels]).map_err(internal)?)?;
-    dict.set_item(
-        "residual_delta_e00",
-        PyArray1::from_vec(py, fit.residual_delta_e00).reshape([height, width]).map_err(internal)?,
-    )?;
-    let extended = PyDict::new(py);
-    for (spec, v) in EXTENDED_PARAMS.iter().zip(options.extended) {
-        extended.set_item(spec.name, v)?;
+
+    /// {"texels", "distinct_colours", "table_from_cache", "max_delta_e00", "mean_delta_e00", "out_of_gamut_texels",
+    /// "options" (with "transport" and "streams")}.
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.fit.stats)
     }
-    dict.set_item("extended", extended)?;
-    dict.set_item("stats", to_py(py, &fit.stats)?)?;
-    if let Some(m) = thickness_means {
-        dict.set_item("thickness_means", m)?;
+
+    /// How the epidermis thickness was chosen ({"screened": [[mm, mean ΔE00], ...], "sampled_texels": None (every
+    /// texel) or a count, "whole_texture": [[mm, mean ΔE00 over every texel], ...], "chosen_mm"}); None when held.
+    #[getter]
+    fn thickness<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.fit.thickness)
     }
-    Ok(dict)
+
+    /// (H, W): the texture's height and width.
+    #[getter]
+    fn shape(&self) -> (usize, usize) {
+        (self.fit.height, self.fit.width)
+    }
+
+    /// Write the parameter EXR to ``path`` (float; channels melanin, melanin_blend, hemoglobin, oiliness per texel
+    /// and the extended physiology as channels of one value each) and, if given, the residual to
+    /// ``residual_path`` (ΔE00, channel Y): staged and renamed into place together, their folders created.
+    ///
+    /// Raises:
+    ///     SpectralSkinIOError: a file that cannot be written (the message names it); nothing is left half-written.
+    #[pyo3(signature = (path, residual_path = None))]
+    fn write(&self, py: Python<'_>, path: PathBuf, residual_path: Option<PathBuf>) -> PyResult<()> {
+        detached(py, || self.fit.write(&path, residual_path.as_deref()))
+    }
+
+    fn __repr__(&self) -> String {
+        let f = &self.fit;
+        format!(
+            "AlbedoMapFit({} x {}, epidermis_thickness_mm={}, mean ΔE00 {:.3}, max {:.3})",
+            f.width, f.height, f.extended[0], f.stats.mean_delta_e00, f.stats.max_delta_e00
+        )
+    }
 }

@@ -18,7 +18,7 @@ use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, param
 use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
 use inverse::fit_spectrum_py;
-use inverse_albedo::{fit_albedo_map_py, fit_albedo_py};
+use inverse_albedo::{fit_albedo_map_py, fit_albedo_py, AlbedoMapFitPy};
 use maps::{maps_py, read_parameter_map_py, write_maps_py};
 use shader_table::{shader_table_py, write_shader_table_py};
 
@@ -45,6 +45,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_shader_table_py, m)?)?;
     m.add_function(wrap_pyfunction!(fit_albedo_py, m)?)?;
     m.add_function(wrap_pyfunction!(fit_albedo_map_py, m)?)?;
+    m.add_class::<AlbedoMapFitPy>()?;
     m.add_function(wrap_pyfunction!(fit_spectrum_py, m)?)?;
     Ok(())
 }

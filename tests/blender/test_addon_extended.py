@@ -166,37 +166,47 @@ def test_from_albedo_texture_is_disabled_without_the_cores_fit(addon, monkeypatc
 
 
 def test_from_albedo_texture_sets_the_parameter_map(addon, tmp_path, monkeypatch):
-    """The operator's glue, with a stand-in for the core's fit where this spectral_skin lacks it: the fit gets the
-    PNG's sRGB codes decoded (IEC 61966-2-1) as Linear Rec.709; its parameters come back as the material's
-    Parameter Map, a file beside the .blend the core reads; the fit's thickness goes to the Advanced slider."""
+    """The operator's glue around the core's fit (recorded as it passes): the fit gets the PNG's sRGB codes decoded
+    (IEC 61966-2-1) as Linear Rec.709 and, by default, chooses the epidermis thickness; the core writes the
+    parameter EXR beside the .blend (the four per texel and the extended physiology as channels), which becomes the
+    material's Parameter Map; the chosen thickness goes to the Advanced slider; Apply then takes the map (its
+    one-value extended channels as the material's values). Hold Epidermis Thickness fits at the slider's value."""
     codes = np.array([[[200, 150, 120], [90, 60, 40]], [[255, 0, 10], [128, 128, 128]]], dtype=np.uint8)
     material = _albedo_material(tmp_path, codes)
     calls = []
-    params = np.float32([[[0.01, 0.7, 0.01, 0.3], [0.3, 0.6, 0.02, 0.2]], [[0.0, 0.0, 0.1, 1.0], [0.1, 0.5, 0.05, 0.4]]])
+    fit_map = spectral_skin.fit_albedo_map
+    fits = []
 
-    def fit_albedo_map(rgb, *, working_space, epidermis_thickness_mm=None):
+    def fit_albedo_map(rgb, *, working_space, epidermis_thickness_mm=None, **keywords):
         calls.append((rgb.copy(), working_space, epidermis_thickness_mm))
-        return {"params": params, "residual_delta_e00": np.float32([[0.1, 0.2], [9.0, 0.3]]),
-                "epidermis_thickness_mm": 0.12}
+        fits.append(fit_map(rgb, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm,
+                            **keywords))
+        return fits[-1]
 
-    monkeypatch.setattr(spectral_skin, "fit_albedo_map", fit_albedo_map, raising=False)
+    monkeypatch.setattr(spectral_skin, "fit_albedo_map", fit_albedo_map)
     assert bpy.ops.spectral_skin.from_albedo_texture(material="Skin") == {"FINISHED"}
     rgb, space, thickness = calls[0]
     c = codes / 255.0
     np.testing.assert_allclose(rgb, np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4), rtol=1e-5,
                                atol=1e-7)
-    assert space == "Linear Rec.709" and thickness is None
+    assert space == "Linear Rec.709" and thickness is None and fits[0].thickness is not None
     props = material.spectral_skin
     path = tmp_path / "head_Skin_params.exr"
     assert props.params_map is not None and pathlib.Path(bpy.path.abspath(props.params_map.filepath)) == path
     planes = spectral_skin.read_parameter_map(str(path))
     np.testing.assert_array_equal(np.stack([planes[n] for n in ("melanin", "melanin_blend", "hemoglobin",
-                                                                 "oiliness")], axis=-1), params)
-    assert props.epidermis_thickness_mm == pytest.approx(0.12, rel=1e-6)
-    # A thickness the artist set is the fit's.
+                                                                 "oiliness")], axis=-1), fits[0].params)
+    chosen = fits[0].extended["epidermis_thickness_mm"]
+    np.testing.assert_array_equal(planes["epidermis_thickness_mm"], np.float32(chosen))
+    assert props.epidermis_thickness_mm == pytest.approx(chosen, rel=1e-6)
+    props.output_dir = str(tmp_path / "textures")
+    assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
+    assert "epidermis_thickness_mm" not in props.result_warning  # the slider holds the map's value
+    # Hold Epidermis Thickness: the fit is made at the slider's value.
     props.epidermis_thickness_mm = 0.08
-    assert bpy.ops.spectral_skin.from_albedo_texture(material="Skin") == {"FINISHED"}
-    assert calls[1][2] == pytest.approx(0.08, rel=1e-6)
+    assert bpy.ops.spectral_skin.from_albedo_texture(material="Skin", hold_thickness=True) == {"FINISHED"}
+    assert calls[1][2] == pytest.approx(0.08, rel=1e-6) and fits[1].thickness is None
+    assert props.epidermis_thickness_mm == pytest.approx(0.08, rel=1e-6)
 
 
 class _Layout:

@@ -5,6 +5,7 @@ of the core's per-texel fit and its summary, the parameter EXR the core's reader
 from __future__ import annotations
 
 import importlib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -42,64 +43,80 @@ def test_without_the_cores_fit(monkeypatch):
         albedo.fit(np.zeros((1, 1, 3), np.float32), "Linear Rec.709", None)
 
 
+class _StandIn:
+    """What the core's AlbedoMapFit gives the add-on (attributes; ``write`` records its path)."""
+
+    def __init__(self, h: int, w: int, thickness: dict | None) -> None:
+        self.shape = (h, w)
+        self.residual_delta_e00 = np.arange(h * w, dtype=np.float32).reshape(h, w)
+        self.extended = {**core.EXTENDED_DEFAULTS, "epidermis_thickness_mm": 0.12}
+        self.thickness = thickness
+        self.stats = {"out_of_gamut_texels": 2}
+        self.written: list[str] = []
+
+    def write(self, path: str) -> None:
+        self.written.append(path)
+
+
 def test_fit_passes_the_albedo_and_summarises(monkeypatch):
     calls = []
 
     def fit_albedo_map(rgb, *, working_space, epidermis_thickness_mm=None):
         calls.append((rgb, working_space, epidermis_thickness_mm))
         h, w, _ = rgb.shape
-        params = np.broadcast_to(np.float32([0.1, 0.5, 0.02, 0.3]), (h, w, 4)).copy()
-        residual = np.arange(h * w, dtype=np.float32).reshape(h, w)
-        return {"params": params, "residual_delta_e00": residual, "epidermis_thickness_mm": 0.12}
+        return _StandIn(h, w, None if epidermis_thickness_mm is not None else {"chosen_mm": 0.12})
 
     monkeypatch.setattr(spectral_skin, "fit_albedo_map", fit_albedo_map, raising=False)
     rgb = np.random.default_rng(1).uniform(0.1, 0.6, (3, 5, 3)).astype(np.float32)
     result = albedo.fit(rgb, "ACEScg", None)
     assert calls[0][0] is rgb and calls[0][1:] == ("ACEScg", None)
     assert result["median_delta_e00"] == 7.0 and result["max_delta_e00"] == 14.0
-    # The fit's thickness; the others, which the fit does not report, the defaults.
+    assert result["out_of_gamut_texels"] == 2 and result["thickness"] == {"chosen_mm": 0.12}
+    # The extended physiology is the fit's (what the parameters hold for), by name.
     assert result["extended"] == {**core.EXTENDED_DEFAULTS, "epidermis_thickness_mm": 0.12}
-
-    def fixed(rgb, *, working_space, epidermis_thickness_mm=None):
-        out = fit_albedo_map(rgb, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm)
-        del out["epidermis_thickness_mm"]
-        return out
-
-    monkeypatch.setattr(spectral_skin, "fit_albedo_map", fixed, raising=False)
-    assert albedo.fit(rgb, "ACEScg", 0.08)["extended"]["epidermis_thickness_mm"] == 0.08
-    monkeypatch.setattr(spectral_skin, "fit_albedo_map", lambda rgb, **kw: {"params": np.zeros((1, 1, 4)),
-                                                                            "residual_delta_e00": np.zeros((1, 1))},
-                        raising=False)
-    with pytest.raises(RuntimeError, match="returned params"):
+    assert albedo.fit(rgb, "ACEScg", 0.08)["thickness"] is None and calls[-1][2] == 0.08
+    monkeypatch.setattr(spectral_skin, "fit_albedo_map", lambda rgb, **kw: _StandIn(1, 1, None), raising=False)
+    with pytest.raises(RuntimeError, match="returned a fit of"):
         albedo.fit(rgb, "ACEScg", None)
 
 
-def test_parameter_map_written_is_read_by_the_core(tmp_path):
-    pytest.importorskip("OpenImageIO")
-    rng = np.random.default_rng(2)
-    params = np.stack([rng.uniform(0, 0.5, (7, 11)), rng.uniform(0, 1, (7, 11)), rng.uniform(0, 0.1, (7, 11)),
-                       rng.uniform(0, 1, (7, 11))], axis=-1).astype(np.float32)
-    path = albedo.parameter_map_path(str(tmp_path / "head.blend"), "head_Skin")
-    assert path == str(tmp_path / "head_Skin_params.exr")
-    albedo.write_parameter_map(path, params)
-    planes = spectral_skin.read_parameter_map(path)
-    assert set(planes) == set(core.PARAMETERS)
-    for i, name in enumerate(core.PARAMETERS):
-        np.testing.assert_array_equal(planes[name], params[:, :, i])  # float32 EXR: exact
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["head_Skin_params.exr"]  # no staging file left
+def test_parameter_map_path():
+    assert albedo.parameter_map_path("/x/head.blend", "head_Skin") == str(Path("/x/head_Skin_params.exr"))
     with pytest.raises(ValueError, match="not saved yet"):
         albedo.parameter_map_path("", "Skin")
 
 
 @pytest.mark.skipif(not albedo.available(), reason="this spectral_skin has no fit_albedo_map yet")
-def test_round_trip_with_the_cores_fit():
-    """Parameters -> the core's albedo -> the fit -> the core's albedo of the fitted parameters: within ΔE00 0.5 of
-    the start where the fit says so (in-gamut colours: the model's own)."""
+def test_round_trip_with_the_cores_fit(tmp_path):
+    """Parameters -> the core's albedo -> the fit (the thickness chosen, the add-on's default) -> the parameter EXR
+    the core writes -> the add-on's reading of it (core.read_map_file, SkinSettings.with_maps) -> the core's albedo
+    of the fitted parameters at the chosen thickness: within ΔE00 0.5 of the start where the fit says so."""
     colours = np.array([[spectral_skin.evaluate(preset=name, outputs=["albedo"])["diffuse_reflectance_rgb"]
                          for name in ("caucasian", "asian", "african")]], dtype=np.float32)
-    result = albedo.fit(colours, "Linear Rec.709", 0.25)
-    assert result["max_delta_e00"] < 0.5
+    result = albedo.fit(colours, "Linear Rec.709", None)
+    assert result["max_delta_e00"] < 0.5 and result["thickness"]["chosen_mm"] in [
+        m[0] for m in result["thickness"]["screened"]]
+    path = albedo.parameter_map_path(str(tmp_path / "head.blend"), "head_Skin")
+    result["fit"].write(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["head_Skin_params.exr"]  # no staging file left
+    settings = core.SkinSettings().with_maps(core.read_map_file(path))
+    assert set(settings.maps) == set(core.PARAMETERS)  # the extended channels are one value: settings
+    assert settings.extended() == result["extended"]
+    thickness = result["extended"]["epidermis_thickness_mm"]
+    if thickness != core.EXTENDED_DEFAULTS["epidermis_thickness_mm"]:
+        assert settings.notes and "epidermis_thickness_mm" in settings.notes[0], settings.notes
     for i in range(3):
-        fitted = result["params"][0, i]
-        again = spectral_skin.evaluate(*map(float, fitted), outputs=["albedo"], epidermis_thickness_mm=0.25)
+        fitted = [float(settings.maps[p].pixels[0, i]) for p in core.PARAMETERS]
+        again = spectral_skin.evaluate(*fitted, outputs=["albedo"], **settings.extended())
         np.testing.assert_allclose(again["diffuse_reflectance_rgb"], colours[0, i], atol=0.01)
+
+
+def test_a_varying_extended_map_stays_a_map_and_live_mode_refuses_it():
+    plane = np.array([[0.1, 0.2]], dtype=np.float32)
+    maps = {"melanin": core.ParameterMap(np.full((1, 2), 0.1, np.float32), False, "m.exr"),
+            "epidermis_thickness_mm": core.ParameterMap(plane, False, "t.exr")}
+    settings = core.SkinSettings().with_maps(maps)
+    assert set(settings.maps) == {"melanin", "epidermis_thickness_mm"} and not settings.notes
+    core.check(settings.replace(output_dir="/tmp"))
+    with pytest.raises(spectral_skin.SpectralSkinError, match="Live mode takes one value of epidermis_thickness_mm"):
+        core.check(settings.replace(mode="LIVE"))

@@ -116,7 +116,7 @@ LONG_CALLS = {
                         "starts=2000)"),
     # The thickness choice builds six albedo tables (about 20 s each on a small machine) before the texels' fit; the
     # table build ran on for 19 s.
-    "fit_albedo_map": (64, "spectral_skin.fit_albedo_map(params[..., :3] * 0.5, fit_epidermis_thickness=True)"),
+    "fit_albedo_map": (64, "spectral_skin.fit_albedo_map(params[..., :3] * 0.5)"),
     # 10^5 radii at every nanometre: a minute and a half of profile; it ignored SIGINT for 90 s.
     "evaluate_profile": (1, "spectral_skin.evaluate(preset='caucasian', accuracy='reference', "
                             "outputs=('profile_spectral',), profile_count=100000)"),

@@ -28,23 +28,34 @@ def albedo(m: float, b: float, h: float, **extended: float) -> np.ndarray:
 
 def test_texture_round_trip_is_within_half_a_delta_e() -> None:
     texture = np.array([[albedo(*p) for p in TRUTH]], dtype=np.float32)  # (1, 6, 3)
-    fit = spectral_skin.fit_albedo_map(texture)
-    assert fit["params"].shape == (1, 6, 4) and fit["params"].dtype == np.float32
-    assert fit["residual_delta_e00"].shape == (1, 6)
-    assert fit["stats"]["distinct_colours"] == 6 and fit["stats"]["out_of_gamut_texels"] == 0
-    back = np.array([albedo(*map(float, p[:3])) for p in fit["params"][0]])
+    fit = spectral_skin.fit_albedo_map(texture, epidermis_thickness_mm=0.25)
+    assert isinstance(fit, spectral_skin.AlbedoMapFit) and fit.shape == (1, 6) and fit.thickness is None
+    assert fit.params.shape == (1, 6, 4) and fit.params.dtype == np.float32
+    assert fit.residual_delta_e00.shape == (1, 6)
+    assert fit.stats["distinct_colours"] == 6 and fit.stats["out_of_gamut_texels"] == 0
+    back = np.array([albedo(*map(float, p[:3])) for p in fit.params[0]])
     de = color_difference.delta_e00_linear_rgb(texture[0].astype(np.float64), back)
     assert np.all(de <= 0.5), de
-    np.testing.assert_allclose(fit["params"][0, :, 3], 0.3)
+    np.testing.assert_allclose(fit.params[0, :, 3], 0.3)
 
 
-def test_a_thin_epidermis_gives_seven_channels() -> None:
-    texture = np.array([[albedo(*p, epidermis_thickness_mm=0.1) for p in TRUTH[:3]]])
-    fit = spectral_skin.fit_albedo_map(texture, epidermis_thickness_mm=0.1)
-    assert fit["params"].shape == (1, 3, 7) and fit["extended"]["epidermis_thickness_mm"] == 0.1
-    np.testing.assert_allclose(fit["params"][0, :, 4], 0.1)
-    back = np.array([albedo(*map(float, p[:3]), epidermis_thickness_mm=0.1) for p in fit["params"][0]])
-    assert np.all(color_difference.delta_e00_linear_rgb(texture[0], back) <= 0.5)
+def test_the_thickness_is_chosen_by_default_and_written_into_the_parameter_map(tmp_path: Path) -> None:
+    """A texture made at 0.1 mm: the default fit chooses a thin epidermis (never worse on the texture than 0.25
+    held), and its parameter EXR, read back and turned into maps, reproduces the texture."""
+    texture = np.array([[albedo(*p, epidermis_thickness_mm=0.1) for p in TRUTH]], dtype=np.float32)
+    fit = spectral_skin.fit_albedo_map(texture)
+    held = spectral_skin.fit_albedo_map(texture, epidermis_thickness_mm=0.25)
+    assert fit.thickness is not None and fit.extended["epidermis_thickness_mm"] == fit.thickness["chosen_mm"]
+    assert fit.extended["epidermis_thickness_mm"] <= 0.15, fit.thickness
+    assert fit.stats["mean_delta_e00"] <= held.stats["mean_delta_e00"]
+    fit.write(tmp_path / "new" / "params.exr", tmp_path / "new" / "residual.exr")
+    planes = spectral_skin.read_parameter_map(tmp_path / "new" / "params.exr")
+    np.testing.assert_array_equal(planes["epidermis_thickness_mm"], np.float32(fit.extended["epidermis_thickness_mm"]))
+    four = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
+    np.testing.assert_array_equal(np.stack([planes[p] for p in four], axis=-1), fit.params)
+    out = spectral_skin.maps(**planes, outputs=["albedo"])
+    de = color_difference.delta_e00_linear_rgb(texture[0].astype(np.float64), out["base_color"][0].astype(np.float64))
+    assert np.all(de <= fit.residual_delta_e00[0] + 0.1), (de, fit.residual_delta_e00)
 
 
 def test_single_colour_and_its_ambiguity() -> None:
@@ -64,8 +75,8 @@ def test_green_is_out_of_gamut_with_finite_parameters() -> None:
     assert all(np.isfinite(v) for v in fit["params"].values())
     texture = np.array([[[0.05, 0.6, 0.05], albedo(*TRUTH[1])]], dtype=np.float64)
     m = spectral_skin.fit_albedo_map(texture)
-    assert np.all(np.isfinite(m["params"])) and m["residual_delta_e00"][0, 0] > 20.0
-    assert m["residual_delta_e00"][0, 1] < 0.5 and m["stats"]["out_of_gamut_texels"] == 1
+    assert np.all(np.isfinite(m.params)) and m.residual_delta_e00[0, 0] > 20.0
+    assert m.residual_delta_e00[0, 1] < 0.5 and m.stats["out_of_gamut_texels"] == 1
 
 
 def test_bad_input_names_it() -> None:

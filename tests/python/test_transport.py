@@ -108,8 +108,8 @@ def test_fits_report_their_transport():
     fit = spectral_skin.fit_albedo(rgb)
     assert fit["transport"] == DEFAULT and fit["delta_e00"] < 0.5
     fitted = spectral_skin.fit_albedo_map(np.tile(np.asarray(rgb, np.float32), (2, 2, 1)))
-    assert fitted["stats"]["options"]["transport"] == DEFAULT
-    assert fitted["stats"]["options"]["streams"] == fit["streams"]
+    assert fitted.stats["options"]["transport"] == DEFAULT
+    assert fitted.stats["options"]["streams"] == fit["streams"]
 
 
 @pytest.mark.parametrize("call", [
