@@ -671,9 +671,12 @@ fn params_help() -> String {
     let extended: Vec<&str> = EXTENDED_PARAMS.iter().map(|p| p.name).collect();
     format!(
         "One EXR with channels {} and optionally {}; a constant (--melanin etc.) fills a channel it lacks (an extended \
-         one it lacks is the default without)",
+         one it lacks is the default without). A file name with {token} (params.{token}.exr) is a UDIM tile set: its \
+         tiles are computed as one texture and each output is a tile set of the same tiles (albedo.{token}.exr); any \
+         map may be a tile set",
         four.join(", "),
-        extended.join(", ")
+        extended.join(", "),
+        token = spectral_skin::maps::udim::UDIM_TOKEN
     )
 }
 
@@ -818,7 +821,9 @@ fn run_shader_table(args: ShaderTableArgs) -> Result<(), Box<dyn std::error::Err
 #[derive(Args)]
 struct FitMapsArgs {
     /// The albedo texture: an EXR with channels R, G, B (linear in --working-space), or an 8/16-bit PNG, TIFF or JPEG
-    /// (sRGB-encoded, decoded to linear; --working-space must then be linear_rec709, sRGB's primaries).
+    /// (sRGB-encoded, decoded to linear; --working-space must then be linear_rec709, sRGB's primaries). A name with
+    /// <UDIM> (face.<UDIM>.png) is a UDIM tile set, fitted as one texture (one thickness); --out (and --residual) must
+    /// then hold <UDIM> too, and get the same tiles.
     #[arg(long)]
     albedo: PathBuf,
     /// The parameter map to write (channels melanin, melanin_blend, hemoglobin, oiliness per texel, and the extended
@@ -826,7 +831,8 @@ struct FitMapsArgs {
     /// is created if missing.
     #[arg(long, default_value = "params.exr")]
     out: PathBuf,
-    /// The residual map to write (ΔE00 per texel, channel Y); default: residual.exr beside --out.
+    /// The residual map to write (ΔE00 per texel, channel Y); default: residual.exr (residual.<UDIM>.exr for a tile
+    /// set) beside --out.
     #[arg(long)]
     residual: Option<PathBuf>,
     /// The albedo's linear RGB working space.
@@ -854,8 +860,9 @@ struct FitMapsArgs {
 mod fit_maps {
     use spectral_skin::color::WorkingSpace;
     use spectral_skin::inverse::albedo::AlbedoFitOptions;
-    use spectral_skin::inverse::albedo_maps::{fit_albedo_map_cancellable, EpidermisThickness};
-    use spectral_skin::maps::io::{check_output_dir, output_folder_of, read_albedo_texture};
+    use spectral_skin::inverse::albedo_maps::{fit_albedo_tiles_cancellable, AlbedoTile, EpidermisThickness};
+    use spectral_skin::maps::io::{check_output_dir, commit_all, output_folder_of, read_albedo_texture};
+    use spectral_skin::maps::udim::{find_tiles, is_tile_set, tile_path, UDIM_TOKEN};
 
     #[derive(Clone, Copy, clap::ValueEnum)]
     #[value(rename_all = "snake_case")]
@@ -866,26 +873,46 @@ mod fit_maps {
     }
 
     pub fn run(args: super::FitMapsArgs) -> Result<(), Box<dyn std::error::Error>> {
-        // The output folders first (checked now, created only to write): one that cannot be written fails now, not
-        // after the fit.
-        let residual_path = args.residual.clone().unwrap_or_else(|| args.out.with_file_name("residual.exr"));
-        for file in [&args.out, &residual_path] {
-            check_output_dir(output_folder_of(file))?;
-        }
-        let albedo = read_albedo_texture(&args.albedo)?;
-        for note in &albedo.notes {
-            eprintln!("warning: {note}");
-        }
-        if albedo.srgb_decoded && !matches!(args.working_space, Space::LinearRec709) {
+        // A UDIM tile set in: a tile set out, with the same tiles.
+        let tiles: Option<Vec<u32>> = if is_tile_set(&args.albedo) { Some(find_tiles(&args.albedo)?) } else { None };
+        if tiles.is_some() != is_tile_set(&args.out) {
             return Err(format!(
-                "{} ({}) is sRGB-encoded, with Rec.709 primaries; --working-space must be linear_rec709 for it (or \
-                 give a linear EXR in the working space)",
+                "--albedo {} and --out {} must both name a tile set with {UDIM_TOKEN} (e.g. face.{UDIM_TOKEN}.png and \
+                 params.{UDIM_TOKEN}.exr) or neither",
                 args.albedo.display(),
-                albedo.encoding
+                args.out.display()
             )
             .into());
         }
-        let (width, height, texels) = (albedo.width, albedo.height, albedo.texels);
+        let residual_default =
+            if tiles.is_some() { format!("residual.{UDIM_TOKEN}.exr") } else { "residual.exr".into() };
+        // The output folders first (checked now, created only to write): one that cannot be written fails now, not
+        // after the fit.
+        let residual_path = args.residual.clone().unwrap_or_else(|| args.out.with_file_name(residual_default));
+        if tiles.is_some() && !is_tile_set(&residual_path) {
+            return Err(format!("--residual {} must name a tile set with {UDIM_TOKEN}", residual_path.display()).into());
+        }
+        for file in [&args.out, &residual_path] {
+            check_output_dir(output_folder_of(file))?;
+        }
+        let mut textures = Vec::new();
+        for tile in tiles.clone().map_or(vec![None], |t| t.into_iter().map(Some).collect()) {
+            let path = tile.map_or(args.albedo.clone(), |t| tile_path(&args.albedo, t));
+            let albedo = read_albedo_texture(&path)?;
+            for note in &albedo.notes {
+                eprintln!("warning: {note}");
+            }
+            if albedo.srgb_decoded && !matches!(args.working_space, Space::LinearRec709) {
+                return Err(format!(
+                    "{} ({}) is sRGB-encoded, with Rec.709 primaries; --working-space must be linear_rec709 for it \
+                     (or give a linear EXR in the working space)",
+                    path.display(),
+                    albedo.encoding
+                )
+                .into());
+            }
+            textures.push((tile, path, albedo));
+        }
         let mut options = AlbedoFitOptions {
             working_space: match args.working_space {
                 Space::LinearRec709 => WorkingSpace::LinearRec709,
@@ -912,18 +939,45 @@ mod fit_maps {
             if args.epidermis_thickness_mm.is_some() { EpidermisThickness::Held } else { EpidermisThickness::Chosen };
         let start = std::time::Instant::now();
         crate::ctrl_c::catch();
-        let fit = fit_albedo_map_cancellable(&texels, width, height, &options, thickness, &crate::ctrl_c::INTERRUPTED)?;
+        let pieces: Vec<AlbedoTile<'_>> = textures
+            .iter()
+            .map(|(_, path, t)| AlbedoTile {
+                label: format!("albedo texture {}", path.display()),
+                width: t.width,
+                height: t.height,
+                texels: &t.texels,
+            })
+            .collect();
+        let fits = fit_albedo_tiles_cancellable(&pieces, &options, thickness, &crate::ctrl_c::INTERRUPTED)?;
         let seconds = start.elapsed().as_secs_f64();
-        fit.write(&args.out, Some(&residual_path))?;
-        let s = &fit.stats;
+        let mut staged = Vec::new();
+        for ((tile, _, _), fit) in textures.iter().zip(&fits) {
+            let at = |p: &std::path::Path| tile.map_or(p.to_path_buf(), |t| tile_path(p, t));
+            staged.extend(fit.stage(&at(&args.out), Some(&at(&residual_path)))?);
+        }
+        commit_all(staged)?;
+        let texels: usize = fits.iter().map(|f| f.stats.texels).sum();
+        let fit = &fits[0];
+        let mut s = fit.stats;
+        s.texels = texels;
+        s.max_delta_e00 = fits.iter().map(|f| f.stats.max_delta_e00).fold(0.0, f64::max);
+        s.mean_delta_e00 =
+            fits.iter().map(|f| f.stats.mean_delta_e00 * f.stats.texels as f64).sum::<f64>() / texels as f64;
+        s.out_of_gamut_texels = fits.iter().map(|f| f.stats.out_of_gamut_texels).sum();
+        let size = match &tiles {
+            Some(t) => format!("{} tiles {:?}", t.len(), t),
+            None => format!("{}x{}", fit.width, fit.height),
+        };
+        let s = &s;
         if args.json {
             println!(
                 "{}",
-                serde_json::json!({ "stats": s, "extended": fit.extended, "thickness": fit.thickness, "seconds": seconds })
+                serde_json::json!({ "stats": s, "extended": fit.extended, "thickness": fit.thickness,
+                    "tiles": tiles, "seconds": seconds })
             );
         } else {
             println!(
-                "wrote {} and {} ({width}x{height}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
+                "wrote {} and {} ({size}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
                  {} texel(s) out of the model's gamut (ΔE00 > {})",
                 args.out.display(),
                 residual_path.display(),

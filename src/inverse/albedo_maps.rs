@@ -12,7 +12,8 @@ use serde::Serialize;
 use super::albedo::{cached_albedo_table_cancellable, distinct_colours, fit_on_table, AlbedoFitOptions, AlbedoTable};
 use crate::error::SkinError;
 use crate::maps::io::{
-    commit_all, create_output_dir, output_folder_of, stage_channels_exr, ExrOptions, EXTENDED_CHANNELS, PARAM_CHANNELS,
+    commit_all, create_output_dir, output_folder_of, stage_channels_exr, ExrOptions, Staged, EXTENDED_CHANNELS,
+    PARAM_CHANNELS,
 };
 use crate::skin::params::EXTENDED_DEFAULTS;
 
@@ -49,6 +50,12 @@ impl AlbedoMapFit {
     /// EXR (ΔE00, channel Y), both staged and renamed into place together; their folders are created. Nothing is
     /// left behind on an error.
     pub fn write(&self, params_path: &Path, residual_path: Option<&Path>) -> Result<(), SkinError> {
+        commit_all(self.stage(params_path, residual_path)?)
+    }
+
+    /// [`Self::write`]'s files staged, for a caller that renames several fits' files into place together (the tiles
+    /// of a UDIM set) with [`crate::maps::io::commit_all`].
+    pub fn stage(&self, params_path: &Path, residual_path: Option<&Path>) -> Result<Vec<Staged>, SkinError> {
         for file in std::iter::once(params_path).chain(residual_path) {
             create_output_dir(output_folder_of(file))?;
         }
@@ -64,7 +71,7 @@ impl AlbedoMapFit {
                 ExrOptions::FLOAT_PIZ,
             )?);
         }
-        commit_all(staged)
+        Ok(staged)
     }
 }
 
@@ -72,6 +79,7 @@ impl AlbedoMapFit {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct AlbedoMapStats {
     pub texels: usize,
+    /// Distinct colours of the texture (of the whole set, for the tiles of a set fitted together).
     pub distinct_colours: usize,
     pub table_from_cache: bool,
     pub max_delta_e00: f64,
@@ -81,11 +89,12 @@ pub struct AlbedoMapStats {
     pub options: AlbedoFitOptions,
 }
 
-/// An error naming the first non-finite texel (x, y; y = 0 the first row) and how many there are.
-fn check_texels(texels: &[[f32; 3]], width: usize, height: usize) -> Result<(), SkinError> {
+/// An error naming `what` (the texture, or a tile of one), the first non-finite texel (x, y; y = 0 the first row) and
+/// how many there are.
+fn check_texels(what: &str, texels: &[[f32; 3]], width: usize, height: usize) -> Result<(), SkinError> {
     if width == 0 || height == 0 || texels.len() != width * height {
         return Err(SkinError::invalid(
-            "albedo texture",
+            what,
             format!("{} texels for {width} x {height} (need a non-empty texture, width * height texels)", texels.len()),
         ));
     }
@@ -93,7 +102,7 @@ fn check_texels(texels: &[[f32; 3]], width: usize, height: usize) -> Result<(), 
     if let Some(first) = texels.iter().position(bad) {
         let count = texels.par_iter().filter(|t| bad(t)).count();
         return Err(SkinError::invalid(
-            "albedo texture",
+            what,
             format!(
                 "texel (x, y) = ({}, {}) is {:?}: every channel must be finite ({count} texel(s) are not)",
                 first % width,
@@ -154,8 +163,40 @@ pub fn fit_albedo_map_cancellable(
     thickness: EpidermisThickness,
     cancel: &AtomicBool,
 ) -> Result<AlbedoMapFit, SkinError> {
+    let tile = AlbedoTile { label: "albedo texture".into(), width, height, texels };
+    let mut fits = fit_albedo_tiles_cancellable(&[tile], options, thickness, cancel)?;
+    Ok(fits.remove(0))
+}
+
+/// One texture of a set fitted together (a UDIM tile), `label` naming it in messages.
+pub struct AlbedoTile<'a> {
+    pub label: String,
+    pub width: usize,
+    pub height: usize,
+    pub texels: &'a [[f32; 3]],
+}
+
+/// Fit a set of textures as one (the tiles of a UDIM set: one epidermis thickness chosen for all of them, each colour
+/// fitted once), a fit per tile in order; each tile's figures are its own, but `distinct_colours` and the thickness
+/// choice are the set's.
+pub fn fit_albedo_tiles_cancellable(
+    tiles: &[AlbedoTile<'_>],
+    options: &AlbedoFitOptions,
+    thickness: EpidermisThickness,
+    cancel: &AtomicBool,
+) -> Result<Vec<AlbedoMapFit>, SkinError> {
     let options = options.validated()?;
-    check_texels(texels, width, height)?;
+    for tile in tiles {
+        check_texels(&tile.label, tile.texels, tile.width, tile.height)?;
+    }
+    let joined;
+    let texels: &[[f32; 3]] = if let [one] = tiles {
+        one.texels
+    } else {
+        joined = tiles.iter().flat_map(|t| t.texels.iter().copied()).collect::<Vec<_>>();
+        &joined
+    };
+    crate::maps::io::check_texel_count("albedo tile set", texels.len(), 1)?;
     let (colours, of_texel) = distinct_colours(texels);
     let (options, fits, table_from_cache, choice) = match thickness {
         EpidermisThickness::Held => {
@@ -168,33 +209,40 @@ pub fn fit_albedo_map_cancellable(
         }
     };
     let oil = options.oiliness as f32;
-    let (params, residual_delta_e00): (Vec<[f32; 4]>, Vec<f32>) = of_texel
-        .par_iter()
-        .map(|&i| {
-            let (p, de) = fits[i as usize];
-            ([p[0], p[1], p[2], oil], de)
-        })
-        .unzip();
-    let max = fits.iter().map(|f| f.1 as f64).fold(0.0, f64::max);
-    let mean = residual_delta_e00.par_iter().map(|&d| d as f64).sum::<f64>() / texels.len() as f64;
-    let out = residual_delta_e00.par_iter().filter(|&&d| d as f64 > options.ambiguity_delta_e).count();
-    Ok(AlbedoMapFit {
-        width,
-        height,
-        params,
-        residual_delta_e00,
-        extended: options.extended,
-        thickness: choice,
-        stats: AlbedoMapStats {
-            texels: texels.len(),
-            distinct_colours: colours.len(),
-            table_from_cache,
-            max_delta_e00: max,
-            mean_delta_e00: mean,
-            out_of_gamut_texels: out,
-            options,
-        },
-    })
+    let mut start = 0;
+    let mut out = Vec::with_capacity(tiles.len());
+    for tile in tiles {
+        let of_tile = &of_texel[start..start + tile.texels.len()];
+        start += tile.texels.len();
+        let (params, residual_delta_e00): (Vec<[f32; 4]>, Vec<f32>) = of_tile
+            .par_iter()
+            .map(|&i| {
+                let (p, de) = fits[i as usize];
+                ([p[0], p[1], p[2], oil], de)
+            })
+            .unzip();
+        let max = residual_delta_e00.par_iter().map(|&d| d as f64).reduce(|| 0.0, f64::max);
+        let mean = residual_delta_e00.par_iter().map(|&d| d as f64).sum::<f64>() / of_tile.len() as f64;
+        let outside = residual_delta_e00.par_iter().filter(|&&d| d as f64 > options.ambiguity_delta_e).count();
+        out.push(AlbedoMapFit {
+            width: tile.width,
+            height: tile.height,
+            params,
+            residual_delta_e00,
+            extended: options.extended,
+            thickness: choice.clone(),
+            stats: AlbedoMapStats {
+                texels: of_tile.len(),
+                distinct_colours: colours.len(),
+                table_from_cache,
+                max_delta_e00: max,
+                mean_delta_e00: mean,
+                out_of_gamut_texels: outside,
+                options,
+            },
+        });
+    }
+    Ok(out)
 }
 
 /// (C_m, beta_m, C_h) and the table's ΔE00 of each colour.

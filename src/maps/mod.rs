@@ -5,5 +5,6 @@ pub mod io;
 pub mod lut;
 pub mod pipeline;
 pub mod shader_table;
+pub mod udim;
 
 pub use pipeline::{compute_maps, run_maps, MapReport, MapResult, MapSettings, StrategyChoice};

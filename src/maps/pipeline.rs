@@ -16,6 +16,7 @@ use super::io::{
     ExrOptions, ParamImage, ParamInputs, Plane, Staged, ALL_CHANNELS, ALL_RANGES, EXTENDED_CHANNELS, PARAM_CHANNELS,
 };
 use super::lut::{measure_error_cancellable, MaterialTable, TableError, TableResolution, TexelMaterial};
+use super::udim::{find_tiles, stack_tiles, tile_file_name, tile_set_file_name, TileRows};
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
 use crate::fit::blender_target::TargetInfo;
@@ -161,6 +162,10 @@ pub struct MapReport {
     /// parameter's name), one sentence each; fronts show them as warnings. Absent from the sidecar when empty.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub input_notes: Vec<String>,
+    /// The UDIM tiles the maps were computed for, as one texture (each output a tile set of them); empty for a
+    /// texture that is not a tile set (and absent from the sidecar then).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub tiles: Vec<u32>,
 }
 
 /// The work of a map run. Every direct evaluation and every table node built is one material: the albedo, and when
@@ -494,6 +499,7 @@ pub fn compute_maps_cancellable(
         work,
         seconds: Timings { compute: start.elapsed().as_secs_f64(), ..Timings::default() },
         input_notes: image.notes.clone(),
+        tiles: Vec::new(),
     };
     Ok(MapResult {
         width: w,
@@ -607,6 +613,10 @@ pub const SIDECAR_FILE: &str = "skin_maps.json";
 /// Read the inputs, check them, compute and write `albedo.exr`, `radius.exr`, `specular.exr` (if oiliness varies)
 /// and `skin_maps.json` into `out_dir`. Nothing is written unless everything succeeded: outputs are staged as
 /// temporary files and renamed into place together at the end.
+///
+/// Inputs naming a UDIM tile set (`params.<UDIM>.exr`, see [`super::udim`]) are computed as one texture of every
+/// tile the first such file has on disk; each output is then a tile set with the same tiles (`albedo.1001.exr`,
+/// ...), and the sidecar lists the tiles.
 pub fn run_maps(
     inputs: &ParamInputs,
     out_dir: &Path,
@@ -615,6 +625,36 @@ pub fn run_maps(
     progress: Option<&(dyn Fn(usize, usize) + Sync)>,
 ) -> Result<MapReport, SkinError> {
     run_maps_cancellable(inputs, out_dir, settings, exr, progress, &AtomicBool::new(false))
+}
+
+/// The parameters of `inputs`, checked (and clamped with `clamp`): one image, or a tile set's tiles stacked with the
+/// rows of each (a tile's bad texels are reported with the tile named and positions inside the tile).
+fn read_checked(
+    inputs: &ParamInputs,
+    clamp: bool,
+) -> Result<(ParamImage, Vec<BadTexels>, Option<TileRows>), SkinError> {
+    let Some(pattern) = inputs.tile_set() else {
+        let mut image = read_params(inputs)?;
+        let clamped = check_planes(&mut image, clamp)?;
+        return Ok((image, clamped, None));
+    };
+    let tiles = find_tiles(pattern)?;
+    let mut images = Vec::with_capacity(tiles.len());
+    let mut clamped: Vec<BadTexels> = Vec::new();
+    for &tile in &tiles {
+        let named = |parameter: String| format!("{parameter} (tile {tile})");
+        let mut image = read_params(&inputs.for_tile(tile))?;
+        let bad = check_planes(&mut image, clamp).map_err(|e| match e {
+            SkinError::BadTexels { parameter, min, max, nan, infinite, out_of_range, first } => {
+                SkinError::BadTexels { parameter: named(parameter), min, max, nan, infinite, out_of_range, first }
+            }
+            other => other,
+        })?;
+        clamped.extend(bad.into_iter().map(|b| BadTexels { parameter: named(b.parameter), ..b }));
+        images.push(image);
+    }
+    let (image, rows) = stack_tiles(&tiles, images)?;
+    Ok((image, clamped, Some(rows)))
 }
 
 /// [`run_maps`] that stops once `cancel` is set (the CLI's Ctrl-C): the computation skips the rows not started, and
@@ -633,8 +673,7 @@ pub fn run_maps_cancellable(
     // The output folder first (not created yet: a failed run leaves none): one that cannot be written fails now, not
     // after the computation.
     check_output_dir(out_dir)?;
-    let mut image = read_params(inputs)?;
-    let clamped = check_planes(&mut image, settings.clamp)?;
+    let (image, clamped, tile_rows) = read_checked(inputs, settings.clamp)?;
     let read = start.elapsed().as_secs_f64();
     let mut result = compute_maps_cancellable(&image, settings, progress, cancel)?;
     drop(image);
@@ -646,15 +685,43 @@ pub fn run_maps_cancellable(
         Some(SpecularOutput::Map { specular_ior_level, .. }) => Some(specular_ior_level.as_slice()),
         Some(SpecularOutput::Constant(_)) | None => None,
     };
-    let files = MapFiles {
-        width: result.width,
-        height: result.height,
-        base_color: result.base_color.as_ref(),
-        radius_mm: result.radius_mm.as_ref(),
-        specular_ior_level,
+    let mut staged = Vec::new();
+    let tiles: Vec<Option<u32>> = match &tile_rows {
+        None => {
+            let files = MapFiles {
+                width: result.width,
+                height: result.height,
+                base_color: result.base_color.as_ref(),
+                radius_mm: result.radius_mm.as_ref(),
+                specular_ior_level,
+            };
+            staged.extend(stage_map_files(out_dir, None, None, &files, exr)?);
+            vec![None]
+        }
+        Some(rows) => {
+            let w = result.width;
+            let rgb = |planes: Option<&[Vec<f32>; 3]>, from: usize, to: usize| {
+                planes.map(|p| p.each_ref().map(|c| c[from * w..to * w].to_vec()))
+            };
+            for &(tile, first, height) in rows {
+                let (base_color, radius_mm) = (
+                    rgb(result.base_color.as_ref(), first, first + height),
+                    rgb(result.radius_mm.as_ref(), first, first + height),
+                );
+                let files = MapFiles {
+                    width: w,
+                    height,
+                    base_color: base_color.as_ref(),
+                    radius_mm: radius_mm.as_ref(),
+                    specular_ior_level: specular_ior_level.map(|s| &s[first * w..(first + height) * w]),
+                };
+                staged.extend(stage_map_files(out_dir, None, Some(tile), &files, exr)?);
+            }
+            rows.iter().map(|r| Some(r.0)).collect()
+        }
     };
-    let mut staged = stage_map_files(out_dir, None, &files, exr)?;
     result.report.clamped = clamped;
+    result.report.tiles = tiles.iter().flatten().copied().collect();
     let mut report = result.report.clone();
     report.seconds.read = read;
     report.seconds.write = write_start.elapsed().as_secs_f64();
@@ -670,7 +737,7 @@ pub fn run_maps_cancellable(
         drop(staged);
         return Err(cancelled());
     }
-    commit_map_files(out_dir, None, staged)?;
+    commit_map_files(out_dir, None, &tiles, staged)?;
     Ok(report)
 }
 
@@ -702,17 +769,28 @@ pub fn output_name(prefix: Option<&str>, file: &str) -> String {
     }
 }
 
+/// [`output_name`] of one UDIM tile: `<prefix>_albedo.1001.exr` ([`super::udim::tile_file_name`]); `tile` None is
+/// the file of a texture that is not a tile set.
+pub fn tile_output_name(prefix: Option<&str>, tile: Option<u32>, file: &str) -> String {
+    let name = output_name(prefix, file);
+    match tile {
+        Some(tile) => tile_file_name(&name, tile),
+        None => name,
+    }
+}
+
 /// Create `out_dir` and stage the EXRs of `files` there as temporary files (see [`commit_map_files`]); dropping the
 /// result deletes them. The one writer of map files: the CLI's `maps` and Python's `write_maps`.
 pub fn stage_map_files(
     out_dir: &Path,
     prefix: Option<&str>,
+    tile: Option<u32>,
     files: &MapFiles,
     exr: ExrOptions,
 ) -> Result<Vec<Staged>, SkinError> {
     create_output_dir(out_dir)?;
     let (w, h) = (files.width, files.height);
-    let path = |file: &str| out_dir.join(output_name(prefix, file));
+    let path = |file: &str| out_dir.join(tile_output_name(prefix, tile, file));
     // The three files are encoded at once: each write gathers its blocks on one thread while its compression runs
     // in parallel, so overlapping the files keeps both cores busy (figures: docs/maps-performance.md).
     type Channels<'a> = Vec<(&'static str, &'a [f32])>;
@@ -736,15 +814,23 @@ pub fn stage_map_files(
     })
 }
 
-/// Rename the `staged` outputs into place together, then remove the outputs with `prefix` that an earlier run wrote
-/// and this one did not (`specular.exr` when the oiliness is now constant, a texture a front dropped, a sidecar), so
-/// the folder holds exactly this run's files. The removal runs after the new files are in place: if it fails, the
-/// new files (and a sidecar listing them) are right, and the error says which file is stale.
-pub fn commit_map_files(out_dir: &Path, prefix: Option<&str>, staged: Vec<Staged>) -> Result<(), SkinError> {
+/// Rename the `staged` outputs into place together, then remove the outputs with `prefix` (of each of `tiles`; None:
+/// the untiled files) that an earlier run wrote and this one did not (`specular.exr` when the oiliness is now
+/// constant, a texture a front dropped, a sidecar), so the folder holds exactly this run's files. The removal runs
+/// after the new files are in place: if it fails, the new files (and a sidecar listing them) are right, and the error
+/// says which file is stale.
+pub fn commit_map_files(
+    out_dir: &Path,
+    prefix: Option<&str>,
+    tiles: &[Option<u32>],
+    staged: Vec<Staged>,
+) -> Result<(), SkinError> {
     let written: Vec<PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
     commit_all(staged)?;
-    for file in [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE, SIDECAR_FILE] {
-        let stale = out_dir.join(output_name(prefix, file));
+    let maps =
+        tiles.iter().flat_map(|&t| [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE].map(|f| tile_output_name(prefix, t, f)));
+    for name in maps.chain(std::iter::once(output_name(prefix, SIDECAR_FILE))) {
+        let stale = out_dir.join(name);
         if written.contains(&stale) {
             continue;
         }
@@ -814,27 +900,35 @@ fn sidecar_json(
     compressions: &[(String, Compression)],
 ) -> String {
     let inputs_json = inputs_json(inputs);
+    // A tile set's outputs are named as Blender loads them: albedo.<UDIM>.exr.
+    let key = |file: &str| if report.tiles.is_empty() { file.to_string() } else { tile_set_file_name(file) };
+    let (albedo_key, radius_key, specular_key) = (key(ALBEDO_FILE), key(RADIUS_FILE), key(SPECULAR_FILE));
     let mut outputs = serde_json::json!({});
     if result.base_color.is_some() {
-        outputs[ALBEDO_FILE] = serde_json::json!({"channels": ["R", "G", "B"], "meaning": "Principled BSDF Base Color",
+        outputs[albedo_key.as_str()] = serde_json::json!({"channels": ["R", "G", "B"], "meaning": "Principled BSDF Base Color",
             "units": "reflectance", "color_space": report.color_space});
     }
     if result.radius_mm.is_some() {
-        outputs[RADIUS_FILE] = serde_json::json!({"channels": ["R", "G", "B"],
+        outputs[radius_key.as_str()] = serde_json::json!({"channels": ["R", "G", "B"],
             "meaning": "Principled BSDF Subsurface Radius x Subsurface Scale", "units": "mm", "color_space": "Non-Color"});
     }
     match &result.specular {
         None => {}
         Some(SpecularOutput::Map { constants, .. }) => {
-            outputs[SPECULAR_FILE] = serde_json::json!({"channels": ["Y"],
+            outputs[specular_key.as_str()] = serde_json::json!({"channels": ["Y"],
                 "meaning": "Principled Specular IOR Level", "units": "dimensionless", "color_space": "Non-Color",
                 "roughness": constants.roughness, "ior": constants.ior});
         }
         Some(SpecularOutput::Constant(s)) => outputs["specular_constants"] = serde_json::json!(s),
     }
     for (file, compression) in compressions {
-        if outputs[file.as_str()].is_object() {
-            outputs[file.as_str()]["compression"] = serde_json::json!(compression);
+        // A tile's file (albedo.1001.exr) under its set's key; every tile of a set is encoded alike.
+        let name = [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE]
+            .into_iter()
+            .find(|f| report.tiles.iter().any(|&t| tile_file_name(f, t) == *file))
+            .map_or(file.clone(), key);
+        if outputs[name.as_str()].is_object() {
+            outputs[name.as_str()]["compression"] = serde_json::json!(compression);
         }
     }
     let value = serde_json::json!({

@@ -18,8 +18,8 @@ use crate::maps::io::{
 };
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
-    check_planes, check_prefix, commit_map_files, compute_maps_cancellable, output_name, stage_map_files, MapFiles,
-    MapSettings, SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
+    check_planes, check_prefix, commit_map_files, compute_maps_cancellable, stage_map_files, tile_output_name,
+    MapFiles, MapSettings, SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
 };
 use crate::Outputs;
 
@@ -623,10 +623,11 @@ pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usiz
 ///
 /// Each image present (and not None) becomes one file in ``folder`` (created if missing): "base_color" ->
 /// ``albedo.exr`` (channels R, G, B), "radius_mm" -> ``radius.exr`` (R, G, B), "specular_ior_level" ->
-/// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc. Row 0 at the top; ``precision`` and
+/// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc.; with ``tile`` (a UDIM tile number),
+/// ``albedo.1001.exr`` etc., one tile of a tile set Blender loads as ``albedo.<UDIM>.exr``. Row 0 at the top; ``precision`` and
 /// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files are written as temporary files in
 /// ``folder`` and renamed into place together once all are written, so a failure leaves the existing files as they
-/// were. Then the files of an earlier write with the same prefix that
+/// were. Then the files of an earlier write with the same prefix (and tile) that
 /// this one did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the
 /// folder holds exactly this result's maps. No sidecar is written: the report is in the result.
 ///
@@ -636,6 +637,7 @@ pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usiz
 ///         :func:`maps`, or a part of one.
 ///     folder: the output folder.
 ///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
+///     tile: None, or the UDIM tile (1001 to 2000) the images are, written into each file name.
 ///     precision: "half" (16-bit, within 0.049 % of each value; the default) or "float" (32-bit).
 ///     compression: "auto" (the default: ZIPS for half, PIZ for float, or none for a file that would shrink by under
 ///         25 %), "piz", "zip", "zips", "rle" or "none".
@@ -648,7 +650,10 @@ pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usiz
 ///         that is empty or holds a path separator; a file that cannot be written (the message names it).
 ///     TypeError: an image that is not a float32 or float64 numpy array.
 #[pyfunction]
-#[pyo3(name = "write_maps", signature = (result, folder, prefix = None, precision = "half", compression = "auto"))]
+#[pyo3(
+    name = "write_maps",
+    signature = (result, folder, prefix = None, precision = "half", compression = "auto", tile = None)
+)]
 pub(super) fn write_maps_py<'py>(
     py: Python<'py>,
     result: &Bound<'py, PyAny>,
@@ -656,7 +661,12 @@ pub(super) fn write_maps_py<'py>(
     prefix: Option<&str>,
     precision: &str,
     compression: &str,
+    tile: Option<u32>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(t) = tile.filter(|t| !crate::maps::udim::TILE_RANGE.contains(t)) {
+        let range = crate::maps::udim::TILE_RANGE;
+        return Err(invalid("tile", format!("must be a UDIM tile, {} to {}; got {t}", range.start(), range.end())));
+    }
     let exr = ExrOptions {
         precision: by_name("precision", precision, &ALL_PRECISIONS)?,
         compression: by_name("compression", compression, &ALL_COMPRESSIONS)?,
@@ -688,14 +698,14 @@ pub(super) fn write_maps_py<'py>(
             radius_mm: radius_mm.as_ref(),
             specular_ior_level: specular.as_deref(),
         };
-        let staged = stage_map_files(&folder, prefix, &files, exr)?;
+        let staged = stage_map_files(&folder, prefix, tile, &files, exr)?;
         let written: Vec<std::path::PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
-        commit_map_files(&folder, prefix, staged)?;
+        commit_map_files(&folder, prefix, &[tile], staged)?;
         Ok(written)
     })?;
     let dict = PyDict::new(py);
     for (key, file) in [("albedo", ALBEDO_FILE), ("radius", RADIUS_FILE), ("specular", SPECULAR_FILE)] {
-        let path = folder.join(output_name(prefix, file));
+        let path = folder.join(tile_output_name(prefix, tile, file));
         if written.contains(&path) {
             dict.set_item(key, path)?;
         }
