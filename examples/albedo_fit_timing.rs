@@ -46,7 +46,7 @@ fn main() {
     let runs = [
         ("held 0.25 mm, first (cold table, in-process cache empty)", EpidermisThickness::Held),
         ("held 0.25 mm, second (table cached)", EpidermisThickness::Held),
-        ("thickness chosen (the default), first (six more tables built)", EpidermisThickness::Chosen),
+        ("thickness chosen (the default), first (five more tables built)", EpidermisThickness::Chosen),
         ("thickness chosen (the default), second (tables cached)", EpidermisThickness::Chosen),
     ];
     for (name, texels) in [("8-bit", &eight), ("float", &float)] {

@@ -6,12 +6,12 @@ use spectral_skin::color::difference::{ciede2000, LabConverter};
 use spectral_skin::color::WorkingSpace;
 use spectral_skin::evaluate::{evaluate, Outputs, Request};
 use spectral_skin::inverse::albedo::{fit_albedo, AlbedoFitOptions, AlbedoTable, ALBEDO_TABLE_RESOLUTION};
-use spectral_skin::inverse::albedo_maps::{fit_albedo_map, EpidermisThickness, SCREEN_COLOURS};
+use spectral_skin::inverse::albedo_maps::{fit_albedo_map, EpidermisThickness, TextureFit, SCREEN_COLOURS};
 use spectral_skin::skin::params::EXTENDED_DEFAULTS;
 use spectral_skin::skin::SkinParams;
 
 mod support;
-use support::measured::measured_skin_colours;
+use support::measured::{measured_skin_colours, tungsten_photograph, tungsten_white};
 
 fn albedo_of(p: &SkinParams, space: WorkingSpace) -> [f64; 3] {
     let request = Request { working_space: space, ..Request::new(Outputs { albedo: true, ..Outputs::default() }) };
@@ -173,6 +173,46 @@ fn measured_skin_colours_fit_by_default_and_never_worse_than_the_paper_thickness
     assert_eq!(held.extended, EXTENDED_DEFAULTS);
     assert!(chosen.stats.mean_delta_e00 <= held.stats.mean_delta_e00, "{:?} {:?}", chosen.stats, held.stats);
     assert!(c[0] <= 0.5, "median ΔE00 {} (paper thickness: {})", c[0], h[0]);
+    assert_eq!(chosen.diagnosis, None, "measured albedos are not a photograph: {:?}", chosen.diagnosis);
+}
+
+/// The measured skin colours photographed under a tungsten lamp with daylight white balance (simulated, see
+/// tests/support/measured.rs): the fit says the input is not an albedo and measures the remedy; with the gains
+/// estimated and applied (`auto_gains`) the median texel comes within 0.5 ΔE00, at most 40 % stay outside (the
+/// shading and the lamp's spectrum, which no gains undo), and the gains' white balance is the lamp's within 15 %.
+#[test]
+fn a_photograph_is_diagnosed_and_the_gains_bring_it_inside() {
+    let photo = tungsten_photograph(200, 1.4);
+    let texels: Vec<[f32; 3]> = photo.iter().map(|c| c.map(|v| v as f32)).collect();
+    let options = AlbedoFitOptions::default();
+    let plain = fit_albedo_map(&texels, 20, 10, &options, EpidermisThickness::Chosen).unwrap();
+    let message = plain.diagnosis.as_deref().expect("a photograph is diagnosed");
+    assert!(message.contains("does not look like an albedo") && message.contains("gains"), "{message}");
+    let suggested = plain.gains.as_ref().unwrap();
+    let texture = TextureFit { auto_gains: true, ..TextureFit::default() };
+    let gained = fit_albedo_map(&texels, 20, 10, &options, texture).unwrap();
+    let g = gained.gains.as_ref().unwrap();
+    let (p, q) = (residual_figures(&plain.residual_delta_e00), residual_figures(&gained.residual_delta_e00));
+    println!(
+        "photograph: {message}\nplain: outside {} of 200, median, p90 {p:?}; with gains {:?} ({:+.2} stops): outside \
+         {}, median, p90 {q:?}, thickness {} mm",
+        plain.stats.out_of_gamut_texels,
+        g.rgb_gains,
+        g.exposure_stops,
+        gained.stats.out_of_gamut_texels,
+        gained.extended[0]
+    );
+    assert_eq!(gained.stats.options.rgb_gains, g.rgb_gains);
+    assert_eq!(suggested.rgb_gains, g.rgb_gains, "the remedy measured is the one applied");
+    // The white balance (the gains' ratios, which exposure does not change) against the lamp's: the gains that map
+    // the photographed white reflector to grey, from Planck's law and the CIE tables.
+    let white = tungsten_white();
+    for (c, name) in [(0, "R/G"), (2, "B/G")] {
+        let (found, truth) = (g.rgb_gains[c] / g.rgb_gains[1], white[1] / white[c]);
+        assert!((found / truth - 1.0).abs() < 0.15, "{name}: {found} against the lamp's {truth}");
+    }
+    assert!(gained.stats.out_of_gamut_texels * 10 <= 4 * 200, "{:?}", gained.stats);
+    assert!(q[0] <= 0.5, "median ΔE00 with the gains {}", q[0]);
 }
 
 /// A texture of more distinct colours than the screen fits whole: the screen's best is kept only where it beats the

@@ -268,6 +268,7 @@ def write_maps(
     prefix: str | None = None,
     precision: _Precision | str = "half",
     compression: _Compression | str = "auto",
+    tile: int | None = None,
 ) -> dict[str, pathlib.Path]:
     """Documented once, in the compiled module: ``help(spectral_skin.write_maps)``."""
 
@@ -346,6 +347,7 @@ def fit_albedo(
     ambiguity_delta_e: float | None = None,
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
+    rgb_gains: npt.ArrayLike | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo)``."""
 
@@ -362,6 +364,7 @@ def fit_albedo_map(
     ambiguity_delta_e: float | None = None,
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
+    rgb_gains: npt.ArrayLike | Literal["auto"] | None = None,
 ) -> AlbedoMapFit:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo_map)``."""
 
@@ -385,6 +388,10 @@ class AlbedoMapFit:
     def stats(self) -> dict[str, Any]: ...
     @property
     def thickness(self) -> _ThicknessChoice | None: ...
+    @property
+    def gains(self) -> dict[str, Any] | None: ...
+    @property
+    def diagnosis(self) -> str | None: ...
     @property
     def shape(self) -> tuple[int, int]: ...
     def write(

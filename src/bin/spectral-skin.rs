@@ -398,7 +398,7 @@ fn joined_negative_numbers(args: impl Iterator<Item = std::ffi::OsString>) -> Ve
     out
 }
 
-/// Ctrl-C for `maps`, `shader-table`, `fit` and `fit-albedo`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the work reads
+/// Ctrl-C for `maps`, `shader-table`, `fit` and `fit-maps`: the first SIGINT sets [`ctrl_c::INTERRUPTED`], which the work reads
 /// (the map pipeline before each row and before renaming its outputs into place, so the run stops without leaving
 /// partial files; the spectrum fit at each forward spectrum); a second Ctrl-C ends the
 /// process at once (the default action is restored by the first).
@@ -843,6 +843,13 @@ struct FitMapsArgs {
     /// value is written into the parameter map as the channel epidermis_thickness_mm, which `maps --params` reads.
     #[arg(long)]
     epidermis_thickness_mm: Option<f64>,
+    /// Exposure and white balance: multiply the texture's linear RGB by these three gains before the fit (R,G,B).
+    #[arg(long, value_delimiter = ',', num_args = 3, conflicts_with = "auto_gains")]
+    rgb_gains: Option<Vec<f64>>,
+    /// Estimate the exposure and white-balance gains that bring the most texels inside skin's colours (for a
+    /// photograph) and apply them; they are printed and recorded in --json.
+    #[arg(long)]
+    auto_gains: bool,
     /// Oiliness written into every texel (0..1; the albedo does not depend on it); default 0.3.
     #[arg(long)]
     oiliness: Option<f64>,
@@ -860,7 +867,9 @@ struct FitMapsArgs {
 mod fit_maps {
     use spectral_skin::color::WorkingSpace;
     use spectral_skin::inverse::albedo::AlbedoFitOptions;
-    use spectral_skin::inverse::albedo_maps::{fit_albedo_tiles_cancellable, AlbedoTile, EpidermisThickness};
+    use spectral_skin::inverse::albedo_maps::{
+        fit_albedo_tiles_cancellable, AlbedoTile, EpidermisThickness, TextureFit,
+    };
     use spectral_skin::maps::io::{check_output_dir, commit_all, output_folder_of, read_albedo_texture};
     use spectral_skin::maps::udim::{find_tiles, is_tile_set, tile_path, UDIM_TOKEN};
 
@@ -934,9 +943,13 @@ mod fit_maps {
         if let Some(n) = args.transport.streams {
             options.streams = n;
         }
+        if let Some(g) = &args.rgb_gains {
+            options.rgb_gains = [g[0], g[1], g[2]];
+        }
         let options = options.validated()?;
         let thickness =
             if args.epidermis_thickness_mm.is_some() { EpidermisThickness::Held } else { EpidermisThickness::Chosen };
+        let texture = TextureFit { thickness, auto_gains: args.auto_gains };
         let start = std::time::Instant::now();
         crate::ctrl_c::catch();
         let pieces: Vec<AlbedoTile<'_>> = textures
@@ -948,7 +961,7 @@ mod fit_maps {
                 texels: &t.texels,
             })
             .collect();
-        let fits = fit_albedo_tiles_cancellable(&pieces, &options, thickness, &crate::ctrl_c::INTERRUPTED)?;
+        let fits = fit_albedo_tiles_cancellable(&pieces, &options, texture, &crate::ctrl_c::INTERRUPTED)?;
         let seconds = start.elapsed().as_secs_f64();
         let mut staged = Vec::new();
         for ((tile, _, _), fit) in textures.iter().zip(&fits) {
@@ -969,11 +982,28 @@ mod fit_maps {
             None => format!("{}x{}", fit.width, fit.height),
         };
         let s = &s;
+        if let Some(diagnosis) = &fit.diagnosis {
+            eprintln!("warning: {diagnosis} (--auto-gains applies the gains)");
+        }
+        if args.auto_gains {
+            if let Some(g) = &fit.gains {
+                eprintln!(
+                    "applied gains R G B x {:.4} {:.4} {:.4} ({:+.2} stops): share of sampled texels outside skin's \
+                     colours {:.0} % -> {:.0} %",
+                    g.rgb_gains[0],
+                    g.rgb_gains[1],
+                    g.rgb_gains[2],
+                    g.exposure_stops,
+                    100.0 * g.outside_share_before,
+                    100.0 * g.outside_share_after
+                );
+            }
+        }
         if args.json {
             println!(
                 "{}",
                 serde_json::json!({ "stats": s, "extended": fit.extended, "thickness": fit.thickness,
-                    "tiles": tiles, "seconds": seconds })
+                    "gains": fit.gains, "diagnosis": fit.diagnosis, "tiles": tiles, "seconds": seconds })
             );
         } else {
             println!(

@@ -40,6 +40,11 @@ impl LabConverter {
     pub fn lab(&self, rgb: [f64; 3]) -> [f64; 3] {
         lab_from_xyz(mat_vec(self.rgb_to_xyz, rgb), self.white_xyz)
     }
+
+    /// The luminance Y of linear RGB relative to the white's (RGB (1, 1, 1) gives 1).
+    pub fn luminance(&self, rgb: [f64; 3]) -> f64 {
+        mat_vec(self.rgb_to_xyz, rgb)[1] / self.white_xyz[1]
+    }
 }
 
 /// ΔE00 between two CIELAB colours (symmetric).

@@ -61,6 +61,9 @@ pub struct AlbedoFitOptions {
     /// How the model's albedo is computed (exact totals by default, [`Transport`]) and the adding-doubling streams.
     pub transport: Transport,
     pub streams: usize,
+    /// Exposure and white balance: each target colour's (texel's) linear RGB is multiplied by these before the fit
+    /// (default 1, 1, 1; [`super::albedo_gains`] estimates them for a photograph).
+    pub rgb_gains: [f64; 3],
 }
 
 impl Default for AlbedoFitOptions {
@@ -74,6 +77,7 @@ impl Default for AlbedoFitOptions {
             ambiguity_delta_e: DEFAULT_AMBIGUITY_DELTA_E,
             transport: Transport::default(),
             streams: DEFAULT_STREAMS,
+            rgb_gains: [1.0; 3],
         }
     }
 }
@@ -92,6 +96,15 @@ impl AlbedoFitOptions {
         check_range("prior_weight", "ΔE00 per unit of melanin blend", self.prior_weight, 0.0, 100.0)?;
         check_range("ambiguity_delta_e", "ΔE00 of the ambiguity set", self.ambiguity_delta_e, 1e-6, 100.0)?;
         crate::transport::adding_doubling::validate_streams(self.streams)?;
+        let (lo, hi) = super::albedo_gains::GAIN_RANGE;
+        for (name, g) in ["rgb_gains[0] (R)", "rgb_gains[1] (G)", "rgb_gains[2] (B)"].iter().zip(self.rgb_gains) {
+            if !(lo..=hi).contains(&g) {
+                return Err(SkinError::invalid(
+                    *name,
+                    format!("must be in [{lo}, {hi}] (a factor on the colour's linear RGB); got {g}"),
+                ));
+            }
+        }
         Ok(self)
     }
 
@@ -453,6 +466,7 @@ pub struct Ambiguity {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AlbedoFit {
     pub params: SkinParams,
+    /// The colour fitted: the target times the options' `rgb_gains`.
     pub target_rgb: [f64; 3],
     /// The model albedo of `params` (direct evaluation).
     pub albedo_rgb: [f64; 3],
@@ -491,6 +505,7 @@ pub fn fit_albedo_cancellable(
 ) -> Result<AlbedoFit, SkinError> {
     let options = options.validated()?;
     let target_rgb = check_rgb("target albedo", target_rgb)?;
+    let target_rgb = [0, 1, 2].map(|c| target_rgb[c] * options.rgb_gains[c]);
     let (table, from_cache) = cached_albedo_table_cancellable(&options, cancel)?;
     let prepared = options.prepared()?;
     let conv = *table.converter();

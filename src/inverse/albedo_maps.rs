@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::albedo::{cached_albedo_table_cancellable, distinct_colours, fit_on_table, AlbedoFitOptions, AlbedoTable};
+use super::albedo_gains::{estimate_gains, not_albedo_diagnosis, GainEstimate, NOT_ALBEDO_DELTA_E00};
 use crate::error::SkinError;
 use crate::maps::io::{
     commit_all, create_output_dir, output_folder_of, stage_channels_exr, ExrOptions, Staged, EXTENDED_CHANNELS,
@@ -31,6 +32,12 @@ pub struct AlbedoMapFit {
     pub extended: [f64; 3],
     /// How the epidermis thickness was chosen (None: held).
     pub thickness: Option<ThicknessChoice>,
+    /// The exposure and white-balance gains estimated on the texture: applied (`TextureFit::auto_gains`; the
+    /// options' `rgb_gains` are these), or measured as the remedy of a `diagnosis` (not applied).
+    pub gains: Option<GainEstimate>,
+    /// Set when the texture does not look like an albedo (over [`super::albedo_gains::NOT_ALBEDO_SHARE`] of its texels outside skin's
+    /// colours, after any gains): the share, the likely reasons and the remedies, the gains measured.
+    pub diagnosis: Option<String>,
     pub stats: AlbedoMapStats,
 }
 
@@ -114,9 +121,9 @@ fn check_texels(what: &str, texels: &[[f32; 3]], width: usize, height: usize) ->
     Ok(())
 }
 
-/// How a texture fit sets the epidermis thickness (the only extended parameter a texture's colours decide: the
-/// measured colours of docs/skin-atlas.md, "Fitting a texture", fit within 0.25 ΔE00 median with it chosen and 3.1 at
-/// the paper's 0.25 mm).
+/// How a texture fit sets the epidermis thickness (the extended parameter a texture's colours decide: 200 measured
+/// skin colours fit within ΔE00 0.008 median with it chosen and 1.32 at the paper's 0.25 mm: docs/skin-atlas.md,
+/// "The epidermis thickness").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EpidermisThickness {
@@ -127,6 +134,21 @@ pub enum EpidermisThickness {
     Chosen,
     /// `options.extended[0]` for every texel.
     Held,
+}
+
+/// How a texture fit treats the texture beyond [`AlbedoFitOptions`]: the thickness, and whether it estimates the
+/// exposure and white-balance gains first ([`super::albedo_gains::estimate_gains`]; they replace the options'
+/// `rgb_gains` and are reported).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub struct TextureFit {
+    pub thickness: EpidermisThickness,
+    pub auto_gains: bool,
+}
+
+impl From<EpidermisThickness> for TextureFit {
+    fn from(thickness: EpidermisThickness) -> TextureFit {
+        TextureFit { thickness, auto_gains: false }
+    }
 }
 
 /// How [`EpidermisThickness::Chosen`] chose, for the fit's report.
@@ -149,9 +171,9 @@ pub fn fit_albedo_map(
     width: usize,
     height: usize,
     options: &AlbedoFitOptions,
-    thickness: EpidermisThickness,
+    texture: impl Into<TextureFit>,
 ) -> Result<AlbedoMapFit, SkinError> {
-    fit_albedo_map_cancellable(texels, width, height, options, thickness, &AtomicBool::new(false))
+    fit_albedo_map_cancellable(texels, width, height, options, texture, &AtomicBool::new(false))
 }
 
 /// [`fit_albedo_map`] that stops once `cancel` is set, with an error.
@@ -160,11 +182,11 @@ pub fn fit_albedo_map_cancellable(
     width: usize,
     height: usize,
     options: &AlbedoFitOptions,
-    thickness: EpidermisThickness,
+    texture: impl Into<TextureFit>,
     cancel: &AtomicBool,
 ) -> Result<AlbedoMapFit, SkinError> {
     let tile = AlbedoTile { label: "albedo texture".into(), width, height, texels };
-    let mut fits = fit_albedo_tiles_cancellable(&[tile], options, thickness, cancel)?;
+    let mut fits = fit_albedo_tiles_cancellable(&[tile], options, texture, cancel)?;
     Ok(fits.remove(0))
 }
 
@@ -182,10 +204,11 @@ pub struct AlbedoTile<'a> {
 pub fn fit_albedo_tiles_cancellable(
     tiles: &[AlbedoTile<'_>],
     options: &AlbedoFitOptions,
-    thickness: EpidermisThickness,
+    texture: impl Into<TextureFit>,
     cancel: &AtomicBool,
 ) -> Result<Vec<AlbedoMapFit>, SkinError> {
-    let options = options.validated()?;
+    let texture = texture.into();
+    let mut options = options.validated()?;
     for tile in tiles {
         check_texels(&tile.label, tile.texels, tile.width, tile.height)?;
     }
@@ -197,8 +220,29 @@ pub fn fit_albedo_tiles_cancellable(
         &joined
     };
     crate::maps::io::check_texel_count("albedo tile set", texels.len(), 1)?;
+    let mut gains = None;
+    // The thicknesses the gains are estimated with: those the fit may choose from.
+    let mut thicknesses = vec![options.extended[0]];
+    if texture.thickness == EpidermisThickness::Chosen {
+        thicknesses.extend(THICKNESS_CANDIDATES_MM.iter().filter(|&&t| t != options.extended[0]));
+    }
+    if texture.auto_gains {
+        let estimate = estimate_gains(texels, &options, &thicknesses, cancel)?;
+        options.rgb_gains = estimate.rgb_gains;
+        gains = Some(estimate);
+    }
+    let gained;
+    let texels: &[[f32; 3]] = if options.rgb_gains == [1.0; 3] {
+        texels
+    } else {
+        let g = options.rgb_gains.map(|v| v as f32);
+        gained = texels.par_iter().map(|t| [t[0] * g[0], t[1] * g[1], t[2] * g[2]]).collect::<Vec<_>>();
+        &gained
+    };
     let (colours, of_texel) = distinct_colours(texels);
-    let (options, fits, table_from_cache, choice) = match thickness {
+    // The gains are estimated at the extended physiology given (before any thickness is chosen), as auto_gains does.
+    let given = options;
+    let (options, fits, table_from_cache, choice) = match texture.thickness {
         EpidermisThickness::Held => {
             let (table, cached) = cached_albedo_table_cancellable(&options, cancel)?;
             (options, fit_colours(&table, &colours, &options, cancel)?, cached, None)
@@ -208,6 +252,19 @@ pub fn fit_albedo_tiles_cancellable(
             (options, fits, cached, Some(choice))
         }
     };
+    // The diagnosis of the whole set, with the remedy measured when the gains were not estimated already.
+    let far = fits
+        .iter()
+        .zip(colour_counts(&of_texel, colours.len()))
+        .filter(|(f, _)| f.1 as f64 > NOT_ALBEDO_DELTA_E00)
+        .map(|(_, c)| c as usize)
+        .sum::<usize>();
+    let mut diagnosis = not_albedo_diagnosis(far, texels.len(), gains.as_ref(), texture.auto_gains);
+    if diagnosis.is_some() && gains.is_none() {
+        let estimate = estimate_gains(texels, &given, &thicknesses, cancel)?;
+        diagnosis = not_albedo_diagnosis(far, texels.len(), Some(&estimate), false);
+        gains = Some(estimate);
+    }
     let oil = options.oiliness as f32;
     let mut start = 0;
     let mut out = Vec::with_capacity(tiles.len());
@@ -231,6 +288,8 @@ pub fn fit_albedo_tiles_cancellable(
             residual_delta_e00,
             extended: options.extended,
             thickness: choice.clone(),
+            gains: gains.clone(),
+            diagnosis: diagnosis.clone(),
             stats: AlbedoMapStats {
                 texels: of_tile.len(),
                 distinct_colours: colours.len(),
@@ -281,6 +340,15 @@ pub const THICKNESS_CANDIDATES_MM: [f64; 6] = [0.05, 0.1, 0.15, 0.25, 0.35, 0.5]
 /// fitted in full and the better on every texel is kept.
 pub const SCREEN_COLOURS: usize = 4096;
 
+/// How many texels have each colour (`of_texel`: each texel's colour index).
+fn colour_counts(of_texel: &[u32], colours: usize) -> Vec<u32> {
+    let mut counts = vec![0u32; colours];
+    for &i in of_texel {
+        counts[i as usize] += 1;
+    }
+    counts
+}
+
 /// The mean over the texture's texels of per-colour values (`count[i]` texels of colour i).
 fn texel_mean(values: &[([f32; 3], f32)], counts: &[u32]) -> f64 {
     let total: f64 = counts.iter().map(|&c| c as f64).sum();
@@ -310,10 +378,7 @@ fn choose_thickness(
         all_cached.set(all_cached.get() && cached);
         fit_colours(&table, colours, &o, cancel)
     };
-    let mut counts = vec![0u32; colours.len()];
-    for &i in of_texel {
-        counts[i as usize] += 1;
-    }
+    let counts = colour_counts(of_texel, colours.len());
     if colours.len() <= SCREEN_COLOURS {
         // Every colour at every candidate: the means are the texture's own, and the best's fits are the result.
         let mut best: Option<(f64, f64, Vec<([f32; 3], f32)>)> = None;

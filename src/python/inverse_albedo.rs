@@ -9,12 +9,12 @@ use pyo3::types::PyDict;
 
 use crate::color::ALL_WORKING_SPACES;
 use crate::inverse::albedo::{fit_albedo_cancellable, AlbedoFitOptions};
-use crate::inverse::albedo_maps::{fit_albedo_map_cancellable, AlbedoMapFit, EpidermisThickness};
+use crate::inverse::albedo_maps::{fit_albedo_map_cancellable, AlbedoMapFit, EpidermisThickness, TextureFit};
 use crate::skin::params::EXTENDED_PARAMS;
 
 use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg};
 use super::detach::{detached, detached_interruptible};
-use super::errors::{internal, invalid};
+use super::errors::{internal, invalid, SpectralSkinWarning};
 
 /// The options from the keyword arguments (None: the defaults of src/inverse/albedo.rs).
 #[allow(clippy::too_many_arguments)]
@@ -27,6 +27,7 @@ fn options_from(
     ambiguity_delta_e: Option<&Bound<'_, PyAny>>,
     transport: &str,
     streams: Option<&Bound<'_, PyAny>>,
+    rgb_gains: Option<[f64; 3]>,
 ) -> PyResult<AlbedoFitOptions> {
     let defaults = AlbedoFitOptions::default();
     let mut o = AlbedoFitOptions {
@@ -50,7 +51,31 @@ fn options_from(
             *value = v.0;
         }
     }
+    if let Some(g) = rgb_gains {
+        o.rgb_gains = g;
+    }
     Ok(o.validated()?)
+}
+
+/// ``rgb_gains``: None, three numbers, or (with ``auto``) the string "auto"; returns the gains given and whether
+/// "auto" was asked for.
+fn gains_arg(obj: Option<&Bound<'_, PyAny>>, auto: bool) -> PyResult<(Option<[f64; 3]>, bool)> {
+    let expected = if auto { "None, \"auto\" or 3 numbers (R, G, B)" } else { "None or 3 numbers (R, G, B)" };
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok((None, false));
+    };
+    if let Ok(text) = obj.extract::<String>() {
+        if auto && text == "auto" {
+            return Ok((None, true));
+        }
+        return Err(invalid("rgb_gains", format!("must be {expected}; got {text:?}")));
+    }
+    let values = real_vector("rgb_gains", obj, expected)?;
+    let gains: [f64; 3] = values
+        .as_slice()
+        .try_into()
+        .map_err(|_| invalid("rgb_gains", format!("must be {expected}; got {} numbers", values.len())))?;
+    Ok((Some(gains), false))
 }
 
 /// The parameters whose model albedo is closest in CIEDE2000 to a colour (docs/skin-atlas.md, "Fitting a colour").
@@ -72,9 +97,11 @@ fn options_from(
 ///     transport: the model whose albedo is fitted, "adding_doubling" (exact totals; the default) or "diffusion"
 ///         (the paper's), as for :func:`evaluate`.
 ///     streams: adding-doubling streams per hemisphere, even, 2..64; None: the default level's (10).
+///     rgb_gains: None, or 3 factors (R, G, B, each 1/64..64) the colour is multiplied by before the fit (exposure and
+///         white balance).
 ///
 /// Returns:
-///     A dict: "params" (the seven parameters by name), "target_rgb", "albedo_rgb" (the fit's model albedo, direct
+///     A dict: "params" (the seven parameters by name), "target_rgb" (the colour fitted: after ``rgb_gains``), "albedo_rgb" (the fit's model albedo, direct
 ///     evaluation), "delta_e00", "in_gamut", "ambiguity" ({"delta_e00", "melanin", "melanin_blend", "hemoglobin":
 ///     [min, max] over the set, "members": [[C_m, beta_m, C_h, ΔE00], ...]}), "table_from_cache", "transport",
 ///     "streams".
@@ -88,7 +115,7 @@ fn options_from(
     signature = (
         rgb, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
         blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
-        ambiguity_delta_e = None, transport = "adding_doubling", streams = None
+        ambiguity_delta_e = None, transport = "adding_doubling", streams = None, rgb_gains = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -105,8 +132,10 @@ pub(super) fn fit_albedo_py<'py>(
     ambiguity_delta_e: Option<&Bound<'py, PyAny>>,
     transport: &str,
     streams: Option<&Bound<'py, PyAny>>,
+    rgb_gains: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let values = real_vector("rgb", rgb, "3 numbers (linear RGB)")?;
+    let (gains, _) = gains_arg(rgb_gains, false)?;
     let target: [f64; 3] = values
         .as_slice()
         .try_into()
@@ -120,6 +149,7 @@ pub(super) fn fit_albedo_py<'py>(
         ambiguity_delta_e,
         transport,
         streams,
+        gains,
     )?;
     let cancel = std::sync::atomic::AtomicBool::new(false);
     let fit = detached_interruptible(py, &cancel, || fit_albedo_cancellable(target, &options, &cancel))?;
@@ -136,6 +166,9 @@ pub(super) fn fit_albedo_py<'py>(
 ///     epidermis_thickness_mm: None (the default): one thickness for the whole texture, the candidate of 0.05..0.5 mm
 ///         with the least mean ΔE00 over its texels, never worse on it than the paper's 0.25; a number: held for
 ///         every texel (mm, 0.01..0.5).
+///     rgb_gains: None, 3 factors (R, G, B) the texture is multiplied by before the fit (exposure and white
+///         balance), or "auto": the gains that bring the most texels inside skin's colours, estimated on the texture
+///         (for a photograph) and applied; ``AlbedoMapFit.gains`` reports them.
 ///     working_space, baseline_absorption_scale, blood_oxygenation, oiliness, melanin_blend_prior, prior_weight,
 ///     ambiguity_delta_e, transport, streams: as for :func:`fit_albedo`.
 ///
@@ -147,13 +180,18 @@ pub(super) fn fit_albedo_py<'py>(
 ///     SpectralSkinError: a non-finite texel, a value out of range, another shape.
 ///     TypeError: another dtype.
 ///     KeyboardInterrupt: Ctrl-C during the fit.
+///
+/// Warns:
+///     SpectralSkinWarning: the texture does not look like an albedo (over a quarter of its texels more than 2
+///         ΔE00 from every skin colour): the message gives the likely reasons and the gains measured on it
+///         (``AlbedoMapFit.diagnosis``, ``.gains``).
 #[pyfunction]
 #[pyo3(
     name = "fit_albedo_map",
     signature = (
         albedo, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
         blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
-        ambiguity_delta_e = None, transport = "adding_doubling", streams = None
+        ambiguity_delta_e = None, transport = "adding_doubling", streams = None, rgb_gains = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -170,7 +208,9 @@ pub(super) fn fit_albedo_map_py(
     ambiguity_delta_e: Option<&Bound<'_, PyAny>>,
     transport: &str,
     streams: Option<&Bound<'_, PyAny>>,
+    rgb_gains: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<AlbedoMapFitPy> {
+    let (gains, auto_gains) = gains_arg(rgb_gains, true)?;
     const EXPECTED: &str = "an (H, W, 3) float array of linear RGB";
     let array = float_array("albedo", albedo, 3, EXPECTED)?
         .ok_or_else(|| pyo3::exceptions::PyTypeError::new_err(format!("albedo must be {EXPECTED}")))?;
@@ -192,6 +232,7 @@ pub(super) fn fit_albedo_map_py(
         ambiguity_delta_e,
         transport,
         streams,
+        gains,
     )?;
     let thickness = if epidermis_thickness_mm.is_some_and(|t| !t.is_none()) {
         EpidermisThickness::Held
@@ -200,9 +241,13 @@ pub(super) fn fit_albedo_map_py(
     };
     // Ctrl-C stops the thickness choice, the table builds and the texels' fits.
     let cancel = std::sync::atomic::AtomicBool::new(false);
+    let texture = TextureFit { thickness, auto_gains };
     let fit = detached_interruptible(py, &cancel, || {
-        fit_albedo_map_cancellable(&texels, width, height, &options, thickness, &cancel)
+        fit_albedo_map_cancellable(&texels, width, height, &options, texture, &cancel)
     })?;
+    if let Some(diagnosis) = &fit.diagnosis {
+        PyErr::warn(py, &py.get_type::<SpectralSkinWarning>(), &std::ffi::CString::new(diagnosis.as_str())?, 1)?;
+    }
     Ok(AlbedoMapFitPy { fit })
 }
 
@@ -254,6 +299,22 @@ impl AlbedoMapFitPy {
     #[getter]
     fn thickness<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.fit.thickness)
+    }
+
+    /// The exposure and white-balance gains estimated on the texture ({"rgb_gains", "exposure_stops",
+    /// "epidermis_thickness_mm", "outside_share_before", "outside_share_after", "median_delta_e00_before",
+    /// "median_delta_e00_after", "sampled_texels"}): applied with ``rgb_gains="auto"``, else measured as the remedy of
+    /// ``diagnosis``; None when neither.
+    #[getter]
+    fn gains<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.fit.gains)
+    }
+
+    /// Why the texture does not look like an albedo (the share far outside skin's colours, the likely reasons, the
+    /// remedies with the gains measured), or None.
+    #[getter]
+    fn diagnosis(&self) -> Option<String> {
+        self.fit.diagnosis.clone()
     }
 
     /// (H, W): the texture's height and width.

@@ -53,6 +53,9 @@ def test_every_core_call_gets_the_transport(monkeypatch, tmp_path):
     """maps, shader_table, the radius bound's evaluate and the albedo fit: ``transport=`` whenever it is not the core's
     default (the default calls the core as before)."""
     seen: list[tuple[str, object]] = []
+    # A skin colour (a grey one would be diagnosed as not an albedo, a warning), before evaluate is spied on.
+    skin = np.array([[spectral_skin.evaluate(preset="caucasian", outputs=["albedo"])["diffuse_reflectance_rgb"]]],
+                    np.float32)
 
     def spy(name, real):
         def call(*args, **kw):
@@ -71,7 +74,7 @@ def test_every_core_call_gets_the_transport(monkeypatch, tmp_path):
         core.make_plan(settings.replace(maps={"melanin": melanin}, output_dir=str(tmp_path)))
         live.shader_table(settings, {})
         scene.radius_bound_mm(settings)
-        albedo.fit(np.full((1, 1, 3), 0.1, np.float32), "Linear Rec.709", None, key)
+        albedo.fit(skin, "Linear Rec.709", None, key)
         called = {name for name, _ in seen}
         assert {"maps", "shader_table", "fit_albedo_map"} <= called, seen
         assert all(transport == expected for _, transport in seen), (key, seen)

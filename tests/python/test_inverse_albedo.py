@@ -44,7 +44,8 @@ def test_the_thickness_is_chosen_by_default_and_written_into_the_parameter_map(t
     held), and its parameter EXR, read back and turned into maps, reproduces the texture."""
     texture = np.array([[albedo(*p, epidermis_thickness_mm=0.1) for p in TRUTH]], dtype=np.float32)
     fit = spectral_skin.fit_albedo_map(texture)
-    held = spectral_skin.fit_albedo_map(texture, epidermis_thickness_mm=0.25)
+    with pytest.warns(spectral_skin.SpectralSkinWarning, match=r"an\s+extended value held"):
+        held = spectral_skin.fit_albedo_map(texture, epidermis_thickness_mm=0.25)  # the wrong thickness, held
     assert fit.thickness is not None and fit.extended["epidermis_thickness_mm"] == fit.thickness["chosen_mm"]
     assert fit.extended["epidermis_thickness_mm"] <= 0.15, fit.thickness
     assert fit.stats["mean_delta_e00"] <= held.stats["mean_delta_e00"]
@@ -74,7 +75,8 @@ def test_green_is_out_of_gamut_with_finite_parameters() -> None:
     assert not fit["in_gamut"] and fit["delta_e00"] > 20.0
     assert all(np.isfinite(v) for v in fit["params"].values())
     texture = np.array([[[0.05, 0.6, 0.05], albedo(*TRUTH[1])]], dtype=np.float64)
-    m = spectral_skin.fit_albedo_map(texture)
+    with pytest.warns(spectral_skin.SpectralSkinWarning, match="1 of 2 texels"):  # half the texture is not skin
+        m = spectral_skin.fit_albedo_map(texture)
     assert np.all(np.isfinite(m.params)) and m.residual_delta_e00[0, 0] > 20.0
     assert m.residual_delta_e00[0, 1] < 0.5 and m.stats["out_of_gamut_texels"] == 1
 
@@ -100,3 +102,25 @@ def test_texture_size_is_bounded_before_any_copy() -> None:
         spectral_skin.fit_albedo_map(huge)
     with pytest.raises(spectral_skin.SpectralSkinError, match=r"shapes.*268435456 texels"):
         spectral_skin.maps(np.broadcast_to(np.full(4, 0.1, dtype=np.float32), (100_000, 100_000, 4)))
+
+
+def test_a_lit_texture_is_diagnosed_and_auto_gains_bring_it_inside() -> None:
+    """The model's own albedos seen under a warm light and brighter (R x 1.6, G x 1.2, B x 0.6): the fit warns that
+    the texture is not an albedo and measures gains; ``rgb_gains="auto"`` applies them, recorded in the result, and
+    the texels come back inside skin's colours; gains given by hand are applied as given; bad gains are errors."""
+    lit = np.array([[albedo(*p) * np.array([1.6, 1.2, 0.6]) for p in TRUTH]], dtype=np.float32)
+    with pytest.warns(spectral_skin.SpectralSkinWarning, match="does not look like an albedo"):
+        plain = spectral_skin.fit_albedo_map(lit)
+    assert plain.diagnosis is not None and plain.gains is not None
+    gained = spectral_skin.fit_albedo_map(lit, rgb_gains="auto")
+    assert gained.diagnosis is None and gained.gains is not None
+    assert gained.stats["options"]["rgb_gains"] == gained.gains["rgb_gains"]
+    # Gains cannot tell exposure from melanin, nor a warm light from pheomelanin: they bring the texels in, not back.
+    assert gained.stats["mean_delta_e00"] < 0.5 * plain.stats["mean_delta_e00"], (gained.stats, plain.stats)
+    by_hand = spectral_skin.fit_albedo_map(lit, rgb_gains=[1 / 1.6, 1 / 1.2, 1 / 0.6], epidermis_thickness_mm=0.25)
+    assert by_hand.stats["max_delta_e00"] < 0.5 and by_hand.gains is None
+    for bad in ([1.0, 1.0], [1.0, 0.0, 1.0], "sometimes", [1.0, np.nan, 1.0]):
+        with pytest.raises(spectral_skin.SpectralSkinError, match="rgb_gains"):
+            spectral_skin.fit_albedo_map(lit, rgb_gains=bad)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="rgb_gains"):
+        spectral_skin.fit_albedo([0.3, 0.2, 0.2], rgb_gains="auto")
