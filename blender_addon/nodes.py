@@ -13,6 +13,7 @@ from typing import Any
 import bpy
 
 from . import frame_values
+from .core import UDIM_TOKEN
 
 TAG = "spectral_skin"
 NAME_PREFIX = "SpectralSkin"
@@ -90,6 +91,26 @@ def _principled(tree: bpy.types.NodeTree) -> bpy.types.Node:
     return node
 
 
+def load_image(path: str) -> bpy.types.Image:
+    """The image of a texture the add-on wrote: a file, or a UDIM tile set (``<UDIM>`` in the name; tiles as written
+    to disk), which Blender loads from its first tile's file and turns into a tiled image that finds the others."""
+    if UDIM_TOKEN not in os.path.basename(path):
+        return bpy.data.images.load(path, check_existing=True)
+    for image in bpy.data.images:  # the tile set loaded already (a tiled image's file path keeps the token)
+        if image.source == "TILED" and os.path.abspath(bpy.path.abspath(image.filepath,
+                                                                         library=image.library)) == path:
+            return image
+    stem, extension = os.path.basename(path).split(UDIM_TOKEN, 1)
+    folder = os.path.dirname(path)
+    tiles = sorted(name for name in os.listdir(folder)
+                   if name.startswith(stem) and name.endswith(extension) and name[len(stem):-len(extension)].isdigit())
+    if not tiles:
+        raise OSError(f"{path}: no tile of the set was written")
+    image = bpy.data.images.load(os.path.join(folder, tiles[0]), check_existing=False)
+    image.source = "TILED"
+    return image
+
+
 def _texture_node(tree: bpy.types.NodeTree, role: str, path: str, colorspace: str,
                   principled: bpy.types.Node, index: int) -> bpy.types.Node:
     found = tagged_nodes(tree, role)
@@ -99,7 +120,7 @@ def _texture_node(tree: bpy.types.NodeTree, role: str, path: str, colorspace: st
         node.location = (principled.location.x - 360, principled.location.y - 280 * index)
     image = node.image
     if image is None or os.path.abspath(bpy.path.abspath(image.filepath, library=image.library)) != path:
-        image = bpy.data.images.load(path, check_existing=True)
+        image = load_image(path)
     image.reload()
     image.colorspace_settings.name = colorspace
     if bpy.data.filepath:

@@ -298,29 +298,67 @@ def image_pixels(image: bpy.types.Image) -> Any:
     return flat.reshape(height, width, image.channels)[::-1]
 
 
-def from_albedo_texture(material: bpy.types.Material, hold_thickness: bool = False) -> dict[str, Any]:
-    """From Albedo Texture: the material's Base Color image fitted per texel by the core (core/albedo.py; the
-    epidermis thickness chosen for the texture, or the material's held with ``hold_thickness``), the parameter EXR
-    written beside the .blend by the core and set as the material's Parameter Map (a Non-Color image), the Advanced
-    sliders set to the extended physiology the fit holds for. Returns the fit's summary (core.albedo.fit without the
-    fit object, plus "path"). Raises ValueError / OSError / spectral_skin.SpectralSkinError; the material is then
+def base_color_texels(image: bpy.types.Image) -> tuple[Any, str, list[tuple[int, int]]]:
+    """The Base Color image's texels as (H, W, 3) linear RGB, their working space, and for a UDIM tile set the
+    (tile, rows) of each tile stacked top to bottom (empty for one image). A tile set's tiles are read from their
+    files (Blender's pixels of a tiled image are its first tile's), in the tiled image's colour space; they must share
+    one width (ValueError naming them)."""
+    import numpy as np
+
+    if image.source != "TILED":
+        pixels, space = core_albedo.linear_albedo(image_pixels(image), image.colorspace_settings.name, image.is_float,
+                                                  scene_working_space())
+        return pixels, space, []
+    pattern = bpy.path.abspath(image.filepath, library=image.library)
+    parts, tiles = [], []
+    for tile in sorted(t.number for t in image.tiles):
+        single = bpy.data.images.load(pattern.replace(core_albedo.UDIM_TOKEN, str(tile)), check_existing=False)
+        try:
+            single.colorspace_settings.name = image.colorspace_settings.name
+            pixels, space = core_albedo.linear_albedo(image_pixels(single), single.colorspace_settings.name,
+                                                      single.is_float, scene_working_space())
+        finally:
+            bpy.data.images.remove(single)
+        parts.append(pixels)
+        tiles.append((tile, pixels.shape[0]))
+    if len({p.shape[1] for p in parts}) != 1:
+        raise ValueError(f"the Base Color tile set {image.name!r} has tiles of different widths "
+                         f"({', '.join(f'{t}: {p.shape[1]}' for (t, _), p in zip(tiles, parts, strict=True))}): they are "
+                         "fitted as one texture, so they must share one width")
+    return np.ascontiguousarray(np.concatenate(parts, axis=0)), space, tiles
+
+
+def from_albedo_texture(material: bpy.types.Material, hold_thickness: bool = False,
+                        auto_gains: bool = False) -> dict[str, Any]:
+    """From Albedo Texture: the material's Base Color image (or UDIM tile set, fitted as one texture) fitted per texel
+    by the core (core/albedo.py; the epidermis thickness chosen for the texture, or the material's held with
+    ``hold_thickness``; with ``auto_gains`` the exposure and white balance corrected first), the parameter EXR and
+    the residual EXR written beside the .blend by the core (tile sets for a tile set), the parameters set as the
+    material's Parameter Map (a Non-Color image), the residual loaded as an image to inspect, the Advanced sliders set
+    to the extended physiology the fit holds for. Returns the fit's summary (core.albedo.fit without the fit object,
+    plus "path", "residual"). Raises ValueError / OSError / spectral_skin.SpectralSkinError; the material is then
     unchanged."""
     image = base_color_image(material)
-    pixels, space = core_albedo.linear_albedo(image_pixels(image), image.colorspace_settings.name, image.is_float,
-                                              scene_working_space())
+    pixels, space, tiles = base_color_texels(image)
     settings = material.spectral_skin
     held = float(settings.epidermis_thickness_mm) if hold_thickness else None
-    result = core_albedo.fit(pixels, space, held, settings.transport)
-    path = core_albedo.parameter_map_path(bpy.data.filepath, texture_prefix(bpy.data.filepath, material.name))
-    result["fit"].write(path)
-    loaded = bpy.data.images.load(path, check_existing=True)
+    result = core_albedo.fit(pixels, space, held, settings.transport, auto_gains)
+    prefix = texture_prefix(bpy.data.filepath, material.name)
+    path = core_albedo.parameter_map_path(bpy.data.filepath, prefix, tiled=bool(tiles))
+    residual = core_albedo.parameter_map_path(bpy.data.filepath, prefix, tiled=bool(tiles), kind="residual")
+    result["fit"].write(path, residual, tiles=tiles or None)
+    loaded = nodes.load_image(path)
     loaded.reload()
     loaded.colorspace_settings.name = "Non-Color"
+    residual_image = nodes.load_image(residual)
+    residual_image.reload()
+    residual_image.colorspace_settings.name = "Non-Color"
     settings.params_map = loaded
     for name, value in result["extended"].items():
         setattr(settings, name, value)
     return {key: value for key, value in result.items() if key != "fit"} | {
-        "path": path, "image": image.name, "working_space": space}
+        "path": path, "residual": residual_image.name, "image": image.name, "working_space": space,
+        "tiles": [t for t, _ in tiles]}
 
 
 class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
@@ -333,6 +371,10 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
 
     material: bpy.props.StringProperty(
         name="Material", description="Name of the material; empty: the active material")
+    auto_gains: bpy.props.BoolProperty(
+        name="Correct Exposure and White Balance", default=False,
+        description="Estimate the exposure and white-balance gains that bring the most texels inside skin's colours "
+                    "(for a photograph) and apply them before the fit")
     hold_thickness: bpy.props.BoolProperty(
         name="Hold Epidermis Thickness", default=False,
         description="Fit at the material's Epidermis Thickness instead of choosing one for the texture (the "
@@ -351,7 +393,7 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
             self.report({"ERROR"}, f"no material {self.material!r}" if self.material else "no active material")
             return {"CANCELLED"}
         try:
-            summary = from_albedo_texture(material, self.hold_thickness)
+            summary = from_albedo_texture(material, self.hold_thickness, self.auto_gains)
         except ERRORS as error:
             self.report({"ERROR"}, f"Spectral Skin: From Albedo Texture: {describe_error(error)}")
             return {"CANCELLED"}
@@ -360,7 +402,15 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
                     f"{summary['median_delta_e00']:.2f}, max {summary['max_delta_e00']:.2f}, "
                     f"{summary['out_of_gamut_texels']} texel(s) outside skin's colours; epidermis thickness "
                     f"{thickness:g} mm ({'held' if summary['thickness'] is None else 'chosen for the texture'}); "
-                    f"parameter map {summary['path']} set (Apply to use it)")
+                    f"parameter map {summary['path']} set (Apply to use it); residual ΔE00 in the image "
+                    f"{summary['residual']!r}")
+        if self.auto_gains and summary["gains"]:
+            g = summary["gains"]
+            self.report({"INFO"}, "Spectral Skin: exposure and white balance corrected, R G B x "
+                        f"{' '.join(f'{v:.3f}' for v in g['rgb_gains'])} ({g['exposure_stops']:+.2f} stops)")
+        if summary["diagnosis"]:
+            self.report({"WARNING"}, f"Spectral Skin: {summary['diagnosis']}"
+                        + ("" if self.auto_gains else " (tick Correct Exposure and White Balance to apply the gains)"))
         return {"FINISHED"}
 
 

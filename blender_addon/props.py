@@ -25,6 +25,7 @@ from .core import (
     ParameterMap,
     SkinSettings,
     read_map_file,
+    read_tile_set,
     texture_prefix,
 )
 from .core import methods as core_methods
@@ -252,6 +253,16 @@ def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str,
     first channel of a one-parameter map. Anything else raises ValueError.
     """
     what = f"{PARAMETER_INFO[name][2]} map" if name else "Parameter Map"
+    if image.source == "TILED" and (image.packed_file is not None or image.is_dirty):
+        raise ValueError(f"{what} {image.name!r} is a UDIM tile set that is packed or painted and not saved: its tiles "
+                         "are read from their files, so save them (Image > Save) first")
+    if image.source == "TILED":
+        # A UDIM tile set: every tile's file, read by the core, stacked into one texture (core.read_tile_set).
+        path = bpy.path.abspath(image.filepath, library=image.library)
+        if not path or path.startswith("//"):
+            raise ValueError(f"{what} {image.name!r}: its file path {image.filepath!r} is relative to a .blend that is "
+                             "not saved yet: save the .blend or use an absolute path")
+        return read_tile_set(os.path.abspath(path), [tile.number for tile in image.tiles], name)
     if image.source == "FILE" and image.packed_file is None and not image.is_dirty:
         path = bpy.path.abspath(image.filepath, library=image.library)
         if not path or path.startswith("//"):
@@ -277,8 +288,8 @@ def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str,
         pixels = flat.reshape(height, width, image.channels)[::-1, :, 0]
         return {name: ParameterMap(pixels=np.ascontiguousarray(pixels), normalized=not image.is_float,
                                    name=image.name)}
-    raise ValueError(f"{what} {image.name!r}: a {image.source.lower()} image is not supported; use a single image file "
-                     "(EXR, PNG, TIFF or JPEG)")
+    raise ValueError(f"{what} {image.name!r}: a {image.source.lower()} image is not supported; use an image file "
+                     "(EXR, PNG, TIFF or JPEG) or a UDIM tile set of them, not packed")
 
 
 def material_maps(material: bpy.types.Material) -> dict[str, ParameterMap]:

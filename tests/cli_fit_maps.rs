@@ -255,3 +255,44 @@ fn a_udim_tile_set_round_trips_through_fit_maps_and_maps() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("no tiles of missing.<UDIM>.exr"), "{err}");
 }
+
+/// A lit texture (the model's albedos x R 1.6, G 1.2, B 0.6): `fit-maps` warns that it is not an albedo and names
+/// the gains measured; `--auto-gains` applies gains (in --json, and in the options recorded) and the texels come
+/// inside; `--rgb-gains` takes three gains and refuses another count before any work.
+#[test]
+fn fit_maps_diagnoses_a_lit_texture_and_applies_gains() {
+    use spectral_skin::evaluate::{evaluate, Outputs, Request};
+    use spectral_skin::SkinParams;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let s = |p: &str| d.join(p).to_str().unwrap().to_string();
+    let request = Request::new(Outputs { albedo: true, ..Outputs::default() });
+    let texels: Vec<[f64; 3]> = [(0.01, 0.7, 0.01), (0.05, 0.5, 0.02), (0.15, 0.7, 0.01), (0.3, 0.8, 0.03)]
+        .iter()
+        .map(|&(m, b, h)| {
+            let a =
+                evaluate(&SkinParams::new(m, b, h, 0.3).unwrap(), &request).unwrap().diffuse_reflectance_rgb.unwrap();
+            [a[0] * 1.6, a[1] * 1.2, a[2] * 0.6]
+        })
+        .collect();
+    let plane = |c: usize| -> Vec<f32> { texels.iter().map(|t| t[c] as f32).collect() };
+    write_rgb_exr(&d.join("lit.exr"), 2, 2, [&plane(0), &plane(1), &plane(2)], ExrOptions::FLOAT_PIZ).unwrap();
+    let o = cli(&["fit-maps", "--albedo", &s("lit.exr"), "--out", &s("p.exr"), "--json"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && err.contains("does not look like an albedo") && err.contains("--auto-gains"),
+        "{err}"
+    );
+    let plain: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let o = cli(&["fit-maps", "--albedo", &s("lit.exr"), "--out", &s("p.exr"), "--json", "--auto-gains"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let gained: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(gained["gains"]["rgb_gains"], gained["stats"]["options"]["rgb_gains"], "{gained}");
+    let mean = |v: &serde_json::Value| v["stats"]["mean_delta_e00"].as_f64().unwrap();
+    assert!(mean(&gained) < 0.5 * mean(&plain), "{gained} {plain}");
+    let o = cli(&["fit-maps", "--albedo", &s("lit.exr"), "--out", &s("q.exr"), "--rgb-gains", "0.625,0.8333,1.6667"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = cli(&["fit-maps", "--albedo", &s("missing.exr"), "--rgb-gains", "0.5,1"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--rgb-gains takes three gains") && !err.contains("missing"), "{err}");
+}

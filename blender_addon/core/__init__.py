@@ -13,11 +13,13 @@ from .settings import (
     PARAMETERS,
     TRANSPORT_DESCRIPTIONS,
     TRANSPORTS,
+    UDIM_TOKEN,
     WORKING_SPACES,
     ParameterMap,
     SkinSettings,
     check,
     read_map_file,
+    read_tile_set,
 )
 from .targets import engine_name, method_name, methods, version_text
 
@@ -42,7 +44,9 @@ __all__ = [
     "make_plan",
     "method_name",
     "methods",
+    "UDIM_TOKEN",
     "read_map_file",
+    "read_tile_set",
     "subsurface_scale",
     "texture_prefix",
     "version_text",

@@ -11,11 +11,12 @@ melanin, melanin_blend, hemoglobin, oiliness per texel and the extended physiolo
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Any
 
 import spectral_skin
 
-from .settings import DEFAULT_TRANSPORT, EXTENDED_PARAMETERS, TRANSPORTS, WORKING_SPACES
+from .settings import DEFAULT_TRANSPORT, EXTENDED_PARAMETERS, TRANSPORTS, UDIM_TOKEN, WORKING_SPACES
 
 # Blender's names of the image colour spaces whose 8/16-bit values are sRGB-encoded Rec.709.
 SRGB_NAMES = ("sRGB",)
@@ -60,12 +61,15 @@ def linear_albedo(pixels: Any, colorspace: str, is_float: bool, scene_space: str
 
 
 def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
-        transport: str = DEFAULT_TRANSPORT) -> dict[str, Any]:
+        transport: str = DEFAULT_TRANSPORT, auto_gains: bool = False) -> dict[str, Any]:
     """The core's per-texel fit (``spectral_skin.fit_albedo_map``, of the model with ``transport``, a key of
     TRANSPORTS; the epidermis thickness chosen for the texture when ``epidermis_thickness_mm`` is None, as the core's
-    default, else held) and what the operator needs of it: {"fit": the core's ``AlbedoMapFit`` (``write(path)``
-    writes the parameter EXR), "extended": the extended physiology the parameters hold for, "thickness": how the
-    thickness was chosen (None: held), "median_delta_e00", "max_delta_e00", "out_of_gamut_texels"}. Raises
+    default, else held; with ``auto_gains`` the exposure and white-balance gains estimated and applied first) and what
+    the operator needs of it: {"fit": the core's ``AlbedoMapFit`` (``write(path)`` writes the parameter EXR),
+    "extended": the extended physiology the parameters hold for, "thickness": how the thickness was chosen (None:
+    held), "gains" (applied, or measured as the diagnosis' remedy; None), "diagnosis" (why the texture does not look
+    like an albedo; None), "median_delta_e00", "max_delta_e00", "out_of_gamut_texels"}. The core's warning about a
+    texture that is not an albedo is not raised here: it is the "diagnosis". Raises
     spectral_skin.SpectralSkinError when the core refuses the input; RuntimeError when this spectral_skin has no fit."""
     import numpy as np
 
@@ -73,20 +77,28 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
     if not callable(fit_map):
         raise RuntimeError(f"From Albedo Texture {UNAVAILABLE}")
     keywords: dict[str, Any] = {} if transport == DEFAULT_TRANSPORT else {"transport": TRANSPORTS[transport]}
-    result = fit_map(albedo, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm, **keywords)
+    if auto_gains:
+        keywords["rgb_gains"] = "auto"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", spectral_skin.SpectralSkinWarning)  # the same text is result.diagnosis
+        result = fit_map(albedo, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm,
+                         **keywords)
     residual = np.asarray(result.residual_delta_e00, dtype=np.float32)
     if tuple(result.shape) != tuple(albedo.shape[:2]) or residual.shape != albedo.shape[:2]:
         raise RuntimeError(f"spectral_skin.fit_albedo_map returned a fit of {tuple(result.shape)} for an albedo of "
                            f"{albedo.shape}")
     extended = {name: float(result.extended[name]) for name in EXTENDED_PARAMETERS}
     return {"fit": result, "extended": extended, "thickness": result.thickness,
+            "gains": getattr(result, "gains", None), "diagnosis": getattr(result, "diagnosis", None),
             "median_delta_e00": float(np.median(residual)), "max_delta_e00": float(np.max(residual)),
             "out_of_gamut_texels": int(result.stats["out_of_gamut_texels"])}
 
 
-def parameter_map_path(blend_path: str, prefix: str) -> str:
-    """Where the parameter EXR goes: beside the .blend, ``<prefix>_params.exr`` (prefix: core.texture_prefix).
-    ValueError for an unsaved .blend (no place beside it)."""
+def parameter_map_path(blend_path: str, prefix: str, tiled: bool = False, kind: str = "params") -> str:
+    """Where the fit's EXR of ``kind`` ("params", the parameter map, or "residual") goes: beside the .blend,
+    ``<prefix>_params.exr`` (prefix: core.texture_prefix), or the tile set ``<prefix>_params.<UDIM>.exr`` with
+    ``tiled``. ValueError for an unsaved .blend (no place beside it)."""
     if not blend_path:
         raise ValueError("the .blend is not saved yet, so the parameter map has no place beside it: save it first")
-    return os.path.join(os.path.dirname(os.path.abspath(blend_path)), f"{prefix}_params.exr")
+    name = f"{prefix}_{kind}.{UDIM_TOKEN}.exr" if tiled else f"{prefix}_{kind}.exr"
+    return os.path.join(os.path.dirname(os.path.abspath(blend_path)), name)

@@ -45,6 +45,7 @@ from .settings import (
     PARAMETER_INFO,
     PARAMETERS,
     TRANSPORTS,
+    UDIM_TOKEN,
     SkinSettings,
     check,
 )
@@ -267,8 +268,13 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
         specular_ior_level = float(constants["specular_ior_level"])
     roughness = float(constants["roughness"])
     ior = float(constants["ior"])
+    # A UDIM tile set (every map has the same tiles: check) is computed as one texture and written tile by tile.
+    tiles = next(iter(settings.maps.values())).tiles
+    udim = f".{UDIM_TOKEN}" if tiles else ""
     strategy = report["strategy"]
     computed = f"{report['width']}×{report['height']} maps, strategy {strategy['name']}"
+    if tiles:
+        computed += f" (UDIM tiles {', '.join(str(t) for t, _ in tiles)})"
     if "tuples" in strategy:
         computed += f" ({strategy['tuples']} distinct parameter sets)"
     warnings = [
@@ -285,7 +291,8 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
         "target": dict(report["target"]),
         "folder": folder,
         "prefix": prefix,
-        "textures": {kind: os.path.join(folder, f"{prefix}_{kind}.exr") for kind in images},
+        "textures": {kind: os.path.join(folder, f"{prefix}_{kind}{udim}.exr") for kind in images},
+        "tiles": tiles,
         "images": images,
         "work": dict(report["work"]),
         "summary": {
@@ -305,7 +312,8 @@ _RESULT_KEYS = {"albedo": "base_color", "radius": "radius_mm", "specular": "spec
 def write_textures(plan: dict[str, Any]) -> None:
     """Write the plan's maps with ``spectral_skin.write_maps`` (the core's writer: half-float EXRs, compression chosen
     per file, staged as temporary files and renamed into place together), as ``<prefix>_albedo.exr`` etc. in the
-    plan's folder; an earlier texture of this prefix that the plan no longer has is removed.
+    plan's folder (a UDIM tile set: ``<prefix>_albedo.1001.exr`` etc., tile by tile); an earlier texture of this prefix
+    (and tile) that the plan no longer has is removed.
 
     Raises spectral_skin.SpectralSkinIOError (an OSError naming the file) when a file cannot be written; the final paths are then
     untouched.
@@ -315,6 +323,19 @@ def write_textures(plan: dict[str, Any]) -> None:
     import spectral_skin
 
     result = {_RESULT_KEYS[kind]: plan["images"][kind] for kind in plan["textures"]}
-    written = {kind: str(path) for kind, path in spectral_skin.write_maps(result, plan["folder"], plan["prefix"]).items()}
-    if written != plan["textures"]:
-        raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {plan['textures']}")
+    tiles = plan.get("tiles") or ()
+    if not tiles:
+        written = {kind: str(path) for kind, path in spectral_skin.write_maps(result, plan["folder"], plan["prefix"]).items()}
+        if written != plan["textures"]:
+            raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {plan['textures']}")
+        return
+    # A tile set: each tile's rows as that tile's files (albedo.1001.exr, ...), which Blender loads as one tiled image.
+    first = 0
+    for tile, rows in tiles:
+        part = {key: image[first:first + rows] for key, image in result.items()}
+        first += rows
+        written = {kind: str(path) for kind, path in
+                   spectral_skin.write_maps(part, plan["folder"], plan["prefix"], tile=tile).items()}
+        expected = {kind: path.replace(UDIM_TOKEN, str(tile)) for kind, path in plan["textures"].items()}
+        if written != expected:
+            raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {expected}")

@@ -7,6 +7,7 @@ core's own message (``melanin must be in [0, 0.5] ...``).
 from __future__ import annotations
 
 import dataclasses
+import os
 import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -93,6 +94,39 @@ class ParameterMap:
     normalized: bool
     name: str = ""
     notes: tuple[str, ...] = ()
+    # A UDIM tile set stacked top to bottom: (tile number, rows) of each tile; () for a single image.
+    tiles: tuple[tuple[int, int], ...] = ()
+
+
+# The token that stands for a UDIM tile number in a file name (the core's src/maps/udim.rs: UDIM_TOKEN).
+UDIM_TOKEN = "<UDIM>"
+
+
+def read_tile_set(pattern: str, tiles: list[int], name: str | None = None) -> dict[str, ParameterMap]:
+    """A UDIM tile set's parameter maps (``pattern`` holds ``<UDIM>``; ``tiles`` its tile numbers, as Blender lists a
+    tiled image's), each tile read by :func:`read_map_file`, stacked top to bottom in tile order into one map per
+    parameter (the core computes a tile set as one texture) with ``tiles`` recording each tile's rows. ValueError when
+    the tiles' widths differ (naming them)."""
+    import numpy as np
+
+    if UDIM_TOKEN not in os.path.basename(pattern):
+        raise ValueError(f"{pattern}: a tile set's file name holds {UDIM_TOKEN}")
+    read = [(tile, read_map_file(pattern.replace(UDIM_TOKEN, str(tile)), name)) for tile in sorted(tiles)]
+    if not read:
+        raise ValueError(f"{pattern}: the tile set has no tiles")
+    stacked: dict[str, ParameterMap] = {}
+    for parameter in read[0][1]:
+        planes = [(tile, maps[parameter]) for tile, maps in read if parameter in maps]
+        widths = {np.asarray(m.pixels).shape[1] for _, m in planes}
+        if len(planes) != len(read) or len(widths) != 1:
+            raise ValueError(f"{pattern}: every tile must have the {parameter} map, all of one width, to be computed "
+                             f"as one texture; found widths {sorted(widths)} in {len(planes)} of {len(read)} tiles")
+        stacked[parameter] = ParameterMap(
+            pixels=np.ascontiguousarray(np.concatenate([np.asarray(m.pixels) for _, m in planes], axis=0)),
+            normalized=planes[0][1].normalized, name=pattern,
+            notes=tuple(dict.fromkeys(n for _, m in planes for n in m.notes)),
+            tiles=tuple((tile, int(np.asarray(m.pixels).shape[0])) for tile, m in planes))
+    return stacked
 
 
 def read_map_file(path: str, name: str | None = None) -> dict[str, ParameterMap]:
@@ -241,6 +275,15 @@ def check(settings: SkinSettings) -> None:
         raise spectral_skin.SpectralSkinError(
             f"parameter maps must be among {', '.join((*PARAMETERS, *EXTENDED_PARAMETERS))}; got "
             f"{', '.join(sorted(unknown))}")
+    tile_sets = {m.tiles for m in settings.maps.values()}
+    if len(tile_sets) > 1:
+        raise spectral_skin.SpectralSkinError(
+            "the parameter maps must all be one UDIM tile set (the same tiles) or all single images; got "
+            + "; ".join(f"{name}: {[t for t, _ in m.tiles] or 'one image'}" for name, m in settings.maps.items()))
+    if settings.mode == "LIVE" and any(m.tiles for m in settings.maps.values()):
+        raise spectral_skin.SpectralSkinError(
+            "Live mode does not take UDIM tile sets yet: use Baked mode, which computes the tiles as one texture and "
+            "writes tiled images")
     varying = [name for name in EXTENDED_PARAMETERS if name in settings.maps]
     if varying and settings.mode == "LIVE":
         raise spectral_skin.SpectralSkinError(

@@ -395,7 +395,10 @@ class AlbedoMapFit:
     @property
     def shape(self) -> tuple[int, int]: ...
     def write(
-        self, path: str | os.PathLike[str], residual_path: str | os.PathLike[str] | None = None
+        self,
+        path: str | os.PathLike[str],
+        residual_path: str | os.PathLike[str] | None = None,
+        tiles: Sequence[tuple[int, int]] | None = None,
     ) -> None: ...
 def fit_spectrum(
     wavelengths_nm: npt.ArrayLike,

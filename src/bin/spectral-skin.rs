@@ -844,7 +844,7 @@ struct FitMapsArgs {
     #[arg(long)]
     epidermis_thickness_mm: Option<f64>,
     /// Exposure and white balance: multiply the texture's linear RGB by these three gains before the fit (R,G,B).
-    #[arg(long, value_delimiter = ',', num_args = 3, conflicts_with = "auto_gains")]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, conflicts_with = "auto_gains")]
     rgb_gains: Option<Vec<f64>>,
     /// Estimate the exposure and white-balance gains that bring the most texels inside skin's colours (for a
     /// photograph) and apply them; they are printed and recorded in --json.
@@ -882,6 +882,12 @@ mod fit_maps {
     }
 
     pub fn run(args: super::FitMapsArgs) -> Result<(), Box<dyn std::error::Error>> {
+        let rgb_gains: Option<[f64; 3]> = match &args.rgb_gains {
+            Some(g) => Some(g.as_slice().try_into().map_err(|_| {
+                format!("--rgb-gains takes three gains, R,G,B (e.g. --rgb-gains 0.8,1,1.6); got {} value(s)", g.len())
+            })?),
+            None => None,
+        };
         // A UDIM tile set in: a tile set out, with the same tiles.
         let tiles: Option<Vec<u32>> = if is_tile_set(&args.albedo) { Some(find_tiles(&args.albedo)?) } else { None };
         if tiles.is_some() != is_tile_set(&args.out) {
@@ -943,8 +949,8 @@ mod fit_maps {
         if let Some(n) = args.transport.streams {
             options.streams = n;
         }
-        if let Some(g) = &args.rgb_gains {
-            options.rgb_gains = [g[0], g[1], g[2]];
+        if let Some(g) = rgb_gains {
+            options.rgb_gains = g;
         }
         let options = options.validated()?;
         let thickness =
@@ -983,7 +989,8 @@ mod fit_maps {
         };
         let s = &s;
         if let Some(diagnosis) = &fit.diagnosis {
-            eprintln!("warning: {diagnosis} (--auto-gains applies the gains)");
+            let hint = if args.auto_gains { "" } else { " (--auto-gains applies the gains)" };
+            eprintln!("warning: {diagnosis}{hint}");
         }
         if args.auto_gains {
             if let Some(g) = &fit.gains {

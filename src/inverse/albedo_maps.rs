@@ -60,6 +60,23 @@ impl AlbedoMapFit {
         commit_all(self.stage(params_path, residual_path)?)
     }
 
+    /// The fit of rows `first..first + rows` (a tile of a stacked tile set): the same fit, those texels.
+    pub fn rows(&self, first: usize, rows: usize) -> Result<AlbedoMapFit, SkinError> {
+        if rows == 0 || first + rows > self.height {
+            return Err(SkinError::invalid(
+                "tile rows",
+                format!("rows {first} to {} of a {}-row fit", first + rows, self.height),
+            ));
+        }
+        let range = first * self.width..(first + rows) * self.width;
+        Ok(AlbedoMapFit {
+            height: rows,
+            params: self.params[range.clone()].to_vec(),
+            residual_delta_e00: self.residual_delta_e00[range].to_vec(),
+            ..self.clone()
+        })
+    }
+
     /// [`Self::write`]'s files staged, for a caller that renames several fits' files into place together (the tiles
     /// of a UDIM set) with [`crate::maps::io::commit_all`].
     pub fn stage(&self, params_path: &Path, residual_path: Option<&Path>) -> Result<Vec<Staged>, SkinError> {

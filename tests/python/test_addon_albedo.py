@@ -120,3 +120,32 @@ def test_a_varying_extended_map_stays_a_map_and_live_mode_refuses_it():
     core.check(settings.replace(output_dir="/tmp"))
     with pytest.raises(spectral_skin.SpectralSkinError, match="Live mode takes one value of epidermis_thickness_mm"):
         core.check(settings.replace(mode="LIVE"))
+
+
+def test_a_tile_set_is_written_by_the_core_and_read_back_stacked(tmp_path):
+    """A fit of two stacked tiles written as a tile set (AlbedoMapFit.write(tiles=...)) and read back by the add-on's
+    core.read_tile_set: the same parameters, the tiles' rows recorded; one tile missing a map, tiles of different
+    widths and mixed tile sets are refused with messages naming them."""
+    colours = np.array([spectral_skin.evaluate(preset=name, outputs=["albedo"])["diffuse_reflectance_rgb"]
+                        for name in ("caucasian", "asian", "african")], dtype=np.float32)
+    texture = np.stack([np.roll(colours, k, axis=0) for k in range(5)])  # (5, 3, 3): tile 1001 rows 0-1, 1002 rows 2-4
+    fit = spectral_skin.fit_albedo_map(texture)
+    pattern = str(tmp_path / "p.<UDIM>.exr")
+    fit.write(pattern, str(tmp_path / "r.<UDIM>.exr"), tiles=[(1001, 2), (1002, 3)])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.1001.exr", "p.1002.exr", "r.1001.exr", "r.1002.exr"]
+    maps = core.read_tile_set(pattern, [1002, 1001])
+    assert maps["melanin"].tiles == ((1001, 2), (1002, 3))
+    for i, name in enumerate(core.PARAMETERS):
+        np.testing.assert_array_equal(maps[name].pixels, fit.params[:, :, i])
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"rows add up to the fit's 5"):
+        fit.write(pattern, tiles=[(1001, 2), (1002, 2)])
+    with pytest.raises(spectral_skin.SpectralSkinError, match="must hold <UDIM>"):
+        fit.write(str(tmp_path / "plain.exr"), tiles=[(1001, 5)])
+    narrow = spectral_skin.fit_albedo_map(texture[:, :2])
+    narrow.write(str(tmp_path / "p.1003.exr"))
+    with pytest.raises(ValueError, match="all of one width"):
+        core.read_tile_set(pattern, [1001, 1002, 1003])
+    mixed = core.SkinSettings(output_dir=str(tmp_path)).with_maps(
+        {**maps, "oiliness": core.ParameterMap(np.zeros((5, 3), np.float32), False, "o.exr")})
+    with pytest.raises(spectral_skin.SpectralSkinError, match="one UDIM tile set"):
+        core.check(mixed)
