@@ -296,3 +296,39 @@ fn fit_maps_diagnoses_a_lit_texture_and_applies_gains() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("--rgb-gains takes three gains") && !err.contains("missing"), "{err}");
 }
+
+/// `fit-maps --mask`: skin over a green background; unmasked the background makes it warn, with a black-and-white
+/// PNG mask (white = skin) it does not, and the figures count only the skin; a mask of another size is refused.
+#[test]
+fn fit_maps_takes_a_skin_mask() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let s = |p: &str| d.join(p).to_str().unwrap().to_string();
+    // The top row: skin (the model's albedos, 8-bit sRGB); the bottom row: green.
+    use spectral_skin::evaluate::{evaluate, Outputs, Request};
+    let request = Request::new(Outputs { albedo: true, ..Outputs::default() });
+    let mut codes: Vec<[u8; 3]> = [(0.01, 0.7, 0.01), (0.05, 0.5, 0.02), (0.15, 0.7, 0.01), (0.3, 0.8, 0.03)]
+        .iter()
+        .map(|&(m, b, h)| {
+            let p = spectral_skin::SkinParams::new(m, b, h, 0.3).unwrap();
+            evaluate(&p, &request).unwrap().diffuse_reflectance_rgb.unwrap().map(srgb_8bit)
+        })
+        .collect();
+    codes.extend([[20, 160, 30]; 4]);
+    image::RgbImage::from_raw(4, 2, codes.concat()).unwrap().save(d.join("albedo.png")).unwrap();
+    let mask: Vec<u8> = (0..8).map(|i| if i < 4 { 255 } else { 0 }).collect();
+    image::GrayImage::from_raw(4, 2, mask).unwrap().save(d.join("mask.png")).unwrap();
+    image::GrayImage::from_raw(2, 2, vec![255; 4]).unwrap().save(d.join("small.png")).unwrap();
+    let o = cli(&["fit-maps", "--albedo", &s("albedo.png"), "--out", &s("p.exr"), "--json"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && err.contains("does not look like an albedo"), "{err}");
+    let o = cli(&["fit-maps", "--albedo", &s("albedo.png"), "--out", &s("p.exr"), "--json", "--mask", &s("mask.png")]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !err.contains("does not look like an albedo"), "{err}");
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["stats"]["masked_out_texels"], 4, "{report}");
+    assert!(report["stats"]["max_delta_e00"].as_f64().unwrap() < 0.6, "{report}");
+    let o = cli(&["fit-maps", "--albedo", &s("albedo.png"), "--out", &s("p.exr"), "--mask", &s("small.png")]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("must have one size"), "{err}");
+}

@@ -365,6 +365,7 @@ def fit_albedo_map(
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
     rgb_gains: npt.ArrayLike | Literal["auto"] | None = None,
+    mask: npt.NDArray[np.bool_] | _MapArray | None = None,
 ) -> AlbedoMapFit:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo_map)``."""
 

@@ -850,6 +850,11 @@ struct FitMapsArgs {
     /// photograph) and apply them; they are printed and recorded in --json.
     #[arg(long)]
     auto_gains: bool,
+    /// A skin mask of the albedo's size: a black-and-white image (PNG, TIFF, JPEG or an RGB EXR; white, over half,
+    /// is skin; a tile set with <UDIM> for a tile set). Only the skin takes part in the thickness choice, the gains,
+    /// the diagnosis and the figures; the other texels are fitted to the skin colour nearest them.
+    #[arg(long)]
+    mask: Option<PathBuf>,
     /// Oiliness written into every texel (0..1; the albedo does not depend on it); default 0.3.
     #[arg(long)]
     oiliness: Option<f64>,
@@ -926,7 +931,27 @@ mod fit_maps {
                 )
                 .into());
             }
-            textures.push((tile, path, albedo));
+            let mask = match &args.mask {
+                Some(pattern) => {
+                    let file = tile.map_or(pattern.clone(), |t| tile_path(pattern, t));
+                    let m = read_albedo_texture(&file)?;
+                    if (m.width, m.height) != (albedo.width, albedo.height) {
+                        return Err(format!(
+                            "--mask {} is {}x{}; the albedo {} is {}x{}: they must have one size",
+                            file.display(),
+                            m.width,
+                            m.height,
+                            path.display(),
+                            albedo.width,
+                            albedo.height
+                        )
+                        .into());
+                    }
+                    Some(m.texels.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0 > 0.5).collect::<Vec<bool>>())
+                }
+                None => None,
+            };
+            textures.push((tile, path, albedo, mask));
         }
         let mut options = AlbedoFitOptions {
             working_space: match args.working_space {
@@ -960,17 +985,18 @@ mod fit_maps {
         crate::ctrl_c::catch();
         let pieces: Vec<AlbedoTile<'_>> = textures
             .iter()
-            .map(|(_, path, t)| AlbedoTile {
+            .map(|(_, path, t, mask)| AlbedoTile {
                 label: format!("albedo texture {}", path.display()),
                 width: t.width,
                 height: t.height,
                 texels: &t.texels,
+                mask: mask.as_deref(),
             })
             .collect();
         let fits = fit_albedo_tiles_cancellable(&pieces, &options, texture, &crate::ctrl_c::INTERRUPTED)?;
         let seconds = start.elapsed().as_secs_f64();
         let mut staged = Vec::new();
-        for ((tile, _, _), fit) in textures.iter().zip(&fits) {
+        for ((tile, _, _, _), fit) in textures.iter().zip(&fits) {
             let at = |p: &std::path::Path| tile.map_or(p.to_path_buf(), |t| tile_path(p, t));
             staged.extend(fit.stage(&at(&args.out), Some(&at(&residual_path)))?);
         }

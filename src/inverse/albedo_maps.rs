@@ -103,6 +103,9 @@ impl AlbedoMapFit {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct AlbedoMapStats {
     pub texels: usize,
+    /// Texels outside the skin mask (fitted, but not in the figures, the thickness choice, the gains or the
+    /// diagnosis); 0 without a mask.
+    pub masked_out_texels: usize,
     /// Distinct colours of the texture (of the whole set, for the tiles of a set fitted together).
     pub distinct_colours: usize,
     pub table_from_cache: bool,
@@ -202,7 +205,7 @@ pub fn fit_albedo_map_cancellable(
     texture: impl Into<TextureFit>,
     cancel: &AtomicBool,
 ) -> Result<AlbedoMapFit, SkinError> {
-    let tile = AlbedoTile { label: "albedo texture".into(), width, height, texels };
+    let tile = AlbedoTile { label: "albedo texture".into(), width, height, texels, mask: None };
     let mut fits = fit_albedo_tiles_cancellable(&[tile], options, texture, cancel)?;
     Ok(fits.remove(0))
 }
@@ -213,6 +216,10 @@ pub struct AlbedoTile<'a> {
     pub width: usize,
     pub height: usize,
     pub texels: &'a [[f32; 3]],
+    /// Which texels are skin (row-major, one per texel; None: all). Texels outside the mask are fitted too (each
+    /// gets the parameters of the skin colour nearest it) but take no part in the thickness choice, the gains, the
+    /// diagnosis or the figures: hair, eyes, background.
+    pub mask: Option<&'a [bool]>,
 }
 
 /// Fit a set of textures as one (the tiles of a UDIM set: one epidermis thickness chosen for all of them, each colour
@@ -237,6 +244,33 @@ pub fn fit_albedo_tiles_cancellable(
         &joined
     };
     crate::maps::io::check_texel_count("albedo tile set", texels.len(), 1)?;
+    // The skin mask of the set (None: every texel counts).
+    let mut mask: Option<Vec<bool>> = None;
+    if tiles.iter().any(|t| t.mask.is_some()) {
+        let mut joined_mask = Vec::with_capacity(texels.len());
+        for tile in tiles {
+            match tile.mask {
+                Some(m) if m.len() != tile.texels.len() => {
+                    return Err(SkinError::invalid(
+                        format!("mask of {}", tile.label),
+                        format!("has {} values for {} texels (one per texel, row-major)", m.len(), tile.texels.len()),
+                    ))
+                }
+                Some(m) => joined_mask.extend_from_slice(m),
+                None => joined_mask.extend(std::iter::repeat(true).take(tile.texels.len())),
+            }
+        }
+        if !joined_mask.contains(&true) {
+            return Err(SkinError::invalid("mask", "marks no texel as skin: at least one texel must be fitted"));
+        }
+        mask = Some(joined_mask);
+    }
+    let counts_in = |i: usize| !matches!(&mask, Some(m) if !m[i]);
+    let skin_texels: Vec<[f32; 3]> = match &mask {
+        Some(m) => texels.iter().zip(m).filter(|(_, &k)| k).map(|(t, _)| *t).collect(),
+        None => Vec::new(),
+    };
+    let skin: &[[f32; 3]] = if mask.is_some() { &skin_texels } else { texels };
     let mut gains = None;
     // The thicknesses the gains are estimated with: those the fit may choose from.
     let mut thicknesses = vec![options.extended[0]];
@@ -244,7 +278,7 @@ pub fn fit_albedo_tiles_cancellable(
         thicknesses.extend(THICKNESS_CANDIDATES_MM.iter().filter(|&&t| t != options.extended[0]));
     }
     if texture.auto_gains {
-        let estimate = estimate_gains(texels, &options, &thicknesses, cancel)?;
+        let estimate = estimate_gains(skin, &options, &thicknesses, cancel)?;
         options.rgb_gains = estimate.rgb_gains;
         gains = Some(estimate);
     }
@@ -257,6 +291,12 @@ pub fn fit_albedo_tiles_cancellable(
         &gained
     };
     let (colours, of_texel) = distinct_colours(texels);
+    // The colour of each texel that counts (the mask's skin).
+    let counted: Vec<u32> = match &mask {
+        Some(m) => of_texel.iter().zip(m).filter(|(_, &k)| k).map(|(&i, _)| i).collect(),
+        None => Vec::new(),
+    };
+    let counted: &[u32] = if mask.is_some() { &counted } else { &of_texel };
     // The gains are estimated at the extended physiology given (before any thickness is chosen), as auto_gains does.
     let given = options;
     let (options, fits, table_from_cache, choice) = match texture.thickness {
@@ -265,28 +305,29 @@ pub fn fit_albedo_tiles_cancellable(
             (options, fit_colours(&table, &colours, &options, cancel)?, cached, None)
         }
         EpidermisThickness::Chosen => {
-            let (options, fits, cached, choice) = choose_thickness(&colours, &of_texel, &options, cancel)?;
+            let (options, fits, cached, choice) = choose_thickness(&colours, counted, &options, cancel)?;
             (options, fits, cached, Some(choice))
         }
     };
     // The diagnosis of the whole set, with the remedy measured when the gains were not estimated already.
     let far = fits
         .iter()
-        .zip(colour_counts(&of_texel, colours.len()))
+        .zip(colour_counts(counted, colours.len()))
         .filter(|(f, _)| f.1 as f64 > NOT_ALBEDO_DELTA_E00)
         .map(|(_, c)| c as usize)
         .sum::<usize>();
-    let mut diagnosis = not_albedo_diagnosis(far, texels.len(), gains.as_ref(), texture.auto_gains);
+    let mut diagnosis = not_albedo_diagnosis(far, counted.len(), gains.as_ref(), texture.auto_gains);
     if diagnosis.is_some() && gains.is_none() {
-        let estimate = estimate_gains(texels, &given, &thicknesses, cancel)?;
-        diagnosis = not_albedo_diagnosis(far, texels.len(), Some(&estimate), false);
+        let estimate = estimate_gains(skin, &given, &thicknesses, cancel)?;
+        diagnosis = not_albedo_diagnosis(far, counted.len(), Some(&estimate), false);
         gains = Some(estimate);
     }
     let oil = options.oiliness as f32;
     let mut start = 0;
     let mut out = Vec::with_capacity(tiles.len());
     for tile in tiles {
-        let of_tile = &of_texel[start..start + tile.texels.len()];
+        let range = start..start + tile.texels.len();
+        let of_tile = &of_texel[range.clone()];
         start += tile.texels.len();
         let (params, residual_delta_e00): (Vec<[f32; 4]>, Vec<f32>) = of_tile
             .par_iter()
@@ -295,9 +336,16 @@ pub fn fit_albedo_tiles_cancellable(
                 ([p[0], p[1], p[2], oil], de)
             })
             .unzip();
-        let max = residual_delta_e00.par_iter().map(|&d| d as f64).reduce(|| 0.0, f64::max);
-        let mean = residual_delta_e00.par_iter().map(|&d| d as f64).sum::<f64>() / of_tile.len() as f64;
-        let outside = residual_delta_e00.par_iter().filter(|&&d| d as f64 > options.ambiguity_delta_e).count();
+        // The figures of the texels that count (the mask's skin; a tile without any: zeros).
+        let counted_de: Vec<f64> = residual_delta_e00
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| counts_in(range.start + i))
+            .map(|(_, &d)| d as f64)
+            .collect();
+        let max = counted_de.iter().copied().fold(0.0, f64::max);
+        let mean = if counted_de.is_empty() { 0.0 } else { counted_de.iter().sum::<f64>() / counted_de.len() as f64 };
+        let outside = counted_de.iter().filter(|&&d| d > options.ambiguity_delta_e).count();
         out.push(AlbedoMapFit {
             width: tile.width,
             height: tile.height,
@@ -309,6 +357,7 @@ pub fn fit_albedo_tiles_cancellable(
             diagnosis: diagnosis.clone(),
             stats: AlbedoMapStats {
                 texels: of_tile.len(),
+                masked_out_texels: of_tile.len() - counted_de.len(),
                 distinct_colours: colours.len(),
                 table_from_cache,
                 max_delta_e00: max,

@@ -9,7 +9,9 @@ use pyo3::types::PyDict;
 
 use crate::color::ALL_WORKING_SPACES;
 use crate::inverse::albedo::{fit_albedo_cancellable, AlbedoFitOptions};
-use crate::inverse::albedo_maps::{fit_albedo_map_cancellable, AlbedoMapFit, EpidermisThickness, TextureFit};
+use crate::inverse::albedo_maps::{
+    fit_albedo_tiles_cancellable, AlbedoMapFit, AlbedoTile, EpidermisThickness, TextureFit,
+};
 use crate::skin::params::EXTENDED_PARAMS;
 
 use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg};
@@ -55,6 +57,33 @@ fn options_from(
         o.rgb_gains = g;
     }
     Ok(o.validated()?)
+}
+
+/// ``mask``: None, or an (H, W) array (bool, or float: non-zero) marking the skin texels of an (H, W) albedo.
+fn mask_arg(obj: Option<&Bound<'_, PyAny>>, height: usize, width: usize) -> PyResult<Option<Vec<bool>>> {
+    const EXPECTED: &str = "an (H, W) array the albedo's height and width: True (or non-zero) where the texel is skin";
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    let (shape, values): (Vec<usize>, Vec<bool>) = if let Ok(a) = obj.cast::<numpy::PyArrayDyn<bool>>() {
+        let readonly = a.try_readonly().map_err(|e| pyo3::exceptions::PyTypeError::new_err(e.to_string()))?;
+        (readonly.as_array().shape().to_vec(), readonly.as_array().iter().copied().collect())
+    } else {
+        let array = float_array("mask", obj, 2, EXPECTED)?
+            .ok_or_else(|| pyo3::exceptions::PyTypeError::new_err(format!("mask must be {EXPECTED}")))?;
+        let plane = array.plane(None)?;
+        if let Some(i) = plane.iter().position(|v| v.is_nan()) {
+            return Err(invalid("mask", format!("texel (x, y) = ({}, {}) is NaN: {EXPECTED}", i % width, i / width)));
+        }
+        (array.shape(), plane.iter().map(|&v| v != 0.0).collect())
+    };
+    if shape != [height, width] {
+        return Err(invalid(
+            "mask",
+            format!("must be {EXPECTED} ({height}, {width}); got shape {}", shape_text(&shape)),
+        ));
+    }
+    Ok(Some(values))
 }
 
 /// ``rgb_gains``: None, three numbers, or (with ``auto``) the string "auto"; returns the gains given and whether
@@ -169,6 +198,9 @@ pub(super) fn fit_albedo_py<'py>(
 ///     rgb_gains: None, 3 factors (R, G, B) the texture is multiplied by before the fit (exposure and white
 ///         balance), or "auto": the gains that bring the most texels inside skin's colours, estimated on the texture
 ///         (for a photograph) and applied; ``AlbedoMapFit.gains`` reports them.
+///     mask: None, or an (H, W) array, True (bool) or non-zero (float) where the texel is skin: only those take part
+///         in the thickness choice, the gains, the diagnosis and the figures (``stats``); the others (hair, eyes,
+///         background) are fitted too, each to the skin colour nearest it.
 ///     working_space, baseline_absorption_scale, blood_oxygenation, oiliness, melanin_blend_prior, prior_weight,
 ///     ambiguity_delta_e, transport, streams: as for :func:`fit_albedo`.
 ///
@@ -191,7 +223,7 @@ pub(super) fn fit_albedo_py<'py>(
     signature = (
         albedo, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
         blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
-        ambiguity_delta_e = None, transport = "adding_doubling", streams = None, rgb_gains = None
+        ambiguity_delta_e = None, transport = "adding_doubling", streams = None, rgb_gains = None, mask = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -209,6 +241,7 @@ pub(super) fn fit_albedo_map_py(
     transport: &str,
     streams: Option<&Bound<'_, PyAny>>,
     rgb_gains: Option<&Bound<'_, PyAny>>,
+    mask: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<AlbedoMapFitPy> {
     let (gains, auto_gains) = gains_arg(rgb_gains, true)?;
     const EXPECTED: &str = "an (H, W, 3) float array of linear RGB";
@@ -242,8 +275,10 @@ pub(super) fn fit_albedo_map_py(
     // Ctrl-C stops the thickness choice, the table builds and the texels' fits.
     let cancel = std::sync::atomic::AtomicBool::new(false);
     let texture = TextureFit { thickness, auto_gains };
+    let mask = mask_arg(mask, height, width)?;
     let fit = detached_interruptible(py, &cancel, || {
-        fit_albedo_map_cancellable(&texels, width, height, &options, texture, &cancel)
+        let tile = AlbedoTile { label: "albedo texture".into(), width, height, texels: &texels, mask: mask.as_deref() };
+        Ok(fit_albedo_tiles_cancellable(&[tile], &options, texture, &cancel)?.remove(0))
     })?;
     if let Some(diagnosis) = &fit.diagnosis {
         PyErr::warn(py, &py.get_type::<SpectralSkinWarning>(), &std::ffi::CString::new(diagnosis.as_str())?, 1)?;

@@ -124,3 +124,27 @@ def test_a_lit_texture_is_diagnosed_and_auto_gains_bring_it_inside() -> None:
             spectral_skin.fit_albedo_map(lit, rgb_gains=bad)
     with pytest.raises(spectral_skin.SpectralSkinError, match="rgb_gains"):
         spectral_skin.fit_albedo([0.3, 0.2, 0.2], rgb_gains="auto")
+
+
+def test_a_skin_mask_keeps_the_background_out_of_the_choice_and_the_figures() -> None:
+    """Skin (made at 0.1 mm) beside a green background: unmasked, the background makes the fit warn that this is not
+    an albedo; with the mask only the skin counts: no warning, the figures are the skin's, the thickness is the
+    skin's, and the background texels are still fitted (finite, in range); a mask of another shape or with NaN is an
+    error."""
+    skin = np.array([albedo(*p, epidermis_thickness_mm=0.1) for p in TRUTH], dtype=np.float32)
+    texture = np.stack([skin, np.tile(np.float32([0.05, 0.5, 0.05]), (6, 1))])  # (2, 6, 3): row 1 is background
+    mask = np.array([[True] * 6, [False] * 6])
+    with pytest.warns(spectral_skin.SpectralSkinWarning, match="6 of 12 texels"):
+        spectral_skin.fit_albedo_map(texture)
+    fit = spectral_skin.fit_albedo_map(texture, mask=mask)
+    assert fit.diagnosis is None and fit.stats["masked_out_texels"] == 6 and fit.stats["max_delta_e00"] < 0.5
+    assert fit.extended["epidermis_thickness_mm"] <= 0.15, fit.thickness
+    assert np.all(np.isfinite(fit.params)) and fit.residual_delta_e00[1].min() > 2.0
+    np.testing.assert_array_equal(spectral_skin.fit_albedo_map(texture, mask=mask.astype(np.float32)).params,
+                                  fit.params)
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"mask.*\(2, 6\); got shape \(6, 2\)"):
+        spectral_skin.fit_albedo_map(texture, mask=mask.T.copy())
+    with pytest.raises(spectral_skin.SpectralSkinError, match="mask.*NaN"):
+        spectral_skin.fit_albedo_map(texture, mask=np.full((2, 6), np.nan))
+    with pytest.raises(spectral_skin.SpectralSkinError, match="marks no texel as skin"):
+        spectral_skin.fit_albedo_map(texture, mask=np.zeros((2, 6), bool))
