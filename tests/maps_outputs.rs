@@ -68,6 +68,7 @@ fn without_radius_no_radius_is_fitted() {
             Strategy::DistinctTuples { .. } => "tuples",
             Strategy::Exact { .. } => "exact",
             Strategy::Table { .. } => "table",
+            Strategy::ThicknessTables { .. } => "thickness_tables",
             Strategy::None => "none",
         };
         assert_eq!(kind, name, "the case takes the strategy it is named for");

@@ -5,6 +5,7 @@ pub mod io;
 pub mod lut;
 pub mod pipeline;
 pub mod shader_table;
+pub mod thickness_tables;
 pub mod udim;
 
 pub use pipeline::{compute_maps, run_maps, MapReport, MapResult, MapSettings, StrategyChoice};

@@ -16,6 +16,7 @@ use super::io::{
     ExrOptions, ParamImage, ParamInputs, Plane, Staged, ALL_CHANNELS, ALL_RANGES, EXTENDED_CHANNELS, PARAM_CHANNELS,
 };
 use super::lut::{measure_error_cancellable, MaterialTable, TableError, TableResolution, TexelMaterial};
+use super::thickness_tables::{measure_stack_error, ThicknessTables};
 use super::udim::{find_tiles, stack_tiles, tile_file_name, tile_set_file_name, TileRows};
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
@@ -25,7 +26,8 @@ use crate::fit::SubsurfaceMethod;
 use crate::skin::SkinParams;
 
 /// At most this many distinct (C_m, beta_m, C_h) tuples (with the extended physiology, when it varies) are evaluated
-/// one by one; more use the table (or, when an extended parameter varies, direct evaluation of every texel).
+/// one by one; more use the table (a stack of tables over thickness when the epidermis thickness varies, or direct
+/// evaluation of every texel when another extended parameter varies).
 pub const MAX_DISTINCT_TUPLES: usize = 2048;
 /// How many bad texels an error message lists by coordinate.
 const LISTED_BAD_TEXELS: usize = 5;
@@ -93,6 +95,19 @@ pub enum Strategy {
         from_cache: bool,
         build_seconds: f64,
         measured_error: Option<TableError>,
+    },
+    /// The epidermis thickness varies (the rest of the extended physiology is one value): a table per thickness node
+    /// in use, each texel blended between the two around its thickness ([`ThicknessTables`]); its error against direct
+    /// evaluation measured at `check_samples` of the map's texels.
+    ThicknessTables {
+        resolution: TableResolution,
+        tables: usize,
+        tables_built: usize,
+        node_range_mm: [f64; 2],
+        build_seconds: f64,
+        check_samples: usize,
+        max_base_color_relative: f64,
+        max_radius_relative: f64,
     },
     Exact {
         evaluations: usize,
@@ -351,6 +366,25 @@ pub fn compute_maps_cancellable(
         && uniform_value(hb).is_some()
         && extended_uniform.is_some();
     let mut work = MapWork { texels: n, ..MapWork::default() };
+    // Row y of plane k (the four, then the thickness) for the table lookups: constant planes become one shared row.
+    let row_planes: [&Plane; 4] = [m, b, hb, e0];
+    let rows_of = |plane: &Plane| match plane {
+        Plane::Texels(_) => None,
+        Plane::Constant(v) => Some(vec![*v; w]),
+    };
+    let constant_rows = row_planes.map(rows_of);
+    let row = |k: usize, y: usize| -> &[f32] {
+        match (row_planes[k], &constant_rows[k]) {
+            (Plane::Texels(values), _) => &values[y * w..(y + 1) * w],
+            (Plane::Constant(_), Some(row)) => row,
+            (Plane::Constant(_), None) => unreachable!("constant planes have a row"),
+        }
+    };
+    // Only the thickness varies among the extended physiology: the stack of tables over thickness.
+    let thickness_only: Option<[f64; 2]> = match [e0, e1, e2].map(uniform_value) {
+        [None, Some(y), Some(z)] => Some([1, 2].map(|k| ([0.0, y, z][k] as f64).clamp(range(3 + k).0, range(3 + k).1))),
+        _ => None,
+    };
     let strategy = if !needs_material {
         Strategy::None
     } else if all_constant {
@@ -399,19 +433,6 @@ pub fn compute_maps_cancellable(
         } else {
             Some(measure_error_cancellable(&table, &prepared, settings.table_check_samples, cancel)?)
         };
-        // Constant planes become one shared row.
-        let rows_of = |plane: &Plane| match plane {
-            Plane::Texels(_) => None,
-            Plane::Constant(v) => Some(vec![*v; w]),
-        };
-        let constant_rows = [rows_of(m), rows_of(b), rows_of(hb)];
-        let row = |k: usize, y: usize| -> &[f32] {
-            match (&image.planes[k], &constant_rows[k]) {
-                (Plane::Texels(values), _) => &values[y * w..(y + 1) * w],
-                (Plane::Constant(_), Some(row)) => row,
-                (Plane::Constant(_), None) => unreachable!("constant planes have a row"),
-            }
-        };
         fill_rows_with(w, &mut base_color, &mut radius, progress, cancel, |y, c, r| {
             table.lookup_method_rows(row(0, y), row(1, y), row(2, y), c, r)
         });
@@ -420,9 +441,54 @@ pub fn compute_maps_cancellable(
         work.table_nodes_built = if from_cache { 0 } else { nodes };
         work.table_lookups = n;
         Strategy::Table { resolution, nodes, from_cache, build_seconds, measured_error }
+    } else if let (StrategyChoice::Auto, Some(rest), Plane::Texels(thickness)) = (settings.strategy, thickness_only, e0)
+    {
+        let (lo, hi) = thickness
+            .par_iter()
+            .fold(|| (f32::INFINITY, f32::NEG_INFINITY), |(a, b), &t| (a.min(t), b.max(t)))
+            .reduce(|| (f32::INFINITY, f32::NEG_INFINITY), |x, y| (x.0.min(y.0), x.1.max(y.1)));
+        let tick = progress.map(|p| move || p(0, n));
+        let (stack, figures) = ThicknessTables::load_or_build(
+            &prepared,
+            method,
+            settings.table,
+            fit_radius,
+            [lo as f64, hi as f64],
+            rest,
+            settings.table_cache.as_deref(),
+            cancel,
+            tick.as_ref().map(|t| t as &(dyn Fn() + Sync)),
+        )?;
+        fill_rows_with(w, &mut base_color, &mut radius, progress, cancel, |y, c, r| {
+            stack.lookup_row([row(0, y), row(1, y), row(2, y), row(3, y)], c, r)
+        });
+        let samples = settings.table_check_samples;
+        let [base_color_error, radius_error] = measure_stack_error(
+            &stack,
+            n,
+            samples,
+            fit_radius,
+            |i| [m.value(i), b.value(i), hb.value(i), e0.value(i)],
+            |i| evaluate_one(tuple(i)).map(|t| [t.base_color, t.radius_mm]),
+            cancel,
+        )?;
+        let nodes = settings.table.node_count();
+        work.evaluations = samples.min(n);
+        work.table_nodes_built = figures.tables_built * nodes;
+        work.table_lookups = 2 * n;
+        Strategy::ThicknessTables {
+            resolution: settings.table,
+            tables: figures.tables,
+            tables_built: figures.tables_built,
+            node_range_mm: figures.node_range_mm,
+            build_seconds: figures.build_seconds,
+            check_samples: samples.min(n),
+            max_base_color_relative: base_color_error,
+            max_radius_relative: radius_error,
+        }
     } else {
-        // Direct evaluation of every texel, row by row in parallel: on request, or when an extended parameter varies
-        // over more tuples than `MAX_DISTINCT_TUPLES` (the table is over the paper's three concentrations only).
+        // Direct evaluation of every texel, row by row in parallel: on request, or when an extended parameter other
+        // than the thickness varies over more tuples than `MAX_DISTINCT_TUPLES`.
         type Row = Result<Vec<([f32; 3], [f32; 3])>, SkinError>;
         let rows: Vec<Row> = (0..h)
             .into_par_iter()
