@@ -256,25 +256,28 @@ fn a_udim_tile_set_round_trips_through_fit_maps_and_maps() {
     assert!(!o.status.success() && err.contains("no tiles of missing.<UDIM>.exr"), "{err}");
 }
 
+/// The model's albedo (linear Rec.709, by `evaluate`) of four skins from fair to dark.
+fn four_skin_albedos() -> Vec<[f64; 3]> {
+    use spectral_skin::evaluate::{evaluate, Outputs, Request};
+    let request = Request::new(Outputs { albedo: true, ..Outputs::default() });
+    [(0.01, 0.7, 0.01), (0.05, 0.5, 0.02), (0.15, 0.7, 0.01), (0.3, 0.8, 0.03)]
+        .iter()
+        .map(|&(m, b, h)| {
+            let p = spectral_skin::SkinParams::new(m, b, h, 0.3).unwrap();
+            evaluate(&p, &request).unwrap().diffuse_reflectance_rgb.unwrap()
+        })
+        .collect()
+}
+
 /// A lit texture (the model's albedos x R 1.6, G 1.2, B 0.6): `fit-maps` warns that it is not an albedo and names
 /// the gains measured; `--auto-gains` applies gains (in --json, and in the options recorded) and the texels come
 /// inside; `--rgb-gains` takes three gains and refuses another count before any work.
 #[test]
 fn fit_maps_diagnoses_a_lit_texture_and_applies_gains() {
-    use spectral_skin::evaluate::{evaluate, Outputs, Request};
-    use spectral_skin::SkinParams;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let s = |p: &str| d.join(p).to_str().unwrap().to_string();
-    let request = Request::new(Outputs { albedo: true, ..Outputs::default() });
-    let texels: Vec<[f64; 3]> = [(0.01, 0.7, 0.01), (0.05, 0.5, 0.02), (0.15, 0.7, 0.01), (0.3, 0.8, 0.03)]
-        .iter()
-        .map(|&(m, b, h)| {
-            let a =
-                evaluate(&SkinParams::new(m, b, h, 0.3).unwrap(), &request).unwrap().diffuse_reflectance_rgb.unwrap();
-            [a[0] * 1.6, a[1] * 1.2, a[2] * 0.6]
-        })
-        .collect();
+    let texels: Vec<[f64; 3]> = four_skin_albedos().iter().map(|a| [a[0] * 1.6, a[1] * 1.2, a[2] * 0.6]).collect();
     let plane = |c: usize| -> Vec<f32> { texels.iter().map(|t| t[c] as f32).collect() };
     write_rgb_exr(&d.join("lit.exr"), 2, 2, [&plane(0), &plane(1), &plane(2)], ExrOptions::FLOAT_PIZ).unwrap();
     let o = cli(&["fit-maps", "--albedo", &s("lit.exr"), "--out", &s("p.exr"), "--json"]);
@@ -305,15 +308,7 @@ fn fit_maps_takes_a_skin_mask() {
     let d = dir.path();
     let s = |p: &str| d.join(p).to_str().unwrap().to_string();
     // The top row: skin (the model's albedos, 8-bit sRGB); the bottom row: green.
-    use spectral_skin::evaluate::{evaluate, Outputs, Request};
-    let request = Request::new(Outputs { albedo: true, ..Outputs::default() });
-    let mut codes: Vec<[u8; 3]> = [(0.01, 0.7, 0.01), (0.05, 0.5, 0.02), (0.15, 0.7, 0.01), (0.3, 0.8, 0.03)]
-        .iter()
-        .map(|&(m, b, h)| {
-            let p = spectral_skin::SkinParams::new(m, b, h, 0.3).unwrap();
-            evaluate(&p, &request).unwrap().diffuse_reflectance_rgb.unwrap().map(srgb_8bit)
-        })
-        .collect();
+    let mut codes: Vec<[u8; 3]> = four_skin_albedos().iter().map(|a| a.map(srgb_8bit)).collect();
     codes.extend([[20, 160, 30]; 4]);
     image::RgbImage::from_raw(4, 2, codes.concat()).unwrap().save(d.join("albedo.png")).unwrap();
     let mask: Vec<u8> = (0..8).map(|i| if i < 4 { 255 } else { 0 }).collect();
