@@ -1,5 +1,12 @@
 //! Guarded numerics shared by the physics modules.
 
+/// The `k`th of `n` indices spread evenly by the golden-ratio sequence (frac(k (sqrt 5 - 1) / 2) n): any number of
+/// picks covers 0..n with no row or column pattern, for the samples taken from a texture.
+pub fn golden_index(k: usize, n: usize) -> usize {
+    let golden = (5f64.sqrt() - 1.0) / 2.0;
+    (((k as f64 * golden).fract() * n as f64) as usize).min(n.saturating_sub(1))
+}
+
 /// The message of a caught panic's payload (a `&str` or `String` panic), or `None` for another payload.
 pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> Option<String> {
     payload.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| payload.downcast_ref::<String>().cloned())

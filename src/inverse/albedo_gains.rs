@@ -53,11 +53,10 @@ pub struct GainEstimate {
 
 /// Texels spread evenly over `texels` (the golden-ratio sequence), as distinct colours with their counts.
 pub(crate) fn spread_sample(texels: &[[f32; 3]], count: usize) -> Vec<([f32; 3], u32)> {
-    let golden = (5f64.sqrt() - 1.0) / 2.0;
     let n = texels.len();
     let mut seen: HashMap<[u32; 3], ([f32; 3], u32)> = HashMap::new();
     for k in 0..count.min(n.max(1) * 4) {
-        let t = texels[(((k as f64 * golden).fract() * n as f64) as usize).min(n - 1)];
+        let t = texels[crate::numeric::golden_index(k, n)];
         seen.entry(t.map(f32::to_bits)).or_insert((t, 0)).1 += 1;
     }
     let mut sample: Vec<([f32; 3], u32)> = seen.into_values().collect();

@@ -463,11 +463,9 @@ fn choose_thickness(
     }
     // Screen on texels spread evenly over the texture (the golden-ratio sequence: no row or column pattern), each
     // distinct colour fitted once with its multiplicity.
-    let golden = (5f64.sqrt() - 1.0) / 2.0;
     let mut weight: HashMap<u32, u32> = HashMap::new();
     for k in 0..SCREEN_COLOURS {
-        let texel = ((k as f64 * golden).fract() * of_texel.len() as f64) as usize;
-        *weight.entry(of_texel[texel.min(of_texel.len() - 1)]).or_default() += 1;
+        *weight.entry(of_texel[crate::numeric::golden_index(k, of_texel.len())]).or_default() += 1;
     }
     let mut sample: Vec<(u32, u32)> = weight.into_iter().collect();
     sample.sort_unstable();

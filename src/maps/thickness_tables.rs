@@ -175,10 +175,7 @@ pub fn measure_stack_error(
     exact: impl Fn(usize) -> Result<[[f32; 3]; 2], SkinError> + Sync,
     cancel: &AtomicBool,
 ) -> Result<[f64; 2], SkinError> {
-    let golden = (5f64.sqrt() - 1.0) / 2.0;
-    let picks: Vec<usize> = (0..samples.min(texels))
-        .map(|k| (((k as f64 * golden).fract() * texels as f64) as usize).min(texels - 1))
-        .collect();
+    let picks: Vec<usize> = (0..samples.min(texels)).map(|k| crate::numeric::golden_index(k, texels)).collect();
     let errors = picks
         .par_iter()
         .map(|&i| {
