@@ -312,8 +312,11 @@ _RESULT_KEYS = {"albedo": "base_color", "radius": "radius_mm", "specular": "spec
 def write_textures(plan: dict[str, Any]) -> None:
     """Write the plan's maps with ``spectral_skin.write_maps`` (the core's writer: half-float EXRs, compression chosen
     per file, staged as temporary files and renamed into place together), as ``<prefix>_albedo.exr`` etc. in the
-    plan's folder (a UDIM tile set: ``<prefix>_albedo.1001.exr`` etc., tile by tile); an earlier texture of this prefix
-    (and tile) that the plan no longer has is removed.
+    plan's folder (a UDIM tile set: ``<prefix>_albedo.1001.exr`` etc., every tile's files staged and then all renamed
+    together); an earlier texture of this prefix (and tiles) that the plan no longer has is removed.
+
+    One call for the plan's images, which need not be one ``maps()`` result's (the scene analysis may take the albedo
+    of another computation and drop textures): the core reads the result's read-only arrays in place.
 
     Raises spectral_skin.SpectralSkinIOError (an OSError naming the file) when a file cannot be written; the final paths are then
     untouched.
@@ -323,19 +326,8 @@ def write_textures(plan: dict[str, Any]) -> None:
     import spectral_skin
 
     result = {_RESULT_KEYS[kind]: plan["images"][kind] for kind in plan["textures"]}
-    tiles = plan.get("tiles") or ()
-    if not tiles:
-        written = {kind: str(path) for kind, path in spectral_skin.write_maps(result, plan["folder"], plan["prefix"]).items()}
-        if written != plan["textures"]:
-            raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {plan['textures']}")
-        return
     # A tile set: each tile's rows as that tile's files (albedo.1001.exr, ...), which Blender loads as one tiled image.
-    first = 0
-    for tile, rows in tiles:
-        part = {key: image[first:first + rows] for key, image in result.items()}
-        first += rows
-        written = {kind: str(path) for kind, path in
-                   spectral_skin.write_maps(part, plan["folder"], plan["prefix"], tile=tile).items()}
-        expected = {kind: path.replace(UDIM_TOKEN, str(tile)) for kind, path in plan["textures"].items()}
-        if written != expected:
-            raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {expected}")
+    written = {kind: str(path) for kind, path in spectral_skin.write_maps(
+        result, plan["folder"], plan["prefix"], tiles=plan.get("tiles") or None).items()}
+    if written != plan["textures"]:
+        raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {plan['textures']}")

@@ -13,10 +13,11 @@ Functions:
     transports: how the totals are computed (adding-doubling, the default, or the paper's diffusion).
     presets: the named parameter sets.
     layered_reflectance: the layered solver alone (exact total, multipole profile), for checks against other solvers.
-    maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays).
+    maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays), as a
+        read-only :class:`Maps` that writes itself (``Maps.write``: one image or a UDIM tile set).
     blender_targets: the Blender versions, engines and subsurface methods the mappings target.
     read_parameter_map: parameter maps read from an EXR, PNG, TIFF or JPEG file by the CLI's rules.
-    write_maps: a maps() result written as EXRs, atomically, by the CLI's writer.
+    write_maps: a maps() result (or a dict of images) written as EXRs, atomically, by the CLI's writer.
     shader_table: Base Color and Subsurface Radius tabulated as images for a live node group in Blender.
     write_shader_table: a shader_table() result written as EXRs and a JSON sidecar.
     fit_albedo: the parameters whose model albedo is closest (CIEDE2000) to an RGB colour.
@@ -32,6 +33,7 @@ unknown channel).
 
 from ._core import (
     AlbedoMapFit,
+    Maps,
     SpectralSkinError,
     SpectralSkinIOError,
     SpectralSkinWarning,
@@ -57,6 +59,7 @@ from ._core import (
 
 __all__ = [
     "AlbedoMapFit",
+    "Maps",
     "SpectralSkinError",
     "SpectralSkinIOError",
     "SpectralSkinWarning",

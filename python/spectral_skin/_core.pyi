@@ -8,14 +8,15 @@ except the images of :func:`maps` (float32). Every function releases the GIL whi
 
 import os
 import pathlib
-from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import Any, Literal, TypedDict, final
+from collections.abc import Callable, ItemsView, Iterable, Iterator, KeysView, Mapping, Sequence, ValuesView
+from typing import Any, Literal, TypedDict, final, overload
 
 import numpy as np
 import numpy.typing as npt
 
 __all__ = [
     "AlbedoMapFit",
+    "Maps",
     "SpectralSkinError",
     "SpectralSkinIOError",
     "SpectralSkinWarning",
@@ -224,14 +225,48 @@ class _SpecularMapConstants(TypedDict):
     ior: float
     beckmann_m: float
 
-class _Maps(TypedDict, total=False):
-    """The result of :func:`maps`: the outputs asked for (``specular_ior_level`` only when the oiliness varies)."""
+@final
+class Maps(Mapping[str, Any]):
+    """Documented once, in the compiled module: ``help(spectral_skin.Maps)``."""
 
-    base_color: _Float32Array
-    radius_mm: _Float32Array
-    specular: _SpecularConstants | _SpecularMapConstants
-    specular_ior_level: _Float32Array
-    report: dict[str, Any]
+    @property
+    def base_color(self) -> _Float32Array | None: ...
+    @property
+    def radius_mm(self) -> _Float32Array | None: ...
+    @property
+    def specular_ior_level(self) -> _Float32Array | None: ...
+    @property
+    def specular(self) -> _SpecularConstants | _SpecularMapConstants | None: ...
+    @property
+    def report(self) -> dict[str, Any]: ...
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    @overload
+    def __getitem__(self, key: Literal["base_color", "radius_mm", "specular_ior_level"], /) -> _Float32Array: ...
+    @overload
+    def __getitem__(self, key: Literal["specular"], /) -> _SpecularConstants | _SpecularMapConstants: ...
+    @overload
+    def __getitem__(self, key: Literal["report"], /) -> dict[str, Any]: ...
+    @overload
+    def __getitem__(self, key: str, /) -> Any: ...
+    def __contains__(self, key: object, /) -> bool: ...
+    def __len__(self) -> int: ...
+    def __iter__(self) -> Iterator[str]: ...
+    def keys(self) -> KeysView[str]: ...
+    def values(self) -> ValuesView[Any]: ...
+    def items(self) -> ItemsView[str, Any]: ...
+    @overload
+    def get(self, key: str, default: None = None) -> Any | None: ...
+    @overload
+    def get(self, key: str, default: Any) -> Any: ...
+    def write(
+        self,
+        folder: str | os.PathLike[str],
+        prefix: str | None = None,
+        precision: _Precision | str = "half",
+        compression: _Compression | str = "auto",
+        tiles: Sequence[tuple[int, int]] | None = None,
+    ) -> dict[str, pathlib.Path]: ...
 
 def maps(
     params: _MapArray | None = None,
@@ -259,16 +294,17 @@ def maps(
     boundaries: _Boundaries | str = "paper",
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
-) -> _Maps:
+) -> Maps:
     """Documented once, in the compiled module: ``help(spectral_skin.maps)``."""
 
 def write_maps(
-    result: Mapping[str, Any],
+    result: Maps | Mapping[str, Any],
     folder: str | os.PathLike[str],
     prefix: str | None = None,
     precision: _Precision | str = "half",
     compression: _Compression | str = "auto",
     tile: int | None = None,
+    tiles: Sequence[tuple[int, int]] | None = None,
 ) -> dict[str, pathlib.Path]:
     """Documented once, in the compiled module: ``help(spectral_skin.write_maps)``."""
 

@@ -21,6 +21,55 @@ pub fn is_tile_set(path: &Path) -> bool {
     path.file_name().is_some_and(|n| n.to_string_lossy().contains(UDIM_TOKEN))
 }
 
+/// `tile` as a UDIM tile number: in [`TILE_RANGE`], else an error naming `name` (the argument) and the range.
+pub fn check_tile(name: &str, tile: i64) -> Result<u32, SkinError> {
+    u32::try_from(tile).ok().filter(|t| TILE_RANGE.contains(t)).ok_or_else(|| {
+        SkinError::invalid(
+            name,
+            format!("must be a UDIM tile, {} to {}; got {tile}", TILE_RANGE.start(), TILE_RANGE.end()),
+        )
+    })
+}
+
+/// A UDIM tile set stacked top to bottom in one image `height` rows high, as a caller gives it: (tile, rows) pairs in
+/// stacking order. Returns the [`TileRows`] (tile, first row, rows) of each; an error names `name` (the argument),
+/// what is wrong and what is expected: each tile in [`TILE_RANGE`] and given once, each at least one row, the rows
+/// adding up to `height`.
+pub fn stacked_tile_rows(name: &str, tiles: &[(i64, i64)], height: usize) -> Result<TileRows, SkinError> {
+    let wrong = |problem: String| {
+        let pairs: Vec<String> = tiles.iter().map(|(t, r)| format!("({t}, {r})")).collect();
+        SkinError::invalid(
+            name,
+            format!(
+                "{problem}: expected (tile, rows) pairs stacked top to bottom, each tile a UDIM tile {} to {} given \
+                 once with at least one row, the rows adding up to the image's {height}; got [{}]",
+                TILE_RANGE.start(),
+                TILE_RANGE.end(),
+                pairs.join(", ")
+            ),
+        )
+    };
+    let mut rows: TileRows = Vec::with_capacity(tiles.len());
+    let mut first = 0usize;
+    for &(tile, count) in tiles {
+        let Ok(number) = check_tile(name, tile) else {
+            return Err(wrong(format!("tile {tile} is not a UDIM tile")));
+        };
+        if rows.iter().any(|r| r.0 == number) {
+            return Err(wrong(format!("tile {tile} is given twice")));
+        }
+        let Some(count) = usize::try_from(count).ok().filter(|&n| n > 0) else {
+            return Err(wrong(format!("tile {tile} has {count} rows")));
+        };
+        rows.push((number, first, count));
+        first = first.saturating_add(count);
+    }
+    if first != height {
+        return Err(wrong(format!("the rows add up to {first}")));
+    }
+    Ok(rows)
+}
+
 /// `pattern` with [`UDIM_TOKEN`] in its file name replaced by `tile` (a path without the token is returned as it is).
 pub fn tile_path(pattern: &Path, tile: u32) -> PathBuf {
     match pattern.file_name() {

@@ -365,18 +365,18 @@ impl AlbedoMapFitPy {
     /// Raises:
     ///     SpectralSkinIOError: a file that cannot be written (the message names it); nothing is left half-written.
     ///
-    /// With ``tiles`` (a UDIM tile set stacked top to bottom, as [(tile number, rows), ...] covering the fit's rows),
-    /// ``path`` (and ``residual_path``) must hold ``<UDIM>``; each tile's rows are written as that tile's file
-    /// (``params.1001.exr``, ...), all renamed into place together.
+    /// With ``tiles`` (a UDIM tile set stacked top to bottom, as [(tile number, rows), ...] covering the fit's rows:
+    /// each tile 1001 to 2000, given once), ``path`` (and ``residual_path``) must hold ``<UDIM>``; each tile's rows
+    /// are written as that tile's file (``params.1001.exr``, ...), all staged first and renamed into place together.
     #[pyo3(signature = (path, residual_path = None, tiles = None))]
     fn write(
         &self,
         py: Python<'_>,
         path: PathBuf,
         residual_path: Option<PathBuf>,
-        tiles: Option<Vec<(u32, usize)>>,
+        tiles: Option<Vec<(i64, i64)>>,
     ) -> PyResult<()> {
-        use crate::maps::udim::{is_tile_set, tile_path, TILE_RANGE};
+        use crate::maps::udim::{is_tile_set, stacked_tile_rows, tile_path};
         let Some(tiles) = tiles else {
             return detached(py, || self.fit.write(&path, residual_path.as_deref()));
         };
@@ -385,24 +385,11 @@ impl AlbedoMapFitPy {
                 return Err(invalid("path", format!("{} must hold <UDIM> to write a tile set", p.display())));
             }
         }
-        let rows: usize = tiles.iter().map(|t| t.1).sum();
-        if rows != self.fit.height || tiles.iter().any(|t| !TILE_RANGE.contains(&t.0) || t.1 == 0) {
-            return Err(invalid(
-                "tiles",
-                format!(
-                    "must be (tile {} to {}, rows > 0) pairs whose rows add up to the fit's {}; got {tiles:?}",
-                    TILE_RANGE.start(),
-                    TILE_RANGE.end(),
-                    self.fit.height
-                ),
-            ));
-        }
+        let rows = stacked_tile_rows("tiles", &tiles, self.fit.height)?;
         detached(py, || {
             let mut staged = Vec::new();
-            let mut first = 0;
-            for &(tile, count) in &tiles {
+            for &(tile, first, count) in &rows {
                 let part = self.fit.rows(first, count)?;
-                first += count;
                 let residual = residual_path.as_ref().map(|r| tile_path(r, tile));
                 staged.extend(part.stage(&tile_path(&path, tile), residual.as_deref())?);
             }

@@ -1,16 +1,18 @@
 //! `maps`, `read_parameter_map` and `write_maps`: texture maps, with progress and cancelling.
 
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
 use numpy::ndarray::{Array2, Array3};
-use numpy::{PyArray, PyArray3};
-use pyo3::exceptions::{PyInterruptedError, PyTypeError};
+use numpy::{PyArray, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyInterruptedError, PyKeyError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyBytes, PyDict, PyString};
+use pyo3::types::{PyBool, PyBytes, PyDict, PyIterator, PyList, PyString};
 use rayon::prelude::*;
 
+use crate::fit::principled_specular::SpecularParams;
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{
     default_extended, read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, ALL_CHANNELS,
@@ -18,9 +20,10 @@ use crate::maps::io::{
 };
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
-    check_planes, check_prefix, commit_map_files, compute_maps_cancellable, stage_map_files, tile_output_name,
-    MapFiles, MapSettings, SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
+    check_planes, check_prefix, commit_map_files, compute_maps_cancellable, output_name, stage_map_files,
+    tile_output_name, MapFiles, MapSettings, SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
 };
+use crate::maps::udim::{check_tile, stacked_tile_rows, tile_set_file_name, TileRows};
 use crate::Outputs;
 
 use super::convert::{
@@ -307,7 +310,9 @@ pub(super) fn read_parameter_map_py<'py>(
 /// finished (a node is about a millisecond) and the exception is raised; a table stopped part-way is not cached.
 ///
 /// Returns:
-///     A dict:
+///     A :class:`Maps`, read-only, which reads like a dict of the outputs asked for (an output not asked for is
+///     absent; each is also an attribute, None when absent) and writes itself (``Maps.write``: one image, or a UDIM
+///     tile set stacked top to bottom):
 ///     "base_color" (with "albedo"): float32 (H, W, 3), Principled Base Color for ``method`` (without "radius": the
 ///     albedo), linear RGB in ``working_space``;
 ///     "radius_mm" (with "radius"): float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for
@@ -327,7 +332,8 @@ pub(super) fn read_parameter_map_py<'py>(
 ///     everywhere), "constant_values" ({name: value} of those), "request" (accuracy, model and transport), "work" ({"texels", "evaluations",
 ///     "table_nodes_built", "table_lookups", "radius_fits", "specular_evaluations", "outputs": {"base_color",
 ///     "radius", "specular"}}: what was computed), "seconds" ({"read", "compute", "write", "total"})}.
-///     The arrays are new, writeable and C-contiguous (handed to numpy without a copy).
+///     The arrays are new and C-contiguous, handed to numpy without a copy and flagged read-only (numpy refuses to
+///     write into them or to make them writeable again: ``np.array(a)`` is a writeable copy).
 ///
 /// Raises:
 ///     SpectralSkinError: a NaN, infinite or out-of-range value without clamp=True (the message names the parameter,
@@ -383,7 +389,7 @@ pub(super) fn maps_py<'py>(
     boundaries: &str,
     transport: &str,
     streams: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<MapsPy> {
     let start = Instant::now();
     if let Some(callback) = progress.as_ref().filter(|c| !c.is_callable()) {
         let type_name = callback.get_type().name().map(|n| n.to_string()).unwrap_or_default();
@@ -544,42 +550,429 @@ pub(super) fn maps_py<'py>(
         return Err(progress.map(Progress::into_error).unwrap_or_else(|| internal("stopped without a progress hook")));
     };
 
-    let dict = PyDict::new(py);
-    if let Some(base_color) = computed.base_color {
-        dict.set_item("base_color", rgb_image(py, height, width, base_color)?)?;
-    }
-    if let Some(radius_mm) = computed.radius_mm {
-        dict.set_item("radius_mm", rgb_image(py, height, width, radius_mm)?)?;
-    }
-    match computed.specular {
-        None => {}
-        Some(SpecularOutput::Map { specular_ior_level, constants }) => {
-            dict.set_item(
-                "specular_ior_level",
-                PyArray::from_owned_array(
-                    py,
-                    Array2::from_shape_vec((height, width), specular_ior_level).map_err(internal)?,
-                ),
-            )?;
-            // Only the constants that do not depend on the oiliness (fit::principled_specular::specular_from_oiliness).
-            let all = to_py(py, &constants)?;
-            let kept = PyDict::new(py);
-            for key in SPECULAR_CONSTANTS {
-                kept.set_item(key, all.get_item(key)?)?;
+    let (base_color, radius_mm, specular_ior_level, specular) = {
+        let rgb = |data: Option<Vec<f32>>| {
+            data.map(|d| rgb_image(py, height, width, d).and_then(|a| frozen(a.as_any()).map(|()| a.unbind())))
+                .transpose()
+        };
+        let (base_color, radius_mm) = (rgb(computed.base_color)?, rgb(computed.radius_mm)?);
+        let (level, specular) = match computed.specular {
+            None => (None, None),
+            Some(SpecularOutput::Constant(constants)) => (None, Some(constants)),
+            Some(SpecularOutput::Map { specular_ior_level, constants }) => {
+                let array = Array2::from_shape_vec((height, width), specular_ior_level).map_err(internal)?;
+                let array = PyArray::from_owned_array(py, array);
+                frozen(array.as_any())?;
+                (Some(array.unbind()), Some(constants))
             }
-            dict.set_item("specular", kept)?
-        }
-        Some(SpecularOutput::Constant(constants)) => dict.set_item("specular", to_py(py, &constants)?)?,
-    }
+        };
+        (base_color, radius_mm, level, specular)
+    };
     let mut report = computed.report;
     report.seconds.total = start.elapsed().as_secs_f64();
-    let report_dict = to_py(py, &report)?;
-    // JSON has no infinity: serde_json writes a semi-infinite dermis as null. Python floats do.
-    report_dict
-        .get_item("request")?
-        .get_item("model")?
-        .set_item("dermis_thickness_mm", report.request.model.dermis_thickness_mm)?;
-    dict.set_item("report", report_dict)?;
+    Ok(MapsPy { height, width, base_color, radius_mm, specular_ior_level, specular, report })
+}
+
+/// Flag a numpy array the core made read-only. Its memory belongs to the core's container (no writeable buffer), so
+/// numpy also refuses to make it (or a view of it) writeable again: the array is frozen.
+fn frozen(array: &Bound<'_, PyAny>) -> PyResult<()> {
+    array.getattr("flags")?.setattr("writeable", false)
+}
+
+/// Whether numpy lets `array` be written into.
+fn writeable(array: &Bound<'_, PyAny>) -> PyResult<bool> {
+    array.getattr("flags")?.getattr("writeable")?.extract()
+}
+
+/// The keys of a :func:`maps` result, in the order the result lists those present.
+const MAPS_KEYS: [&str; 5] = ["base_color", "radius_mm", "specular_ior_level", "specular", "report"];
+
+/// The result of :func:`maps`: the texture maps of the outputs asked for, the specular constants and the report.
+/// Read-only: its arrays are flagged not writeable (numpy refuses writes into them; copy one with ``np.array(a)``
+/// to change it) and ``specular`` and ``report`` are new dicts on each access.
+///
+/// Attributes (None when the output was not asked for):
+///     base_color: float32 (H, W, 3), Principled Base Color (see :func:`maps`).
+///     radius_mm: float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale, mm.
+///     specular_ior_level: float32 (H, W), Principled Specular IOR Level per texel; None also when the oiliness is
+///         one value everywhere (``specular`` then holds the level).
+///     specular: the specular constants (dict; see :func:`maps`).
+///     report: what was done (dict; see :func:`maps`).
+///     shape: (H, W).
+///
+/// It reads like the dict :func:`maps` returned before: ``result["base_color"]``, ``"radius_mm" in result``,
+/// ``result.keys()`` (those present, in the order above: an output not asked for is absent), ``result.get(key)``,
+/// ``result.items()``, ``len(result)``, iteration over the keys, ``dict(result)``; it is a
+/// ``collections.abc.Mapping``.
+///
+/// ``write(folder)`` writes its maps as EXRs with the core's writer, straight from its arrays (see ``Maps.write``).
+#[pyclass(frozen, mapping, name = "Maps", module = "spectral_skin")]
+pub(super) struct MapsPy {
+    height: usize,
+    width: usize,
+    base_color: Option<Py<PyArray3<f32>>>,
+    radius_mm: Option<Py<PyArray3<f32>>>,
+    specular_ior_level: Option<Py<PyArray2<f32>>>,
+    /// The specular constants; with `specular_ior_level` (the oiliness varies) only those of `SPECULAR_CONSTANTS`
+    /// are shown.
+    specular: Option<SpecularParams>,
+    report: crate::maps::MapReport,
+}
+
+impl MapsPy {
+    /// The value of `key`, or None when the result has no such key.
+    fn item<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
+        Ok(match key {
+            "base_color" => self.base_color.as_ref().map(|a| a.bind(py).clone().into_any()),
+            "radius_mm" => self.radius_mm.as_ref().map(|a| a.bind(py).clone().into_any()),
+            "specular_ior_level" => self.specular_ior_level.as_ref().map(|a| a.bind(py).clone().into_any()),
+            "specular" => self.specular_dict(py)?,
+            "report" => Some(self.report_dict(py)?),
+            _ => None,
+        })
+    }
+
+    /// The keys present, in [`MAPS_KEYS`] order.
+    fn present(&self) -> Vec<&'static str> {
+        let has = [
+            self.base_color.is_some(),
+            self.radius_mm.is_some(),
+            self.specular_ior_level.is_some(),
+            self.specular.is_some(),
+            true,
+        ];
+        MAPS_KEYS.iter().zip(has).filter(|(_, has)| *has).map(|(k, _)| *k).collect()
+    }
+
+    fn specular_dict<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let Some(constants) = &self.specular else {
+            return Ok(None);
+        };
+        let all = to_py(py, constants)?;
+        if self.specular_ior_level.is_none() {
+            return Ok(Some(all));
+        }
+        // Only the constants that do not depend on the oiliness (fit::principled_specular::specular_from_oiliness).
+        let kept = PyDict::new(py);
+        for key in SPECULAR_CONSTANTS {
+            kept.set_item(key, all.get_item(key)?)?;
+        }
+        Ok(Some(kept.into_any()))
+    }
+
+    fn report_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let report = to_py(py, &self.report)?;
+        // JSON has no infinity: serde_json writes a semi-infinite dermis as null. Python floats do.
+        report
+            .get_item("request")?
+            .get_item("model")?
+            .set_item("dermis_thickness_mm", self.report.request.model.dermis_thickness_mm)?;
+        Ok(report)
+    }
+
+    /// Write the held maps, borrowed from the arrays (read-only, C-contiguous float32: the core made them).
+    fn write_as<'py>(
+        &self,
+        py: Python<'py>,
+        folder: &Path,
+        prefix: Option<&str>,
+        exr: ExrOptions,
+        tiling: Tiling,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let base_color = self.base_color.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
+        let radius_mm = self.radius_mm.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
+        let specular =
+            self.specular_ior_level.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
+        let images = MapImages::new(
+            self.height,
+            self.width,
+            base_color.as_ref().map(|a| a.as_slice()).transpose().map_err(internal)?,
+            radius_mm.as_ref().map(|a| a.as_slice()).transpose().map_err(internal)?,
+            specular.as_ref().map(|a| a.as_slice()).transpose().map_err(internal)?,
+        )?;
+        write_images(py, &images, folder, prefix, exr, tiling)
+    }
+}
+
+#[pymethods]
+impl MapsPy {
+    /// float32 (H, W, 3), Principled Base Color (read-only); None without the "albedo" output.
+    #[getter]
+    fn base_color<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f32>>> {
+        self.base_color.as_ref().map(|a| a.bind(py).clone())
+    }
+
+    /// float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale, mm (read-only); None without the "radius"
+    /// output.
+    #[getter]
+    fn radius_mm<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f32>>> {
+        self.radius_mm.as_ref().map(|a| a.bind(py).clone())
+    }
+
+    /// float32 (H, W), Principled Specular IOR Level per texel (read-only); None without the "specular" output or
+    /// when the oiliness is one value everywhere.
+    #[getter]
+    fn specular_ior_level<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f32>>> {
+        self.specular_ior_level.as_ref().map(|a| a.bind(py).clone())
+    }
+
+    /// The specular constants (a new dict; see :func:`maps`); None without the "specular" output.
+    #[getter]
+    fn specular<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.specular_dict(py)
+    }
+
+    /// What was done (a new dict; see :func:`maps`).
+    #[getter]
+    fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.report_dict(py)
+    }
+
+    /// (H, W): the maps' height and width.
+    #[getter]
+    fn shape(&self) -> (usize, usize) {
+        (self.height, self.width)
+    }
+
+    fn __getitem__<'py>(&self, py: Python<'py>, key: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        let found = match key.cast::<PyString>() {
+            Ok(k) => self.item(py, k.to_str()?)?,
+            Err(_) => None,
+        };
+        found.ok_or_else(|| PyKeyError::new_err(key.clone().unbind()))
+    }
+
+    fn __contains__(&self, key: &Bound<'_, PyAny>) -> PyResult<bool> {
+        Ok(match key.cast::<PyString>() {
+            Ok(k) => self.present().contains(&k.to_str()?),
+            Err(_) => false,
+        })
+    }
+
+    fn __len__(&self) -> usize {
+        self.present().len()
+    }
+
+    fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyIterator>> {
+        PyList::new(py, self.present())?.try_iter()
+    }
+
+    /// The keys present, in the order "base_color", "radius_mm", "specular_ior_level", "specular", "report" (a
+    /// ``KeysView``, as a dict's).
+    fn keys<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        mapping_view(slf, "KeysView")
+    }
+
+    /// The values of ``keys()`` (a ``ValuesView``).
+    fn values<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        mapping_view(slf, "ValuesView")
+    }
+
+    /// The (key, value) pairs of ``keys()`` (an ``ItemsView``).
+    fn items<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        mapping_view(slf, "ItemsView")
+    }
+
+    /// ``result[key]`` if present, else ``default``.
+    #[pyo3(signature = (key, default = None))]
+    fn get<'py>(
+        &self,
+        py: Python<'py>,
+        key: &Bound<'py, PyAny>,
+        default: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let found = match key.cast::<PyString>() {
+            Ok(k) => self.item(py, k.to_str()?)?,
+            Err(_) => None,
+        };
+        Ok(found.or(default))
+    }
+
+    /// Write the maps this result holds as float EXRs with the core's writer (that of ``spectral-skin maps``),
+    /// straight from its arrays, in ``folder`` (created if missing): ``base_color`` -> ``albedo.exr`` (channels R, G,
+    /// B), ``radius_mm`` -> ``radius.exr`` (R, G, B), ``specular_ior_level`` -> ``specular.exr`` (Y); the file names
+    /// and everything else as :func:`write_maps`.
+    ///
+    /// Arguments:
+    ///     folder: the output folder.
+    ///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
+    ///     precision: "half" (the default) or "float"; compression: "auto" (the default), "piz", "zip", "zips",
+    ///         "rle" or "none" (as :func:`write_maps`).
+    ///     tiles: None for one image; or a UDIM tile set stacked top to bottom: [(tile, rows), ...] in stacking
+    ///         order, each tile 1001 to 2000 and given once, each at least one row, the rows adding up to H. Each
+    ///         tile's rows become that tile's files (``albedo.1001.exr``, ...), which Blender loads as
+    ///         ``albedo.<UDIM>.exr``.
+    ///
+    /// Every file (of every tile) is written as a temporary file in ``folder`` first and all are renamed into place
+    /// together once all are written, so a failure leaves the existing files as they were. Then the files of an
+    /// earlier write with the same prefix (and tiles) that this one did not write are removed.
+    ///
+    /// Returns:
+    ///     {"albedo" | "radius" | "specular": path}, for the maps written; for a tile set the path holds ``<UDIM>``
+    ///     (``<folder>/albedo.<UDIM>.exr``).
+    ///
+    /// Raises:
+    ///     SpectralSkinError: a bad prefix, precision or compression; ``tiles`` that are not such pairs (the message
+    ///         names ``tiles``, what is wrong and what is expected).
+    ///     SpectralSkinIOError: a file that cannot be written (the message names it); nothing is changed.
+    #[pyo3(signature = (folder, prefix = None, precision = "half", compression = "auto", tiles = None))]
+    fn write<'py>(
+        &self,
+        py: Python<'py>,
+        folder: PathBuf,
+        prefix: Option<&str>,
+        precision: &str,
+        compression: &str,
+        tiles: Option<Vec<(i64, i64)>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let exr = write_options(prefix, precision, compression)?;
+        let tiling = Tiling::of(None, tiles, self.height)?;
+        self.write_as(py, &folder, prefix, exr, tiling)
+    }
+
+    fn __repr__(&self) -> String {
+        let strategy = serde_json::to_value(&self.report.strategy)
+            .ok()
+            .and_then(|v| v.get("name").and_then(|n| n.as_str().map(str::to_string)))
+            .unwrap_or_default();
+        let keys: Vec<&str> = self.present().into_iter().filter(|k| *k != "report").collect();
+        format!("Maps({} x {}, {}; strategy {strategy})", self.width, self.height, keys.join(", "))
+    }
+}
+
+/// A ``collections.abc`` view (`kind`: "KeysView", "ValuesView" or "ItemsView") of a result, as a dict's.
+fn mapping_view<'py>(maps: &Bound<'py, MapsPy>, kind: &str) -> PyResult<Bound<'py, PyAny>> {
+    maps.py().import("collections.abc")?.getattr(kind)?.call1((maps,))
+}
+
+/// How a write lays the rows out in files.
+enum Tiling {
+    /// One image: the untiled files, or (`Some`) the files of that one UDIM tile.
+    One(Option<u32>),
+    /// A UDIM tile set stacked top to bottom: each tile's rows its own files.
+    Set(TileRows),
+}
+
+impl Tiling {
+    /// From `tile` (write_maps' one tile) and `tiles` (a stacked tile set of an image `height` rows high).
+    fn of(tile: Option<i64>, tiles: Option<Vec<(i64, i64)>>, height: usize) -> PyResult<Tiling> {
+        Ok(match (tile, tiles) {
+            (Some(_), Some(_)) => {
+                return Err(invalid("tiles", "give tile (one tile's image) or tiles (a stacked tile set), not both"))
+            }
+            (Some(t), None) => Tiling::One(Some(check_tile("tile", t)?)),
+            (None, Some(t)) => Tiling::Set(stacked_tile_rows("tiles", &t, height)?),
+            (None, None) => Tiling::One(None),
+        })
+    }
+}
+
+/// The EXR options of a write, after checking the prefix.
+fn write_options(prefix: Option<&str>, precision: &str, compression: &str) -> PyResult<ExrOptions> {
+    let exr = ExrOptions {
+        precision: by_name("precision", precision, &ALL_PRECISIONS)?,
+        compression: by_name("compression", compression, &ALL_COMPRESSIONS)?,
+    };
+    check_prefix(prefix)?;
+    Ok(exr)
+}
+
+/// The maps one write puts in files, row-major float32 texels: (H, W, 3) interleaved Base Color and radius, (H, W)
+/// Specular IOR Level. Borrowed: from a [`MapsPy`]'s arrays, or from (or gathered out of) the arrays given to
+/// `write_maps`.
+struct MapImages<'a> {
+    height: usize,
+    width: usize,
+    base_color: Option<&'a [f32]>,
+    radius_mm: Option<&'a [f32]>,
+    specular_ior_level: Option<&'a [f32]>,
+}
+
+impl<'a> MapImages<'a> {
+    /// The images, each checked to hold (H, W, channels) values.
+    fn new(
+        height: usize,
+        width: usize,
+        base_color: Option<&'a [f32]>,
+        radius_mm: Option<&'a [f32]>,
+        specular_ior_level: Option<&'a [f32]>,
+    ) -> PyResult<Self> {
+        for (texels, channels) in [(base_color, 3), (radius_mm, 3), (specular_ior_level, 1)] {
+            if texels.is_some_and(|t| t.len() != height * width * channels) {
+                return Err(internal("an image whose size is not its shape's"));
+            }
+        }
+        Ok(MapImages { height, width, base_color, radius_mm, specular_ior_level })
+    }
+}
+
+/// Interleaved RGB rows (`width` texels each) to three planes, rows in parallel.
+fn deinterleave(width: usize, texels: &[f32]) -> [Vec<f32>; 3] {
+    let n = texels.len() / 3;
+    let (mut p0, mut p1, mut p2) = (vec![0f32; n], vec![0f32; n], vec![0f32; n]);
+    p0.par_chunks_mut(width)
+        .zip(p1.par_chunks_mut(width))
+        .zip(p2.par_chunks_mut(width))
+        .zip(texels.par_chunks(3 * width))
+        .for_each(|(((r0, r1), r2), row)| {
+            for (x, texel) in row.chunks_exact(3).enumerate() {
+                r0[x] = texel[0];
+                r1[x] = texel[1];
+                r2[x] = texel[2];
+            }
+        });
+    [p0, p1, p2]
+}
+
+/// Write `images` as laid out by `tiling` with the core's writer, the GIL released: every file of every tile
+/// staged, then all committed together ([`commit_map_files`], which also removes this prefix's files of those tiles
+/// that this write did not write). Returns {"albedo" | "radius" | "specular": path} of the maps written (for a tile
+/// set, the path with `<UDIM>`).
+fn write_images<'py>(
+    py: Python<'py>,
+    images: &MapImages<'_>,
+    folder: &Path,
+    prefix: Option<&str>,
+    exr: ExrOptions,
+    tiling: Tiling,
+) -> PyResult<Bound<'py, PyDict>> {
+    let parts: Vec<(Option<u32>, usize, usize)> = match &tiling {
+        Tiling::One(tile) => vec![(*tile, 0, images.height)],
+        Tiling::Set(rows) => rows.iter().map(|&(tile, first, rows)| (Some(tile), first, rows)).collect(),
+    };
+    detached(py, || {
+        let w = images.width;
+        let mut staged = Vec::new();
+        for &(tile, first, rows) in &parts {
+            // One tile's planes at a time: the writer reads planes; they are dropped once the tile is staged.
+            let rgb =
+                |texels: Option<&[f32]>| texels.map(|t| deinterleave(w, &t[3 * w * first..3 * w * (first + rows)]));
+            let (base_color, radius_mm) = (rgb(images.base_color), rgb(images.radius_mm));
+            let files = MapFiles {
+                width: w,
+                height: rows,
+                base_color: base_color.as_ref(),
+                radius_mm: radius_mm.as_ref(),
+                specular_ior_level: images.specular_ior_level.map(|s| &s[w * first..w * (first + rows)]),
+            };
+            staged.extend(stage_map_files(folder, prefix, tile, &files, exr)?);
+        }
+        let tiles: Vec<Option<u32>> = parts.iter().map(|p| p.0).collect();
+        commit_map_files(folder, prefix, &tiles, staged)
+    })?;
+    let dict = PyDict::new(py);
+    let present = [images.base_color.is_some(), images.radius_mm.is_some(), images.specular_ior_level.is_some()];
+    for ((key, file), present) in
+        [("albedo", ALBEDO_FILE), ("radius", RADIUS_FILE), ("specular", SPECULAR_FILE)].into_iter().zip(present)
+    {
+        if present {
+            let name = match &tiling {
+                Tiling::One(tile) => tile_output_name(prefix, *tile, file),
+                Tiling::Set(_) => tile_set_file_name(&output_name(prefix, file)),
+            };
+            dict.set_item(key, folder.join(name))?;
+        }
+    }
     Ok(dict)
 }
 
@@ -590,13 +983,17 @@ pub(super) struct ResultImage {
     pub(super) planes: Vec<Vec<f32>>,
 }
 
-/// One image of `write_maps`' result as row-major planes: `channels` of them (an (H, W, channels) array, or (H, W)
-/// for one channel). None when the key is absent or None.
-pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyResult<Option<ResultImage>> {
+/// One image of a result mapping, checked: a float array of `channels` channels ((H, W, channels), or (H, W) for
+/// one channel), with its shape. None when the key is absent or None.
+fn result_array<'py>(
+    result: &Bound<'py, PyAny>,
+    key: &str,
+    channels: usize,
+) -> PyResult<Option<(FloatArray<'py>, Vec<usize>)>> {
     let obj = match result.get_item(key) {
         Ok(obj) if !obj.is_none() => obj,
         Ok(_) => return Ok(None),
-        Err(e) if e.is_instance_of::<pyo3::exceptions::PyKeyError>(result.py()) => return Ok(None),
+        Err(e) if e.is_instance_of::<PyKeyError>(result.py()) => return Ok(None),
         Err(e) => return Err(e),
     };
     let (ndim, expected) = if channels == 1 {
@@ -611,6 +1008,15 @@ pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usiz
     if channels > 1 && shape[2] != channels {
         return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(&shape))));
     }
+    Ok(Some((array, shape)))
+}
+
+/// One image of `write_maps`' result as row-major planes: `channels` of them (an (H, W, channels) array, or (H, W)
+/// for one channel). None when the key is absent or None.
+pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usize) -> PyResult<Option<ResultImage>> {
+    let Some((array, shape)) = result_array(result, key, channels)? else {
+        return Ok(None);
+    };
     let planes = if channels == 1 {
         vec![array.plane(None)?]
     } else {
@@ -619,67 +1025,107 @@ pub(super) fn result_planes(result: &Bound<'_, PyAny>, key: &str, channels: usiz
     Ok(Some(ResultImage { height: shape[0], width: shape[1], planes }))
 }
 
+/// The texels of an image given to `write_maps`, row-major: a read-only C-contiguous float32 array (a :func:`maps`
+/// result's) is read in place; any other is gathered into a float32 copy first (under the GIL, so nothing can change
+/// it while the GIL is released for the write).
+enum Texels<'py> {
+    InPlace(PyReadonlyArrayDyn<'py, f32>),
+    Copied(Vec<f32>),
+}
+
+impl<'py> Texels<'py> {
+    fn of(array: FloatArray<'py>) -> PyResult<Self> {
+        let unreadable = |e: numpy::BorrowError| PyTypeError::new_err(format!("cannot read the array: {e}"));
+        Ok(match array {
+            FloatArray::F32(a) if a.is_c_contiguous() && !writeable(a.as_any())? => {
+                Texels::InPlace(a.try_readonly().map_err(unreadable)?)
+            }
+            FloatArray::F32(a) => {
+                Texels::Copied(a.try_readonly().map_err(unreadable)?.as_array().iter().copied().collect())
+            }
+            FloatArray::F64(a) => {
+                Texels::Copied(a.try_readonly().map_err(unreadable)?.as_array().iter().map(|&v| v as f32).collect())
+            }
+        })
+    }
+
+    fn as_slice(&self) -> PyResult<&[f32]> {
+        match self {
+            Texels::InPlace(a) => a.as_slice().map_err(internal),
+            Texels::Copied(v) => Ok(v),
+        }
+    }
+}
+
 /// Write the images of a :func:`maps` result as float EXRs, with the core's writer (that of ``spectral-skin maps``).
 ///
 /// Each image present (and not None) becomes one file in ``folder`` (created if missing): "base_color" ->
 /// ``albedo.exr`` (channels R, G, B), "radius_mm" -> ``radius.exr`` (R, G, B), "specular_ior_level" ->
 /// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc.; with ``tile`` (a UDIM tile number),
-/// ``albedo.1001.exr`` etc., one tile of a tile set Blender loads as ``albedo.<UDIM>.exr``. Row 0 at the top; ``precision`` and
-/// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files are written as temporary files in
-/// ``folder`` and renamed into place together once all are written, so a failure leaves the existing files as they
-/// were. Then the files of an earlier write with the same prefix (and tile) that
-/// this one did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the
-/// folder holds exactly this result's maps. No sidecar is written: the report is in the result.
+/// ``albedo.1001.exr`` etc., one tile of a tile set Blender loads as ``albedo.<UDIM>.exr``; with ``tiles``, a tile
+/// set stacked top to bottom, each tile's rows as that tile's files. Row 0 at the top; ``precision`` and
+/// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files (of every tile) are written as
+/// temporary files in ``folder`` and renamed into place together once all are written, so a failure leaves the
+/// existing files as they were. Then the files of an earlier write with the same prefix (and tiles) that this one
+/// did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the folder
+/// holds exactly this result's maps. No sidecar is written: the report is in the result.
+///
+/// A :class:`Maps` is written from its own arrays (as ``result.write(...)``). Read-only C-contiguous float32 arrays
+/// (a :class:`Maps`' arrays, or slices of rows of them) are read in place; other arrays are copied (float64 rounded
+/// to float32) first.
 ///
 /// Arguments:
-///     result: a mapping with any of "base_color" (H, W, 3), "radius_mm" (H, W, 3) and "specular_ior_level" (H, W),
-///         float32 or float64 numpy arrays (float64 is rounded to float32); other keys are ignored. A result of
-///         :func:`maps`, or a part of one.
+///     result: a :class:`Maps` (the result of :func:`maps`), or a mapping with any of "base_color" (H, W, 3),
+///         "radius_mm" (H, W, 3) and "specular_ior_level" (H, W), float32 or float64 numpy arrays (float64 is rounded
+///         to float32); other keys are ignored.
 ///     folder: the output folder.
 ///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
-///     tile: None, or the UDIM tile (1001 to 2000) the images are, written into each file name.
 ///     precision: "half" (16-bit, within 0.049 % of each value; the default) or "float" (32-bit).
 ///     compression: "auto" (the default: ZIPS for half, PIZ for float, or none for a file that would shrink by under
 ///         25 %), "piz", "zip", "zips", "rle" or "none".
+///     tile: None, or the UDIM tile (1001 to 2000) the images are, written into each file name.
+///     tiles: None, or the images as a UDIM tile set stacked top to bottom, as ``Maps.write``'s ``tiles``:
+///         [(tile, rows), ...], each tile 1001 to 2000 given once, the rows adding up to H. Not with ``tile``.
 ///
 /// Returns:
-///     {"albedo" | "radius" | "specular": path of the file written}, for the images written.
+///     {"albedo" | "radius" | "specular": path of the file written}, for the images written; for ``tiles`` the path
+///     holds ``<UDIM>``.
 ///
 /// Raises:
 ///     SpectralSkinError: no image in ``result``, images whose (H, W) differ, an image of the wrong shape, a prefix
-///         that is empty or holds a path separator; a file that cannot be written (the message names it).
+///         that is empty or holds a path separator, a tile out of range, ``tiles`` that are not such pairs (the
+///         message names ``tiles``), both ``tile`` and ``tiles``.
+///     SpectralSkinIOError: a file that cannot be written (the message names it).
 ///     TypeError: an image that is not a float32 or float64 numpy array.
 #[pyfunction]
 #[pyo3(
     name = "write_maps",
-    signature = (result, folder, prefix = None, precision = "half", compression = "auto", tile = None)
+    signature = (result, folder, prefix = None, precision = "half", compression = "auto", tile = None, tiles = None)
 )]
+#[allow(clippy::too_many_arguments)]
 pub(super) fn write_maps_py<'py>(
     py: Python<'py>,
     result: &Bound<'py, PyAny>,
-    folder: std::path::PathBuf,
+    folder: PathBuf,
     prefix: Option<&str>,
     precision: &str,
     compression: &str,
-    tile: Option<u32>,
+    tile: Option<i64>,
+    tiles: Option<Vec<(i64, i64)>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if let Some(t) = tile.filter(|t| !crate::maps::udim::TILE_RANGE.contains(t)) {
-        let range = crate::maps::udim::TILE_RANGE;
-        return Err(invalid("tile", format!("must be a UDIM tile, {} to {}; got {t}", range.start(), range.end())));
+    if let Some(t) = tile {
+        check_tile("tile", t)?;
     }
-    let exr = ExrOptions {
-        precision: by_name("precision", precision, &ALL_PRECISIONS)?,
-        compression: by_name("compression", compression, &ALL_COMPRESSIONS)?,
-    };
-    check_prefix(prefix)?;
-    let base_color = result_planes(result, "base_color", 3)?;
-    let radius_mm = result_planes(result, "radius_mm", 3)?;
-    let specular = result_planes(result, "specular_ior_level", 1)?;
-    let sizes: Vec<(&str, usize, usize)> =
-        [("base_color", &base_color), ("radius_mm", &radius_mm), ("specular_ior_level", &specular)]
-            .into_iter()
-            .filter_map(|(name, image)| image.as_ref().map(|i| (name, i.height, i.width)))
-            .collect();
+    let exr = write_options(prefix, precision, compression)?;
+    if let Ok(maps) = result.cast::<MapsPy>() {
+        let maps = maps.get();
+        return maps.write_as(py, &folder, prefix, exr, Tiling::of(tile, tiles, maps.height)?);
+    }
+    let mut images = Vec::with_capacity(3);
+    for (key, channels) in [("base_color", 3), ("radius_mm", 3), ("specular_ior_level", 1)] {
+        images.push(result_array(result, key, channels)?.map(|(a, shape)| (key, shape, a)));
+    }
+    let sizes: Vec<(&str, usize, usize)> = images.iter().flatten().map(|(key, s, _)| (*key, s[0], s[1])).collect();
     let Some(&(_, height, width)) = sizes.first() else {
         return Err(invalid("result", "holds none of base_color, radius_mm, specular_ior_level: nothing to write"));
     };
@@ -687,30 +1133,12 @@ pub(super) fn write_maps_py<'py>(
         let listed: Vec<String> = sizes.iter().map(|(n, h, w)| format!("{n} ({h}, {w})")).collect();
         return Err(invalid("result", format!("the images must agree in (H, W); got {}", listed.join(", "))));
     }
-    let rgb = |image: Option<ResultImage>| -> Option<[Vec<f32>; 3]> { image.and_then(|i| i.planes.try_into().ok()) };
-    let (base_color, radius_mm) = (rgb(base_color), rgb(radius_mm));
-    let specular = specular.and_then(|mut i| i.planes.pop());
-    let written = detached(py, || {
-        let files = MapFiles {
-            width,
-            height,
-            base_color: base_color.as_ref(),
-            radius_mm: radius_mm.as_ref(),
-            specular_ior_level: specular.as_deref(),
-        };
-        let staged = stage_map_files(&folder, prefix, tile, &files, exr)?;
-        let written: Vec<std::path::PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
-        commit_map_files(&folder, prefix, &[tile], staged)?;
-        Ok(written)
-    })?;
-    let dict = PyDict::new(py);
-    for (key, file) in [("albedo", ALBEDO_FILE), ("radius", RADIUS_FILE), ("specular", SPECULAR_FILE)] {
-        let path = folder.join(tile_output_name(prefix, tile, file));
-        if written.contains(&path) {
-            dict.set_item(key, path)?;
-        }
-    }
-    Ok(dict)
+    let tiling = Tiling::of(tile, tiles, height)?;
+    let texels: Vec<Option<Texels>> =
+        images.into_iter().map(|image| image.map(|(_, _, a)| Texels::of(a)).transpose()).collect::<PyResult<_>>()?;
+    let slice = |i: usize| texels[i].as_ref().map(Texels::as_slice).transpose();
+    let images = MapImages::new(height, width, slice(0)?, slice(1)?, slice(2)?)?;
+    write_images(py, &images, &folder, prefix, exr, tiling)
 }
 
 /// The maps `maps(outputs=...)` asks for: names among the material outputs ("albedo", "radius", "specular"), at

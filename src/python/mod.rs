@@ -19,7 +19,7 @@ use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
 use inverse::fit_spectrum_py;
 use inverse_albedo::{fit_albedo_map_py, fit_albedo_py, AlbedoMapFitPy};
-use maps::{maps_py, read_parameter_map_py, write_maps_py};
+use maps::{maps_py, read_parameter_map_py, write_maps_py, MapsPy};
 use shader_table::{shader_table_py, write_shader_table_py};
 
 /// spectral-skin's compiled core: Donner & Jensen 2006's spectral skin BSSRDF.
@@ -46,6 +46,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit_albedo_py, m)?)?;
     m.add_function(wrap_pyfunction!(fit_albedo_map_py, m)?)?;
     m.add_class::<AlbedoMapFitPy>()?;
+    m.add_class::<MapsPy>()?;
+    // A maps() result reads like the dict it replaced: a Mapping for isinstance (its methods are its own).
+    m.py().import("collections.abc")?.getattr("Mapping")?.call_method1("register", (m.py().get_type::<MapsPy>(),))?;
     m.add_function(wrap_pyfunction!(fit_spectrum_py, m)?)?;
     Ok(())
 }

@@ -38,8 +38,8 @@ PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
 
 def reference_maps(*args, **kwargs):
     """``spectral_skin.maps`` for this Blender and Cycles (the scenes of these tests), its images rounded to half
-    floats as the add-on writes them (``write_maps``' default precision)."""
-    result = spectral_skin.maps(*args, blender=bpy.app.version, engine="cycles", **kwargs)
+    floats as the add-on writes them (``write_maps``' default precision): a dict (the core's ``Maps`` is read-only)."""
+    result = dict(spectral_skin.maps(*args, blender=bpy.app.version, engine="cycles", **kwargs))
     for key in ("base_color", "radius_mm"):
         if result.get(key) is not None:
             result[key] = result[key].astype(np.float16).astype(np.float32)

@@ -34,7 +34,7 @@ def assert_image(a, height, width, channels=3):
     assert isinstance(a, np.ndarray), type(a)
     assert a.dtype == np.float32, a.dtype
     assert a.shape == ((height, width, channels) if channels > 1 else (height, width)), a.shape
-    assert a.flags["C_CONTIGUOUS"] and a.flags["WRITEABLE"]
+    assert a.flags["C_CONTIGUOUS"] and not a.flags["WRITEABLE"]  # a Maps is read-only
     assert np.all(np.isfinite(a))
 
 
