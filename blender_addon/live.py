@@ -25,6 +25,7 @@ chain (:func:`chain_head`).
 from __future__ import annotations
 
 import os
+import tempfile
 from typing import Any
 
 import bpy
@@ -230,8 +231,8 @@ def _direct(image: Any) -> bool | None:
     path reads it (props._image_parameter_maps)."""
     if image.source == "GENERATED" or image.is_dirty:
         return not image.is_float
-    if image.source == "FILE" and os.path.splitext(image.filepath)[1].lower() != ".exr":
-        return True
+    if image.source in ("FILE", "TILED") and os.path.splitext(image.filepath)[1].lower() != ".exr":
+        return True  # a tiled image (UDIM tile set) is read by the Image Texture node tile by tile, from the UVs
     return None
 
 
@@ -248,8 +249,41 @@ def _parameter_image(material: Any, param: str, maps: dict[str, Any]) -> tuple[A
     if pmap is None:
         return None
     pixels = np.asarray(pmap.pixels, dtype=np.float32)
-    copy = table_image(f"SpectralSkin {material.name} {param}", np.repeat(pixels[:, :, None], 3, axis=2))
+    name = f"SpectralSkin {material.name} {param}"
+    if pmap.tiles:
+        return tiled_copy(name, pixels, pmap.tiles), bool(pmap.normalized)
+    copy = table_image(name, np.repeat(pixels[:, :, None], 3, axis=2))
     return _packed(copy), bool(pmap.normalized)
+
+
+def tiled_copy(name: str, pixels: np.ndarray, tiles: tuple[tuple[int, int], ...]) -> Any:
+    """A packed float UDIM image (Non-Color, grey) holding a tile set's values: ``pixels`` (H, W) are the tiles
+    stacked top to bottom, ``tiles`` each tile's (number, rows), as the core reads a tile set
+    (core.read_tile_set). Blender's Python API sets the pixels of a tiled image's first tile only, so each tile is
+    written by Blender as a 32-bit float EXR into a temporary folder, loaded as one tiled image and packed into the
+    .blend (Blender packs every tile); the folder is then removed: nothing depends on it."""
+    old = bpy.data.images.get(name)
+    if old is not None:
+        bpy.data.images.remove(old)
+    with tempfile.TemporaryDirectory(prefix="spectral-skin-") as folder:
+        first = 0
+        for tile, rows in tiles:
+            part = table_image(f"{name} {tile}", np.repeat(pixels[first:first + rows, :, None], 3, axis=2))
+            first += rows
+            part.filepath_raw = os.path.join(folder, f"copy.{tile}.exr")
+            part.file_format = "OPEN_EXR"
+            part.use_half_precision = False  # the core's reading, not rounded
+            part.save()
+            bpy.data.images.remove(part)
+        image = bpy.data.images.load(os.path.join(folder, f"copy.{tiles[0][0]}.exr"))
+        image.source = "TILED"
+        found = sorted(t.number for t in image.tiles)
+        if found != sorted(t for t, _ in tiles):
+            raise RuntimeError(f"{name}: Blender loaded the tiles {found}, expected {[t for t, _ in tiles]}")
+        image.pack()
+    image.name = name
+    image.colorspace_settings.name = "Non-Color"
+    return image
 
 
 def chain_head(socket: Any) -> Any:

@@ -280,10 +280,6 @@ def check(settings: SkinSettings) -> None:
         raise spectral_skin.SpectralSkinError(
             "the parameter maps must all be one UDIM tile set (the same tiles) or all single images; got "
             + "; ".join(f"{name}: {[t for t, _ in m.tiles] or 'one image'}" for name, m in settings.maps.items()))
-    if settings.mode == "LIVE" and any(m.tiles for m in settings.maps.values()):
-        raise spectral_skin.SpectralSkinError(
-            "Live mode does not take UDIM tile sets yet: use Baked mode, which computes the tiles as one texture and "
-            "writes tiled images")
     varying = [name for name in EXTENDED_PARAMETERS if name in settings.maps]
     if varying and settings.mode == "LIVE":
         raise spectral_skin.SpectralSkinError(

@@ -3,7 +3,7 @@ for the set: one thickness, a parameter tile set beside the .blend set as a tile
 mode (the tiles computed as one texture, each texture written as a tile set and loaded as a tiled image). Each
 written albedo tile is checked against the core's maps() of that tile's parameters alone (read back with
 OpenImageIO) and against the texture's own colours (within the fit's residual + 0.1 ΔE00, by the independent
-CIEDE2000 of scripts/color_difference.py); Live mode refuses a tile set with a clear message.
+CIEDE2000 of scripts/color_difference.py). Live mode's reading of a tile set is rendered in test_live_mode.py.
 
 Headless, no rendering. Run: .venv-blender/5.3/bin/python -m pytest tests/blender/test_addon_udim.py
 """
@@ -127,11 +127,3 @@ def _read_rgb_one(path: pathlib.Path) -> np.ndarray:
     pixels = image.read_image("float")
     image.close()
     return np.asarray(pixels)[:, :, 0]
-
-
-def test_live_mode_refuses_a_tile_set(addon, tmp_path):
-    material, _ = _tiled_albedo_material(tmp_path)
-    assert bpy.ops.spectral_skin.from_albedo_texture(material="Skin") == {"FINISHED"}
-    material.spectral_skin.mode = "LIVE"
-    with pytest.raises(RuntimeError, match="Live mode does not take UDIM tile sets yet"):
-        bpy.ops.spectral_skin.apply(material="Skin")

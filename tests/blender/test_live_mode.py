@@ -166,6 +166,41 @@ def _uv_slab():
     return slab
 
 
+def _two_tile_slab():
+    """The slab (1 m wide, 0.2 m thick, top at z = 0) with its top split so that the middle TEXEL_SPAN_M square is two
+    faces, one per UDIM tile: u = 2 (x / span + 1/2) from 0 to 1 (tile 1001) and from 1 to 2 (tile 1002), v = y / span
+    + 1/2 from 0 to 1, two texels of a 2-texel-wide tile each. (Cycles loads only the tiles the mesh's faces lie in, in
+    a background render: one face spanning both tiles, with its corners far outside, would load neither.)"""
+    h, s, depth = 0.5, TEXEL_SPAN_M, 0.2
+    xs, ys = (-h, -s / 2, 0.0, s / 2, h), (-h, -s / 2, s / 2, h)
+
+    def top(i: int, j: int) -> int:
+        return j * len(xs) + i
+
+    verts = [(x, y, 0.0) for y in ys for x in xs]
+    b = len(verts)
+    verts += [(-h, -h, -depth), (h, -h, -depth), (-h, h, -depth), (h, h, -depth)]  # b00, b10, b01, b11
+    faces = [(top(i, j), top(i + 1, j), top(i + 1, j + 1), top(i, j + 1))
+             for j in range(len(ys) - 1) for i in range(len(xs) - 1)]
+    faces += [
+        (b, b + 2, b + 3, b + 1),  # bottom (-z)
+        (b, b + 1, *[top(i, 0) for i in reversed(range(len(xs)))]),  # -y
+        (b + 2, *[top(i, len(ys) - 1) for i in range(len(xs))], b + 3),  # +y
+        (b, *[top(0, j) for j in range(len(ys))], b + 2),  # -x
+        (b + 1, b + 3, *[top(len(xs) - 1, j) for j in reversed(range(len(ys)))]),  # +x
+    ]
+    mesh = bpy.data.meshes.new("Slab")
+    mesh.from_pydata(verts, [], faces)
+    mesh.update()
+    slab = bpy.data.objects.new("Slab", mesh)
+    bpy.context.scene.collection.objects.link(slab)
+    uv = mesh.uv_layers.new(name="UVMap")
+    for loop in mesh.loops:
+        x, y, _ = mesh.vertices[loop.vertex_index].co
+        uv.data[loop.index].uv = (2 * (x / s + 0.5), y / s + 0.5)
+    return slab
+
+
 def _closest(material) -> None:
     """Closest lookups (the add-on's are Linear), so that each texel's interior is that texel's alone (Baked: its
     outputs; Live: its parameters): test_renders.py's per-texel setup."""
@@ -246,6 +281,82 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
         repainted = _texels(scene, live_material)
         for k in range(4):
             _check(f"repainted texel {k} live, no Apply", repainted[k], core[k])
+
+
+def _write_exr(path: pathlib.Path, pixels: np.ndarray, channels: tuple[str, ...]) -> None:
+    h, w, c = pixels.shape
+    spec = oiio.ImageSpec(w, h, c, "float")
+    spec.channelnames = channels
+    out = oiio.ImageOutput.create(str(path))
+    assert out is not None and out.open(str(path), spec), oiio.geterror()
+    assert out.write_image(np.ascontiguousarray(pixels, dtype=np.float32)), out.geterror()
+    out.close()
+
+
+@pytest.mark.parametrize("source", ["parameter exr tile set", "png haemoglobin tile set"])
+def test_live_reads_a_udim_tile_set_as_baked_and_the_core_per_texel(addon, tmp_path, source):
+    """A UDIM tile set of two tiles (1001, 1002: two texels each) under a UV map across both: Live mode reads it
+    (the four-channel parameter EXRs as a packed tiled float copy of the core's reading; 8-bit PNG tiles directly),
+    and renders per texel as the Baked material (tiled textures) and the core."""
+    scene = blender_scenes.reset_scene()
+    set_world(scene, strength=1.0)
+    _two_tile_slab()
+    add_top_camera(scene, ortho_scale=TEXEL_SPAN_M, width=64, height=16)
+    params = _params()
+    if source == "parameter exr tile set":
+        for k, tile in enumerate((1001, 1002)):
+            _write_exr(tmp_path / f"params.{tile}.exr", params[:, 2 * k:2 * k + 2],
+                       ("melanin", "melanin_blend", "hemoglobin", "oiliness"))
+        image = bpy.data.images.load(str(tmp_path / "params.1001.exr"))
+    else:
+        params[0, :, 0], params[0, :, 1] = 0.05, 0.7
+        grey = np.array([[13, 51, 128, 255]], dtype=np.uint8)
+        params[0, :, 2] = grey[0] / 255.0 * 0.1
+        for k, tile in enumerate((1001, 1002)):
+            path = tmp_path / f"hemoglobin.{tile}.png"
+            out = oiio.ImageOutput.create(str(path))
+            assert out is not None and out.open(str(path), oiio.ImageSpec(2, 1, 1, "uint8")), oiio.geterror()
+            assert out.write_image(np.ascontiguousarray(grey[:, 2 * k:2 * k + 2, None])), out.geterror()
+            out.close()
+        image = bpy.data.images.load(str(tmp_path / "hemoglobin.1001.png"))
+    image.source = "TILED"
+    assert sorted(t.number for t in image.tiles) == [1001, 1002]
+    materials = []
+    for mode in ("LIVE", "BAKED"):
+        material = _skin(mode.title(), mode, melanin=0.05, melanin_blend=0.7)
+        if source == "parameter exr tile set":
+            material.spectral_skin.params_map = image
+        else:
+            material.spectral_skin.hemoglobin_map = image
+        material.spectral_skin.output_dir = str(tmp_path / "maps")
+        materials.append(material)
+    _apply(scene, *materials)
+    live_material, baked_material = materials
+    read = addon_nodes.tagged_nodes(live_material.node_tree, "live hemoglobin")[0].image
+    assert read.source == "TILED" and sorted(t.number for t in read.tiles) == [1001, 1002]
+    if source == "parameter exr tile set":
+        assert read.name == "SpectralSkin Live hemoglobin" and read.packed_files, "a packed copy"
+    else:
+        assert read == image, "the tile set itself"
+    for material in materials:
+        _closest(material)
+    core = np.asarray(spectral_skin.maps(params, blender=tuple(bpy.app.version), engine="cycles",
+                                         method="burley")["base_color"], dtype=np.float64)[0]
+    live, baked = _texels(scene, live_material), _texels(scene, baked_material)
+    for k in range(4):
+        _check(f"{source} texel {k} live", live[k], core[k])
+        _check(f"{source} texel {k} baked", baked[k], core[k])
+        _check(f"{source} texel {k} live vs baked", live[k], baked[k])
+    if source == "parameter exr tile set":
+        # Saved and opened again, the packed copy's tiles are still there (nothing depends on the temporary files).
+        blend = tmp_path / "live.blend"
+        live_material.use_fake_user = True  # the slab has the Baked one now: keep the Live one in the file
+        bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+        bpy.ops.wm.open_mainfile(filepath=str(blend))
+        scene = bpy.context.scene
+        again = _texels(scene, bpy.data.materials["Live"])
+        for k in range(4):
+            _check(f"{source} texel {k} live, reopened", again[k], core[k])
 
 
 def test_remove_restores_the_previous_shader_and_drops_the_packed_copies(addon, tmp_path):
