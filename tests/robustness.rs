@@ -6,10 +6,11 @@ mod support;
 
 use std::f64::consts::PI;
 
+use spectral_skin::accuracy::ProfileGrid;
 use spectral_skin::diffusion::{
     layered_reflectance, layered_reflectance_with, multipole_reflectance, raw_reflectance_profiles,
     reflectance_profiles, Boundaries, ClampedProfiles, Combination, HankelQuadrature, Layer, LayerStack,
-    LayeredOptions, MultipoleTerms, ROUND_OFF_OF_PEAK,
+    LayeredOptions, MultipoleTerms, PEAK_PROBE_MM, ROUND_OFF_OF_PEAK,
 };
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::fit::SubsurfaceMethod;
@@ -393,9 +394,12 @@ fn a_clamped_lobe_is_reported_not_hidden() {
     let lobe = paper.negative_lobe.expect("the paper's boundaries give this stack a negative lobe");
     let stack = LayerStack::new(&layers).unwrap();
     let q = HankelQuadrature::default();
-    let raw = raw_reflectance_profiles(&[stack], &radii, Combination::Directional, MultipoleTerms::All, &q).remove(0);
+    let raw =
+        raw_reflectance_profiles(&[stack.clone()], &radii, Combination::Directional, MultipoleTerms::All, &q).remove(0);
+    let centre =
+        raw_reflectance_profiles(&[stack], &[PEAK_PROBE_MM], Combination::Directional, MultipoleTerms::All, &q)[0][0];
     let (k, min) = raw.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)).map(|(k, v)| (k, *v)).unwrap();
-    let peak = raw.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let peak = raw.iter().fold(centre.abs(), |m, v| m.max(v.abs()));
     assert_eq!(lobe.radius_mm, radii[k]);
     assert!((0.08..=0.2).contains(&lobe.radius_mm), "{lobe:?}");
     assert!((lobe.relative_to_peak - min / peak).abs() < 1e-15 && lobe.relative_to_peak < -1e-4, "{lobe:?}");
@@ -413,25 +417,51 @@ fn a_clamped_lobe_is_reported_not_hidden() {
     }
 }
 
+/// Radii all in the far tail (20 to 200 mm, where a skin profile is about 1e-76 per mm² and the quadrature gives
+/// round-off of 1e-20) are no lobe under either boundaries: the round-off threshold is read against the profile's
+/// value near its centre, not against the largest magnitude of the round-off itself (which made it -1 of the peak).
+#[test]
+fn far_tail_round_off_is_no_lobe() {
+    for boundaries in [Boundaries::Paper, Boundaries::Capped] {
+        for (min_mm, max_mm) in [(20.0, 100.0), (50.0, 200.0)] {
+            let mut request = Request::new(Outputs { profile_spectral: true, ..Outputs::default() });
+            request.boundaries = boundaries;
+            request.accuracy.profile_grid = ProfileGrid { r_min_mm: min_mm, r_max_mm: max_mm, count: 16 };
+            for preset in spectral_skin::PRESETS {
+                let ev = spectral_skin::evaluate(&preset.params, &request).unwrap();
+                let profile = ev.profile.unwrap();
+                assert_eq!(profile.negative_lobe, None, "{} {boundaries:?} {min_mm}-{max_mm} mm", preset.name);
+            }
+        }
+    }
+}
+
 /// Round-off below `ROUND_OFF_OF_PEAK` of the peak is not a lobe; the deepest lobe over several profiles is the one
 /// reported, at its own radius; a profile negative everywhere asked is -1 of its peak.
 #[test]
 fn lobes_are_told_apart_from_round_off() {
     let radii = [0.1, 1.0, 10.0];
-    let none = ClampedProfiles::from_raw(vec![vec![1.0, -0.5 * ROUND_OFF_OF_PEAK, 0.0]], &radii, &[]);
+    let none = ClampedProfiles::from_raw(vec![vec![1.0, -0.5 * ROUND_OFF_OF_PEAK, 0.0]], &radii, &[], &[]);
     assert_eq!(none.negative_lobe, None);
     assert_eq!(none.per_mm2, vec![vec![1.0, 0.0, 0.0]]);
     let two = ClampedProfiles::from_raw(
         vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3], vec![-1.0, -2.0, -0.5]],
         &radii,
         &[],
+        &[],
     );
     let lobe = two.negative_lobe.unwrap();
     assert_eq!((lobe.profile, lobe.radius_mm, lobe.relative_to_peak), (2, 1.0, -1.0));
-    let one = ClampedProfiles::from_raw(vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3]], &radii, &[]);
+    let one = ClampedProfiles::from_raw(vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3]], &radii, &[], &[]);
     let lobe = one.negative_lobe.unwrap();
     assert_eq!((lobe.profile, lobe.radius_mm), (1, 10.0));
     assert!((lobe.relative_to_peak + 3e-3).abs() < 1e-15);
+    // The same tail values under a profile whose centre is 1e20 times larger: round-off, no lobe; a centre of the
+    // tail's own size leaves the lobe.
+    let tail = || vec![vec![1e-20, -1e-20, -2e-20]];
+    assert_eq!(ClampedProfiles::from_raw(tail(), &radii, &[], &[1.0]).negative_lobe, None);
+    let lobe = ClampedProfiles::from_raw(tail(), &radii, &[], &[1e-20]).negative_lobe.unwrap();
+    assert_eq!((lobe.radius_mm, lobe.relative_to_peak), (10.0, -1.0));
 }
 
 /// The diffusion model's accuracy against Monte Carlo (the same transport problem: isotropic scattering with

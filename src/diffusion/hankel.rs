@@ -103,6 +103,12 @@ impl std::fmt::Display for NegativeLobe {
     }
 }
 
+/// The radius, mm, at which each profile's scale is read for the round-off threshold ([`ROUND_OFF_OF_PEAK`]): near
+/// the centre, where a diffusion profile peaks. The radii a caller asks for may all lie in the far tail (20 to 100 mm),
+/// where the values themselves are round-off (1e-20 where the profile is about 1e-76): measured against their own
+/// largest magnitude they would read as a lobe of -1 of the peak.
+pub const PEAK_PROBE_MM: f64 = 1e-3;
+
 /// Profiles clamped to zero, and the deepest negative lobe the clamp removed (`None`: only round-off was removed).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClampedProfiles {
@@ -111,12 +117,15 @@ pub struct ClampedProfiles {
 }
 
 impl ClampedProfiles {
-    /// Clamp raw profiles (one per stack, at `radii_mm`) to zero and find the deepest lobe beyond round-off; `stacks`
-    /// are the profiles' stacks, whose boundaries the lobe names (a profile without its stack counts as the paper's).
-    pub fn from_raw(raw: Vec<Vec<f64>>, radii_mm: &[f64], stacks: &[LayerStack]) -> ClampedProfiles {
+    /// Clamp raw profiles (one per stack, at `radii_mm`) to zero and find the deepest lobe beyond round-off of the
+    /// profile's peak: the largest magnitude over `radii_mm` and its value at [`PEAK_PROBE_MM`], `centre` (one per
+    /// profile; empty: the radii alone). `stacks` are the profiles' stacks, whose boundaries the lobe names (a
+    /// profile without its stack counts as the paper's).
+    pub fn from_raw(raw: Vec<Vec<f64>>, radii_mm: &[f64], stacks: &[LayerStack], centre: &[f64]) -> ClampedProfiles {
         let mut negative_lobe: Option<NegativeLobe> = None;
         for (profile, values) in raw.iter().enumerate() {
-            let peak = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let at_centre = centre.get(profile).map_or(0.0, |v| v.abs());
+            let peak = values.iter().fold(at_centre, |m, v| m.max(v.abs()));
             let Some((i, &min)) = values.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)) else { continue };
             let relative_to_peak = min / peak;
             if min < 0.0
@@ -143,11 +152,21 @@ pub fn clamped_reflectance_profiles(
     terms: MultipoleTerms,
     quadrature: &HankelQuadrature,
 ) -> ClampedProfiles {
-    ClampedProfiles::from_raw(
-        raw_reflectance_profiles(stacks, radii_mm, combination, terms, quadrature),
-        radii_mm,
-        stacks,
-    )
+    let (raw, centre) =
+        split_centre(raw_reflectance_profiles(stacks, &with_centre(radii_mm), combination, terms, quadrature));
+    ClampedProfiles::from_raw(raw, radii_mm, stacks, &centre)
+}
+
+/// `radii_mm` and [`PEAK_PROBE_MM`] last: one more radius per call, for the profiles' scale.
+fn with_centre(radii_mm: &[f64]) -> Vec<f64> {
+    radii_mm.iter().copied().chain([PEAK_PROBE_MM]).collect()
+}
+
+/// Profiles computed at [`with_centre`]'s radii: the profiles at the radii asked for, and each one's value at
+/// [`PEAK_PROBE_MM`].
+fn split_centre(mut raw: Vec<Vec<f64>>) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let centre = raw.iter_mut().map(|p| p.pop().unwrap_or(0.0)).collect();
+    (raw, centre)
 }
 
 /// [`clamped_reflectance_profiles`] that stops once `cancel` is set (read before each radius: 10^5 radii at 401
@@ -160,8 +179,11 @@ pub fn clamped_reflectance_profiles_cancellable(
     quadrature: &HankelQuadrature,
     cancel: &AtomicBool,
 ) -> Result<ClampedProfiles, SkinError> {
-    raw_profiles(stacks, radii_mm, combination, terms, quadrature, cancel)
-        .map(|raw| ClampedProfiles::from_raw(raw, radii_mm, stacks))
+    raw_profiles(stacks, &with_centre(radii_mm), combination, terms, quadrature, cancel)
+        .map(|raw| {
+            let (raw, centre) = split_centre(raw);
+            ClampedProfiles::from_raw(raw, radii_mm, stacks, &centre)
+        })
         .ok_or_else(|| SkinError::interrupted("reflectance profile"))
 }
 

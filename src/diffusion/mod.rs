@@ -9,7 +9,8 @@ pub mod multipole;
 pub use fft_route::{fft_reflectance_profiles, fft_reflectance_profiles_with, FftGrid, FftProfiles, PixelSampling};
 pub use hankel::{
     clamped_reflectance_profiles, clamped_reflectance_profiles_cancellable, raw_reflectance_profiles,
-    reflectance_profiles, ClampedProfiles, HankelQuadrature, NegativeLobe, MAX_RADIUS_MM, ROUND_OFF_OF_PEAK,
+    reflectance_profiles, ClampedProfiles, HankelQuadrature, NegativeLobe, MAX_RADIUS_MM, PEAK_PROBE_MM,
+    ROUND_OFF_OF_PEAK,
 };
 pub use layered::{
     Boundaries, Combination, Layer, LayerStack, ALL_BOUNDARIES, ALL_COMBINATIONS, COEFFICIENT_RANGE_PER_MM, IOR_RANGE,
