@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Create (or reuse) the project's virtual environment in .venv, build the Python module into it and put the CLI next
-# to it, so that `.venv/bin/spectral-skin` and `.venv/bin/python -c "import spectral_skin"` work.
+# Create (or reuse) the project's virtual environment in .venv and build the Python module into it, with the
+# `spectral-skin` command it carries, so that `.venv/bin/spectral-skin` and `.venv/bin/python -c "import spectral_skin"`
+# work.
 #
 #   bash scripts/setup-python.sh          # what the main job needs: scripts/requirements.txt (maturin, numpy)
 #   bash scripts/setup-python.sh --test   # and the test and lint tools: scripts/requirements-test.txt (pytest, mypy,
@@ -9,10 +10,10 @@
 #                                         # missing (apt, as root); the module is then the extension's wheel
 #
 # Needs only the Rust toolchain and Python 3.11+ with pip (PYTHON=... picks the interpreter; default python3).
-# The module (cargo feature `python`) and the CLI (feature `cli`) are compiled with different features, so each has its
-# own target folder: maturin builds in target/python, cargo in target/release. Had they shared one, every switch
-# between `maturin develop` and `cargo build` would recompile the crate. After editing the Rust code:
-# `maturin develop --release --target-dir target/python` (in the activated venv) and `cargo build --release`.
+# The module (cargo features `python` and `cli`) and cargo's own builds (feature `cli`) are compiled with different
+# features, so each has its own target folder: maturin builds in target/python, cargo in target/release. Had they
+# shared one, every switch between `maturin develop` and `cargo build` would recompile the crate. After editing the
+# Rust code: `maturin develop --release --target-dir target/python` (in the activated venv).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 test_tools=0
@@ -53,7 +54,7 @@ else
     .venv/bin/python -m pip install --force-reinstall --no-deps target/wheels/spectral_skin-*-cp311-abi3-*.whl
 fi
 
-say "building the CLI (cargo build --release; the first build compiles its crates again, with the CLI's features)"
-cargo build --release --bin spectral-skin
-install -m 755 target/release/spectral-skin .venv/bin/spectral-skin
+# The module carries the command line (pyproject.toml: features python and cli), and installing it put the
+# `spectral-skin` script into .venv/bin, as `pip install` of the wheel does anywhere: no second build for the CLI.
+.venv/bin/spectral-skin --version >/dev/null
 say "ready: .venv/bin/spectral-skin, .venv/bin/python with spectral_skin (or: source .venv/bin/activate)"

@@ -7,6 +7,8 @@
 //! [`Request`] asks for.
 
 pub mod accuracy;
+#[cfg(feature = "cli")]
+pub mod cli;
 pub mod color;
 pub mod diffusion;
 pub mod error;

@@ -394,8 +394,14 @@ fn a_clamped_lobe_is_reported_not_hidden() {
     let lobe = paper.negative_lobe.expect("the paper's boundaries give this stack a negative lobe");
     let stack = LayerStack::new(&layers).unwrap();
     let q = HankelQuadrature::default();
-    let raw =
-        raw_reflectance_profiles(&[stack.clone()], &radii, Combination::Directional, MultipoleTerms::All, &q).remove(0);
+    let raw = raw_reflectance_profiles(
+        std::slice::from_ref(&stack),
+        &radii,
+        Combination::Directional,
+        MultipoleTerms::All,
+        &q,
+    )
+    .remove(0);
     let centre =
         raw_reflectance_profiles(&[stack], &[PEAK_PROBE_MM], Combination::Directional, MultipoleTerms::All, &q)[0][0];
     let (k, min) = raw.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)).map(|(k, v)| (k, *v)).unwrap();

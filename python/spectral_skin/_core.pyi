@@ -437,6 +437,10 @@ class AlbedoMapFit:
         residual_path: str | os.PathLike[str] | None = None,
         tiles: Sequence[tuple[int, int]] | None = None,
     ) -> None: ...
+def _cli_main(argv: list[str]) -> int:
+    """The console script's entry (spectral_skin._cli), not an API: help(spectral_skin._core._cli_main)."""
+    ...
+
 def fit_spectrum(
     wavelengths_nm: npt.ArrayLike,
     reflectance: npt.ArrayLike,

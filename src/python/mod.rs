@@ -3,6 +3,8 @@
 //! lives here; names of outputs, combinations and working spaces come from the core's serde names.
 
 mod catalog;
+#[cfg(feature = "cli")]
+mod cli;
 mod convert;
 mod detach;
 mod errors;
@@ -50,5 +52,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // A maps() result reads like the dict it replaced: a Mapping for isinstance (its methods are its own).
     m.py().import("collections.abc")?.getattr("Mapping")?.call_method1("register", (m.py().get_type::<MapsPy>(),))?;
     m.add_function(wrap_pyfunction!(fit_spectrum_py, m)?)?;
+    #[cfg(feature = "cli")]
+    m.add_function(wrap_pyfunction!(cli::cli_main_py, m)?)?;
     Ok(())
 }
