@@ -588,7 +588,10 @@ fn colour_key(t: &[f32; 3]) -> [u32; 3] {
 /// Distinct colours of a texture (up to the cache key's quantisation, [`CACHE_LEVELS`]) and each texel's index into
 /// them: 8-bit textures repeat colours, and each is fitted once.
 pub(crate) fn distinct_colours(texels: &[[f32; 3]]) -> (Vec<[f32; 3]>, Vec<u32>) {
-    let mut index: HashMap<[u32; 3], u32, std::hash::BuildHasherDefault<FxHasher>> = HashMap::default();
+    // FNV-1a, the crate's one hasher (src/maps/lut.rs's cache keys): measured on 4096² keys, 0.29 s against 0.18 s
+    // for a hand-written Fx hash at 192 000 distinct colours (2.1 s against 1.3 s at 7.2 million), small beside the
+    // fit of those colours.
+    let mut index: HashMap<[u32; 3], u32, fnv::FnvBuildHasher> = HashMap::default();
     let mut colours = Vec::new();
     let keys: Vec<[u32; 3]> = texels.par_iter().map(colour_key).collect();
     let mut of_texel = Vec::with_capacity(texels.len());
@@ -601,27 +604,6 @@ pub(crate) fn distinct_colours(texels: &[[f32; 3]]) -> (Vec<[f32; 3]>, Vec<u32>)
         of_texel.push(i);
     }
     (colours, of_texel)
-}
-
-/// The Firefox / rustc hash (a multiply and rotate per word): fast for the fixed-size keys above; not DoS-resistant,
-/// which a texture's colours do not need.
-#[derive(Default)]
-pub(crate) struct FxHasher(u64);
-
-impl std::hash::Hasher for FxHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(4) {
-            let mut w = [0u8; 4];
-            w[..chunk.len()].copy_from_slice(chunk);
-            self.write_u32(u32::from_le_bytes(w));
-        }
-    }
-    fn write_u32(&mut self, i: u32) {
-        self.0 = (self.0.rotate_left(5) ^ i as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    fn finish(&self) -> u64 {
-        self.0
-    }
 }
 
 /// The extended parameters' names, for messages and results.
