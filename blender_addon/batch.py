@@ -150,7 +150,8 @@ def _apply_main(argv: list[str]) -> int:
     parser.add_argument("blend")
     parser.add_argument("out_blend")
     parser.add_argument("--material", action="append", required=True, help="material name (repeatable)")
-    parser.add_argument("--preset", default="caucasian")
+    parser.add_argument("--preset", default=core.DEFAULT_PRESET,
+                        help=f"the values the material starts from: {', '.join(core.PRESETS)} (default {core.DEFAULT_PRESET})")
     for name in core.PARAMETERS:
         flag = name.replace("_", "-")
         parser.add_argument(f"--{flag}", type=float, help=f"{name} (overrides the preset)")

@@ -29,14 +29,13 @@ from .core import (
     texture_prefix,
 )
 from .core import methods as core_methods
+from .core import settings as core_settings
 from .core.plan import swatch_albedo
 from .nodes import scene_target, scene_working_space
 from .scene_facts import OVERRIDE_ITEMS
 
-# Plain dicts (name -> value) for lookups by parameter name; an extended parameter a preset leaves out is the default.
-_PRESETS: dict[str, dict[str, Any]] = {name: {**EXTENDED_DEFAULTS, **dict(p)}
-                                       for name, p in spectral_skin.presets().items()}
-_DEFAULT_PRESET = "caucasian" if "caucasian" in _PRESETS else next(iter(_PRESETS))
+_PRESETS = core_settings.PRESETS
+_DEFAULT_PRESET = core_settings.DEFAULT_PRESET
 
 
 def _preset_tip(p: dict[str, Any]) -> str:

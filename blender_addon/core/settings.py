@@ -80,6 +80,13 @@ def _info(spec: _ParameterSpec) -> ParameterInfo:
 
 PARAMETER_INFO = {p["name"]: _info(p) for p in _SPECS}
 
+# The core's presets (``spectral_skin.presets()``) as plain dicts, name -> {parameter: value}, an extended parameter a
+# preset leaves out at its default; the default preset (a new material's values, the batch script's default) is
+# the core's first.
+PRESETS: dict[str, dict[str, Any]] = {name: {**EXTENDED_DEFAULTS, **dict(p)}
+                                      for name, p in spectral_skin.presets().items()}
+DEFAULT_PRESET = next(iter(PRESETS))
+
 
 @dataclass
 class ParameterMap:
@@ -150,10 +157,11 @@ def read_map_file(path: str, name: str | None = None) -> dict[str, ParameterMap]
 class SkinSettings:
     """Everything the Apply operator needs, read from the material's properties or given by a batch script."""
 
-    melanin: float = 0.005
-    melanin_blend: float = 0.7
-    hemoglobin: float = 0.005
-    oiliness: float = 0.3
+    # The default preset's values (PRESETS[DEFAULT_PRESET], from the core).
+    melanin: float = float(PRESETS[DEFAULT_PRESET]["melanin"])
+    melanin_blend: float = float(PRESETS[DEFAULT_PRESET]["melanin_blend"])
+    hemoglobin: float = float(PRESETS[DEFAULT_PRESET]["hemoglobin"])
+    oiliness: float = float(PRESETS[DEFAULT_PRESET]["oiliness"])
     # Principled subsurface_method id (the methods the Blender version offers: core/targets.py).
     method: str = "BURLEY"
     # The target: Blender version "MAJOR.MINOR" (None: the core's current release) and engine ("cycles", "eevee").
@@ -187,18 +195,13 @@ class SkinSettings:
 
     @classmethod
     def from_preset(cls, name: str, **overrides: object) -> SkinSettings:
-        """Settings with a preset's parameters (``spectral_skin.presets()``: the four and the extended ones, the
-        default where a preset leaves one out), then ``overrides``."""
-        import spectral_skin
-
-        presets = spectral_skin.presets()
+        """Settings with a preset's parameters (:data:`PRESETS`: the four and the extended ones, the default where a
+        preset leaves one out), then ``overrides``."""
         key = name.lower()
-        if key not in presets:
+        if key not in PRESETS:
             raise spectral_skin.SpectralSkinError(
-                f"unknown preset {name!r}; expected one of {', '.join(sorted(presets))}")
-        preset: dict[str, object] = dict(presets[key])
-        values = {p: preset[p] for p in PARAMETERS}
-        values.update({p: preset.get(p, EXTENDED_DEFAULTS[p]) for p in EXTENDED_PARAMETERS})
+                f"unknown preset {name!r}; expected one of {', '.join(sorted(PRESETS))}")
+        values: dict[str, object] = {p: PRESETS[key][p] for p in (*PARAMETERS, *EXTENDED_PARAMETERS)}
         values.update(overrides)
         return cls(**values)  # type: ignore[arg-type]
 

@@ -45,6 +45,10 @@ def test_presets_carry_their_extended_values():
         assert settings.extended() == {n: preset.get(n, SPECS[n]["default"]) for n in core.EXTENDED_PARAMETERS}
         assert settings.constants() == {n: preset[n] for n in core.PARAMETERS}
     assert core.SkinSettings.from_preset("asian", epidermis_thickness_mm=0.1).epidermis_thickness_mm == 0.1
+    # A new material's values are the core's first preset's: no copy of them in the add-on.
+    first, values = next(iter(spectral_skin.presets().items()))
+    assert core.DEFAULT_PRESET == first
+    assert core.SkinSettings().constants() == {n: values[n] for n in core.PARAMETERS}, core.SkinSettings().constants()
 
 
 def test_constant_plan_uses_the_extended_values():
