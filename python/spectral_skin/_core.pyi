@@ -21,6 +21,7 @@ __all__ = [
     "SpectralSkinIOError",
     "SpectralSkinWarning",
     "__version__",
+    "_cli_main",
     "accuracy_levels",
     "blender_targets",
     "evaluate",
