@@ -91,7 +91,7 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
                                scale_length=scene.unit_settings.scale_length)) for name in material_names]
     plans = dict(zip(material_names, ops.apply_skins(items, scene), strict=True))
     for name, plan in plans.items():
-        for line in analysis.describe(plan["effects"]):
+        for line in analysis.describe(plan.effects):
             print(f"spectral-skin batch: {name}: {line}", flush=True)
         if pack:
             for node in nodes.tagged_nodes(bpy.data.materials[name].node_tree):
@@ -109,17 +109,15 @@ def sidecar_path(out_blend: str) -> str:
     return os.path.splitext(os.path.abspath(out_blend))[0] + ".spectral_skin.json"
 
 
-def _write_sidecar(out_blend: str, plans: dict[str, dict[str, Any]]) -> None:
+def _write_sidecar(out_blend: str, plans: dict[str, Any]) -> None:
     """Per material: the target, the transport and the extended physiology computed with (``transport``,
     ``extended``), the decisions (``effects``),
     the core's work (``work``: what was computed, the counts the operator stores on the material), the texture files
     and the per-frame values of an animated constant material (``animation``, or null), as JSON next to the .blend."""
     import json
 
-    content = {name: {"target": plan["target"], "method": plan["method"], "transport": plan.get("transport"),
-                      "extended": plan.get("extended"),
-                      "effects": plan["effects"],
-                      "work": plan.get("work", {}), "textures": plan["textures"], "animation": plan.get("animation")}
+    keys = ("target", "method", "transport", "extended", "effects", "work", "textures", "animation")
+    content = {name: {key: value for key, value in plan.as_json().items() if key in keys}
                for name, plan in plans.items()}
     path = sidecar_path(out_blend)
     tmp = f"{path}.{os.getpid()}.tmp"

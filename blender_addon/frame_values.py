@@ -10,11 +10,10 @@ animation, or a socket a texture now feeds, removes them; other F-curves of the 
 
 from __future__ import annotations
 
-from typing import Any
-
 import bpy
 
 from . import anim
+from .core import MaterialPlan
 
 # Per-frame values of an Apply before they became F-curves (JSON on the material): removed at the next Apply.
 LEGACY_PROPERTY = "spectral_skin_frames"
@@ -37,11 +36,11 @@ def clear(material: bpy.types.Material, node: bpy.types.Node | None) -> int:
     return anim.remove(tree, lambda path, _index: path not in paths, with_drivers=False)
 
 
-def store(material: bpy.types.Material, node: bpy.types.Node, plan: dict[str, Any]) -> int:
+def store(material: bpy.types.Material, node: bpy.types.Node, plan: MaterialPlan) -> int:
     """Write the plan's per-frame values as keys on ``node``'s sockets (the old ones removed first); returns the
     number of F-curves written (0 without animation)."""
     clear(material, node)
-    animation = plan.get("animation")
+    animation = plan.animation
     if not animation:
         return 0
     frames = [int(f) for f in animation["frames"]]

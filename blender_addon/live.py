@@ -32,7 +32,7 @@ import bpy
 import numpy as np
 
 from . import anim, nodes
-from .core import PARAMETER_INFO, PARAMETERS
+from .core import PARAMETER_INFO, PARAMETERS, MaterialPlan
 
 GROUP_NAME = "Spectral Skin"
 # The group's layout version, stored on the group: a group of another version (such as an EEVEE group from before
@@ -327,11 +327,13 @@ def carry_animation(material: Any, param: str, socket: Any) -> list[str]:
     return copied
 
 
-def wire(material: Any, plan: dict[str, Any]) -> Any:
-    """Live mode's last step (main thread): the group (built from ``plan["live"]["table"]``, its images packed, or
+def wire(material: Any, plan: MaterialPlan) -> Any:
+    """Live mode's last step (main thread): the group (built from ``plan.live["table"]``, its images packed, or
     the blend file's), its node wired into the tagged Principled BSDF, its inputs set (see the module's docstring).
     Returns the group node."""
-    info = plan["live"]
+    info = plan.live
+    if info is None:
+        raise ValueError("the plan is not a Live plan (core/live.py live_plan)")
     tree = material.node_tree
     principled = nodes.tagged_nodes(tree, "principled")[0]
     name = info["group"]

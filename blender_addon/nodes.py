@@ -13,7 +13,7 @@ from typing import Any
 import bpy
 
 from . import frame_values
-from .core import UDIM_TOKEN
+from .core import UDIM_TOKEN, MaterialPlan
 
 TAG = "spectral_skin"
 NAME_PREFIX = "SpectralSkin"
@@ -134,14 +134,14 @@ def _texture_node(tree: bpy.types.NodeTree, role: str, path: str, colorspace: st
     return node
 
 
-def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.Node:
+def apply_plan(material: bpy.types.Material, plan: MaterialPlan) -> bpy.types.Node:
     """Make (or update) the add-on's Principled BSDF and texture nodes from a computed plan; returns the Principled.
 
     A constant Base Color is taken as it is, so the plan must be in the scene's working space (ValueError if not);
     the albedo texture is tagged with the plan's working space, which Blender converts to the scene's.
     """
-    working_space = plan.get("working_space", "Linear Rec.709")
-    if plan["base_color"] is not None and working_space != scene_working_space():
+    working_space = plan.working_space
+    if plan.base_color is not None and working_space != scene_working_space():
         raise ValueError(f"the plan's Base Color is in {working_space} but the scene's working space is "
                          f"{scene_working_space()}: compute the plan with working_space={scene_working_space()!r}")
     if material.node_tree is None:
@@ -150,15 +150,15 @@ def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.
     node = _principled(tree)
     inputs = node.inputs
     values = {
-        "Base Color": None if plan["base_color"] is None else [*plan["base_color"], 1.0],
-        "Subsurface Radius": plan["radius"],
-        "Specular IOR Level": plan["specular_ior_level"],
+        "Base Color": None if plan.base_color is None else [*plan.base_color, 1.0],
+        "Subsurface Radius": None if plan.radius is None else list(plan.radius),
+        "Specular IOR Level": plan.specular_ior_level,
         # 0 where the scene analysis dropped subsurface scattering (core/scene.py): plain diffuse, same albedo.
-        "Subsurface Weight": float(plan.get("subsurface_weight", 1.0)),
-        "Subsurface Scale": plan["scale"],
-        "Roughness": plan["roughness"],
-        "IOR": plan["ior"],
-        "Subsurface IOR": plan["subsurface_ior"],
+        "Subsurface Weight": plan.subsurface_weight,
+        "Subsurface Scale": plan.scale,
+        "Roughness": plan.roughness,
+        "IOR": plan.ior,
+        "Subsurface IOR": plan.subsurface_ior,
     }
     for name, value in values.items():
         socket = _socket(inputs, name)
@@ -166,11 +166,10 @@ def apply_plan(material: bpy.types.Material, plan: dict[str, Any]) -> bpy.types.
         if value is not None:
             socket.default_value = value
     # Set after the values: the method hides sockets it does not use.
-    node.subsurface_method = plan["method"]
+    node.subsurface_method = plan.method
 
-    working_space = plan.get("working_space", "Linear Rec.709")
     for index, (role, (input_name, colorspace)) in enumerate(TEXTURE_INPUTS.items()):
-        path = plan["textures"].get(role)
+        path = plan.textures.get(role)
         if path is None:
             for stale in tagged_nodes(tree, role):
                 tree.nodes.remove(stale)

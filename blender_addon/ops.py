@@ -21,7 +21,7 @@ import bpy
 import spectral_skin
 
 from . import live, nodes, props, scene_facts
-from .core import SkinSettings, describe_error, texture_prefix, write_textures
+from .core import MaterialPlan, SkinSettings, describe_error, texture_prefix, write_textures
 from .core import albedo as core_albedo
 from .core import live as core_live
 from .core import scene as analysis
@@ -52,9 +52,9 @@ def prepare(material: bpy.types.Material, settings: SkinSettings, scene: bpy.typ
     return Job(settings, scene_facts.gather(scene, material), overrides, needed)
 
 
-def compute(jobs: Sequence[Job], progress: Any = None, before_write: Callable[[], bool] | None = None) -> list[dict]:
+def compute(jobs: Sequence[Job], progress: Any = None, before_write: Callable[[], bool] | None = None) -> list[MaterialPlan]:
     """Apply's second step, which needs no bpy data (safe in a worker thread): every job's plan (the scene decides
-    which effects are simulated: ``plan["effects"]``), then, only once all are computed, every plan's maps written.
+    which effects are simulated: ``plan.effects``), then, only once all are computed, every plan's maps written.
 
     ``progress(done, total)`` is the core's callback (False cancels). ``before_write()`` is called between the two;
     when it returns False nothing is written and the result is empty (a cancel)."""
@@ -68,11 +68,11 @@ def compute(jobs: Sequence[Job], progress: Any = None, before_write: Callable[[]
     return plans
 
 
-def finish(material: bpy.types.Material, plan: dict) -> None:
+def finish(material: bpy.types.Material, plan: MaterialPlan) -> None:
     """Apply's last step, on Blender's data (main thread only): the material's nodes (in Live mode with the live
     node group wired in: live.py; in Baked mode without it), then the plan stored on it."""
     nodes.apply_plan(material, plan)
-    if "live" in plan:
+    if plan.live is not None:
         live.wire(material, plan)
     else:
         live.remove_nodes(material.node_tree)
@@ -80,7 +80,7 @@ def finish(material: bpy.types.Material, plan: dict) -> None:
 
 
 def apply_skins(items: Sequence[tuple[bpy.types.Material, SkinSettings]],
-                scene: bpy.types.Scene | None = None) -> list[dict]:
+                scene: bpy.types.Scene | None = None) -> list[MaterialPlan]:
     """Apply, the one path of the operator and of the batch apply: for each ``(material, settings)`` the plan for
     ``scene`` (default: the context's), then every plan's maps written, and only then each material edited and its
     plan stored (:func:`prepare`, :func:`compute`, :func:`finish`; the operator started from the panel runs
@@ -97,7 +97,7 @@ def apply_skins(items: Sequence[tuple[bpy.types.Material, SkinSettings]],
     return plans
 
 
-def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> dict:
+def apply_skin(material: bpy.types.Material, settings: SkinSettings) -> MaterialPlan:
     """:func:`apply_skins` for one material in the context's scene; returns its plan."""
     return apply_skins([(material, settings)])[0]
 
@@ -119,7 +119,7 @@ class _Work:
         self.fraction = 0.0
         self.cancel = threading.Event()
         self.writing = False
-        self.plan: dict | None = None
+        self.plan: MaterialPlan | None = None
         self.error: BaseException | None = None
         self.thread = threading.Thread(target=self._run, args=(job,), daemon=True)
 
@@ -167,12 +167,12 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
             self.report({"ERROR"}, f"Spectral Skin: {describe_error(error)}")
             return material, None
 
-    def _done(self, plan: dict) -> set[str]:
-        summary = plan["summary"]
-        self.report({"INFO"}, f"Spectral Skin: {summary['computed']} in {summary['seconds']:.2f} s")
-        for line in analysis.describe(plan.get("effects", [])):
+    def _done(self, plan: MaterialPlan) -> set[str]:
+        summary = plan.summary
+        self.report({"INFO"}, f"Spectral Skin: {summary.computed} in {summary.seconds:.2f} s")
+        for line in analysis.describe(plan.effects):
             self.report({"INFO"}, f"Spectral Skin: {line}")
-        for warning in summary["warnings"]:
+        for warning in summary.warnings:
             self.report({"WARNING"}, warning)
         return {"FINISHED"}
 
@@ -298,16 +298,21 @@ def image_pixels(image: bpy.types.Image) -> Any:
     return flat.reshape(height, width, image.channels)[::-1]
 
 
-def base_color_texels(image: bpy.types.Image) -> tuple[Any, str, list[tuple[int, int]]]:
+def base_color_texels(image: bpy.types.Image, raw: bool = False) -> tuple[Any, str, list[tuple[int, int]]]:
     """The Base Color image's texels as (H, W, 3) linear RGB, their working space, and for a UDIM tile set the
     (tile, rows) of each tile stacked top to bottom (empty for one image). A tile set's tiles are read from their
     files (Blender's pixels of a tiled image are its first tile's), in the tiled image's colour space; they must share
-    one width (ValueError naming them)."""
+    one width (ValueError naming them). ``raw``: Blender's pixel values as they are, not decoded (a mask's)."""
     import numpy as np
 
+    def texels(single: bpy.types.Image) -> tuple[Any, str]:
+        if raw:
+            return np.ascontiguousarray(image_pixels(single)[:, :, :3]), scene_working_space()
+        return core_albedo.linear_albedo(image_pixels(single), single.colorspace_settings.name, single.is_float,
+                                         scene_working_space())
+
     if image.source != "TILED":
-        pixels, space = core_albedo.linear_albedo(image_pixels(image), image.colorspace_settings.name, image.is_float,
-                                                  scene_working_space())
+        pixels, space = texels(image)
         return pixels, space, []
     pattern = bpy.path.abspath(image.filepath, library=image.library)
     parts, tiles = [], []
@@ -315,14 +320,13 @@ def base_color_texels(image: bpy.types.Image) -> tuple[Any, str, list[tuple[int,
         single = bpy.data.images.load(pattern.replace(core_albedo.UDIM_TOKEN, str(tile)), check_existing=False)
         try:
             single.colorspace_settings.name = image.colorspace_settings.name
-            pixels, space = core_albedo.linear_albedo(image_pixels(single), single.colorspace_settings.name,
-                                                      single.is_float, scene_working_space())
+            pixels, space = texels(single)
         finally:
             bpy.data.images.remove(single)
         parts.append(pixels)
         tiles.append((tile, pixels.shape[0]))
     if len({p.shape[1] for p in parts}) != 1:
-        raise ValueError(f"the Base Color tile set {image.name!r} has tiles of different widths "
+        raise ValueError(f"the tile set {image.name!r} has tiles of different widths "
                          f"({', '.join(f'{t}: {p.shape[1]}' for (t, _), p in zip(tiles, parts, strict=True))}): they are "
                          "fitted as one texture, so they must share one width")
     return np.ascontiguousarray(np.concatenate(parts, axis=0)), space, tiles
@@ -333,7 +337,8 @@ def from_albedo_texture(material: bpy.types.Material, hold_thickness: bool = Fal
     """From Albedo Texture: the material's Base Color image (or UDIM tile set, fitted as one texture) fitted per texel
     by the core (core/albedo.py; the epidermis thickness chosen for the texture, or the material's held with
     ``hold_thickness``; with ``auto_gains`` the exposure and white balance corrected first), the parameter EXR and
-    the residual EXR written beside the .blend by the core (tile sets for a tile set), the parameters set as the
+    the residual EXR written beside the .blend by the core (tile sets for a tile set), the material's Skin Mask (if
+    set, of the same size or tiles) marking the texels that count, the parameters set as the
     material's Parameter Map (a Non-Color image), the residual loaded as an image to inspect, the Advanced sliders set
     to the extended physiology the fit holds for. Returns the fit's summary (core.albedo.fit without the fit object,
     plus "path", "residual"). Raises ValueError / OSError / spectral_skin.SpectralSkinError; the material is then
@@ -342,7 +347,14 @@ def from_albedo_texture(material: bpy.types.Material, hold_thickness: bool = Fal
     pixels, space, tiles = base_color_texels(image)
     settings = material.spectral_skin
     held = float(settings.epidermis_thickness_mm) if hold_thickness else None
-    result = core_albedo.fit(pixels, space, held, settings.transport, auto_gains)
+    mask = None
+    if settings.skin_mask is not None:
+        mask_rgb, _, mask_tiles = base_color_texels(settings.skin_mask, raw=True)
+        if [t for t, _ in mask_tiles] != [t for t, _ in tiles]:
+            raise ValueError(f"the skin mask {settings.skin_mask.name!r} has the tiles {[t for t, _ in mask_tiles]} "
+                             f"but the Base Color {image.name!r} has {[t for t, _ in tiles]}: they must be the same")
+        mask = core_albedo.skin_mask(mask_rgb, pixels.shape, settings.skin_mask.name, image.name)
+    result = core_albedo.fit(pixels, space, held, settings.transport, auto_gains, mask)
     prefix = texture_prefix(bpy.data.filepath, material.name)
     path = core_albedo.parameter_map_path(bpy.data.filepath, prefix, tiled=bool(tiles))
     residual = core_albedo.parameter_map_path(bpy.data.filepath, prefix, tiled=bool(tiles), kind="residual")
@@ -398,9 +410,11 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
             self.report({"ERROR"}, f"Spectral Skin: From Albedo Texture: {describe_error(error)}")
             return {"CANCELLED"}
         thickness = summary["extended"]["epidermis_thickness_mm"]
+        masked = (f", {summary['masked_out_texels']} outside the skin mask (fitted to their nearest skin colour)"
+                  if material.spectral_skin.skin_mask is not None else "")
         self.report({"INFO"}, f"Spectral Skin: fitted {summary['image']!r} ({summary['working_space']}): ΔE00 median "
                     f"{summary['median_delta_e00']:.2f}, max {summary['max_delta_e00']:.2f}, "
-                    f"{summary['out_of_gamut_texels']} texel(s) outside skin's colours; epidermis thickness "
+                    f"{summary['out_of_gamut_texels']} texel(s) outside skin's colours{masked}; epidermis thickness "
                     f"{thickness:g} mm ({'held' if summary['thickness'] is None else 'chosen for the texture'}); "
                     f"parameter map {summary['path']} set (Apply to use it); residual ΔE00 in the image "
                     f"{summary['residual']!r}")

@@ -41,6 +41,7 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
         box.template_ID(props, "params_map", open="image.open")
         # Disabled, with the reason as its tooltip, where this spectral_skin has no albedo fit.
         box.operator("spectral_skin.from_albedo_texture", icon="IMAGE_RGB").material = material.name
+        box.template_ID(props, "skin_mask", open="image.open")
         for name in PARAMETERS:
             box.template_ID(props, f"{name}_map", open="image.open")
         box.prop(props, "clamp")

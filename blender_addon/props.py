@@ -22,6 +22,7 @@ from .core import (
     PARAMETERS,
     TRANSPORT_DESCRIPTIONS,
     TRANSPORTS,
+    MaterialPlan,
     ParameterMap,
     SkinSettings,
     read_map_file,
@@ -191,6 +192,11 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
         description="Optional four-channel parameter EXR (channels melanin, melanin_blend, hemoglobin, oiliness, as "
         "`spectral-skin example` writes): gives all four parameters per texel; a parameter's own map replaces its "
         "channel")
+    skin_mask: bpy.props.PointerProperty(
+        type=bpy.types.Image, name="Skin Mask",
+        description="Optional for From Albedo Texture: an image of the Base Color's size (or tile set), white (over "
+        "half) where the texture is skin. Only those texels choose the epidermis thickness and the gains and count in "
+        "the figures; the others (hair, eyes, a background) are fitted to their nearest skin colour")
     clamp: bpy.props.BoolProperty(
         name="Clamp Out-of-Range Texels",
         description="Clamp NaN, infinite and out-of-range values of the parameter maps into range (and say how many) "
@@ -332,19 +338,20 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
         blender=target["blender"], engine=target["engine"], mode=props.mode).with_maps(maps)
 
 
-def store_result(material: bpy.types.Material, plan: dict) -> None:
+def store_result(material: bpy.types.Material, plan: MaterialPlan) -> None:
     props = material.spectral_skin
-    summary = plan["summary"]
+    summary = plan.summary
     props.has_result = True
-    props.result_albedo = [min(max(c, 0.0), 1.0) for c in summary["albedo"]]
-    props.result_radius_mm = summary["radius_mm"]
-    props.result_computed = summary["computed"]
-    props.result_seconds = summary["seconds"]
-    props.result_warning = "; ".join(summary["warnings"])
-    target = plan["target"]
+    props.result_albedo = [min(max(c, 0.0), 1.0) for c in summary.albedo]
+    props.result_radius_mm = summary.radius_mm
+    props.result_computed = summary.computed
+    props.result_seconds = summary.seconds
+    props.result_warning = "; ".join(summary.warnings)
+    target = plan.target
     props.result_target = f"Blender {target['blender']}, {target['engine'].upper()}"
-    props.result_effects = json.dumps(plan.get("effects", []), default=float)
-    props.result_work = json.dumps(plan.get("work", {}))
+    json_plan = plan.as_json()
+    props.result_effects = json.dumps(json_plan["effects"], default=float)
+    props.result_work = json.dumps(json_plan["work"])
     update_swatch(props)  # in the working space of this Apply (the blend file's may have changed since a slider moved)
 
 

@@ -174,7 +174,7 @@ def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_s
         settings = SkinSettings.from_preset("caucasian").replace(maps=maps, output_dir=str(maps_dir),
                                                                   file_prefix="Head")
         plan = ops.apply_skin(material, settings)  # Auto: the scene decides
-        decision = next(e for e in plan["effects"] if e["effect"] == "subsurface")
+        decision = next(e for e in plan.effects if e["effect"] == "subsurface")
         principled = nodes.tagged_nodes(material.node_tree, "principled")[0]
         decided_weight = principled.inputs["Subsurface Weight"].default_value
         images, times = {}, {}
@@ -206,13 +206,13 @@ def apply_times(shape: str, distance: float, size: int, map_path: Path, maps_dir
     """The add-on's Apply on the head scene at ``distance`` (the shortest of ``repeats``, after a warm-up apply that
     fills the lookup-table cache): with the analysis (ops.apply_skin: the scene's facts gathered, the decisions
     taken and applied), its parts, and without it (the plan, its maps written and the material edited, no facts,
-    no decisions: core.make_plan, core.write_textures, ops.finish)."""
+    no decisions: core.make_plan frozen, core.write_textures, ops.finish)."""
     import blender_scenes
     import bpy
 
     import blender_addon
     from blender_addon import ops, scene_facts
-    from blender_addon.core import SkinSettings, make_plan, read_map_file, write_textures
+    from blender_addon.core import SkinSettings, freeze, make_plan, read_map_file, write_textures
     from blender_addon.core import scene as analysis
 
     scene = blender_scenes.reset_scene()
@@ -238,7 +238,7 @@ def apply_times(shape: str, distance: float, size: int, map_path: Path, maps_dir
     overrides = scene_facts.overrides(material)
 
     def without() -> None:
-        bare = make_plan(job_settings)
+        bare = freeze(make_plan(job_settings))
         write_textures(bare)
         ops.finish(material, bare)
 
@@ -253,7 +253,7 @@ def apply_times(shape: str, distance: float, size: int, map_path: Path, maps_dir
 # The rest of the report: what the analysis decides besides dropping subsurface (no measurement of this script).
 DECISIONS_TEXT = """## What is not computed
 
-A dropped effect is not computed at all, and the core's count of its work (`plan["work"]`: `evaluate(...)["work"]`,
+A dropped effect is not computed at all, and the core's count of its work (`plan.work`: `evaluate(...)["work"]`,
 or `maps(...)["report"]["work"]`; stored per material with its decisions, `result_work`) shows it:
 
 - Subsurface is decided before anything is computed when the largest radius of *any* skin is already under the
@@ -326,7 +326,7 @@ A Spectral Skin parameter (melanin, melanin blend, haemoglobin, oiliness) keyfra
 (decision `animation`; figures `parameters`, `first_frame`, `last_frame`, `evaluations`):
 
 - Constant-parameter material: the values at every frame of the scene's range are part of the plan
-  (`plan["animation"]`: Base Color, Subsurface Radius, Specular IOR Level per frame), each computed by the core
+  (`plan.animation`: Base Color, Subsurface Radius, Specular IOR Level per frame), each computed by the core
   (`spectral_skin.evaluate`, once per distinct parameter set) and changed by the same decisions, which hold over
   every frame (subsurface from the largest radius over the frames, specular dropped only if the oiliness is zero at
   every frame). Apply writes them as F-curves on the add-on's Principled BSDF (`blender_addon/frame_values.py`: one

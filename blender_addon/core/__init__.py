@@ -1,5 +1,6 @@
 """The add-on's portable part: settings and the material plan, computed by spectral_skin. No bpy imports."""
 
+from .material_plan import MaterialPlan, PlanSummary, freeze
 from .plan import describe_error, make_plan, subsurface_scale, texture_prefix, write_textures
 from .settings import (
     ACCURACY_DESCRIPTIONS,
@@ -46,6 +47,9 @@ __all__ = [
     "describe_error",
     "engine_name",
     "make_plan",
+    "MaterialPlan",
+    "PlanSummary",
+    "freeze",
     "method_name",
     "methods",
     "UDIM_TOKEN",

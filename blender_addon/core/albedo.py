@@ -61,14 +61,17 @@ def linear_albedo(pixels: Any, colorspace: str, is_float: bool, scene_space: str
 
 
 def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
-        transport: str = DEFAULT_TRANSPORT, auto_gains: bool = False) -> dict[str, Any]:
+        transport: str = DEFAULT_TRANSPORT, auto_gains: bool = False, mask: Any = None) -> dict[str, Any]:
     """The core's per-texel fit (``spectral_skin.fit_albedo_map``, of the model with ``transport``, a key of
     TRANSPORTS; the epidermis thickness chosen for the texture when ``epidermis_thickness_mm`` is None, as the core's
-    default, else held; with ``auto_gains`` the exposure and white-balance gains estimated and applied first) and what
+    default, else held; with ``auto_gains`` the exposure and white-balance gains estimated and applied first; with
+    ``mask``, an (H, W) bool array, only the texels it marks choose the thickness and the gains and count in the
+    figures, the others are fitted to their nearest skin colour) and what
     the operator needs of it: {"fit": the core's ``AlbedoMapFit`` (``write(path)`` writes the parameter EXR),
     "extended": the extended physiology the parameters hold for, "thickness": how the thickness was chosen (None:
     held), "gains" (applied, or measured as the diagnosis' remedy; None), "diagnosis" (why the texture does not look
-    like an albedo; None), "median_delta_e00", "max_delta_e00", "out_of_gamut_texels"}. The core's warning about a
+    like an albedo; None), "median_delta_e00", "max_delta_e00" (over the masked texels), "out_of_gamut_texels",
+    "masked_out_texels"}. The core's warning about a
     texture that is not an albedo is not raised here: it is the "diagnosis". Raises
     spectral_skin.SpectralSkinError when the core refuses the input; RuntimeError when this spectral_skin has no fit."""
     import numpy as np
@@ -79,6 +82,8 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
     keywords: dict[str, Any] = {} if transport == DEFAULT_TRANSPORT else {"transport": TRANSPORTS[transport]}
     if auto_gains:
         keywords["rgb_gains"] = "auto"
+    if mask is not None:
+        keywords["mask"] = mask
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", spectral_skin.SpectralSkinWarning)  # the same text is result.diagnosis
         result = fit_map(albedo, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm,
@@ -88,10 +93,26 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
         raise RuntimeError(f"spectral_skin.fit_albedo_map returned a fit of {tuple(result.shape)} for an albedo of "
                            f"{albedo.shape}")
     extended = {name: float(result.extended[name]) for name in EXTENDED_PARAMETERS}
+    skin = residual if mask is None or not np.any(mask) else residual[np.asarray(mask, dtype=bool)]
     return {"fit": result, "extended": extended, "thickness": result.thickness,
             "gains": getattr(result, "gains", None), "diagnosis": getattr(result, "diagnosis", None),
-            "median_delta_e00": float(np.median(residual)), "max_delta_e00": float(np.max(residual)),
-            "out_of_gamut_texels": int(result.stats["out_of_gamut_texels"])}
+            "median_delta_e00": float(np.median(skin)), "max_delta_e00": float(np.max(skin)),
+            "out_of_gamut_texels": int(result.stats["out_of_gamut_texels"]),
+            "masked_out_texels": int(result.stats.get("masked_out_texels", 0))}
+
+
+def skin_mask(mask_rgb: Any, albedo_shape: tuple[int, ...], mask_name: str, albedo_name: str) -> Any:
+    """The skin mask as an (H, W) bool array, from the mask image's values as Blender holds them (H, W, 3), not
+    decoded: white, over half on average over the channels, is skin (0 and 1 are the same in every colour space).
+    ValueError when its size is not the albedo's (naming both)."""
+    import numpy as np
+
+    rgb = np.asarray(mask_rgb, dtype=np.float32)
+    if rgb.shape[:2] != tuple(albedo_shape[:2]):
+        raise ValueError(f"the skin mask {mask_name!r} is {rgb.shape[1]}x{rgb.shape[0]} texels but the Base Color "
+                         f"{albedo_name!r} is {albedo_shape[1]}x{albedo_shape[0]}: they must have one size (a tile "
+                         "set: the same tiles)")
+    return np.ascontiguousarray(rgb[:, :, :3].mean(axis=2) > 0.5)
 
 
 def parameter_map_path(blend_path: str, prefix: str, tiled: bool = False, kind: str = "params") -> str:

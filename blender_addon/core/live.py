@@ -21,6 +21,7 @@ import dataclasses
 import hashlib
 from typing import Any
 
+from .material_plan import MaterialPlan, freeze
 from .plan import extended_keywords
 from .settings import (
     ACCURACY_LEVELS,
@@ -86,12 +87,13 @@ def shader_table(settings: SkinSettings, overrides: dict[str, str] | None) -> di
 
 
 def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | None, table_needed: bool,
-              progress: Any = None) -> dict[str, Any]:
-    """The plan of a Live material: the scene plan of the panel's constants (no maps, no per-frame values, subsurface
-    and specular kept unless forced off), plus ``plan["live"]``: {"group": the node group's name, "table": the
-    shader table, or None when ``table_needed`` is False (the blend file has it), "maps": the parameter maps as the
-    core read them (for the files Blender cannot read), "constants", "subsurface", "specular"}."""
-    from .scene import scene_plan
+              progress: Any = None) -> MaterialPlan:
+    """The plan of a Live material (frozen: :class:`~core.material_plan.MaterialPlan`): the scene plan of the panel's
+    constants (no maps, no per-frame values, subsurface and specular kept unless forced off), with ``plan.live``:
+    {"group": the node group's name, "table": the shader table, or None when ``table_needed`` is False (the blend
+    file has it), "maps": the parameter maps as the core read them (for the files Blender cannot read),
+    "constants", "subsurface", "specular"}."""
+    from .scene import scene_draft
 
     check(settings)  # with its maps: a varying extended-physiology map has no place in a Live group
     forced = {**(overrides or {}),
@@ -99,7 +101,7 @@ def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | No
               "specular": "ON" if kept(overrides, "specular") else "OFF"}
     if facts is not None and getattr(facts, "animation", None) is not None:
         facts = dataclasses.replace(facts, animation=None)
-    plan = scene_plan(settings.replace(maps={}, output_dir=""), facts, forced, progress)
+    plan = scene_draft(settings.replace(maps={}, output_dir=""), facts, forced, progress)
     plan["live"] = {
         "group": table_name(settings, overrides),
         "table": shader_table(settings, overrides) if table_needed else None,
@@ -110,4 +112,4 @@ def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | No
     }
     plan["summary"]["computed"] += ("; live node group, shader table " +
                                     ("computed" if table_needed else "reused from the blend file"))
-    return plan
+    return freeze(plan)

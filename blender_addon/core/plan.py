@@ -1,30 +1,11 @@
 """What the skin material needs, computed by the core before anything in Blender changes (no bpy here).
 
-:func:`make_plan` returns a plain dict, the "material plan":
+:func:`make_plan` computes a material's values with the core and returns them as a plain dict, the draft of the
+material plan (:class:`~core.material_plan.MaterialPlan`: its keys are the plan's fields, documented there). The scene
+analysis (core/scene.py) and Live mode (core/live.py) change the draft as their decisions say and freeze it; nothing
+changes a plan after that.
 
-- ``method``: Blender's subsurface method id ("BURLEY", "RANDOM_WALK", ...: those the target's Blender offers);
-- ``target``: what the core computed for, {"blender": "5.0", "engine": "cycles" | "eevee", "tested": bool};
-- ``working_space``: the scene-linear working space of ``base_color`` and of the albedo texture (the settings');
-- ``base_color``: Principled Base Color, linear RGB in ``working_space``, or None when the albedo texture supplies it;
-- ``radius``: Principled Subsurface Radius (the core's radius in mm), or None when the radius texture supplies it;
-- ``scale``: Principled Subsurface Scale, scene units per mm (``METRES_PER_MM / scale_length``), so that
-  Radius × Scale is the core's radius in scene units;
-- ``ior``, ``subsurface_ior``, ``specular_ior_level`` (None when the specular texture supplies it), ``roughness``;
-- ``textures``: {"albedo" | "radius" | "specular": final absolute path} of the maps this plan writes
-  (``<folder>/<prefix>_<kind>.exr``; ``folder`` and ``prefix`` are in the plan of a material with maps);
-- ``images``: {same keys: numpy array, row 0 at the top} still to be written by :func:`write_textures`;
-- ``work``: what the core computed for this plan, as it reports it (``evaluate(...)["work"]``: wavelengths,
-  transform samples, radial profiles, radius fits, specular evaluations; or ``maps(...)["report"]["work"]``: texels,
-  evaluations, table nodes built, table lookups, radius fits, specular evaluations, texels per output);
-- ``transport``: the core's transport name the totals were computed with ("adding_doubling" or "diffusion");
-- ``extended``: the extended physiology the core computed with ({epidermis_thickness_mm, baseline_absorption_scale,
-  blood_oxygenation}: the settings', one value per material; the paper's values by default);
-- ``computed``: {"radius": bool, "specular": bool}: whether the core was asked for the radius and the specular inputs
-  (the scene analysis asks for neither when it has dropped the effect before computing: core/scene.py);
-- ``summary``: what the panel shows: ``albedo`` (RGB), ``radius_mm`` (RGB), ``computed`` (a sentence),
-  ``seconds``, ``warnings`` (list of sentences).
-
-Maps are written only by :func:`write_textures`, after the plan is complete, by the core's writer
+Maps are written only by :func:`write_textures`, from a frozen plan, by the core's writer
 (``spectral_skin.write_maps``): first to temporary files in the output folder, then renamed into place together, so a
 failure leaves existing files as they were.
 """
@@ -38,6 +19,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from .material_plan import MaterialPlan
 from .settings import (
     ACCURACY_LEVELS,
     DEFAULT_TRANSPORT,
@@ -309,25 +291,27 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
 _RESULT_KEYS = {"albedo": "base_color", "radius": "radius_mm", "specular": "specular_ior_level"}
 
 
-def write_textures(plan: dict[str, Any]) -> None:
+def write_textures(plan: MaterialPlan) -> None:
     """Write the plan's maps with ``spectral_skin.write_maps`` (the core's writer: half-float EXRs, compression chosen
     per file, staged as temporary files and renamed into place together), as ``<prefix>_albedo.exr`` etc. in the
     plan's folder (a UDIM tile set: ``<prefix>_albedo.1001.exr`` etc., every tile's files staged and then all renamed
     together); an earlier texture of this prefix (and tiles) that the plan no longer has is removed.
 
     One call for the plan's images, which need not be one ``maps()`` result's (the scene analysis may take the albedo
-    of another computation and drop textures): the core reads the result's read-only arrays in place.
+    of another computation and drop textures): the core reads the plan's read-only arrays in place.
 
     Raises spectral_skin.SpectralSkinIOError (an OSError naming the file) when a file cannot be written; the final paths are then
     untouched.
     """
-    if not plan["textures"]:
+    if not plan.textures:
         return
     import spectral_skin
 
-    result = {_RESULT_KEYS[kind]: plan["images"][kind] for kind in plan["textures"]}
-    # A tile set: each tile's rows as that tile's files (albedo.1001.exr, ...), which Blender loads as one tiled image.
+    if plan.folder is None:
+        raise ValueError("a plan with textures has a folder (core/plan.py _plan_from_maps)")
+
+    result = {_RESULT_KEYS[kind]: plan.images[kind] for kind in plan.textures}
     written = {kind: str(path) for kind, path in spectral_skin.write_maps(
-        result, plan["folder"], plan["prefix"], tiles=plan.get("tiles") or None).items()}
-    if written != plan["textures"]:
-        raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {plan['textures']}")
+        result, plan.folder, plan.prefix, tiles=list(plan.tiles) or None).items()}
+    if written != dict(plan.textures):
+        raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {dict(plan.textures)}")

@@ -43,9 +43,11 @@ Effects:
 from __future__ import annotations
 
 import copy
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
+
+from .material_plan import MaterialPlan, freeze
 
 # Largest subsurface radius, in pixels of the smallest footprint, below which subsurface scattering is dropped.
 # Chosen from the measurement in docs/scene-effects.md (scripts/scene_effects_report.py): at and below this radius
@@ -569,7 +571,7 @@ def apply_decisions(plan: dict[str, Any], effects: list[dict[str, Any]], albedo:
         _drop_texture(plan, kind)
 
 
-def describe(effects: list[dict[str, Any]]) -> list[str]:
+def describe(effects: Sequence[Mapping[str, Any]]) -> list[str]:
     """One line per decision, for the batch log and the operator's report."""
     return [f"{e['effect']}: {'on' if e['enabled'] else 'off'} ({e['reason']})" for e in effects]
 
@@ -644,10 +646,17 @@ ANIMATED_VALUES = ("base_color", "radius", "specular_ior_level")
 
 
 def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str] | None = None,
-               progress: Any = None) -> dict[str, Any]:
-    """The material plan for a scene: :func:`~core.plan.make_plan`, :func:`decide`, :func:`apply_decisions`; the
-    decisions are in ``plan["effects"]``. The one path of the operator and of the batch apply (textures still to be
-    written with :func:`~core.plan.write_textures`).
+               progress: Any = None) -> MaterialPlan:
+    """The material plan for a scene (frozen: :class:`~core.material_plan.MaterialPlan`): :func:`scene_draft`. The
+    one path of the operator and of the batch apply in Baked mode (textures still to be written with
+    :func:`~core.plan.write_textures`)."""
+    return freeze(scene_draft(settings, facts, overrides, progress))
+
+
+def scene_draft(settings: Any, facts: SceneFacts | None, overrides: dict[str, str] | None = None,
+                progress: Any = None) -> dict[str, Any]:
+    """The draft of the material plan for a scene: :func:`~core.plan.make_plan` of only the effects decided before
+    computing, :func:`decide`, :func:`apply_decisions`; the decisions are in ``draft["effects"]``.
 
     Animated parameters (``facts.animation``) take their values at the current frame. For a material without maps
     the plan also gets ``plan["animation"]``: ``{"frames": [...], "base_color": [[r, g, b], ...], "radius": [...],

@@ -145,7 +145,7 @@ def test_apply_writes_nothing_until_every_plan_is_computed(addon, tmp_path):
     plans = apply_skins([(first, good), (second, SkinSettings.from_preset("caucasian"))])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["First_albedo.exr", "First_radius.exr"]
     assert [first.spectral_skin.result_computed, second.spectral_skin.result_computed] == [
-        plan["summary"]["computed"] for plan in plans]
+        plan.summary.computed for plan in plans]
 
 
 def test_operator_reports_error_and_changes_nothing(addon, tmp_path):
@@ -177,7 +177,7 @@ def test_maps_write_textures_and_link_them(addon, tmp_path):
     assert node.inputs["Base Color"].links[0].from_node == albedo
     assert node.inputs["Subsurface Radius"].links[0].from_node == radius
     assert tuple(albedo.image.size) == (4, 3)
-    assert plan["summary"]["computed"]
+    assert plan.summary.computed
     # Back to constants: the texture nodes go, the values come back.
     apply_skin(material, SkinSettings.from_preset("asian"))
     assert not addon_nodes.tagged_nodes(material.node_tree, "albedo")

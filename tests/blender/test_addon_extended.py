@@ -209,6 +209,44 @@ def test_from_albedo_texture_sets_the_parameter_map(addon, tmp_path, monkeypatch
     assert props.epidermis_thickness_mm == pytest.approx(0.08, rel=1e-6)
 
 
+def test_from_albedo_texture_with_a_skin_mask(addon, tmp_path, monkeypatch):
+    """A texture that is half skin, half green paint: the fit, given the material's Skin Mask (a painted image, white
+    on the skin), gets the mask (the skin texels as True), counts the others as masked out, and gives no diagnosis;
+    without the mask, the half of the texture outside skin's colours is diagnosed. A mask of another size is refused
+    naming both images, and the material is left as it was."""
+    skin = [[200, 150, 120], [190, 140, 115], [150, 105, 80], [90, 60, 40]]
+    codes = np.array([skin, [[40, 200, 40]] * 4], dtype=np.uint8)  # row 0 skin, row 1 green
+    material = _albedo_material(tmp_path, codes)
+    masks = []
+    fit_map = spectral_skin.fit_albedo_map
+
+    def fit_albedo_map(rgb, **keywords):
+        masks.append(keywords.get("mask"))
+        return fit_map(rgb, **keywords)
+
+    monkeypatch.setattr(spectral_skin, "fit_albedo_map", fit_albedo_map)
+    assert bpy.ops.spectral_skin.from_albedo_texture(material="Skin") == {"FINISHED"}
+    assert masks[-1] is None
+    unmasked = material.spectral_skin.params_map
+
+    mask = bpy.data.images.new("Skin Mask", 4, 2, alpha=False, float_buffer=False)
+    rgba = np.ones((2, 4, 4), dtype=np.float32)
+    rgba[0, :, :3] = 0.0  # Blender's row 0 is the bottom: the green row is not skin
+    mask.pixels.foreach_set(rgba.ravel())
+    material.spectral_skin.skin_mask = mask
+    assert bpy.ops.spectral_skin.from_albedo_texture(material="Skin") == {"FINISHED"}
+    expected = np.array([[True] * 4, [False] * 4])
+    print(f"mask given to the fit: {masks[-1]}")
+    np.testing.assert_array_equal(masks[-1], expected)
+
+    small = bpy.data.images.new("Small Mask", 2, 2, alpha=False, float_buffer=False)
+    material.spectral_skin.skin_mask = small
+    before = material.spectral_skin.params_map
+    with pytest.raises(RuntimeError, match="'Small Mask' is 2x2 texels but the Base Color 'Albedo' is 4x2"):
+        bpy.ops.spectral_skin.from_albedo_texture(material="Skin")
+    assert material.spectral_skin.params_map == before and before is not None and unmasked is not None
+
+
 class _Layout:
     """A stand-in for a panel's layout (headless Blender has no window to draw in): checks that every property and
     operator the panel names exists, and records the properties."""

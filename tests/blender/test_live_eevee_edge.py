@@ -69,7 +69,7 @@ def _edge_profiles() -> tuple[Layout, np.ndarray, dict[str, np.ndarray]]:
     slab = bpy.data.objects["Slab"]
     assign(slab, materials["LIVE"])
     plans = _apply(scene, *materials.values())
-    assert " eevee" in plans[0]["live"]["group"]
+    assert plans[0].live is not None and " eevee" in plans[0].live["group"]
     assert addon_nodes.tagged_nodes(materials["LIVE"].node_tree, "live")
     profiles = {}
     lo = (EEVEE_ROWS - EEVEE_BAND_ROWS) // 2

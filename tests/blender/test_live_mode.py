@@ -91,7 +91,7 @@ def test_live_constants_render_the_cores_albedo(addon, tmp_path):
     material = _skin("Skin", "LIVE", melanin=0.05, hemoglobin=0.02)
     _slab_scene(material)
     plan = _apply(scene, material)[0]
-    assert plan["live"]["table"] is not None
+    assert plan.live is not None and plan.live["table"] is not None
     tree = material.node_tree
     (group_node,) = addon_nodes.tagged_nodes(tree, "live")
     principled = addon_nodes.tagged_nodes(tree, "principled")[0]
@@ -110,7 +110,7 @@ def test_live_constants_render_the_cores_albedo(addon, tmp_path):
     principled = addon_nodes.tagged_nodes(tree, "principled")[0]
     _check("constants, reopened", _centre(render(scene, samples=BURLEY_SPP)), _core_albedo(0.05, 0.7, 0.02))
     # Apply again: the table is reused from the blend file, not recomputed; Baked then removes the live nodes.
-    assert _apply(scene, material)[0]["live"]["table"] is None
+    assert _apply(scene, material)[0].live["table"] is None
     material.spectral_skin.mode = "BAKED"
     _apply(scene, material)
     assert not addon_nodes.tagged_nodes(tree, "live")
@@ -407,7 +407,7 @@ def test_live_in_eevee_renders_as_baked(addon):
     assign(blender_scenes.add_box("Baked", 0.0, 0.5, -0.5, 0.5, -0.2, 0.0), baked_material)
     add_top_camera(scene, ortho_scale=0.2, width=128, height=64)
     plans = _apply(scene, live_material, baked_material)
-    assert " eevee" in plans[0]["live"]["group"]
+    assert plans[0].live is not None and " eevee" in plans[0].live["group"]
     img = render(scene, samples=1)
     live, baked = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
     # EEVEE keeps the surface colour in its g-buffer at about 10 bits: its renders here come in steps of 1/1024
@@ -436,7 +436,7 @@ def test_a_group_of_another_layout_is_rebuilt_not_reused(addon):
     _apply(scene, material)
     (group_node,) = addon_nodes.tagged_nodes(material.node_tree, "live")
     group = group_node.node_tree
-    assert _apply(scene, material)[0]["live"]["table"] is None
+    assert _apply(scene, material)[0].live["table"] is None
     group[live.LAYOUT_KEY] = live.LAYOUT_VERSION - 1
-    assert _apply(scene, material)[0]["live"]["table"] is not None
+    assert _apply(scene, material)[0].live["table"] is not None
     assert group[live.LAYOUT_KEY] == live.LAYOUT_VERSION

@@ -139,7 +139,7 @@ def test_dropped_effects_are_not_computed(addon, tmp_path):
                                         maps={"hemoglobin": ParameterMap(hemoglobin, False)})
     plan = apply_skin(materials["Far"], settings)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["Far_albedo.exr"]
-    assert plan["work"]["texels"] == 12 and stored_work(materials["Far"]) == plan["work"]
+    assert plan.work["texels"] == 12 and stored_work(materials["Far"]) == plan.as_json()["work"]
     assert not addon_nodes.tagged_nodes(materials["Far"].node_tree, "radius")
 
 
@@ -169,13 +169,13 @@ def test_batch_decides_as_the_operator(addon, tmp_path):
     bpy.ops.wm.save_as_mainfile(filepath=str(source))
     plans = batch.apply_to_materials(str(source), ["Far", "Close"], SkinSettings.from_preset("caucasian"),
                                      str(tmp_path / "out.blend"))
-    headless = {name: json.loads(json.dumps(plan["effects"], default=float)) for name, plan in plans.items()}
+    headless = {name: json.loads(json.dumps(plan.as_json()["effects"], default=float)) for name, plan in plans.items()}
     sidecar = json.loads(pathlib.Path(batch.sidecar_path(str(tmp_path / "out.blend"))).read_text())
     assert {name: entry["effects"] for name, entry in sidecar.items()} == headless
     # The core's work, as stored on each material: far (subsurface dropped before computing) fitted no radius, close
     # (specular forced off) computed no specular input.
     for name in ("Far", "Close"):
-        assert sidecar[name]["work"] == plans[name]["work"] == stored_work(bpy.data.materials[name]), name
+        assert sidecar[name]["work"] == plans[name].as_json()["work"] == stored_work(bpy.data.materials[name]), name
     assert sidecar["Far"]["work"]["radius_fits"] == 0 and sidecar["Close"]["work"]["radius_fits"] == 3
     assert sidecar["Close"]["work"]["specular_evaluations"] == 0
     bpy.ops.wm.open_mainfile(filepath=str(source))
@@ -411,7 +411,7 @@ def test_batch_apply_follows_the_materials_animation(addon, tmp_path):
     operator = _keyed(bpy.data.materials["Close"], [1, 2])
     plans = batch.apply_to_materials(str(source), ["Close"], SkinSettings.from_preset("caucasian", hemoglobin=0.1),
                                      str(tmp_path / "out.blend"))
-    headless = plans["Close"]["animation"]
+    headless = plans["Close"].as_json()["animation"]
     assert headless["frames"] == operator["frames"] == [1, 2]
     for key in ("base_color", "radius"):
         np.testing.assert_allclose(headless[key], operator[key], rtol=1e-6)

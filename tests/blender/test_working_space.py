@@ -33,7 +33,7 @@ if str(REPO) not in sys.path:
 from blender_scenes import add_slab, add_top_camera, assign, render, reset_scene, set_world  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
-from blender_addon.core import WORKING_SPACES, ParameterMap, SkinSettings, make_plan  # noqa: E402
+from blender_addon.core import WORKING_SPACES, ParameterMap, SkinSettings, freeze, make_plan  # noqa: E402
 from blender_addon.ops import apply_skin, scene_working_space  # noqa: E402
 
 PRESET = "caucasian"
@@ -97,7 +97,7 @@ def test_constant_base_color_and_render_in_working_space(addon, space):
     scene = _scene_in(space)
     material = bpy.data.materials.new("Skin")
     plan = apply_skin(material, SkinSettings.from_preset(PRESET))
-    assert plan["working_space"] == space
+    assert plan.working_space == space
 
     expected = spectral_skin.evaluate(preset=PRESET, working_space=space)
     assert expected["color_space"] == space
@@ -127,7 +127,7 @@ def test_albedo_texture_tagged_with_working_space(addon, space, tmp_path):
         output_dir=str(tmp_path))
     material.spectral_skin.override_constant_maps = "OFF"  # the textures of one value, not values: their path
     plan = apply_skin(material, settings)
-    assert plan["working_space"] == space
+    assert plan.working_space == space
     colorspaces = {role: addon_nodes.tagged_nodes(material.node_tree, role)[0].image.colorspace_settings.name
                    for role in ("albedo", "radius", "specular")}
     assert colorspaces == {"albedo": space, "radius": "Non-Color", "specular": "Non-Color"}
@@ -152,7 +152,7 @@ def test_plan_in_another_space_is_refused():
         pytest.skip("this Blender has only Linear Rec.709")
     _scene_in(other[0])
     material = bpy.data.materials.new("Mismatch")
-    plan = make_plan(SkinSettings.from_preset(PRESET))  # working_space defaults to Linear Rec.709
+    plan = freeze(make_plan(SkinSettings.from_preset(PRESET)))  # working_space defaults to Linear Rec.709
     with pytest.raises(ValueError, match="working space"):
         addon_nodes.apply_plan(material, plan)
 

@@ -149,3 +149,24 @@ def test_a_tile_set_is_written_by_the_core_and_read_back_stacked(tmp_path):
         {**maps, "oiliness": core.ParameterMap(np.zeros((5, 3), np.float32), False, "o.exr")})
     with pytest.raises(spectral_skin.SpectralSkinError, match="one UDIM tile set"):
         core.check(mixed)
+
+
+def test_a_skin_mask_reaches_the_fit_and_its_figures_are_the_skins():
+    """core.albedo.fit with a mask: the core fits every texel, counts the unmasked ones as masked out, and the
+    figures (median and largest ΔE00) are over the skin texels alone; no diagnosis for a texture whose non-skin half is
+    masked out, one without the mask."""
+    skin = [spectral_skin.evaluate(preset=p, outputs=["albedo"])["diffuse_reflectance_rgb"]
+            for p in ("caucasian", "asian", "african", "caucasian")]
+    texture = np.array([skin, [[0.05, 0.6, 0.05]] * 4], dtype=np.float32)
+    mask = np.array([[True] * 4, [False] * 4])
+    masked = albedo.fit(texture, "Linear Rec.709", None, mask=mask)
+    plain = albedo.fit(texture, "Linear Rec.709", None)
+    residual = np.asarray(masked["fit"].residual_delta_e00)
+    print(f"masked: {masked['masked_out_texels']} out, median {masked['median_delta_e00']:.3f}, "
+          f"max {masked['max_delta_e00']:.3f}; plain diagnosis {plain['diagnosis']!r}")
+    assert masked["masked_out_texels"] == 4 and plain["masked_out_texels"] == 0
+    assert masked["max_delta_e00"] == pytest.approx(float(residual[0].max()))
+    assert masked["max_delta_e00"] < 0.5 < plain["max_delta_e00"]
+    assert masked["diagnosis"] is None and plain["diagnosis"] is not None
+    with pytest.raises(ValueError, match="'m' is 3x2 texels but the Base Color 'a' is 4x2"):
+        albedo.skin_mask(np.ones((2, 3, 3)), texture.shape, "m", "a")

@@ -40,13 +40,13 @@ def test_effects_kept_unless_off():
 def test_live_plan_is_the_constants_plan_with_the_cores_table():
     settings = _settings(oiliness=0.0)
     plan = live.live_plan(settings, None, {}, table_needed=True)
-    info = plan["live"]
-    assert info["subsurface"] and info["specular"] and plan["radius"] is not None
+    info = plan.live
+    assert info["subsurface"] and info["specular"] and plan.radius is not None
     table = spectral_skin.shader_table(method="burley", blender="5.0", engine="cycles")
     np.testing.assert_array_equal(info["table"]["base_color_log"], table["base_color_log"])
     ev = spectral_skin.evaluate(preset="caucasian", oiliness=0.0, blender="5.0", engine="cycles")
-    np.testing.assert_allclose(plan["base_color"], ev["methods"]["burley"]["base_color"], rtol=1e-6)
-    assert live.live_plan(settings, None, {"subsurface": "OFF"}, table_needed=False)["live"]["table"] is None
+    np.testing.assert_allclose(plan.base_color, ev["methods"]["burley"]["base_color"], rtol=1e-6)
+    assert live.live_plan(settings, None, {"subsurface": "OFF"}, table_needed=False).live["table"] is None
 
 
 def test_mode_is_checked():

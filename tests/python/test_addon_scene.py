@@ -131,38 +131,38 @@ def test_scene_plan_far_is_plain_diffuse_with_the_cores_albedo():
     expected = spectral_skin.evaluate(preset="caucasian")["methods"]["burley"]["base_color"]
     for method in ("BURLEY", "RANDOM_WALK"):
         plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", method=method), far)
-        assert plan["subsurface_weight"] == 0.0
-        np.testing.assert_allclose(plan["base_color"], expected, rtol=1e-6)
+        assert plan.subsurface_weight == 0.0
+        np.testing.assert_allclose(plan.base_color, expected, rtol=1e-6)
     close = scene.scene_plan(core.SkinSettings.from_preset("caucasian"), _facts(0.5))
-    assert close["subsurface_weight"] == 1.0
+    assert close.subsurface_weight == 1.0
 
 
 def test_zero_oiliness_means_no_specular(tmp_path):
     plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", oiliness=0.0), None)
-    entry = next(e for e in plan["effects"] if e["effect"] == "specular")
-    assert not entry["enabled"] and "oil" in entry["reason"] and plan["specular_ior_level"] == 0.0
+    entry = next(e for e in plan.effects if e["effect"] == "specular")
+    assert not entry["enabled"] and "oil" in entry["reason"] and plan.specular_ior_level == 0.0
     # A map of zero oiliness beside a varying haemoglobin map: no specular texture, the albedo is a texture.
     hemoglobin = np.linspace(0.001, 0.05, 16, dtype=np.float32).reshape(4, 4)
     maps = {"hemoglobin": core.ParameterMap(hemoglobin, False), "oiliness": core.ParameterMap(np.zeros((4, 4), np.float32), False)}
     settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
     plan = scene.scene_plan(settings, None)
-    assert "specular" not in plan["textures"] and plan["specular_ior_level"] == 0.0
-    assert "albedo" in plan["textures"]
+    assert "specular" not in plan.textures and plan.specular_ior_level == 0.0
+    assert "albedo" in plan.textures
     oily = settings.replace(maps={**maps, "oiliness": core.ParameterMap(np.full((4, 4), 0.3, np.float32), False)})
-    assert scene.enabled(scene.scene_plan(oily, None)["effects"], "specular")
+    assert scene.enabled(scene.scene_plan(oily, None).effects, "specular")
 
 
 def test_constant_maps_become_values(tmp_path):
     maps = {"melanin": core.ParameterMap(np.full((4, 4), 0.02, np.float32), False)}
     settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
     plan = scene.scene_plan(settings, None)
-    assert plan["textures"] == {}
+    assert plan.textures == {}
     expected = spectral_skin.evaluate(0.02, 0.7, 0.005, 0.3)["methods"]["burley"]
-    np.testing.assert_allclose(plan["base_color"], expected["base_color"], rtol=1e-5)
-    np.testing.assert_allclose(plan["radius"], expected["subsurface_radius_mm"], rtol=1e-5)
-    entry = next(e for e in plan["effects"] if e["effect"] == "constant maps")
+    np.testing.assert_allclose(plan.base_color, expected["base_color"], rtol=1e-5)
+    np.testing.assert_allclose(plan.radius, expected["subsurface_radius_mm"], rtol=1e-5)
+    entry = next(e for e in plan.effects if e["effect"] == "constant maps")
     # A constant oiliness gives specular values already (the core's constant detection): only two images were made.
-    assert entry["figures"]["constant"] == ["albedo", "radius"]
+    assert entry["figures"]["constant"] == ("albedo", "radius")
 
 
 def test_frames_and_camera_switching():
@@ -180,7 +180,7 @@ def test_constant_maps_override_off_keeps_the_textures(tmp_path):
     maps = {"melanin": core.ParameterMap(np.full((4, 4), 0.02, np.float32), False)}
     settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
     plan = scene.scene_plan(settings, None, {"constant maps": "OFF"})
-    assert sorted(plan["textures"]) == ["albedo", "radius"] and plan["base_color"] is None
+    assert sorted(plan.textures) == ["albedo", "radius"] and plan.base_color is None
 
 
 def _entry(effects, name):
@@ -241,18 +241,18 @@ def test_animated_constant_material_gets_the_cores_values_per_frame():
     facts = _with(_facts(0.5), animation=_animated({"hemoglobin": hemoglobin}, current=3, first=10))
     settings = core.SkinSettings.from_preset("caucasian")
     plan = scene.scene_plan(settings, facts)
-    assert plan["animation"]["frames"] == [10, 11, 12, 13]
+    assert plan.animation["frames"] == (10, 11, 12, 13)
     for index, value in enumerate(hemoglobin):
         burley = spectral_skin.evaluate(settings.melanin, settings.melanin_blend, value, settings.oiliness)
         burley = burley["methods"]["burley"]
-        np.testing.assert_allclose(plan["animation"]["base_color"][index], burley["base_color"], rtol=1e-9)
-        np.testing.assert_allclose(plan["animation"]["radius"][index], burley["subsurface_radius_mm"], rtol=1e-9)
+        np.testing.assert_allclose(plan.animation["base_color"][index], burley["base_color"], rtol=1e-9)
+        np.testing.assert_allclose(plan.animation["radius"][index], burley["subsurface_radius_mm"], rtol=1e-9)
     # The current frame (3, before the range) takes the first frame's values.
-    np.testing.assert_allclose(plan["base_color"], plan["animation"]["base_color"][0])
-    entry = _entry(plan["effects"], "animation")
+    np.testing.assert_allclose(plan.base_color, plan.animation["base_color"][0])
+    entry = _entry(plan.effects, "animation")
     assert entry["enabled"] and entry["figures"]["evaluations"] == 3 and "hemoglobin keyframed" in entry["reason"]
     # The plan's work: the three distinct parameter sets, each once (the current frame's is one of them).
-    assert (plan["work"]["radius_fits"], plan["work"]["specular_evaluations"]) == (9, 3)
+    assert (plan.work["radius_fits"], plan.work["specular_evaluations"]) == (9, 3)
     assert entry["figures"]["first_frame"] == 10 and entry["figures"]["last_frame"] == 13
 
 
@@ -265,17 +265,16 @@ def test_animated_decisions_hold_over_every_frame():
     assert radius[big] / radius[small] > 0.25 / 0.2
     depth = radius[small] / 0.2 / 0.375
     facts = _with(_facts(depth + 0.1), animation=_animated({"hemoglobin": (small, big)}, current=1))
-    assert not scene.enabled(scene.scene_plan(settings.replace(hemoglobin=small), _with(facts, animation=None))[
-        "effects"], "subsurface")
+    assert not scene.enabled(scene.scene_plan(settings.replace(hemoglobin=small), _with(facts, animation=None)).effects, "subsurface")
     plan = scene.scene_plan(settings, facts)
-    entry = _entry(plan["effects"], "subsurface")
+    entry = _entry(plan.effects, "subsurface")
     assert entry["enabled"] and entry["figures"]["largest_radius_mm"] == pytest.approx(radius[big], rel=1e-9)
     # Oiliness zero at one frame only: the specular lobe stays, with each frame's level.
     oily = scene.scene_plan(settings, _with(_facts(0.5), animation=_animated({"oiliness": (0.0, 0.5)})))
-    assert scene.enabled(oily["effects"], "specular")
-    assert oily["animation"]["specular_ior_level"][0] == 0.0 < oily["animation"]["specular_ior_level"][1]
+    assert scene.enabled(oily.effects, "specular")
+    assert oily.animation["specular_ior_level"][0] == 0.0 < oily.animation["specular_ior_level"][1]
     dry = scene.scene_plan(settings, _with(_facts(0.5), animation=_animated({"oiliness": (0.0, 0.0)})))
-    assert not scene.enabled(dry["effects"], "specular")
+    assert not scene.enabled(dry.effects, "specular")
 
 
 def test_animation_with_parameter_maps_is_reported_not_applied(tmp_path):
@@ -283,14 +282,14 @@ def test_animation_with_parameter_maps_is_reported_not_applied(tmp_path):
     settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
     facts = _with(_facts(0.5), animation=_animated({"hemoglobin": (0.005, 0.05)}, current=2))
     plan = scene.scene_plan(settings, facts)
-    assert "animation" not in plan
-    entry = _entry(plan["effects"], "animation")
+    assert plan.animation is None
+    entry = _entry(plan.effects, "animation")
     assert not entry["enabled"] and "per-frame maps or the live shader" in entry["reason"]
     # The maps are computed with the current frame's haemoglobin.
     expected = spectral_skin.evaluate(0.01, settings.melanin_blend, 0.05, settings.oiliness)["methods"]["burley"]
-    np.testing.assert_allclose(np.asarray(plan["images"]["albedo"])[0, 0], expected["base_color"], rtol=1e-4)
+    np.testing.assert_allclose(np.asarray(plan.images["albedo"])[0, 0], expected["base_color"], rtol=1e-4)
     # Without animation: an entry that says so.
-    still = _entry(scene.scene_plan(core.SkinSettings(), None)["effects"], "animation")
+    still = _entry(scene.scene_plan(core.SkinSettings(), None).effects, "animation")
     assert not still["enabled"] and "no keyframed or driven" in still["reason"]
 
 
@@ -302,16 +301,16 @@ def test_plan_textures_written_by_the_core_and_specular_constants_from_maps(tmp_
     maps = {"melanin": core.ParameterMap(melanin, False), "oiliness": core.ParameterMap(oiliness, False)}
     settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path), file_prefix="Skin")
     plan = scene.scene_plan(settings, None)
-    assert sorted(plan["textures"]) == ["albedo", "radius", "specular"] and plan["specular_ior_level"] is None
+    assert sorted(plan.textures) == ["albedo", "radius", "specular"] and plan.specular_ior_level is None
     expected = spectral_skin.evaluate(preset="caucasian", outputs=("specular",))["specular"]
-    assert plan["roughness"] == pytest.approx(expected["roughness"], rel=1e-12)
-    assert plan["ior"] == pytest.approx(expected["ior"], rel=1e-12)
+    assert plan.roughness == pytest.approx(expected["roughness"], rel=1e-12)
+    assert plan.ior == pytest.approx(expected["ior"], rel=1e-12)
     core.write_textures(plan)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["Skin_albedo.exr", "Skin_radius.exr", "Skin_specular.exr"]
     level = spectral_skin.read_parameter_map(tmp_path / "Skin_specular.exr", "oiliness")["oiliness"]
     # The file holds the plan's values as half floats (write_maps' default precision).
-    np.testing.assert_array_equal(level, plan["images"]["specular"].astype(np.float16).astype(np.float32))
-    np.testing.assert_allclose(plan["images"]["specular"], oiliness / 2, rtol=1e-6)  # Specular IOR Level = oil / 2
+    np.testing.assert_array_equal(level, plan.images["specular"].astype(np.float16).astype(np.float32))
+    np.testing.assert_allclose(plan.images["specular"], oiliness / 2, rtol=1e-6)  # Specular IOR Level = oil / 2
     # Specular forced off: no specular texture, and the previous one is gone.
     off = scene.scene_plan(settings, None, {"specular": "OFF"})
     core.write_textures(off)
@@ -351,25 +350,25 @@ def test_dropped_effects_are_not_computed():
     specular evaluation (the decisions were taken before computing); close and oily, it has them."""
     settings = core.SkinSettings.from_preset("caucasian", oiliness=0.0, method="RANDOM_WALK")
     plan = scene.scene_plan(settings, _facts(1e4))
-    work = plan["work"]
+    work = plan.work
     assert (work["radius_fits"], work["radial_profiles"], work["specular_evaluations"]) == (0, 0, 0), work
     assert work["transform_samples"] == work["wavelengths"] > 0  # the albedo alone: one value per wavelength
-    entry = _entry(plan["effects"], "subsurface")
+    entry = _entry(plan.effects, "subsurface")
     assert not entry["enabled"] and "not computed" in entry["reason"]
     assert entry["figures"]["largest_radius_bound_px"] < scene.SUBSURFACE_MIN_RADIUS_PX
-    assert not scene.enabled(plan["effects"], "specular") and plan["specular_ior_level"] == 0.0
+    assert not scene.enabled(plan.effects, "specular") and plan.specular_ior_level == 0.0
     albedo = spectral_skin.evaluate(preset="caucasian", outputs=["albedo"])["diffuse_reflectance_rgb"]
-    np.testing.assert_allclose(plan["base_color"], albedo, rtol=1e-12)
-    assert plan["subsurface_weight"] == 0.0 and plan["radius"] is None
-    assert plan["ior"] == plan["subsurface_ior"] == spectral_skin.evaluate(preset="caucasian")["specular"]["ior"]
+    np.testing.assert_allclose(plan.base_color, albedo, rtol=1e-12)
+    assert plan.subsurface_weight == 0.0 and plan.radius is None
+    assert plan.ior == plan.subsurface_ior == spectral_skin.evaluate(preset="caucasian")["specular"]["ior"]
     close = scene.scene_plan(settings.replace(oiliness=0.3), _facts(0.5))
-    work = close["work"]
+    work = close.work
     assert (work["radius_fits"], work["radial_profiles"], work["specular_evaluations"]) == (3, 0, 1), work
     # Forced off: not computed either, whatever the distance.
     forced = scene.scene_plan(settings.replace(oiliness=0.3), _facts(0.5), {"subsurface": "OFF", "specular": "OFF"})
-    assert (forced["work"]["radius_fits"], forced["work"]["specular_evaluations"]) == (0, 0)
-    assert not scene.enabled(forced["effects"], "subsurface") and "forced off" in _entry(
-        forced["effects"], "subsurface")["reason"]
+    assert (forced.work["radius_fits"], forced.work["specular_evaluations"]) == (0, 0)
+    assert not scene.enabled(forced.effects, "subsurface") and "forced off" in _entry(
+        forced.effects, "subsurface")["reason"]
 
 
 @pytest.mark.parametrize("method", ["BURLEY", "RANDOM_WALK"])
@@ -382,17 +381,17 @@ def test_dropped_effects_with_maps_are_not_kept(tmp_path, method):
     settings = core.SkinSettings.from_preset("caucasian", maps={"hemoglobin": hemoglobin}, oiliness=0.0,
                                              output_dir=str(tmp_path), method=method)
     plan = scene.scene_plan(settings, _facts(1e4))
-    assert set(plan["textures"]) == {"albedo"} and plan["radius"] is None
-    work = plan["work"]
+    assert set(plan.textures) == {"albedo"} and plan.radius is None
+    work = plan.work
     assert work["texels"] == 16 and work["evaluations"] == 16
     assert work["radius_fits"] == 0 and work["specular_evaluations"] == 0, work
     assert work["outputs"] == {"base_color": 16, "radius": 0, "specular": 0}, work
-    assert plan["specular_ior_level"] == 0.0 and plan["roughness"] > 0.0
+    assert plan.specular_ior_level == 0.0 and plan.roughness > 0.0
     c = settings.constants()
     # A map run holds every parameter as float32, the constants too: evaluate() gets the same float32 values.
     as_map = [float(np.float32(v)) for v in (c["melanin"], c["melanin_blend"], levels.flat[5])]
     albedo = spectral_skin.evaluate(*as_map, 0.0, outputs=("albedo",))["diffuse_reflectance_rgb"]
-    np.testing.assert_array_equal(np.asarray(plan["images"]["albedo"]).reshape(-1, 3)[5], np.float32(albedo))
+    np.testing.assert_array_equal(np.asarray(plan.images["albedo"]).reshape(-1, 3)[5], np.float32(albedo))
 
 
 def test_thin_parts_of_a_thick_object_by_area():
@@ -433,11 +432,11 @@ def test_dropped_after_computing_the_radius_costs_one_evaluation():
     depth = own_mm / 0.2 / 0.375  # the material's largest extent at 0.2 px
     assert bound_mm / own_mm > scene.SUBSURFACE_MIN_RADIUS_PX / 0.2  # the bound alone does not drop it
     plan = scene.scene_plan(settings, _facts(depth + 0.1))
-    assert plan["subsurface_weight"] == 0.0
-    assert "not computed" not in _entry(plan["effects"], "subsurface")["reason"]
-    assert plan["work"]["radius_fits"] == 3
+    assert plan.subsurface_weight == 0.0
+    assert "not computed" not in _entry(plan.effects, "subsurface")["reason"]
+    assert plan.work["radius_fits"] == 3
     albedo = spectral_skin.evaluate(preset="african", outputs=["albedo"])["diffuse_reflectance_rgb"]
-    np.testing.assert_allclose(plan["base_color"], albedo, rtol=1e-12)
+    np.testing.assert_allclose(plan.base_color, albedo, rtol=1e-12)
 
 
 def test_thin_parts_keep_subsurface_however_far():
@@ -458,8 +457,8 @@ def test_thin_parts_keep_subsurface_however_far():
             assert entry["figures"]["thin_objects"] == [shapes[-1].object_name]
             assert shapes[-1].object_name in entry["reason"] and "thinner than 3 radii" in entry["reason"]
         planned = scene.scene_plan(settings, _with(_facts(1e4), shapes=shapes))
-        assert (planned["work"]["radius_fits"] > 0) is kept, planned["work"]
-        assert scene.enabled(planned["effects"], "subsurface") is kept
+        assert (planned.work["radius_fits"] > 0) is kept, planned.work
+        assert scene.enabled(planned.effects, "subsurface") is kept
 
 
 @pytest.mark.parametrize("preset", ["caucasian", "asian", "african"])
@@ -481,6 +480,6 @@ def test_every_method_decides_alike_on_the_same_scene(preset):
         decided = {}
         for method in ("BURLEY", "RANDOM_WALK", "RANDOM_WALK_SKIN"):
             plan = scene.scene_plan(settings.replace(method=method), _facts(depth + 0.1))
-            decided[method] = plan["subsurface_weight"] == 1.0
+            decided[method] = plan.subsurface_weight == 1.0
         assert len(set(decided.values())) == 1, (preset, radius_px, decided)
         assert decided["BURLEY"] == (radius_px * depth / (depth + 0.1) >= scene.SUBSURFACE_MIN_RADIUS_PX), radius_px
