@@ -15,7 +15,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::lm::{minimize, LmSettings};
+use super::lm::{minimize, LmResult, LmSettings};
 use crate::color::spectrum::VISIBLE_RANGE_NM;
 use crate::color::{ciede2000, lab_from_xyz, spectrum_to_xyz, WavelengthGrid};
 use crate::error::SkinError;
@@ -149,6 +149,10 @@ pub struct SpectrumFit {
     pub transport: crate::transport::Transport,
     pub streams: usize,
 }
+
+/// The solver's unknowns: every parameter but the oiliness (a fit frees each at most once) and the offset; a fit with
+/// fewer holds the rest (`lm::minimize`: equal bounds, no evaluation).
+const UNKNOWNS: usize = PARAM_COUNT;
 
 /// One spectrum of the start table: the free parameters' values and the diffuse spectrum there.
 type StartSpectrum = (Vec<f64>, Vec<f64>);
@@ -360,15 +364,17 @@ impl SpectrumFitter {
         let starts = self.options.starts.min(scored.len());
         scored.select_nth_unstable_by(starts - 1, |a, b| a.0.total_cmp(&b.0));
         scored[..starts].sort_by(|a, b| a.0.total_cmp(&b.0));
-        // Local refinement in the free parameters (and the offset when it is free).
-        let mut lower: Vec<f64> = self.free.iter().map(|&k| PARAMS[k].min).collect();
-        let mut upper: Vec<f64> = self.free.iter().map(|&k| PARAMS[k].max).collect();
+        // Local refinement in the free parameters (and the offset when it is free), the unknowns after them held at 0.
+        let mut lower = [0.0; UNKNOWNS];
+        let mut upper = [0.0; UNKNOWNS];
+        for (q, &k) in self.free.iter().enumerate() {
+            (lower[q], upper[q]) = (PARAMS[k].min, PARAMS[k].max);
+        }
         if fit_offset {
-            lower.push(SPECULAR_OFFSET_RANGE.0);
-            upper.push(SPECULAR_OFFSET_RANGE.1);
+            (lower[n_free], upper[n_free]) = SPECULAR_OFFSET_RANGE;
         }
         let lab_measured = self.lab(reflectance);
-        let residuals = |x: &[f64]| -> Vec<f64> {
+        let residuals = |x: &[f64; UNKNOWNS]| -> Vec<f64> {
             // Cancelled: a NaN residual ends the refinement at once (the solver takes no step to it).
             if cancel.load(Ordering::Relaxed) {
                 return vec![f64::NAN; reflectance.len()];
@@ -387,16 +393,17 @@ impl SpectrumFitter {
                 }
             }
         };
-        let mut best: Option<super::lm::LmResult> = None;
+        let mut best: Option<LmResult<UNKNOWNS, Vec<f64>>> = None;
         let mut evaluations = 0;
         for &(_, i) in &scored[..starts] {
             SkinError::check_cancel(cancel, "fit_spectrum")?;
             let (x_table, diffuse) = &self.table[i];
-            let mut x0 = x_table.clone();
+            let mut x0 = [0.0; UNKNOWNS];
+            x0[..n_free].copy_from_slice(x_table);
             if fit_offset {
-                x0.push(self.offset_for(diffuse, reflectance));
+                x0[n_free] = self.offset_for(diffuse, reflectance);
             }
-            let result = minimize(residuals, &x0, &lower, &upper, &LmSettings::default());
+            let result = minimize(residuals, x0, lower, upper, &LmSettings::default());
             evaluations += result.evaluations;
             if best.as_ref().map_or(true, |b| result.cost < b.cost) {
                 best = Some(result);
