@@ -23,6 +23,9 @@ use crate::evaluate::{Outputs, Prepared, Request};
 use crate::fit::blender_target::TargetInfo;
 use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams};
 use crate::fit::SubsurfaceMethod;
+use crate::skin::params::{
+    ParamSpec, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MATERIAL_PARAMS, MELANIN, MELANIN_BLEND, OILINESS,
+};
 use crate::skin::SkinParams;
 
 /// At most this many distinct (C_m, beta_m, C_h) tuples (with the extended physiology, when it varies) are evaluated
@@ -328,28 +331,25 @@ pub fn compute_maps_cancellable(
     // The method must be one the target's Blender offers (an error naming those that are).
     settings.request.target.method_entry(method)?;
     let n = image.texel_count();
-    let [m, b, hb, oil] = &image.planes;
-    let [e0, e1, e2] = &image.extended;
     let wanted = settings.request.outputs;
     let fit_radius = wanted.radius;
-    // Texel tuples: (C_m, beta_m, C_h) and the extended physiology; oiliness does not enter the material.
-    let range = |k: usize| if k < 3 { ALL_RANGES[k] } else { ALL_RANGES[k + 1] };
+    // Texel tuples: the values of MATERIAL_PARAMS (oiliness does not enter the material), in that order.
+    let material_planes: [&Plane; 6] = MATERIAL_PARAMS.map(|spec| image.plane_of(&spec));
     let evaluate_one = |t: [f32; 6]| -> Result<TexelMaterial, SkinError> {
-        // Texels passed `check_planes` in f32; widening can step just past a bound (0.1f32 > 0.1), so round back in.
-        let v = |k: usize| (t[k] as f64).clamp(range(k).0, range(k).1);
-        let p = SkinParams::from_values([v(0), v(1), v(2), 0.0, v(3), v(4), v(5)])?;
+        let p = SkinParams::from_fn(|spec| match MATERIAL_PARAMS.iter().position(|m| m.name == spec.name) {
+            Some(k) => widened(t[k], spec),
+            None => 0.0, // OILINESS: the surface's, not the material's
+        })?;
         if fit_radius {
             TexelMaterial::of(&prepared.material(&p)?, method)
         } else {
             Ok(TexelMaterial::albedo_only(prepared.albedo(&p)?))
         }
     };
-    let tuple = |i: usize| [m.value(i), b.value(i), hb.value(i), e0.value(i), e1.value(i), e2.value(i)];
+    let tuple = |i: usize| material_planes.map(|plane| plane.value(i));
     // The extended physiology when it is one value everywhere (the table bakes it in), widened as `evaluate_one` does.
-    let extended_uniform: Option<[f64; 3]> = match [e0, e1, e2].map(uniform_value) {
-        [Some(x), Some(y), Some(z)] => {
-            Some(std::array::from_fn(|k| ([x, y, z][k] as f64).clamp(range(3 + k).0, range(3 + k).1)))
-        }
+    let extended_uniform: Option<[f64; 3]> = match EXTENDED_PARAMS.map(|spec| uniform_value(image.plane_of(&spec))) {
+        [Some(x), Some(y), Some(z)] => Some(std::array::from_fn(|k| widened([x, y, z][k], &EXTENDED_PARAMS[k]))),
         _ => None,
     };
 
@@ -361,13 +361,11 @@ pub fn compute_maps_cancellable(
     let mut radius = planes(fit_radius);
     let select = |t: &TexelMaterial| (t.base_color, t.radius_mm);
 
-    let all_constant = uniform_value(m).is_some()
-        && uniform_value(b).is_some()
-        && uniform_value(hb).is_some()
-        && extended_uniform.is_some();
+    let all_constant = material_planes.iter().all(|plane| uniform_value(plane).is_some());
     let mut work = MapWork { texels: n, ..MapWork::default() };
-    // Row y of plane k (the four, then the thickness) for the table lookups: constant planes become one shared row.
-    let row_planes: [&Plane; 4] = [m, b, hb, e0];
+    // Row y of plane k of the tables' axes (the three concentrations, then the thickness) for the table lookups:
+    // constant planes become one shared row.
+    let row_planes: [&Plane; 4] = TABLE_AXES.map(|spec| image.plane_of(&spec));
     let rows_of = |plane: &Plane| match plane {
         Plane::Texels(_) => None,
         Plane::Constant(v) => Some(vec![*v; w]),
@@ -380,9 +378,13 @@ pub fn compute_maps_cancellable(
             (Plane::Constant(_), None) => unreachable!("constant planes have a row"),
         }
     };
-    // Only the thickness varies among the extended physiology: the stack of tables over thickness.
-    let thickness_only: Option<[f64; 2]> = match [e0, e1, e2].map(uniform_value) {
-        [None, Some(y), Some(z)] => Some([1, 2].map(|k| ([0.0, y, z][k] as f64).clamp(range(3 + k).0, range(3 + k).1))),
+    // Only the thickness varies among the extended physiology: the stack of tables over thickness, the other two
+    // (EXTENDED_PARAMS after the thickness) held.
+    let thickness = image.plane_of(&EPIDERMIS_THICKNESS);
+    let thickness_only: Option<[f64; 2]> = match EXTENDED_PARAMS.map(|spec| uniform_value(image.plane_of(&spec))) {
+        [None, Some(y), Some(z)] => {
+            Some([(y, &EXTENDED_PARAMS[1]), (z, &EXTENDED_PARAMS[2])].map(|(v, s)| widened(v, s)))
+        }
         _ => None,
     };
     let strategy = if !needs_material {
@@ -441,7 +443,8 @@ pub fn compute_maps_cancellable(
         work.table_nodes_built = if from_cache { 0 } else { nodes };
         work.table_lookups = n;
         Strategy::Table { resolution, nodes, from_cache, build_seconds, measured_error }
-    } else if let (StrategyChoice::Auto, Some(rest), Plane::Texels(thickness)) = (settings.strategy, thickness_only, e0)
+    } else if let (StrategyChoice::Auto, Some(rest), Plane::Texels(thickness)) =
+        (settings.strategy, thickness_only, thickness)
     {
         let (lo, hi) = thickness
             .par_iter()
@@ -468,7 +471,7 @@ pub fn compute_maps_cancellable(
             n,
             samples,
             fit_radius,
-            |i| [m.value(i), b.value(i), hb.value(i), e0.value(i)],
+            |i| row_planes.map(|plane| plane.value(i)),
             |i| evaluate_one(tuple(i)).map(|t| [t.base_color, t.radius_mm]),
             cancel,
         )?;
@@ -526,7 +529,8 @@ pub fn compute_maps_cancellable(
     if wanted.albedo {
         work.outputs.base_color = n;
     }
-    let specular = wanted.specular.then(|| match (uniform_value(oil), oil) {
+    let oiliness = image.plane_of(&OILINESS);
+    let specular = wanted.specular.then(|| match (uniform_value(oiliness), oiliness) {
         (Some(v), _) => SpecularOutput::Constant(specular_from_oiliness(v as f64)),
         (None, Plane::Constant(_)) => unreachable!("a constant plane is uniform"),
         (None, Plane::Texels(values)) => {
@@ -591,17 +595,26 @@ fn uniform_value(plane: &Plane) -> Option<f32> {
 /// The distinct (C_m, beta_m, C_h, extended physiology) tuples (as f32 bit patterns) if there are at most `limit`,
 /// else None.
 fn distinct_tuples(image: &ParamImage, limit: usize) -> Option<HashMap<[u32; 6], ()>> {
-    let [m, b, h, _] = &image.planes;
-    let [e0, e1, e2] = &image.extended;
+    let planes = MATERIAL_PARAMS.map(|spec| image.plane_of(&spec));
     let mut set = HashMap::new();
     for i in 0..image.texel_count() {
-        let t = [m.value(i), b.value(i), h.value(i), e0.value(i), e1.value(i), e2.value(i)];
+        let t = planes.map(|plane| plane.value(i));
         set.insert(t.map(f32::to_bits), ());
         if set.len() > limit {
             return None;
         }
     }
     Some(set)
+}
+
+/// The axes of the lookup tables, in the order their lookups take rows: the three concentrations, then the thickness
+/// (a stack of tables over it when it varies).
+const TABLE_AXES: [ParamSpec; 4] = [MELANIN, MELANIN_BLEND, HEMOGLOBIN, EPIDERMIS_THICKNESS];
+
+/// A texel's value of `spec` as f64. Texels passed `check_planes` in f32; widening can step just past a bound
+/// (0.1f32 > 0.1), so it is rounded back into the range.
+fn widened(value: f32, spec: &ParamSpec) -> f64 {
+    (value as f64).clamp(spec.min, spec.max)
 }
 
 /// Fill the output planes row by row in parallel from a per-texel function; rows not started when `cancel` is set

@@ -177,6 +177,11 @@ pub const PAPER_PARAMS: [ParamSpec; 4] = [MELANIN, MELANIN_BLEND, HEMOGLOBIN, OI
 /// The extended physiology ([`PARAMS`] after the paper's four), each with a default.
 pub const EXTENDED_PARAMS: [ParamSpec; 3] = [EPIDERMIS_THICKNESS, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION];
 
+/// The parameters that change the material (Base Color and Subsurface Radius): every one of [`PARAMS`] but
+/// [`OILINESS`], which only the surface's specular reads. The maps evaluate texels by these.
+pub const MATERIAL_PARAMS: [ParamSpec; 6] =
+    [MELANIN, MELANIN_BLEND, HEMOGLOBIN, EPIDERMIS_THICKNESS, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION];
+
 /// The extended physiology's defaults (the values DJ2006 fix), in [`EXTENDED_PARAMS`] order.
 pub const EXTENDED_DEFAULTS: [f64; 3] =
     [spec_default(EPIDERMIS_THICKNESS), spec_default(BASELINE_ABSORPTION_SCALE), spec_default(BLOOD_OXYGENATION)];
@@ -261,6 +266,11 @@ impl SkinParams {
             blood_oxygenation: v[6],
         }
         .validated()
+    }
+
+    /// Validate every parameter, each given by `value_of` its spec (addressed by name, not by position).
+    pub fn from_fn(value_of: impl Fn(&ParamSpec) -> f64) -> Result<Self, SkinError> {
+        Self::from_values(PARAMS.map(|spec| value_of(&spec)))
     }
 
     /// These parameters if each is in its range ([`PARAMS`]), else the error naming the first that is not.

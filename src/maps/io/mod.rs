@@ -30,7 +30,7 @@ pub use staging::{
     check_output_dir, commit_all, create_output_dir, output_folder_of, stage_bytes, write_atomic, Staged,
 };
 
-use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, PAPER_PARAMS as PARAMS};
+use crate::skin::params::{ParamSpec, EXTENDED_DEFAULTS, EXTENDED_PARAMS, PAPER_PARAMS as PARAMS};
 
 /// The names of the four parameters ([`PARAMS`]: melanin, melanin_blend, hemoglobin, oiliness). These are also the channel names
 /// a multi-channel parameter EXR must use (exact, case-sensitive).
@@ -187,6 +187,12 @@ impl ParamImage {
         } else {
             &self.extended[p - 4]
         }
+    }
+
+    /// The plane of the parameter `spec` (one of `crate::skin::params::PARAMS`, found by name).
+    pub fn plane_of(&self, spec: &ParamSpec) -> &Plane {
+        let p = ALL_CHANNELS.iter().position(|name| *name == spec.name).expect("every parameter has a plane");
+        self.plane(p)
     }
 
     /// Number of texels, `width * height`.
