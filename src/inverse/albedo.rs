@@ -27,6 +27,7 @@ use crate::color::difference::{ciede2000, ciede2000_terms, LabConverter};
 use crate::color::WorkingSpace;
 use crate::error::{check_range, SkinError};
 use crate::evaluate::{Accuracy, Outputs, Prepared, Request};
+use crate::maps::lut::{unwarp, warp};
 use crate::skin::params::{
     BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_DEFAULTS, HEMOGLOBIN, MELANIN, MELANIN_BLEND,
 };
@@ -125,9 +126,9 @@ impl AlbedoFitOptions {
     pub fn params_at(&self, u: [f64; 3]) -> SkinParams {
         let [um, b, uh] = u.map(|x| x.clamp(0.0, 1.0));
         SkinParams {
-            melanin: MELANIN.max * um.powi(3),
+            melanin: unwarp(um, MELANIN.max),
             melanin_blend: MELANIN_BLEND.min + b * (MELANIN_BLEND.max - MELANIN_BLEND.min),
-            hemoglobin: HEMOGLOBIN.max * uh.powi(3),
+            hemoglobin: unwarp(uh, HEMOGLOBIN.max),
             oiliness: self.oiliness,
             epidermis_thickness_mm: self.extended[0],
             baseline_absorption_scale: self.extended[1],
@@ -138,7 +139,7 @@ impl AlbedoFitOptions {
 
 /// Table coordinates of parameters (inverse of [`AlbedoFitOptions::params_at`]).
 pub fn table_coordinates(p: &SkinParams) -> [f64; 3] {
-    [(p.melanin / MELANIN.max).cbrt(), p.melanin_blend, (p.hemoglobin / HEMOGLOBIN.max).cbrt()]
+    [warp(p.melanin, MELANIN.max), p.melanin_blend, warp(p.hemoglobin, HEMOGLOBIN.max)]
 }
 
 /// Nodes per axis (u_m, beta_m, u_h) of the fit's forward table: chosen so that the table's colour error (ΔE00

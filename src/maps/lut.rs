@@ -62,7 +62,6 @@ impl TexelMaterial {
     }
 }
 
-/// The concentration axes are warped by a cube root: u = (C / C_max)^(1/3) (`warp`, `unwarp`).
 /// Smallest value stored before taking the logarithm (outputs are positive; this guards underflow).
 const MIN_STORED: f32 = 1e-30;
 /// Largest value stored (outputs are reflectances near 1 and radii of millimetres; this keeps exp() of every
@@ -119,7 +118,9 @@ impl TableResolution {
     }
 }
 
-fn warp(value: f64, max: f64) -> f64 {
+/// The warp of a concentration axis (melanin, haemoglobin), shared by the maps' tables and the albedo fit's: the
+/// cube root of the share of the maximum, u = (C / C_max)^(1/3), clamped to [0, 1]. Inverse: [`unwarp`].
+pub(crate) fn warp(value: f64, max: f64) -> f64 {
     cbrt_unit((value / max).clamp(0.0, 1.0))
 }
 
@@ -176,7 +177,8 @@ fn exp_stored(x: f32) -> f32 {
     p * f32::from_bits(((n_bits + 127) as u32) << 23)
 }
 
-fn unwarp(u: f64, max: f64) -> f64 {
+/// The concentration at warped coordinate `u` of an axis of maximum `max` (the inverse of [`warp`]).
+pub(crate) fn unwarp(u: f64, max: f64) -> f64 {
     max * u.powi(3)
 }
 
