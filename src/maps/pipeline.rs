@@ -347,8 +347,10 @@ pub fn compute_maps_cancellable(
         }
     };
     let tuple = |i: usize| material_planes.map(|plane| plane.value(i));
+    // The extended physiology's values where a plane is one value everywhere (each plane scanned once).
+    let extended_values: [Option<f32>; 3] = EXTENDED_PARAMS.map(|spec| uniform_value(image.plane_of(&spec)));
     // The extended physiology when it is one value everywhere (the table bakes it in), widened as `evaluate_one` does.
-    let extended_uniform: Option<[f64; 3]> = match EXTENDED_PARAMS.map(|spec| uniform_value(image.plane_of(&spec))) {
+    let extended_uniform: Option<[f64; 3]> = match extended_values {
         [Some(x), Some(y), Some(z)] => Some(std::array::from_fn(|k| widened([x, y, z][k], &EXTENDED_PARAMS[k]))),
         _ => None,
     };
@@ -361,7 +363,8 @@ pub fn compute_maps_cancellable(
     let mut radius = planes(fit_radius);
     let select = |t: &TexelMaterial| (t.base_color, t.radius_mm);
 
-    let all_constant = material_planes.iter().all(|plane| uniform_value(plane).is_some());
+    let all_constant = extended_uniform.is_some()
+        && [MELANIN, MELANIN_BLEND, HEMOGLOBIN].iter().all(|spec| uniform_value(image.plane_of(spec)).is_some());
     let mut work = MapWork { texels: n, ..MapWork::default() };
     // Row y of plane k of the tables' axes (the three concentrations, then the thickness) for the table lookups:
     // constant planes become one shared row.
@@ -381,7 +384,7 @@ pub fn compute_maps_cancellable(
     // Only the thickness varies among the extended physiology: the stack of tables over thickness, the other two
     // (EXTENDED_PARAMS after the thickness) held.
     let thickness = image.plane_of(&EPIDERMIS_THICKNESS);
-    let thickness_only: Option<[f64; 2]> = match EXTENDED_PARAMS.map(|spec| uniform_value(image.plane_of(&spec))) {
+    let thickness_only: Option<[f64; 2]> = match extended_values {
         [None, Some(y), Some(z)] => {
             Some([(y, &EXTENDED_PARAMS[1]), (z, &EXTENDED_PARAMS[2])].map(|(v, s)| widened(v, s)))
         }
