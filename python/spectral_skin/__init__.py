@@ -23,6 +23,7 @@ Functions:
     fit_albedo: the parameters whose model albedo is closest (CIEDE2000) to an RGB colour.
     fit_albedo_map: parameter maps and a per-texel ΔE00 residual from an albedo texture.
     fit_spectrum: model parameters fitted to a measured reflectance spectrum.
+    cielab, delta_e00: the core's CIELAB and CIEDE2000 colour difference of linear RGB colours (the fits' own).
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
@@ -40,6 +41,8 @@ from ._core import (
     __version__,
     accuracy_levels,
     blender_targets,
+    cielab,
+    delta_e00,
     evaluate,
     fit_albedo,
     fit_albedo_map,
@@ -66,6 +69,8 @@ __all__ = [
     "__version__",
     "accuracy_levels",
     "blender_targets",
+    "cielab",
+    "delta_e00",
     "evaluate",
     "fit_albedo",
     "fit_albedo_map",

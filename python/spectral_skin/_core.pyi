@@ -442,6 +442,25 @@ def _cli_main(argv: list[str]) -> int:
     """The console script's entry (spectral_skin._cli), not an API: help(spectral_skin._core._cli_main)."""
     ...
 
+def cielab(
+    rgb: npt.ArrayLike,
+    *,
+    working_space: _WorkingSpace | str = "Linear Rec.709",
+    white_luminance: float = 1.0,
+) -> npt.NDArray[np.float64]:
+    """Documented once, in the compiled module: ``help(spectral_skin.cielab)``."""
+    ...
+
+def delta_e00(
+    reference: npt.ArrayLike,
+    test: npt.ArrayLike,
+    *,
+    working_space: _WorkingSpace | str = "Linear Rec.709",
+    white_luminance: float = 1.0,
+) -> npt.NDArray[np.float64]:
+    """Documented once, in the compiled module: ``help(spectral_skin.delta_e00)``."""
+    ...
+
 def fit_spectrum(
     wavelengths_nm: npt.ArrayLike,
     reflectance: npt.ArrayLike,

@@ -5,6 +5,7 @@
 mod catalog;
 #[cfg(feature = "cli")]
 mod cli;
+mod color;
 mod convert;
 mod detach;
 mod errors;
@@ -17,6 +18,7 @@ mod shader_table;
 use pyo3::prelude::*;
 
 use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, parameters_py, presets_py, transports_py};
+use color::{cielab_py, delta_e00_py};
 use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
 use inverse::fit_spectrum_py;
@@ -52,6 +54,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // A maps() result reads like the dict it replaced: a Mapping for isinstance (its methods are its own).
     m.py().import("collections.abc")?.getattr("Mapping")?.call_method1("register", (m.py().get_type::<MapsPy>(),))?;
     m.add_function(wrap_pyfunction!(fit_spectrum_py, m)?)?;
+    m.add_function(wrap_pyfunction!(cielab_py, m)?)?;
+    m.add_function(wrap_pyfunction!(delta_e00_py, m)?)?;
     #[cfg(feature = "cli")]
     m.add_function(wrap_pyfunction!(cli::cli_main_py, m)?)?;
     Ok(())
