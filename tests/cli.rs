@@ -28,22 +28,22 @@ fn eval_json_has_the_stable_keys() {
         {
             assert!(j.get(key).is_some(), "{preset}: missing {key}");
         }
-        assert_eq!(j["color_space"], "Linear Rec.709");
+        assert_eq!(j["color_space"], "Linear Rec.709", "{preset}");
         let default = j["default_method"].as_str().unwrap();
-        assert!(default == "burley" || default == "random_walk");
+        assert!(default == "burley" || default == "random_walk", "{preset}: default_method {default:?}");
         let albedo = triple(&j["diffuse_reflectance_rgb"]);
         assert!(albedo.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 1.0), "{albedo:?}");
         for method in ["burley", "random_walk"] {
             let radius = triple(&j["methods"][method]["subsurface_radius_mm"]);
             let base = triple(&j["methods"][method]["base_color"]);
             assert!(radius.iter().all(|v| v.is_finite() && *v > 0.0), "{preset} {method}: {radius:?}");
-            assert!(base.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)));
+            assert!(base.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)), "{preset} {method}: {base:?}");
         }
         assert_eq!(triple(&j["methods"]["burley"]["base_color"]), albedo, "Burley renders Base Color as the albedo");
         // The CLI's eval computes a material: one Burley fit per channel and one specular set, no profile.
-        assert_eq!(j["work"]["radius_fits"], 3);
-        assert_eq!(j["work"]["specular_evaluations"], 1);
-        assert_eq!(j["work"]["radial_profiles"], 0);
+        assert_eq!(j["work"]["radius_fits"], 3, "{preset}");
+        assert_eq!(j["work"]["specular_evaluations"], 1, "{preset}");
+        assert_eq!(j["work"]["radial_profiles"], 0, "{preset}");
         luminance.push(0.2126 * albedo[0] + 0.7152 * albedo[1] + 0.0722 * albedo[2]);
     }
     assert!(luminance[0] < luminance[1] && luminance[1] < luminance[2], "{luminance:?}");
@@ -52,16 +52,17 @@ fn eval_json_has_the_stable_keys() {
 #[test]
 fn profile_csv() {
     let out = run(&["profile", "--preset", "caucasian", "--csv", "--count", "16"]);
-    assert!(out.status.success());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next().unwrap(), "r_mm,r_per_mm2,g_per_mm2,b_per_mm2");
     let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
     assert_eq!(rows.len(), 16);
-    assert!(rows.windows(2).all(|w| w[1][1] <= w[0][1]), "red profile decreases with r");
+    assert!(rows.windows(2).all(|w| w[1][1] <= w[0][1]), "red profile decreases with r: {rows:?}");
     let spectral = run(&["profile", "--preset", "african", "--spectral", "--count", "4", "--wavelength-step-nm", "20"]);
     let text = String::from_utf8(spectral.stdout).unwrap();
-    assert!(text.lines().next().unwrap().starts_with("r_mm,nm380_per_mm2"));
+    let header = text.lines().next().unwrap();
+    assert!(header.starts_with("r_mm,nm380_per_mm2"), "{header}");
 }
 
 #[test]
@@ -80,7 +81,7 @@ fn bad_input_is_a_clear_error() {
         assert_eq!(out.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(needle), "{args:?}: {err}");
-        assert!(!err.contains("panicked"));
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
 }
 
@@ -98,7 +99,8 @@ fn maps_on_the_example() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("strategy table"));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("strategy table"), "{stdout}");
     for f in ["albedo.exr", "radius.exr", "specular.exr", "skin_maps.json"] {
         assert!(maps.join(f).is_file(), "{f}");
     }
@@ -120,7 +122,11 @@ fn maps_on_the_example() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("hemoglobin") && err.contains("--clamp"), "{err}");
-    assert!(!bad.exists() || std::fs::read_dir(&bad).unwrap().next().is_none());
+    assert!(
+        !bad.exists() || std::fs::read_dir(&bad).unwrap().next().is_none(),
+        "written on bad input: {:?}",
+        std::fs::read_dir(&bad).unwrap().collect::<Vec<_>>()
+    );
 }
 
 /// `--accuracy` picks a named level; `--wavelength-step-nm` overrides the level's step.
@@ -155,7 +161,7 @@ fn eval_and_maps_take_a_target() {
     let default = eval_json("caucasian");
     assert_eq!(default["target"], serde_json::json!({"blender": "5.3", "engine": "cycles", "tested": true}));
     let out = run(&["eval", "--preset", "asian", "--blender", "5.9", "--method", "random_walk_legacy"]);
-    assert!(out.status.success());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
         text.contains("newer than the versions") && text.contains("random_walk_legacy") && !text.contains("burley"),
@@ -195,8 +201,13 @@ fn eval_and_maps_take_a_target() {
         "5.0",
     ]);
     assert_eq!(legacy_in_5_0.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&legacy_in_5_0.stderr).contains("random_walk_legacy is not offered by Blender 5.0"));
-    assert!(!out_dir.exists(), "nothing written on a refused target");
+    let err = String::from_utf8_lossy(&legacy_in_5_0.stderr);
+    assert!(err.contains("random_walk_legacy is not offered by Blender 5.0"), "{err}");
+    assert!(
+        !out_dir.exists(),
+        "nothing written on a refused target: {:?}",
+        std::fs::read_dir(&out_dir).map(|d| d.count())
+    );
     // The sidecar names the target.
     let params = uniform_example(dir.path());
     let out = run(&[
@@ -237,7 +248,8 @@ fn negative_values_reach_the_range_check() {
     }
     let dir = tempfile::tempdir().unwrap();
     let params = dir.path().join("face.exr");
-    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]).status.success());
+    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]);
+    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
     let out_dir = dir.path().join("maps");
     let out = run(&[
         "maps",
@@ -255,7 +267,7 @@ fn negative_values_reach_the_range_check() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("hemoglobin") && err.contains("[0, 0.1]") && !err.contains("unexpected argument"), "{err}");
-    assert!(!out_dir.exists(), "nothing written on bad input");
+    assert!(!out_dir.exists(), "nothing written on bad input: {:?}", std::fs::read_dir(&out_dir).map(|d| d.count()));
 }
 
 /// `--table-check` is bounded before any work, with the allowed range in the message (10^12 used to abort).
@@ -282,7 +294,7 @@ fn table_check_is_bounded() {
     let err = String::from_utf8_lossy(&out.stderr);
     let max = spectral_skin::maps::pipeline::MAX_TABLE_CHECK_SAMPLES.to_string();
     assert!(err.contains("--table-check") && err.contains(&max), "{err}");
-    assert!(!out_dir.exists());
+    assert!(!out_dir.exists(), "written on a refused check: {:?}", std::fs::read_dir(&out_dir).map(|d| d.count()));
 }
 
 /// A run with constant oiliness writes no specular.exr and removes the one an earlier run left, so the folder holds
@@ -291,7 +303,8 @@ fn table_check_is_bounded() {
 fn a_new_run_leaves_no_stale_outputs() {
     let dir = tempfile::tempdir().unwrap();
     let face = dir.path().join("face.exr");
-    assert!(run(&["example", "--out", face.to_str().unwrap(), "--size", "16"]).status.success());
+    let example = run(&["example", "--out", face.to_str().unwrap(), "--size", "16"]);
+    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
     let out_dir = dir.path().join("maps");
     let maps = |extra: &[&str]| {
         let mut args = vec!["maps", "--out", out_dir.to_str().unwrap(), "--no-cache", "--table-check", "0"];
@@ -300,7 +313,11 @@ fn a_new_run_leaves_no_stale_outputs() {
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     };
     maps(&["--params", face.to_str().unwrap()]);
-    assert!(out_dir.join("specular.exr").is_file(), "varying oiliness writes a specular map");
+    assert!(
+        out_dir.join("specular.exr").is_file(),
+        "varying oiliness writes a specular map: {:?}",
+        std::fs::read_dir(&out_dir).map(|d| d.map(|e| e.map(|e| e.file_name())).collect::<Vec<_>>())
+    );
     maps(&[
         "--melanin-map",
         face.to_str().unwrap(),
@@ -321,8 +338,8 @@ fn a_new_run_leaves_no_stale_outputs() {
         std::fs::read_dir(&out_dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     present.sort();
     assert_eq!(present, listed, "the folder holds exactly the sidecar's files");
-    assert!(!out_dir.join("specular.exr").exists());
-    assert!(sidecar["outputs"]["specular_constants"].is_object());
+    assert!(!out_dir.join("specular.exr").exists(), "stale specular.exr, present: {present:?}");
+    assert!(sidecar["outputs"]["specular_constants"].is_object(), "{}", sidecar["outputs"]);
     // The work: one specular set for the constant oiliness, no specular map; every texel of the other two.
     let work = &sidecar["report"]["work"];
     let texels = work["texels"].as_u64().unwrap();
@@ -348,7 +365,8 @@ fn ctrl_c_stops_maps_and_writes_nothing() {
 fn interrupt_maps(args: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let face = dir.path().join("face.exr");
-    assert!(run(&["example", "--out", face.to_str().unwrap(), "--size", "512"]).status.success());
+    let example = run(&["example", "--out", face.to_str().unwrap(), "--size", "512"]);
+    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
     let out_dir = dir.path().join("maps");
     std::fs::create_dir(&out_dir).unwrap();
     std::fs::write(out_dir.join("keep.txt"), b"earlier").unwrap();
@@ -371,7 +389,8 @@ fn interrupt(argv: &[&str]) {
         .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(1500));
     let sent = std::time::Instant::now();
-    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success(), "{argv:?}: kill -INT {}: {kill:?}", child.id());
     let status = loop {
         if let Some(status) = child.try_wait().unwrap() {
             break status;
@@ -409,8 +428,8 @@ fn profile_rgb_mapping() {
         text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect()
     };
     let (linear, mapped) = (rows(&[]), rows(&["--rgb-mapping", "non_negative"]));
-    assert!(linear.iter().any(|r| r[1..].iter().any(|&v| v < 0.0)), "the linear tail is out of gamut");
-    assert!(mapped.iter().all(|r| r[1..].iter().all(|&v| v >= 0.0)));
+    assert!(linear.iter().any(|r| r[1..].iter().any(|&v| v < 0.0)), "the linear tail is out of gamut: {linear:?}");
+    assert!(mapped.iter().all(|r| r[1..].iter().all(|&v| v >= 0.0)), "{mapped:?}");
     for (l, m) in linear.iter().zip(&mapped) {
         if l[1..].iter().all(|&v| v >= 0.0) {
             assert_eq!(l, m);
@@ -418,7 +437,8 @@ fn profile_rgb_mapping() {
     }
     let bad = run(&["profile", "--preset", "african", "--rgb-mapping", "clip"]);
     assert_eq!(bad.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&bad.stderr).contains("non_negative"));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("non_negative"), "{err}");
 }
 
 /// `maps --outputs` computes and writes only the maps named: without radius no radius fit and no radius.exr.
@@ -426,12 +446,17 @@ fn profile_rgb_mapping() {
 fn maps_outputs_choose_the_maps() {
     let dir = tempfile::tempdir().unwrap();
     let params = dir.path().join("face.exr");
-    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]).status.success());
+    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]);
+    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
     let out_dir = dir.path().join("maps");
     let (params, out) = (params.to_str().unwrap(), out_dir.to_str().unwrap());
     let out = run(&["maps", "--params", params, "--out", out, "--outputs", "albedo,specular"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out_dir.join("albedo.exr").is_file() && !out_dir.join("radius.exr").exists());
+    assert!(
+        out_dir.join("albedo.exr").is_file() && !out_dir.join("radius.exr").exists(),
+        "{:?}",
+        std::fs::read_dir(&out_dir).unwrap().map(|e| e.unwrap().file_name()).collect::<Vec<_>>()
+    );
     let sidecar: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
     assert_eq!(sidecar["report"]["work"]["radius_fits"], 0);
@@ -460,7 +485,8 @@ fn extended_physiology_flags() {
 
     let dir = tempfile::tempdir().unwrap();
     let params = dir.path().join("p.exr");
-    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "8", "--kind", "mask"]).status.success());
+    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "8", "--kind", "mask"]);
+    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
     let out_dir = dir.path().join("out");
     let out = run(&[
         "maps",
@@ -535,7 +561,11 @@ fn fit_a_measured_spectrum() {
     std::fs::write(&path, "400,0.1\n410,0.1\n").unwrap();
     let out = run(&["fit", "--spectrum", path.to_str().unwrap(), "--specular", "fresnel"]);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.code() == Some(2) && err.contains("spectrum.csv") && err.contains("header"), "{err}");
+    assert!(
+        out.status.code() == Some(2) && err.contains("spectrum.csv") && err.contains("header"),
+        "{:?}: {err}",
+        out.status.code()
+    );
 }
 
 /// Issue 20: `--transport` and `--streams` on every subcommand that computes the model; `eval` and the maps sidecar
@@ -595,7 +625,7 @@ fn transport_on_every_front() {
         let sidecar: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
         assert_eq!(sidecar["report"]["request"]["transport"], transport.name());
-        assert_eq!(sidecar["report"]["request"]["accuracy"]["streams"], DEFAULT_STREAMS);
+        assert_eq!(sidecar["report"]["request"]["accuracy"]["streams"], DEFAULT_STREAMS, "{}", transport.name());
     }
 }
 
@@ -686,6 +716,7 @@ fn maps_warns_about_an_unknown_channel_of_its_parameter_exr() {
 /// A 4x4 uniform parameter map written by `spectral-skin example` into `dir`.
 fn uniform_example(dir: &std::path::Path) -> std::path::PathBuf {
     let params = dir.join("uniform.exr");
-    assert!(run(&["example", "--out", params.to_str().unwrap(), "--size", "4", "--kind", "uniform"]).status.success());
+    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "4", "--kind", "uniform"]);
+    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
     params
 }

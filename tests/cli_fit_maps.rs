@@ -71,7 +71,13 @@ fn fit_maps_names_a_nan_texel_and_writes_nothing() {
         cli(&["fit-maps", "--albedo", dir.path().join("albedo.exr").to_str().unwrap(), "--out", out.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("(x, y) = (1, 1)"), "{err}");
-    assert!(!out.exists() && !dir.path().join("residual.exr").exists());
+    let residual = dir.path().join("residual.exr");
+    assert!(
+        !out.exists() && !residual.exists(),
+        "written on a failed fit: params {}, residual {}",
+        out.exists(),
+        residual.exists()
+    );
 }
 
 /// The sRGB decoding formula (IEC 61966-2-1), written out here.
@@ -98,7 +104,13 @@ fn fit_maps_takes_an_srgb_png_albedo_into_a_folder_it_creates() {
     let out_png = d.join("new/deeper/params.exr");
     let o = cli(&["fit-maps", "--albedo", d.join("albedo.png").to_str().unwrap(), "--out", out_png.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(out_png.exists() && d.join("new/deeper/residual.exr").exists());
+    let residual_png = d.join("new/deeper/residual.exr");
+    assert!(
+        out_png.exists() && residual_png.exists(),
+        "params written: {}, residual written: {}",
+        out_png.exists(),
+        residual_png.exists()
+    );
     let out_exr = d.join("params_exr.exr");
     let o = cli(&[
         "fit-maps",
@@ -227,9 +239,14 @@ fn a_udim_tile_set_round_trips_through_fit_maps_and_maps() {
     assert!(sidecar["outputs"]["albedo.<UDIM>.exr"]["compression"].is_string(), "{sidecar}");
     for tile in tiles {
         maps(&s(&format!("truth.{tile}.exr")), &s(&format!("alone{tile}")));
-        assert_eq!(rgb(&d.join(format!("a/albedo.{tile}.exr"))), rgb(&d.join(format!("alone{tile}/albedo.exr"))));
+        assert_eq!(
+            rgb(&d.join(format!("a/albedo.{tile}.exr"))),
+            rgb(&d.join(format!("alone{tile}/albedo.exr"))),
+            "tile {tile}"
+        );
     }
-    assert!(!d.join("a/albedo.exr").exists());
+    let plain = d.join("a/albedo.exr");
+    assert!(!plain.exists(), "a UDIM run wrote {plain:?}");
     let o = cli(&["fit-maps", "--albedo", &s("a/albedo.<UDIM>.exr"), "--out", &s("fit/params.<UDIM>.exr"), "--json"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -240,7 +257,11 @@ fn a_udim_tile_set_round_trips_through_fit_maps_and_maps() {
         let (_, _, residual) = read_exr_channels(&d.join(format!("fit/residual.{tile}.exr"))).unwrap();
         let (_, _, params) = read_exr_channels(&d.join(format!("fit/params.{tile}.exr"))).unwrap();
         let thickness = &params.iter().find(|(n, _)| n == "epidermis_thickness_mm").unwrap().1;
-        assert!(thickness.iter().all(|&t| t as f64 == report["extended"][0].as_f64().unwrap() as f32 as f64));
+        assert!(
+            thickness.iter().all(|&t| t as f64 == report["extended"][0].as_f64().unwrap() as f32 as f64),
+            "tile {tile}: thickness {thickness:?}, reported {}",
+            report["extended"][0]
+        );
         let a = rgb(&d.join(format!("a/albedo.{tile}.exr")));
         let b = rgb(&d.join(format!("b/albedo.{tile}.exr")));
         for (i, (x, y)) in a.iter().zip(&b).enumerate() {

@@ -128,15 +128,21 @@ fn profile_encircled_energy() {
             100.0 * (m50 / t50 - 1.0),
             100.0 * (m90 / t90 - 1.0)
         );
-        assert!((m50 / t50 - 1.0).abs() < r50_bound, "{name}: r50 {m50} vs MC {t50}");
-        assert!((m90 / t90 - 1.0).abs() < r90_bound, "{name}: r90 {m90} vs MC {t90}");
+        assert!((m50 / t50 - 1.0).abs() < r50_bound, "{name}: r50 {m50} vs MC {t50}, bound {r50_bound}");
+        assert!((m90 / t90 - 1.0).abs() < r90_bound, "{name}: r90 {m90} vs MC {t90}, bound {r90_bound}");
     }
 }
 
 /// Radius where a cumulative curve given at `edges` reaches `level` (log-linear interpolation in r).
 fn radius_at(edges: &[f64], cdf: &[f64], level: f64) -> f64 {
     let k = cdf.partition_point(|&c| c < level);
-    assert!(k >= 1 && k < cdf.len(), "level {level} outside the tabulated curve");
+    assert!(
+        k >= 1 && k < cdf.len(),
+        "level {level} outside the tabulated curve: index {k} of {}, from {:?} to {:?}",
+        cdf.len(),
+        cdf.first(),
+        cdf.last()
+    );
     let f = (level - cdf[k - 1]) / (cdf[k] - cdf[k - 1]);
     if edges[k - 1] == 0.0 {
         return edges[k] * f;

@@ -119,7 +119,7 @@ fn grey_rgb_png_is_a_parameter_map_and_a_coloured_one_is_refused() {
     let (min, max) = PARAM_RANGES[0];
     let expected: Vec<f32> = codes.iter().map(|&v| (min + (max - min) * f64::from(v) / 255.0) as f32).collect();
     assert_eq!(texels(&img.planes[0]), expected, "data, not colour: no sRGB decoding");
-    assert!(img.notes.is_empty());
+    assert!(img.notes.is_empty(), "{:?}", img.notes);
 
     // RGBA, 16-bit, grey: taken, alpha noted.
     let rgba: Vec<u16> = [0u16, 65535, 1000].iter().flat_map(|&v| [v, v, v, 7]).collect();
@@ -172,7 +172,7 @@ fn srgb_pngs_are_read_as_linear_albedo_within_1_in_65535_of_the_formula() {
     image::RgbImage::from_raw(16, 16, rgb.clone()).unwrap().save(&p8).unwrap();
     let t = read_albedo_texture(&p8).unwrap();
     assert_eq!((t.width, t.height, t.texels.len()), (16, 16, 256));
-    assert!(t.srgb_decoded && t.notes.is_empty());
+    assert!(t.srgb_decoded && t.notes.is_empty(), "srgb_decoded {}, notes {:?}", t.srgb_decoded, t.notes);
     for (texel, code) in t.texels.iter().zip(rgb.chunks_exact(3)) {
         for c in 0..3 {
             let reference = srgb_formula(f64::from(code[c]) / 255.0);
@@ -207,7 +207,10 @@ fn jpeg_and_rgba_png_albedos_are_read_and_alpha_is_noted() {
     for (texel, code) in t.texels.iter().zip(decoded.as_raw().chunks_exact(3)) {
         for c in 0..3 {
             let reference = srgb_formula(f64::from(code[c]) / 255.0);
-            assert!((f64::from(texel[c]) - reference).abs() <= 1.0 / 65535.0);
+            assert!(
+                (f64::from(texel[c]) - reference).abs() <= 1.0 / 65535.0,
+                "channel {c}: code {code:?} read as {texel:?}, formula {reference}"
+            );
         }
     }
 
@@ -215,7 +218,11 @@ fn jpeg_and_rgba_png_albedos_are_read_and_alpha_is_noted() {
     image::RgbaImage::from_raw(2, 1, vec![255, 0, 0, 10, 0, 0, 255, 255]).unwrap().save(&png).unwrap();
     let t = read_albedo_texture(&png).unwrap();
     assert_eq!(t.texels, [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
-    assert!(t.notes.len() == 1 && t.notes[0].contains("albedo_alpha.png") && t.notes[0].contains("alpha"));
+    assert!(
+        t.notes.len() == 1 && t.notes[0].contains("albedo_alpha.png") && t.notes[0].contains("alpha"),
+        "{:?}",
+        t.notes
+    );
 }
 
 #[test]
@@ -235,7 +242,8 @@ fn exr_albedos_bare_or_layered_and_refusals_name_the_channels() {
     write_exr(&grey, 1, 1, vec![("Y", vec![0.4])]);
     let e = read_albedo_texture(&grey).unwrap_err().to_string();
     assert!(
-        e.contains("Y.exr") && e.contains("found channels Y") && e.contains("expected an EXR with channels R, G, B")
+        e.contains("Y.exr") && e.contains("found channels Y") && e.contains("expected an EXR with channels R, G, B"),
+        "{e}"
     );
 
     let two = temp(&dir, "two.exr");

@@ -122,13 +122,13 @@ fn cached_table_is_not_reused_for_other_extended_values() {
     };
     let thin = [0.08, 1.0, 0.75];
     let (paper, cached) = build(EXTENDED_DEFAULTS);
-    assert!(!cached);
+    assert!(!cached, "{EXTENDED_DEFAULTS:?}: the first build came from an empty cache");
     let (other, cached) = build(thin);
-    assert!(!cached, "a table of the paper's thickness was reused for 0.08 mm");
+    assert!(!cached, "a table of the paper's thickness was reused for {thin:?}");
     assert_eq!(other.extended(), thin);
     assert_ne!(paper.node_log_method(1, 1, 1), other.node_log_method(1, 1, 1));
     let (again, cached) = build(thin);
-    assert!(cached);
+    assert!(cached, "{thin:?}: the second build was not read from the cache");
     assert_eq!(again.node_log_method(1, 1, 1), other.node_log_method(1, 1, 1));
     assert_eq!(again.extended(), thin);
 }
@@ -201,7 +201,7 @@ fn a_varying_thickness_map_gives_each_texel_evaluates_value() {
     );
     let r = compute_maps(&img, &MapSettings::default(), None).unwrap();
     assert_eq!(r.report.strategy, Strategy::DistinctTuples { tuples: w * h });
-    assert!(!r.report.constant_parameters.contains(&"epidermis_thickness_mm"));
+    assert!(!r.report.constant_parameters.contains(&"epidermis_thickness_mm"), "{:?}", r.report.constant_parameters);
     for i in 0..w * h {
         let (c, rad) = expected(&texel_params(&img, i));
         assert_eq!(r.base_color.as_ref().unwrap()[0][i], c[0], "texel {i}");

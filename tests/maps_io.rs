@@ -77,16 +77,16 @@ fn multi_channel_exr_round_trips_in_every_encoding() {
             PARAM_CHANNELS.iter().zip(&planes).map(|(n, p)| (*n, p.as_slice())).collect();
         write_channels_exr(&path, w, h, &channels, *options).unwrap();
         let img = read_params(&ParamInputs::Multi { path: path.clone(), constants: [None; 4] }).unwrap();
-        assert_eq!((img.width, img.height), (w, h));
+        assert_eq!((img.width, img.height), (w, h), "{options:?}");
         for (k, expected) in planes.iter().enumerate() {
             assert_eq!(texels(&img.planes[k]), as_stored(expected, options.precision).as_slice(), "{options:?} {k}");
         }
         // The generic reader gives the channels sorted by name, with their sample type converted to f32.
         let (rw, rh, chans) = read_exr_channels(&path).unwrap();
-        assert_eq!((rw, rh), (w, h));
+        assert_eq!((rw, rh), (w, h), "{options:?}");
         let names: Vec<&str> = chans.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(names, ["hemoglobin", "melanin", "melanin_blend", "oiliness"]);
-        assert_eq!(chans[1].1, as_stored(&planes[0], options.precision));
+        assert_eq!(names, ["hemoglobin", "melanin", "melanin_blend", "oiliness"], "{options:?}");
+        assert_eq!(chans[1].1, as_stored(&planes[0], options.precision), "{options:?}");
     }
     // Only the finished files are left.
     assert_eq!(names_in(dir.path()).len(), all_options().len());
@@ -103,14 +103,14 @@ fn rgb_exr_round_trips_with_row_0_at_the_top() {
         let path = dir.path().join("albedo.exr");
         write_rgb_exr(&path, w, h, [&r, &g, &b], options).unwrap();
         let (rw, rh, chans) = read_exr_channels(&path).unwrap();
-        assert_eq!((rw, rh), (w, h));
+        assert_eq!((rw, rh), (w, h), "{options:?}");
         let get = |name: &str| chans.iter().find(|(n, _)| n == name).unwrap().1.clone();
-        assert_eq!(get("R"), r);
-        assert_eq!(get("G"), g);
-        assert_eq!(get("B"), b);
+        assert_eq!(get("R"), r, "{options:?}");
+        assert_eq!(get("G"), g, "{options:?}");
+        assert_eq!(get("B"), b, "{options:?}");
         // On disk the channels are sorted: B, G, R.
         let names: Vec<&str> = chans.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(names, ["B", "G", "R"]);
+        assert_eq!(names, ["B", "G", "R"], "{options:?}");
     }
     // The file is a standard single-part scan-line EXR that the exr crate's own RGBA reader opens,
     // with the sample type and compression asked for.
@@ -121,7 +121,11 @@ fn rgb_exr_round_trips_with_row_0_at_the_top() {
     assert_eq!(meta.headers.len(), 1);
     let header = &meta.headers[0];
     assert_eq!(header.compression, exr::compression::Compression::PIZ);
-    assert!(header.channels.list.iter().all(|c| c.sample_type == exr::meta::attribute::SampleType::F16));
+    assert!(
+        header.channels.list.iter().all(|c| c.sample_type == exr::meta::attribute::SampleType::F16),
+        "{:?}",
+        header.channels.list.iter().map(|c| (&c.name, c.sample_type)).collect::<Vec<_>>()
+    );
     assert_eq!(header.layer_size.0, w);
     assert_eq!(header.shared_attributes.display_window.size.0, w);
     let rgba = exr::prelude::read_first_rgba_layer_from_file(
@@ -320,7 +324,7 @@ fn missing_file_is_named() {
     assert!(e.contains(&missing.display().to_string()) && e.contains("hemoglobin map"), "{e}");
     let e = err_text(read_params(&ParamInputs::Multi { path: dir.path().join("gone.exr"), constants: [None; 4] }));
     assert!(e.contains("gone.exr"), "{e}");
-    assert!(names_in(dir.path()).is_empty());
+    assert!(names_in(dir.path()).is_empty(), "{:?}", names_in(dir.path()));
 }
 
 #[test]
@@ -421,9 +425,13 @@ fn dropped_stages_leave_nothing_behind() {
         let a = stage_rgb_exr(&dir.path().join("albedo.exr"), 8, 8, [&v, &v, &v], ExrOptions::FLOAT_PIZ).unwrap();
         let b = stage_bytes(&dir.path().join("albedo.json"), b"{}").unwrap();
         // The temporary files live beside their destination until then.
-        assert!(a.temp_path().unwrap().parent() == Some(dir.path()));
+        assert!(a.temp_path().unwrap().parent() == Some(dir.path()), "{:?} not in {:?}", a.temp_path(), dir.path());
         assert_eq!(names_in(dir.path()).len(), 2);
-        assert!(names_in(dir.path()).iter().all(|n| n.starts_with('.') && n.ends_with(".tmp")));
+        assert!(
+            names_in(dir.path()).iter().all(|n| n.starts_with('.') && n.ends_with(".tmp")),
+            "{:?}",
+            names_in(dir.path())
+        );
         drop((a, b));
     }
     assert!(names_in(dir.path()).is_empty(), "{:?}", names_in(dir.path()));
@@ -510,11 +518,15 @@ fn bad_write_arguments_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("x.exr");
     let v = vec![0.0f32; 4];
-    assert!(err_text(write_channels_exr(&p, 0, 4, &[("Y", &[])], ExrOptions::FLOAT_PIZ)).contains("0 wide x 4 high"));
-    assert!(err_text(write_channels_exr(&p, 2, 2, &[], ExrOptions::FLOAT_PIZ)).contains("at least one channel"));
-    assert!(err_text(write_channels_exr(&p, 2, 2, &[("Y", &v), ("Y", &v)], ExrOptions::FLOAT_PIZ)).contains("twice"));
-    assert!(err_text(write_channels_exr(&p, 2, 2, &[("", &v)], ExrOptions::FLOAT_PIZ)).contains("channel name"));
-    assert!(names_in(dir.path()).is_empty());
+    let e = err_text(write_channels_exr(&p, 0, 4, &[("Y", &[])], ExrOptions::FLOAT_PIZ));
+    assert!(e.contains("0 wide x 4 high"), "{e}");
+    let e = err_text(write_channels_exr(&p, 2, 2, &[], ExrOptions::FLOAT_PIZ));
+    assert!(e.contains("at least one channel"), "{e}");
+    let e = err_text(write_channels_exr(&p, 2, 2, &[("Y", &v), ("Y", &v)], ExrOptions::FLOAT_PIZ));
+    assert!(e.contains("twice"), "{e}");
+    let e = err_text(write_channels_exr(&p, 2, 2, &[("", &v)], ExrOptions::FLOAT_PIZ));
+    assert!(e.contains("channel name"), "{e}");
+    assert!(names_in(dir.path()).is_empty(), "{:?}", names_in(dir.path()));
 }
 
 /// The compression a written file's header names.
@@ -552,7 +564,7 @@ fn auto_compression_compresses_where_it_pays_and_not_where_it_does_not() {
             Precision::Half => (Compression::Zips, exr::compression::Compression::ZIP1),
             Precision::Float => (Compression::Piz, exr::compression::Compression::PIZ),
         };
-        assert_eq!(Compression::auto_candidate(precision), candidate);
+        assert_eq!(Compression::auto_candidate(precision), candidate, "{precision:?}");
         for (name, planes, expected, on_disk) in [
             ("smooth", [&smooth, &smooth, &smooth], candidate, candidate_on_disk),
             (
@@ -595,7 +607,7 @@ fn auto_compression_compresses_where_it_pays_and_not_where_it_does_not() {
             let path = dir.path().join("forced-zip.exr");
             let planes = [noise[0].as_slice(), noise[1].as_slice(), noise[2].as_slice()];
             write_rgb_exr(&path, w, h, planes, ExrOptions { precision, compression }).unwrap();
-            assert_eq!(compression_on_disk(&path), on_disk);
+            assert_eq!(compression_on_disk(&path), on_disk, "{precision:?} {compression:?}");
             let (_, _, chans) = read_exr_channels(&path).unwrap();
             for (c, plane) in chans.iter().rev().zip(planes) {
                 assert_eq!(c.1, as_stored(plane, precision), "{compression:?} {precision:?} {}", c.0);
@@ -630,7 +642,7 @@ fn param_image_helpers() {
     };
     assert_eq!(img.texel_count(), 2);
     assert_eq!(img.texel(1), [0.2, 0.5, 0.01, 0.4]);
-    assert!(img.planes[1].is_constant());
+    assert!(img.planes[1].is_constant(), "{:?}", img.planes[1]);
 }
 
 /// The bytes reader (what the fuzz target drives) gives what the file reader gives, for the four-channel EXR and for
@@ -659,7 +671,7 @@ fn bytes_reader_equals_file_reader() {
         sources[p] = file(path);
         let from_file = read_params(&ParamInputs::Separate(sources)).unwrap();
         let from_bytes = read_params_from_bytes(&std::fs::read(path).unwrap(), "m", Some(p)).unwrap();
-        assert_eq!((from_bytes.width, from_bytes.height), (w, h));
+        assert_eq!((from_bytes.width, from_bytes.height), (w, h), "{}", path.display());
         assert_eq!(from_bytes.planes[p], from_file.planes[p], "{}", path.display());
         for (k, plane) in from_bytes.planes.iter().enumerate().filter(|(k, _)| *k != p) {
             assert!(matches!(plane, Plane::Constant(v) if v.is_nan()), "plane {k}: {plane:?}");

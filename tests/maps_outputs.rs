@@ -84,9 +84,14 @@ fn without_radius_no_radius_is_fitted() {
             // The same evaluations and nodes, each the albedo alone.
             assert_eq!(
                 (w.evaluations, w.table_nodes_built, w.table_lookups),
-                (fw.evaluations, fw.table_nodes_built, fw.table_lookups)
+                (fw.evaluations, fw.table_nodes_built, fw.table_lookups),
+                "{name} {method:?}"
             );
-            assert!(r.radius_mm.is_none(), "{name} {method:?}");
+            assert!(
+                r.radius_mm.is_none(),
+                "{name} {method:?}: a radius of {:?} texels",
+                r.radius_mm.as_ref().map(|p| p[0].len())
+            );
             assert_eq!(r.base_color, full.base_color, "{name} {method:?}: Base Color is Burley's, the albedo");
         }
     }
@@ -111,7 +116,11 @@ fn base_color_without_radius_is_the_albedo() {
             differs |= full.base_color.as_ref().unwrap()[c][i] != base_color[c][i];
         }
     }
-    assert!(differs, "the random walk's own Base Color is not the albedo, so this test tells them apart");
+    assert!(
+        differs,
+        "the random walk's own Base Color is not the albedo, so this test tells them apart: all {} texels equal",
+        image.texel_count()
+    );
 }
 
 /// Without specular: no specular input computed, no specular output; Base Color and radius as in the full run.
@@ -121,34 +130,47 @@ fn specular_is_computed_only_when_asked() {
     for (name, image, strategy) in cases() {
         let n = image.width * image.height;
         let full = run(&image, SubsurfaceMethod::RandomWalk, strategy, Outputs::material());
-        assert!(full.report.work.specular_evaluations > 0, "{name}");
+        assert!(full.report.work.specular_evaluations > 0, "{name}: {:?}", full.report.work);
         let r = run(&image, SubsurfaceMethod::RandomWalk, strategy, outputs(true, true, false));
         let w = r.report.work;
         assert_eq!((w.specular_evaluations, w.outputs.specular), (0, 0), "{name}: {w:?}");
-        assert!(r.specular.is_none());
+        assert!(r.specular.is_none(), "{name}: a specular output without specular asked: {:?}", r.report.work);
         assert_eq!((r.base_color, r.radius_mm), (full.base_color.clone(), full.radius_mm.clone()), "{name}");
-        assert_eq!((w.evaluations, w.radius_fits), (full.report.work.evaluations, full.report.work.radius_fits));
+        assert_eq!(
+            (w.evaluations, w.radius_fits),
+            (full.report.work.evaluations, full.report.work.radius_fits),
+            "{name}"
+        );
 
         let s = run(&image, SubsurfaceMethod::RandomWalk, strategy, outputs(false, false, true));
         let w = s.report.work;
         assert_eq!(s.report.strategy, Strategy::None, "{name}");
         assert_eq!((w.evaluations, w.table_nodes_built, w.table_lookups, w.radius_fits), (0, 0, 0, 0), "{name}");
-        assert_eq!((w.outputs.base_color, w.outputs.radius), (0, 0));
-        assert_eq!(w.specular_evaluations, full.report.work.specular_evaluations);
-        assert!(s.base_color.is_none() && s.radius_mm.is_none());
+        assert_eq!((w.outputs.base_color, w.outputs.radius), (0, 0), "{name}");
+        assert_eq!(w.specular_evaluations, full.report.work.specular_evaluations, "{name}");
+        assert!(
+            s.base_color.is_none() && s.radius_mm.is_none(),
+            "{name}: specular alone kept a Base Color of {:?} and a radius of {:?} texels",
+            s.base_color.as_ref().map(|p| p[0].len()),
+            s.radius_mm.as_ref().map(|p| p[0].len())
+        );
         match (s.specular.unwrap(), full.specular.unwrap()) {
             (SpecularOutput::Map { specular_ior_level: a, .. }, SpecularOutput::Map { specular_ior_level: b, .. }) => {
                 assert_eq!(a, b, "{name}");
-                assert_eq!(w.outputs.specular, n);
+                assert_eq!(w.outputs.specular, n, "{name}");
             }
             (SpecularOutput::Constant(a), SpecularOutput::Constant(b)) => assert_eq!(a, b, "{name}"),
             _ => panic!("{name}: specular changed kind"),
         }
         // The radius alone: fitted (the albedo with it), Base Color not kept.
         let r = run(&image, SubsurfaceMethod::RandomWalk, strategy, outputs(false, true, false));
-        assert!(r.base_color.is_none());
+        assert!(
+            r.base_color.is_none(),
+            "{name}: radius alone kept a Base Color of {:?} texels",
+            r.base_color.as_ref().map(|p| p[0].len())
+        );
         assert_eq!(r.radius_mm, full.radius_mm, "{name}");
-        assert_eq!(r.report.work.outputs.base_color, 0);
+        assert_eq!(r.report.work.outputs.base_color, 0, "{name}");
     }
 }
 
@@ -168,14 +190,19 @@ fn albedo_only_table_is_cached_apart() {
     };
     let full = compute_maps(&image, &with_cache(Outputs::material()), None).unwrap();
     let albedo = compute_maps(&image, &with_cache(outputs(true, false, false)), None).unwrap();
-    assert!(!from_cache(&full) && !from_cache(&albedo));
+    assert!(
+        !from_cache(&full) && !from_cache(&albedo),
+        "from the cache in an empty folder: full {}, albedo only {}",
+        from_cache(&full),
+        from_cache(&albedo)
+    );
     assert_eq!(albedo.report.work.radius_fits, 0);
     let again = compute_maps(&image, &with_cache(outputs(true, false, false)), None).unwrap();
-    assert!(from_cache(&again));
+    assert!(from_cache(&again), "second albedo-only run: {:?}", again.report.strategy);
     assert_eq!(again.base_color, albedo.base_color);
-    assert!(again.radius_mm.is_none());
+    assert!(again.radius_mm.is_none(), "a radius of {:?} texels", again.radius_mm.as_ref().map(|p| p[0].len()));
     let full_again = compute_maps(&image, &with_cache(Outputs::material()), None).unwrap();
-    assert!(from_cache(&full_again));
+    assert!(from_cache(&full_again), "second full run: {:?}", full_again.report.strategy);
     assert_eq!(full_again.radius_mm, full.radius_mm);
 }
 
@@ -192,8 +219,9 @@ fn run_maps_writes_only_what_was_asked() {
     let wanted = settings(SubsurfaceMethod::Burley, StrategyChoice::Auto, outputs(true, false, false));
     let report = run_maps(&ParamInputs::Separate(separate), &out, &wanted, ExrOptions::default(), None).unwrap();
     assert_eq!((report.work.radius_fits, report.work.specular_evaluations), (0, 0));
-    assert!(out.join(ALBEDO_FILE).is_file() && out.join(SIDECAR_FILE).is_file());
-    assert!(!out.join(RADIUS_FILE).exists());
+    let written = || std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name()).collect::<Vec<_>>();
+    assert!(out.join(ALBEDO_FILE).is_file() && out.join(SIDECAR_FILE).is_file(), "{:?}", written());
+    assert!(!out.join(RADIUS_FILE).exists(), "{:?}", written());
     let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join(SIDECAR_FILE)).unwrap()).unwrap();
     let listed: Vec<&String> = sidecar["outputs"].as_object().unwrap().keys().collect();
     assert_eq!(listed, [ALBEDO_FILE]);

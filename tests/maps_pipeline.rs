@@ -64,7 +64,11 @@ fn exact_mode_equals_evaluate() {
         let request = Request { target, ..Request::new(Outputs::material()) };
         let settings = MapSettings { method, strategy: StrategyChoice::Exact, request, ..MapSettings::default() };
         let result = compute_maps(&img, &settings, None).unwrap();
-        assert!(matches!(result.report.strategy, Strategy::Exact { .. }));
+        assert!(
+            matches!(result.report.strategy, Strategy::Exact { .. }),
+            "{target:?} {method:?}: {:?}",
+            result.report.strategy
+        );
         for i in 0..w * h {
             // The pipeline widens f32 texels and rounds them into range (0.1f32 is just above 0.1).
             let p = SkinParams::new(m[i] as f64, b[i] as f64, (hb[i] as f64).min(0.1), 0.3).unwrap();
@@ -106,7 +110,7 @@ fn strategies_follow_the_input() {
     );
     let r = compute_maps(&uniform, &settings, None).unwrap();
     assert_eq!(r.report.strategy, Strategy::Constant);
-    assert!(matches!(r.specular, Some(spectral_skin::maps::pipeline::SpecularOutput::Constant(_))));
+    assert!(matches!(r.specular, Some(spectral_skin::maps::pipeline::SpecularOutput::Constant(_))), "{:?}", r.specular);
     // A mask with three values: one evaluation per tuple.
     let mask: Vec<f32> = (0..64 * 64).map(|i| [0.01, 0.2, 0.4][(i / 64) % 3]).collect();
     let masked =
@@ -158,15 +162,22 @@ fn writes_the_documented_files() {
         [(ALBEDO_FILE, vec!["B", "G", "R"]), (RADIUS_FILE, vec!["B", "G", "R"]), (SPECULAR_FILE, vec!["Y"])]
     {
         let (w, h, channels) = read_exr_channels(&out.join(f)).unwrap();
-        assert_eq!((w, h), (48, 48));
+        assert_eq!((w, h), (48, 48), "{f}");
         let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, expected, "{f}");
-        assert!(channels.iter().all(|(_, v)| v.iter().all(|x| x.is_finite() && *x >= 0.0)));
+        assert!(
+            channels.iter().all(|(_, v)| v.iter().all(|x| x.is_finite() && *x >= 0.0)),
+            "{f}: first bad (channel, texel, value): {:?}",
+            channels
+                .iter()
+                .flat_map(|(n, v)| v.iter().enumerate().map(move |(i, x)| (n, i, *x)))
+                .find(|(_, _, x)| !(x.is_finite() && *x >= 0.0))
+        );
     }
     let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join(SIDECAR_FILE)).unwrap()).unwrap();
     assert_eq!(sidecar["outputs"][RADIUS_FILE]["units"], "mm");
     assert_eq!(sidecar["report"]["strategy"]["name"], "table");
-    assert!(report.seconds.total > 0.0);
+    assert!(report.seconds.total > 0.0, "{:?}", report.seconds);
 
     // Constant zero oiliness: no specular map, its constants in the sidecar.
     let out2 = dir.path().join("out2");
@@ -309,10 +320,15 @@ fn cache_file_values_a_build_cannot_store_are_refused() {
     let mut flipped = file(0.0);
     let last = flipped.len() - 1;
     flipped[last] ^= 1;
-    assert!(MaterialTable::from_cache_bytes(&flipped, key, SubsurfaceMethod::Burley, resolution).is_none());
+    assert!(
+        MaterialTable::from_cache_bytes(&flipped, key, SubsurfaceMethod::Burley, resolution).is_none(),
+        "a file with byte {last} of {} flipped was accepted",
+        flipped.len()
+    );
     // A whole, undamaged file of another request is not this request's table.
     assert!(
-        MaterialTable::from_cache_bytes(&file(0.0), "another request", SubsurfaceMethod::Burley, resolution).is_none()
+        MaterialTable::from_cache_bytes(&file(0.0), "another request", SubsurfaceMethod::Burley, resolution).is_none(),
+        "the file of {key:?} was read for \"another request\""
     );
 }
 
@@ -361,17 +377,17 @@ fn table_cache_round_trip() {
     let small = TableResolution { melanin: 5, melanin_blend: 3, hemoglobin: 4 };
     let (built, cached) =
         MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
-    assert!(!cached);
+    assert!(!cached, "{small:?}: the first load came from an empty cache folder {:?}", dir.path());
     let (again, cached) =
         MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
-    assert!(cached);
+    assert!(cached, "{small:?}: the second load was built afresh, cache folder {:?}", dir.path());
     for (m, b, h) in [(0.0, 0.0, 0.0), (0.13, 0.4, 0.07), (0.5, 1.0, 0.1)] {
-        assert_eq!(built.lookup(m, b, h), again.lookup(m, b, h));
+        assert_eq!(built.lookup(m, b, h), again.lookup(m, b, h), "at ({m}, {b}, {h})");
     }
     let file = std::fs::read_dir(dir.path()).unwrap().next().unwrap().unwrap().path();
     let bytes = std::fs::read(&file).unwrap();
     std::fs::write(&file, &bytes[..bytes.len() - 7]).unwrap();
     let (_, cached) =
         MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, small, Some(dir.path())).unwrap();
-    assert!(!cached, "a damaged cache file must be rebuilt");
+    assert!(!cached, "a damaged cache file must be rebuilt: {file:?} cut to {} bytes", bytes.len() - 7);
 }

@@ -85,9 +85,14 @@ fn mc_non_absorbing_semi_infinite_reflects_everything() {
             "non-absorbing, ior {ior}: R = {:.5} +- {:.5}, unfinished {:.5}, T {}, events {}",
             r.reflectance, r.reflectance_se, r.unfinished, r.transmittance, r.scattering_events
         );
-        assert_eq!(r.transmittance, 0.0);
-        assert!(r.absorbed.abs() < 1e-12, "absorbed {}", r.absorbed);
-        assert!((r.reflectance + r.unfinished - 1.0).abs() < 1e-12);
+        assert_eq!(r.transmittance, 0.0, "ior {ior}");
+        assert!(r.absorbed.abs() < 1e-12, "ior {ior}: absorbed {}", r.absorbed);
+        assert!(
+            (r.reflectance + r.unfinished - 1.0).abs() < 1e-12,
+            "ior {ior}: R {} + unfinished {} != 1",
+            r.reflectance,
+            r.unfinished
+        );
         assert!(r.unfinished < 0.01, "too many photons still inside after the cap: {}", r.unfinished);
     }
 }
@@ -123,8 +128,8 @@ fn mc_fresnel_normal_incidence_two_interfaces() {
     let expect = r0 / (1.0 + r0);
     let se = (expect * (1.0 - expect) / n as f64).sqrt();
     println!("two clear interfaces: R = {:.5} (expect {expect:.5}), T = {:.5}", r.reflectance, r.transmittance);
-    assert!((r.reflectance - expect).abs() < 4.0 * se);
-    assert!((r.reflectance + r.transmittance - 1.0).abs() < 1e-12);
+    assert!((r.reflectance - expect).abs() < 4.0 * se, "R {} vs {expect}, 4 se = {}", r.reflectance, 4.0 * se);
+    assert!((r.reflectance + r.transmittance - 1.0).abs() < 1e-12, "R {} + T {} != 1", r.reflectance, r.transmittance);
 }
 
 /// The Fresnel function: unpolarised reflectance at normal incidence, total internal reflection
@@ -133,10 +138,15 @@ fn mc_fresnel_normal_incidence_two_interfaces() {
 #[test]
 fn fresnel_function() {
     let (r, c) = fresnel_unpolarized(1.4, 1.0, 1.0);
-    assert!((r - (0.4f64 / 2.4).powi(2)).abs() < 1e-15 && (c - 1.0).abs() < 1e-15);
+    assert!(
+        (r - (0.4f64 / 2.4).powi(2)).abs() < 1e-15 && (c - 1.0).abs() < 1e-15,
+        "normal incidence: R {r} vs {}, cosine {c}",
+        (0.4f64 / 2.4).powi(2)
+    );
     let crit = (1.0f64 / 1.4).asin();
     assert_eq!(fresnel_unpolarized(1.4, 1.0, (crit + 1e-6).cos()).0, 1.0);
-    assert!(fresnel_unpolarized(1.4, 1.0, (crit - 1e-3).cos()).0 < 1.0);
+    let below = fresnel_unpolarized(1.4, 1.0, (crit - 1e-3).cos()).0;
+    assert!(below < 1.0, "1e-3 rad inside the critical angle {crit}: R {below}");
     let (x, w) = gauss_legendre_01(400);
     let diffuse = |n1: f64, n2: f64| -> f64 {
         // Split at the critical angle for the internal case so the quadrature sees smooth pieces.
@@ -154,7 +164,7 @@ fn fresnel_function() {
     };
     let (ri, re) = (diffuse(1.4, 1.0), diffuse(1.0, 1.4));
     println!("diffuse Fresnel n = 1.4: internal {ri:.5}, external {re:.5}");
-    assert!((ri - (1.0 - (1.0 - re) / 1.96)).abs() < 1e-6);
+    assert!((ri - (1.0 - (1.0 - re) / 1.96)).abs() < 1e-6, "internal {ri} vs 1 - (1 - {re}) / 1.96");
     let eta = 1.4f64;
     let fdr_fit = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
     assert!((ri - fdr_fit).abs() < 0.015, "{ri} vs fit {fdr_fit}");
@@ -215,7 +225,12 @@ fn mc_single_scattering_radial_profile() {
             "single scattering, ior {ior}: R1 exact {total:.5}, MC {:.5} +- {:.5}",
             mc.reflectance, mc.reflectance_se
         );
-        assert!((mc.reflectance - total).abs() < 4.0 * mc.reflectance_se);
+        assert!(
+            (mc.reflectance - total).abs() < 4.0 * mc.reflectance_se,
+            "ior {ior}: MC {} +- {} vs exact {total}",
+            mc.reflectance,
+            mc.reflectance_se
+        );
         let mut worst: f64 = 0.0;
         for k in 0..edges.len() - 1 {
             let area = annulus_area(edges[k], edges[k + 1]);
@@ -232,7 +247,12 @@ fn mc_single_scattering_radial_profile() {
             );
         }
         let over = escape_in(edges[edges.len() - 1], f64::INFINITY);
-        assert!((mc.reflectance_beyond_last_edge - over).abs() < 4.5 * (over / 1e6).sqrt() + 1e-6);
+        assert!(
+            (mc.reflectance_beyond_last_edge - over).abs() < 4.5 * (over / 1e6).sqrt() + 1e-6,
+            "ior {ior}: beyond {} mm: MC {} vs exact {over}",
+            edges[edges.len() - 1],
+            mc.reflectance_beyond_last_edge
+        );
         println!("single scattering, ior {ior}: {} radial bins, worst deviation {worst:.2} se", edges.len() - 1);
     }
 }
@@ -272,8 +292,14 @@ fn mc_bookkeeping_and_determinism() {
     println!("three layers: R {:.5} T {:.5} A {:.5} sum {total}", a.reflectance, a.transmittance, a.absorbed);
     assert!((total - 1.0).abs() < 1e-9, "energy balance {total}");
     let cdf = a.cumulative_reflectance_at_edges();
-    assert!((cdf.last().unwrap() + a.reflectance_beyond_last_edge - a.reflectance).abs() < 1e-12);
-    assert!(a.transmittance > 0.0 && a.reflectance > 0.0);
+    assert!(
+        (cdf.last().unwrap() + a.reflectance_beyond_last_edge - a.reflectance).abs() < 1e-12,
+        "histogram {} + beyond {} vs R {}",
+        cdf.last().unwrap(),
+        a.reflectance_beyond_last_edge,
+        a.reflectance
+    );
+    assert!(a.transmittance > 0.0 && a.reflectance > 0.0, "T {} R {}", a.transmittance, a.reflectance);
     assert_eq!(a.reflectance.to_bits(), b.reflectance.to_bits());
     assert_eq!(a.profile_per_mm2, b.profile_per_mm2);
     let c = simulate(&layers, &McConfig { seed: 32, ..cfg });
@@ -324,7 +350,13 @@ const NODES_PER_BIN: usize = 6;
 /// Radius where a cumulative curve given at `edges` reaches `level` (log-linear interpolation in r).
 fn radius_at(edges: &[f64], cdf: &[f64], level: f64) -> f64 {
     let k = cdf.partition_point(|&c| c < level);
-    assert!(k >= 1 && k < cdf.len(), "level {level} outside the tabulated CDF");
+    assert!(
+        k >= 1 && k < cdf.len(),
+        "level {level} outside the tabulated CDF: index {k} of {}, from {:?} to {:?}",
+        cdf.len(),
+        cdf.first(),
+        cdf.last()
+    );
     let (c0, c1) = (cdf[k - 1], cdf[k]);
     let f = (level - c0) / (c1 - c0);
     if edges[k - 1] == 0.0 {
@@ -341,7 +373,7 @@ fn log_slope(centres: &[f64], values: &[f64], lo: f64, hi: f64) -> f64 {
         .filter(|(r, v)| **r >= lo && **r <= hi && **v > 0.0)
         .map(|(r, v)| (*r, v.ln()))
         .collect();
-    assert!(pts.len() >= 3, "too few bins for a slope");
+    assert!(pts.len() >= 3, "too few bins for a slope in [{lo}, {hi}] mm: {pts:?}");
     let n = pts.len() as f64;
     let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
@@ -375,7 +407,10 @@ fn compare(name: &str, layers: &[Layer], photons: u64, seed: u64, mfp_mm: f64, l
     let start = std::time::Instant::now();
     let (r_diffusion, profile) = multipole_reflectance(layers, &radii).expect("diffusion solver");
     let diffusion_seconds = start.elapsed().as_secs_f64();
-    assert!(r_diffusion.is_finite() && profile.iter().all(|v| v.is_finite()), "{name}: non-finite diffusion output");
+    assert!(
+        r_diffusion.is_finite() && profile.iter().all(|v| v.is_finite()),
+        "{name}: non-finite diffusion output: total {r_diffusion}, profile {profile:?}"
+    );
     let bin_weight: Vec<f64> = (0..nbins)
         .map(|k| (0..NODES_PER_BIN).map(|j| profile[k * NODES_PER_BIN + j] * area_weights[k * NODES_PER_BIN + j]).sum())
         .collect();
@@ -407,7 +442,7 @@ fn compare(name: &str, layers: &[Layer], photons: u64, seed: u64, mfp_mm: f64, l
             continue;
         }
         let mc_bin = mc.profile_per_mm2[k];
-        assert!(mc_bin > 0.0, "{name}: empty MC bin at {}..{} mm", edges[k], edges[k + 1]);
+        assert!(mc_bin > 0.0, "{name}: empty MC bin at {}..{} mm: {mc_bin}", edges[k], edges[k + 1]);
         let rel = (diff_bins[k] - mc_bin) / mc_bin;
         sq += rel * rel;
         se_sq += (mc.profile_se_per_mm2[k] / mc_bin).powi(2);
@@ -529,7 +564,7 @@ fn diffusion_vs_mc_african_two_layer_450_low_albedo() {
         transport_mfp_mm(&epi)
     );
     let c = compare("african two-layer 450 nm", &layers, 1_000_000, 103, transport_mfp_mm(&epi), 0.3, 5.0);
-    assert!(c.r_diffusion > 0.0 && c.r_mc > 0.0);
+    assert!(c.r_diffusion > 0.0 && c.r_mc > 0.0, "{c:?}");
     assert!(c.rel_total.abs() < 1.0, "total: {c:?}");
     assert!((c.profile_integral_ratio - 1.0).abs() < 0.02, "profile integral vs total: {c:?}");
 }

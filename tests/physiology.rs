@@ -35,14 +35,15 @@ fn hemoglobin_lowers_green_relative_to_red() {
     let shift = |melanin: f64| {
         let pale = albedo(SkinParams::new(melanin, 0.7, 0.002, 0.3).unwrap());
         let flushed = albedo(SkinParams::new(melanin, 0.7, 0.02, 0.3).unwrap());
-        assert!(flushed[1] < pale[1], "more blood must lower green");
+        assert!(flushed[1] < pale[1], "C_m {melanin}: more blood must lower green: {flushed:?} vs {pale:?}");
         flushed[1] / flushed[0] - pale[1] / pale[0]
     };
     let light: Vec<f64> = [0.0, 0.005, 0.02].iter().map(|&m| shift(m)).collect();
     assert!(light.iter().all(|d| *d < -0.02), "{light:?}");
     assert!(light.windows(2).all(|w| w[1] > w[0]), "the shift fades with melanin: {light:?}");
     for m in [0.05, 0.15, 0.3] {
-        assert!(shift(m).abs() < light[2].abs(), "C_m {m}");
+        let s = shift(m);
+        assert!(s.abs() < light[2].abs(), "C_m {m}: shift {s} vs {} at C_m 0.02", light[2]);
     }
 }
 
@@ -54,23 +55,40 @@ fn only_requested_outputs_are_computed() {
     assert_eq!(ev.work.radial_profiles, 0);
     assert_eq!(ev.work.transform_samples, ev.work.wavelengths, "one transform value per wavelength");
     assert_eq!((ev.work.radius_fits, ev.work.specular_evaluations), (0, 0), "no fit, no specular: not asked");
-    assert!(ev.methods.is_none() && ev.profile.is_none() && ev.specular.is_none() && ev.spectral_reflectance.is_none());
+    assert!(
+        ev.methods.is_none() && ev.profile.is_none() && ev.specular.is_none() && ev.spectral_reflectance.is_none(),
+        "albedo alone computed methods {}, profile {}, specular {}, spectral reflectance {}",
+        ev.methods.is_some(),
+        ev.profile.is_some(),
+        ev.specular.is_some(),
+        ev.spectral_reflectance.is_some()
+    );
 
     let ev = evaluate(&p, &Request::new(Outputs { specular: true, ..Outputs::default() })).unwrap();
     assert_eq!(ev.work.wavelengths, 0, "specular alone needs no spectral work");
     assert_eq!((ev.work.radius_fits, ev.work.specular_evaluations, ev.work.radial_profiles), (0, 1, 0));
-    assert!(ev.specular.is_some() && ev.diffuse_reflectance_rgb.is_none());
+    assert!(
+        ev.specular.is_some() && ev.diffuse_reflectance_rgb.is_none(),
+        "specular alone: specular {:?}, albedo {:?}",
+        ev.specular,
+        ev.diffuse_reflectance_rgb
+    );
 
     let ev = evaluate(&p, &Request::new(Outputs { albedo: true, radius: true, ..Outputs::default() })).unwrap();
     assert_eq!(ev.work.radial_profiles, 0, "the radius fit works in the frequency domain");
     assert_eq!((ev.work.radius_fits, ev.work.specular_evaluations), (3, 0), "one fit per RGB channel");
-    assert!(ev.methods.is_some());
+    assert!(ev.methods.is_some(), "albedo and radius: no methods, work {:?}", ev.work);
 
     let ev = evaluate(&p, &Request::new(Outputs { profile_rgb: true, ..Outputs::default() })).unwrap();
     assert_eq!(ev.work.radial_profiles, ev.work.wavelengths);
     assert_eq!((ev.work.radius_fits, ev.work.specular_evaluations), (0, 0), "a profile needs no fit");
     let profile = ev.profile.unwrap();
-    assert!(profile.rgb_per_mm2.is_some() && profile.spectral_per_mm2.is_none());
+    assert!(
+        profile.rgb_per_mm2.is_some() && profile.spectral_per_mm2.is_none(),
+        "RGB profile alone: rgb {}, spectral {}",
+        profile.rgb_per_mm2.is_some(),
+        profile.spectral_per_mm2.is_some()
+    );
 }
 
 /// The RGB profile integrates (2 pi r dr) to the RGB albedo: profile and total agree.
@@ -113,9 +131,9 @@ proptest! {
         for (_, mp) in methods.iter() {
             prop_assert!(mp.subsurface_radius_mm.iter().all(|v| v.is_finite() && *v > 0.0), "{mp:?}");
             prop_assert!(mp.base_color.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)), "{mp:?}");
-            prop_assert!((0..3).all(|c| mp.expected_albedo[c] <= a[c] + 1e-9));
+            prop_assert!((0..3).all(|c| mp.expected_albedo[c] <= a[c] + 1e-9), "{mp:?} vs albedo {a:?}");
         }
         let s = ev.specular.unwrap();
-        prop_assert!(s.specular_ior_level.is_finite() && s.roughness.is_finite());
+        prop_assert!(s.specular_ior_level.is_finite() && s.roughness.is_finite(), "{s:?}");
     }
 }

@@ -97,8 +97,12 @@ fn non_negative_profile_keeps_luminance_and_in_gamut_radii() {
             // white against Lindbloom's (1e-4 of the colour) and the quadrature's round-off.
             let y = p.luminance[i];
             let tolerance = 2e-4 * lin.iter().map(|c| c.abs()).sum::<f64>() + 1e-12 * peak_y;
-            assert!((luma(non) - y).abs() <= tolerance, "{at}: Y {} vs {y} from the spectrum", luma(non));
-            assert!((luma(lin) - y).abs() <= tolerance, "{at}: linear Y {} vs {y}", luma(lin));
+            assert!(
+                (luma(non) - y).abs() <= tolerance,
+                "{at}: Y {} vs {y} from the spectrum, tolerance {tolerance:e}",
+                luma(non)
+            );
+            assert!((luma(lin) - y).abs() <= tolerance, "{at}: linear Y {} vs {y}, tolerance {tolerance:e}", luma(lin));
         }
         assert!(changed > 0, "{}: nothing was out of gamut", preset.name);
     }

@@ -80,7 +80,10 @@ fn caucasian_profile_matches_reference() {
             }
             let e: f64 = printed.parse().unwrap();
             let tolerance = half_unit_in_last_digit(printed) + 0.003 * e;
-            assert!((got - e).abs() <= tolerance, "{w} nm, r = {r} mm: got {got:.4e}, reference {printed}");
+            assert!(
+                (got - e).abs() <= tolerance,
+                "{w} nm, r = {r} mm: got {got:.4e}, reference {printed}, tolerance {tolerance:.1e}"
+            );
         }
     }
 }
@@ -141,7 +144,7 @@ fn profile_matches_brute_force_quadrature() {
             let tolerance = 2e-3 * brute.abs() + 2e-9 * peak;
             assert!(
                 (got - brute).abs() <= tolerance,
-                "{preset} {w} nm r = {r}: ours {got:.5e}, brute force {brute:.5e}"
+                "{preset} {w} nm r = {r}: ours {got:.5e}, brute force {brute:.5e}, tolerance {tolerance:.1e}"
             );
         }
     }

@@ -130,7 +130,7 @@ fn capped_boundaries_have_no_holes() {
     // Positive up to 5 mm, where R has fallen to 1e-13 of its peak; beyond, zero within round-off (the layer below
     // decays like e^(-3.7 r / mm)).
     for (&r, &v) in radii.iter().zip(&profile) {
-        assert!(v > 0.0 || (r > 5.0 && v > -1e-16 * peak), "R({r}) = {v}: {profile:?}");
+        assert!(v > 0.0 || (r > 5.0 && v > -1e-16 * peak), "R({r}) = {v}, peak {peak}: {profile:?}");
     }
     // 0.001, 0.01, 0.1, 0.2, 0.32, 1, 3.2 and 10 mm.
     for k in [0, 20, 40, 46, 50, 60, 70, 80] {
@@ -186,7 +186,8 @@ fn capped_boundaries_are_the_paper_slab_where_consistent() {
     let below = d_star * (1.0 - 1e-9);
     let step = (at(below, Boundaries::Capped) - at(above, Boundaries::Capped)).abs();
     assert!(step < 1e-8, "step across the cap {step}");
-    assert!((at(0.5 * d_star, Boundaries::Capped) - at(0.5 * d_star, Boundaries::Paper)).abs() > 1e-3);
+    let (capped, paper) = (at(0.5 * d_star, Boundaries::Capped), at(0.5 * d_star, Boundaries::Paper));
+    assert!((capped - paper).abs() > 1e-3, "at d*/2 = {}: capped {capped} vs paper {paper}", 0.5 * d_star);
 }
 
 /// Why `Boundaries::Paper` stays the default (docs/robustness.md): against the Monte Carlo of the same transport
@@ -344,10 +345,11 @@ fn corrupted_table_cache_is_rebuilt() {
     let dir = tempfile::tempdir().unwrap();
     let (fresh, cached) =
         MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path())).unwrap();
-    assert!(!cached);
+    assert!(!cached, "{resolution:?}: the first load came from an empty cache folder {:?}", dir.path());
     assert!(
         MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path())).unwrap().1,
-        "second load from the cache"
+        "{resolution:?}: the second load was built afresh, cache folder {:?}",
+        dir.path()
     );
     let file = std::fs::read_dir(dir.path()).unwrap().next().unwrap().unwrap().path();
     let good = std::fs::read(&file).unwrap();
@@ -360,7 +362,7 @@ fn corrupted_table_cache_is_rebuilt() {
         let (rebuilt, cached) =
             MaterialTable::load_or_build(&prepared, SubsurfaceMethod::Burley, resolution, Some(dir.path())).unwrap();
         assert!(!cached, "byte {at} flipped: the corrupted cache was used");
-        assert_eq!(probe(&rebuilt), probe(&fresh));
+        assert_eq!(probe(&rebuilt), probe(&fresh), "byte {at} flipped");
         assert_eq!(std::fs::read(&file).unwrap(), good, "the cache file is rewritten");
     }
 }
@@ -375,7 +377,7 @@ fn sizes_are_bounded_before_allocation() {
     for size in [0, 99_999_999, 4_294_967_296] {
         let e = write_example_params(&out, ExampleKind::Face, size).unwrap_err().to_string();
         assert!(e.contains("size") && e.contains("8192"), "{size}: {e}");
-        assert!(!out.exists());
+        assert!(!out.exists(), "{size}: {out:?} written");
     }
     let e = TableResolution { melanin: 400, melanin_blend: 400, hemoglobin: 400 }.validate().unwrap_err().to_string();
     assert!(e.contains("table resolution") && e.contains("1000000"), "{e}");
@@ -409,7 +411,7 @@ fn a_clamped_lobe_is_reported_not_hidden() {
     assert_eq!(lobe.radius_mm, radii[k]);
     assert!((0.08..=0.2).contains(&lobe.radius_mm), "{lobe:?}");
     assert!((lobe.relative_to_peak - min / peak).abs() < 1e-15 && lobe.relative_to_peak < -1e-4, "{lobe:?}");
-    assert!(paper.profile_per_mm2.iter().all(|&v| v >= 0.0));
+    assert!(paper.profile_per_mm2.iter().all(|&v| v >= 0.0), "{:?}", paper.profile_per_mm2);
     assert!(lobe.to_string().contains("capped"), "the message names the way out: {lobe}");
     assert_eq!(lobe.boundaries, Boundaries::Paper, "the lobe names the boundaries of its stack");
 
@@ -461,7 +463,7 @@ fn lobes_are_told_apart_from_round_off() {
     let one = ClampedProfiles::from_raw(vec![vec![2.0, -2e-3, 0.0], vec![1.0, 0.0, -3e-3]], &radii, &[], &[]);
     let lobe = one.negative_lobe.unwrap();
     assert_eq!((lobe.profile, lobe.radius_mm), (1, 10.0));
-    assert!((lobe.relative_to_peak + 3e-3).abs() < 1e-15);
+    assert!((lobe.relative_to_peak + 3e-3).abs() < 1e-15, "{lobe:?}");
     // The same tail values under a profile whose centre is 1e20 times larger: round-off, no lobe; a centre of the
     // tail's own size leaves the lobe.
     let tail = || vec![vec![1e-20, -1e-20, -2e-20]];
@@ -546,7 +548,12 @@ fn diffusion_against_monte_carlo_by_top_layer_thickness() {
             bound_capped
         );
         assert_eq!(r.len(), PER_CLASS, "{name}: too few stacks drawn");
-        assert!(worst(0) <= *bound_paper && worst(1) <= *bound_capped, "{name}: past the stated bound");
+        assert!(
+            worst(0) <= *bound_paper && worst(1) <= *bound_capped,
+            "{name}: past the stated bound: paper {} vs {bound_paper}, capped {} vs {bound_capped}",
+            worst(0),
+            worst(1)
+        );
     }
 }
 

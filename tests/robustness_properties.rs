@@ -91,14 +91,14 @@ proptest! {
             for f in [Slab::reflectance, Slab::transmittance] {
                 let values: Vec<f64> = all.iter().map(|&r| f(&slab, r, MultipoleTerms::All)).collect();
                 let peak = values.iter().map(|v| v.abs()).fold(0.0, f64::max);
-                prop_assert!(values.iter().all(|&v| v >= -1e-9 * peak), "{:?}: {:?}", slab, values);
+                prop_assert!(values.iter().all(|&v| v >= -1e-9 * peak), "{:?}: peak {}, {:?}", slab, peak, values);
             }
         }
         let profile = raw_reflectance_profiles(
             std::slice::from_ref(&stack), &all, Combination::Directional, MultipoleTerms::All, &HankelQuadrature::default(),
         ).pop().unwrap();
         let peak = profile.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        prop_assert!(profile.iter().all(|&v| v >= -1e-8 * peak), "{:?}", profile);
+        prop_assert!(profile.iter().all(|&v| v >= -1e-8 * peak), "peak {}, {:?}", peak, profile);
     }
 
     /// With `Boundaries::Capped`, more absorption in any one layer never gives more reflectance, for every accepted
@@ -140,7 +140,7 @@ proptest! {
             let e = result.unwrap_err().to_string();
             prop_assert!(e.contains(&format!("layer {k}")) && e.contains(name), "{}", e);
         } else {
-            prop_assert!(result.is_ok());
+            prop_assert!(result.is_ok(), "layer {k} {name} = {bad}: {:?}", result.err());
         }
     }
 
@@ -233,7 +233,7 @@ proptest! {
             .map(|(r, p)| 0.5 * h * 2.0 * PI * (r[0] * r[0] * p[0] + r[1] * r[1] * p[1]))
             .sum();
         prop_assert!((integral - t).abs() <= 0.01 * t + 1e-9, "integral {} total {}", integral, t);
-        prop_assert!(t < 1e-12 || peak > 0.0);
+        prop_assert!(t < 1e-12 || peak > 0.0, "total {} peak {}", t, peak);
     }
 
     /// `evaluate` over the whole parameter box: finite albedo in [0, 1] and radii > 0.

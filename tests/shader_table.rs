@@ -49,8 +49,8 @@ fn sampling_the_images_as_blender_does_reproduces_the_trilinear_table() {
         let table = MaterialTable::build(&prepared, method, SMALL).unwrap();
         let shader = ShaderTable::from_table(&table, &prepared).unwrap();
         let m = shader.meta();
-        assert_eq!((m.width, m.height, m.slice_width), (4 * 8, 5, 8));
-        assert_eq!(shader.texel_bytes(), 2 * 3 * 32 * 5 * 4);
+        assert_eq!((m.width, m.height, m.slice_width), (4 * 8, 5, 8), "{method:?}");
+        assert_eq!(shader.texel_bytes(), 2 * 3 * 32 * 5 * 4, "{method:?}");
         let mut worst = 0.0f32;
         for [c_m, beta, c_h] in points() {
             let (bc, rad) = shader.sample(c_m, beta, c_h);
@@ -79,10 +79,10 @@ fn guard_columns_copy_the_outer_nodes_and_rows_run_bottom_up() {
             let (first, _) = table.node_log_method(0, j, k);
             let (last, _) = table.node_log_method(SMALL.melanin - 1, j, k);
             for c in 0..3 {
-                assert_eq!(bc[c][row + j * sw], first[c]);
-                assert_eq!(bc[c][row + j * sw + 1], first[c]);
-                assert_eq!(bc[c][row + j * sw + sw - 2], last[c]);
-                assert_eq!(bc[c][row + j * sw + sw - 1], last[c]);
+                assert_eq!(bc[c][row + j * sw], first[c], "blend node {j}, hemoglobin node {k}, channel {c}");
+                assert_eq!(bc[c][row + j * sw + 1], first[c], "blend node {j}, hemoglobin node {k}, channel {c}");
+                assert_eq!(bc[c][row + j * sw + sw - 2], last[c], "blend node {j}, hemoglobin node {k}, channel {c}");
+                assert_eq!(bc[c][row + j * sw + sw - 1], last[c], "blend node {j}, hemoglobin node {k}, channel {c}");
             }
         }
     }
@@ -112,7 +112,7 @@ fn files_read_back_as_written_with_their_metadata() {
     for (file, planes) in [(SHADER_BASE_COLOR_FILE, shader.base_color_log()), (SHADER_RADIUS_FILE, shader.radius_log())]
     {
         let (w, h, channels) = read_exr_channels(&dir.path().join(format!("face_{file}"))).unwrap();
-        assert_eq!((w, h), (shader.meta().width, shader.meta().height));
+        assert_eq!((w, h), (shader.meta().width, shader.meta().height), "{file}");
         for (name, plane) in ["R", "G", "B"].iter().zip(planes) {
             let read = &channels.iter().find(|(n, _)| n == name).unwrap().1;
             assert_eq!(read, plane, "{file} {name}");
@@ -123,5 +123,6 @@ fn files_read_back_as_written_with_their_metadata() {
     assert_eq!(&meta, shader.meta());
     let parts = ShaderTable::from_parts(meta, shader.base_color_log().clone(), shader.radius_log().clone()).unwrap();
     assert_eq!(parts.sample(0.1, 0.5, 0.02), shader.sample(0.1, 0.5, 0.02));
-    assert!(shader.write(dir.path(), Some("a/b"), ExrOptions::default()).is_err());
+    let written = shader.write(dir.path(), Some("a/b"), ExrOptions::default());
+    assert!(written.is_err(), "prefix \"a/b\": {written:?}");
 }

@@ -50,8 +50,8 @@ fn diffusion_reproduces_the_multipole_bit_for_bit() {
         for (got, want) in spectral.iter().zip(&profiles) {
             assert_eq!(bits(got), bits(want), "{}", preset.name);
         }
-        assert_eq!(ev.transport, Transport::Diffusion);
-        assert_eq!(ev.work.transport_solves, 0);
+        assert_eq!(ev.transport, Transport::Diffusion, "{}", preset.name);
+        assert_eq!(ev.work.transport_solves, 0, "{}", preset.name);
     }
 }
 
@@ -64,10 +64,10 @@ fn adding_doubling_scales_the_multipole_to_the_exact_total() {
         let mut r = request(Transport::AddingDoubling, everything());
         r.accuracy.streams = streams;
         let ev = evaluate(&params, &r).unwrap();
-        assert_eq!(ev.transport, Transport::AddingDoubling);
+        assert_eq!(ev.transport, Transport::AddingDoubling, "{streams} streams");
         assert_eq!(ev.accuracy.streams, streams);
         let wavelengths = ev.wavelengths_nm.as_ref().unwrap();
-        assert_eq!(ev.work.transport_solves, wavelengths.len());
+        assert_eq!(ev.work.transport_solves, wavelengths.len(), "{streams} streams");
         let (multipole_totals, multipole_profiles) = multipole(&params, &r);
         let spectral = ev.profile.as_ref().unwrap().spectral_per_mm2.as_ref().unwrap();
         for (k, &w) in wavelengths.iter().enumerate() {
@@ -154,7 +154,8 @@ fn bad_streams_are_clear_errors() {
     // Diffusion does not use the streams, but a bad value is still refused (one rule for the knob, as `Accuracy`'s).
     let options = LayeredOptions { transport: Transport::Diffusion, streams: 0, ..LayeredOptions::default() };
     let layers = skin_layers(&SkinParams::preset("asian").unwrap(), &Default::default(), 550.0);
-    assert!(layered_reflectance_with(&layers, &[1.0], &options).unwrap_err().to_string().contains("streams"));
+    let e = layered_reflectance_with(&layers, &[1.0], &options).unwrap_err().to_string();
+    assert!(e.contains("streams"), "{e}");
 }
 
 /// The material-table cache key (and so the shader table's) and the albedo fit's table key differ by transport and
@@ -187,7 +188,7 @@ fn fits_use_their_transport() {
         let options = AlbedoFitOptions { transport, streams: 16, ..AlbedoFitOptions::default() };
         let prepared = options.prepared().unwrap();
         assert_eq!(prepared.request().transport, transport);
-        assert_eq!(prepared.request().accuracy.streams, 16);
+        assert_eq!(prepared.request().accuracy.streams, 16, "{transport:?}");
         let params = SkinParams::preset("caucasian").unwrap();
         let direct = evaluate(
             &params,
@@ -196,7 +197,7 @@ fn fits_use_their_transport() {
         .unwrap()
         .diffuse_reflectance_rgb
         .unwrap();
-        assert_eq!(prepared.albedo(&params).unwrap(), direct);
+        assert_eq!(prepared.albedo(&params).unwrap(), direct, "{transport:?}");
     }
 }
 

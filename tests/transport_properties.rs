@@ -101,7 +101,10 @@ proptest! {
         // solver's unit tests hold a conservative layer to 5e-6 of 1 for that reason).
         let near_conservative = layers.iter().any(|l| l.sigma_a_per_mm < 1e-3 * (l.sigma_a_per_mm + l.sigma_s_reduced_per_mm));
         let tolerance = if near_conservative { 5e-6 } else { 1e-10 };
-        prop_assert!((a - b).abs() <= tolerance, "whole {} split {} (layer {} of {:?})", a, b, k, layers);
+        prop_assert!(
+            (a - b).abs() <= tolerance,
+            "whole {} split {} tolerance {} (layer {} of {:?})", a, b, tolerance, k, layers
+        );
     }
 
     /// (d) Any number of layers (1 to 8) gives a finite total in [0, 1).

@@ -144,7 +144,7 @@ pub fn annulus_area(r0: f64, r1: f64) -> f64 {
 /// `n + 1` log-spaced edges from `r_min` to `r_max` (both > 0), with `0` prepended when
 /// `with_zero` (so the first bin is the disc r < r_min).
 pub fn log_edges(r_min: f64, r_max: f64, n: usize, with_zero: bool) -> Vec<f64> {
-    assert!(r_min > 0.0 && r_max > r_min && n >= 1);
+    assert!(r_min > 0.0 && r_max > r_min && n >= 1, "r_min {r_min}, r_max {r_max}, n {n}");
     let mut v = Vec::with_capacity(n + 2);
     if with_zero {
         v.push(0.0);
@@ -378,22 +378,27 @@ impl Walker<'_> {
 
 /// Run the simulation. Panics on an invalid stack or configuration.
 pub fn simulate(layers: &[McLayer], cfg: &McConfig) -> McResult {
-    assert!(!layers.is_empty(), "no layers");
+    assert!(!layers.is_empty(), "no layers: {layers:?}");
     let edges = &cfg.radial_edges_mm;
-    assert!(edges.windows(2).all(|p| p[1] > p[0]), "radial edges must increase strictly");
-    assert!(edges.first().map_or(true, |&e| e >= 0.0), "radial edges must be >= 0");
-    assert!(cfg.roulette_survival > 0.0 && cfg.roulette_survival <= 1.0);
-    assert!(cfg.chunk_photons > 0);
+    assert!(edges.windows(2).all(|p| p[1] > p[0]), "radial edges must increase strictly: {edges:?}");
+    assert!(edges.first().map_or(true, |&e| e >= 0.0), "radial edges must be >= 0: {edges:?}");
+    assert!(
+        cfg.roulette_survival > 0.0 && cfg.roulette_survival <= 1.0,
+        "roulette survival {} outside (0, 1]",
+        cfg.roulette_survival
+    );
+    assert!(cfg.chunk_photons > 0, "chunk_photons {}", cfg.chunk_photons);
     let mut slabs = Vec::with_capacity(layers.len());
     let mut z = 0.0;
     for (i, l) in layers.iter().enumerate() {
         let last = i + 1 == layers.len();
         assert!(
             l.thickness_mm > 0.0 && (l.thickness_mm.is_finite() || last),
-            "layer {i}: thickness must be > 0 and finite except for the last layer"
+            "layer {i}: thickness {} must be > 0 and finite except for the last layer",
+            l.thickness_mm
         );
-        assert!(l.sigma_a_per_mm >= 0.0 && l.sigma_s_per_mm >= 0.0, "layer {i}: negative coefficient");
-        assert!(l.ior.is_finite() && l.ior > 0.0, "layer {i}: bad ior");
+        assert!(l.sigma_a_per_mm >= 0.0 && l.sigma_s_per_mm >= 0.0, "layer {i}: negative coefficient: {l:?}");
+        assert!(l.ior.is_finite() && l.ior > 0.0, "layer {i}: bad ior {}", l.ior);
         let sigma_t = l.sigma_a_per_mm + l.sigma_s_per_mm;
         slabs.push(Slab {
             z_top: z,
