@@ -27,7 +27,7 @@ use crate::color::difference::{ciede2000, ciede2000_terms, LabConverter};
 use crate::color::WorkingSpace;
 use crate::error::{check_range, SkinError};
 use crate::evaluate::{Accuracy, Outputs, Prepared, Request};
-use crate::maps::lut::{unwarp, warp};
+use crate::maps::lut::{unwarp, warp, MaterialTable, TableResolution};
 use crate::skin::params::{
     BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_DEFAULTS, HEMOGLOBIN, MELANIN, MELANIN_BLEND,
 };
@@ -144,14 +144,14 @@ pub fn table_coordinates(p: &SkinParams) -> [f64; 3] {
 
 /// Nodes per axis (u_m, beta_m, u_h) of the fit's forward table: chosen so that the table's colour error (ΔE00
 /// against direct evaluation, `tests/inverse_albedo.rs`) leaves room within the 0.5 ΔE00 a fit must reach.
-pub const ALBEDO_TABLE_RESOLUTION: [usize; 3] = [41, 11, 25];
+pub const ALBEDO_TABLE_RESOLUTION: TableResolution = TableResolution { melanin: 41, melanin_blend: 11, hemoglobin: 25 };
 
-/// The model albedo over the table coordinates at fixed extended physiology: ln albedo at each node, interpolated
-/// trilinearly (as `MaterialTable`, whose nodes hold the paper's extended values only).
+/// The model albedo over the table coordinates at fixed extended physiology, for the fits: an albedo-only
+/// [`MaterialTable`] (the maps' table over the same warped axes: ln albedo at each node, interpolated trilinearly)
+/// with the CIELAB of each node's albedo.
 #[derive(Debug, Clone)]
 pub struct AlbedoTable {
-    n: [usize; 3],
-    log_albedo: Vec<[f64; 3]>,
+    table: MaterialTable,
     /// CIELAB of each node's albedo (the coarse search's candidates).
     lab: Vec<[f64; 3]>,
     converter: LabConverter,
@@ -168,30 +168,33 @@ impl AlbedoTable {
     pub fn build_cancellable(options: &AlbedoFitOptions, cancel: &AtomicBool) -> Result<AlbedoTable, SkinError> {
         let options = options.validated()?;
         let prepared = options.prepared()?;
-        let n = ALBEDO_TABLE_RESOLUTION;
-        let count = n[0] * n[1] * n[2];
-        let albedo = (0..count)
-            .into_par_iter()
-            .map(|i| {
-                SkinError::check_cancel(cancel, "albedo fit table")?;
-                prepared.albedo(&options.params_at(node_u(n, i)))
-            })
-            .collect::<Result<Vec<_>, SkinError>>()?;
+        // An albedo-only table: no node fits a radius, so the method only names the target's entry.
+        let table = MaterialTable::build_outputs(
+            &prepared,
+            crate::fit::DEFAULT_METHOD,
+            ALBEDO_TABLE_RESOLUTION,
+            false,
+            options.extended,
+            cancel,
+            None,
+        )?;
         let converter = LabConverter::new(options.working_space);
-        Ok(AlbedoTable {
-            n,
-            log_albedo: albedo.iter().map(|a| a.map(|x| x.max(1e-30).ln())).collect(),
-            lab: albedo.iter().map(|a| converter.lab(*a)).collect(),
-            converter,
-        })
+        let lab = (0..table.node_count()).map(|n| converter.lab(table.node_albedo(n))).collect();
+        Ok(AlbedoTable { table, lab, converter })
     }
 
     pub fn node_count(&self) -> usize {
-        self.log_albedo.len()
+        self.table.node_count()
+    }
+
+    /// Nodes per axis (u_m, beta_m, u_h).
+    fn axes(&self) -> [usize; 3] {
+        let r = self.table.resolution();
+        [r.melanin, r.melanin_blend, r.hemoglobin]
     }
 
     pub fn node_u(&self, i: usize) -> [f64; 3] {
-        node_u(self.n, i)
+        self.table.node_warped(i)
     }
 
     pub fn node_lab(&self, i: usize) -> [f64; 3] {
@@ -204,37 +207,8 @@ impl AlbedoTable {
 
     /// The albedo at table coordinates `u` (clamped to [0, 1]).
     pub fn albedo(&self, u: [f64; 3]) -> [f64; 3] {
-        let n = self.n;
-        let mut idx = [0usize; 3];
-        let mut t = [0.0f64; 3];
-        for d in 0..3 {
-            let x = u[d].clamp(0.0, 1.0) * (n[d] - 1) as f64;
-            idx[d] = (x as usize).min(n[d] - 2);
-            t[d] = x - idx[d] as f64;
-        }
-        let (si, sj) = (n[1] * n[2], n[2]);
-        let base = idx[0] * si + idx[1] * sj + idx[2];
-        let mut out = [0.0; 3];
-        for (oi, wi) in [(0, 1.0 - t[0]), (si, t[0])] {
-            for (oj, wj) in [(0, 1.0 - t[1]), (sj, t[1])] {
-                for (ok, wk) in [(0, 1.0 - t[2]), (1, t[2])] {
-                    let v = &self.log_albedo[base + oi + oj + ok];
-                    let w = wi * wj * wk;
-                    for c in 0..3 {
-                        out[c] += w * v[c];
-                    }
-                }
-            }
-        }
-        out.map(f64::exp)
+        self.table.albedo_at_warped(u)
     }
-}
-
-fn node_u(n: [usize; 3], i: usize) -> [f64; 3] {
-    let k = i % n[2];
-    let j = (i / n[2]) % n[1];
-    let m = i / (n[1] * n[2]);
-    [m as f64 / (n[0] - 1) as f64, j as f64 / (n[1] - 1) as f64, k as f64 / (n[2] - 1) as f64]
 }
 
 /// How many forward tables [`cached_albedo_table`] keeps (about 0.3 MB each): a texture fit that chooses the
@@ -330,7 +304,7 @@ pub(crate) fn coarse_start(
     stride: usize,
     blend_level: Option<usize>,
 ) -> [f64; 3] {
-    let n = table.n;
+    let n = table.axes();
     let mut best = (f64::INFINITY, [0.0; 3]);
     let levels = blend_level.map_or(0..n[1], |j| j..j + 1);
     for i in (0..n[0]).step_by(stride) {
@@ -370,7 +344,7 @@ pub(crate) fn fit_on_table(table: &AlbedoTable, target_rgb: [f64; 3], options: &
     // A poor fit may be a local minimum (or a start stuck on a bound): restart from the nearest node at every other
     // melanin blend of the table and keep the best.
     if cost > RESTART_COST {
-        for j in (0..table.n[1]).step_by(2) {
+        for j in (0..table.axes()[1]).step_by(2) {
             let (v, c) = problem.solve(coarse_start(table, target_lab, options, 2, Some(j)), 40);
             if c < cost {
                 (u, cost) = (v, c);

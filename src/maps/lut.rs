@@ -292,6 +292,59 @@ impl MaterialTable {
         self.resolution
     }
 
+    /// How many nodes the table has.
+    pub fn node_count(&self) -> usize {
+        self.log_values.len()
+    }
+
+    /// The warped coordinates (u_m, melanin blend share, u_h), each in [0, 1], of node `n` (node (i, j, k) is
+    /// `n = ((i * nb) + j) * nh + k`).
+    pub fn node_warped(&self, n: usize) -> [f64; 3] {
+        let r = self.resolution;
+        let at = |idx: usize, count: usize| idx as f64 / (count - 1) as f64;
+        [
+            at(n / (r.hemoglobin * r.melanin_blend), r.melanin),
+            at((n / r.hemoglobin) % r.melanin_blend, r.melanin_blend),
+            at(n % r.hemoglobin, r.hemoglobin),
+        ]
+    }
+
+    /// The albedo (the model's total diffuse reflectance, working-space RGB) stored at node `n`.
+    pub fn node_albedo(&self, n: usize) -> [f64; 3] {
+        let v = &self.log_values[n];
+        [v[0], v[1], v[2]].map(|l| (l as f64).exp())
+    }
+
+    /// The albedo at warped coordinates `u` = (u_m, melanin blend share, u_h) (each clamped to [0, 1]): the stored
+    /// logarithms interpolated trilinearly in f64 and exponentiated. The albedo fit differentiates this by finite
+    /// differences of 1e-4 in `u`, which the f32 cell weights of the texture lookups ([`MaterialTable::lookup`])
+    /// would quantise.
+    pub fn albedo_at_warped(&self, u: [f64; 3]) -> [f64; 3] {
+        let r = self.resolution;
+        let axis = |u: f64, n: usize| {
+            let x = u.clamp(0.0, 1.0) * (n - 1) as f64;
+            let i = (x as usize).min(n - 2);
+            (i, x - i as f64)
+        };
+        let (i, ti) = axis(u[0], r.melanin);
+        let (j, tj) = axis(u[1], r.melanin_blend);
+        let (k, tk) = axis(u[2], r.hemoglobin);
+        let (di, dj) = (r.melanin_blend * r.hemoglobin, r.hemoglobin);
+        let corner = (i * r.melanin_blend + j) * r.hemoglobin + k;
+        let mut out = [0.0f64; 3];
+        for (oi, wi) in [(0, 1.0 - ti), (di, ti)] {
+            for (oj, wj) in [(0, 1.0 - tj), (dj, tj)] {
+                for (ok, wk) in [(0, 1.0 - tk), (1, tk)] {
+                    let v = &self.log_values[corner + oi + oj + ok];
+                    for c in 0..3 {
+                        out[c] += wi * wj * wk * v[c] as f64;
+                    }
+                }
+            }
+        }
+        out.map(f64::exp)
+    }
+
     /// ln of Base Color and of radius (mm) at node (i, j, k) = (melanin, melanin blend, haemoglobin) indices.
     pub fn node_log_method(&self, i: usize, j: usize, k: usize) -> ([f32; 3], [f32; 3]) {
         let r = self.resolution;
