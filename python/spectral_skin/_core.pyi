@@ -24,6 +24,8 @@ __all__ = [
     "_cli_main",
     "accuracy_levels",
     "blender_targets",
+    "cielab",
+    "delta_e00",
     "evaluate",
     "fit_albedo",
     "fit_albedo_map",
