@@ -1,6 +1,6 @@
 //! Map pipeline costs (criterion): table build, per-texel table lookup, and the whole pipeline on a 256² example
 //! (table strategy) and a 256² mask with 16 tuples (distinct-tuple strategy). The full size sweep with peak memory
-//! is `scripts/maps_report.py` (writes docs/maps-performance.md).
+//! is `scripts/reports/maps_report.py` (writes docs/maps-performance.md).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use spectral_skin::evaluate::Prepared;

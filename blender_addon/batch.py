@@ -24,8 +24,8 @@ constant-parameter material gets its values per frame as F-curves (frame_values.
 Every material's plan is computed, then every map written, before any material changes; on an error nothing is
 saved. The saved .blend refers to the textures by paths relative to itself, or packs them with ``pack=True``.
 
-Rendering the saved .blend needs only bpy, not the add-on nor ``spectral_skin``: ``scripts/render_blend.py``, which is
-not part of the extension.
+Rendering the saved .blend needs only bpy, not the add-on nor ``spectral_skin``: ``scripts/tools/render_blend.py``,
+which is not part of the extension.
 """
 
 from __future__ import annotations
@@ -193,8 +193,8 @@ def _apply_main(argv: list[str]) -> int:
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "render":
-        print("spectral-skin batch: rendering moved out of the add-on: python scripts/render_blend.py BLEND --out DIR "
-              "(needs only bpy)", file=sys.stderr)
+        print("spectral-skin batch: rendering moved out of the add-on: python scripts/tools/render_blend.py BLEND "
+              "--out DIR (needs only bpy)", file=sys.stderr)
         return 2
     if argv and argv[0] == "apply":
         return _apply_main(argv[1:])

@@ -9,10 +9,10 @@ cd "$(dirname "$0")/.."
 .venv/bin/python -c 'import bpy' 2>/dev/null || bash scripts/setup-python.sh --test
 if [ "${1:-}" = "--quick" ]; then
     out="$(mktemp -d)"
-    .venv/bin/python scripts/cycles_samples.py --quick --out "$out/data/cycles_samples.json"
+    .venv/bin/python scripts/reports/cycles_samples.py --quick --out "$out/data/cycles_samples.json"
     cargo run --release --example accuracy_report -- --quick --out-dir "$out" --cycles-json "$out/data/cycles_samples.json"
     echo "reduced report: $out/accuracy-vs-time.md"
 else
-    .venv/bin/python scripts/cycles_samples.py --out docs/data/cycles_samples.json
+    .venv/bin/python scripts/reports/cycles_samples.py --out docs/data/cycles_samples.json
     cargo run --release --example accuracy_report
 fi

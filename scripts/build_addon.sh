@@ -56,8 +56,8 @@ sed -i "s|^platforms = .*|platforms = [$(join "${platforms[@]}")]|" blender_addo
 mkdir -p dist
 rm -f dist/spectral_skin-*.zip
 "$PY" "$BLENDER_EXT" build --source-dir blender_addon --output-dir dist --split-platforms
-# Each zip holds exactly the add-on's tracked Python files (no render-only script: scripts/render_blend.py stays out),
-# the manifest and its one wheel.
+# Each zip holds exactly the add-on's tracked Python files (no render-only script: scripts/tools/render_blend.py stays
+# out), the manifest and its one wheel.
 for zip in dist/spectral_skin-*.zip; do
     "$PY" - "$zip" <<'PYEOF'
 import subprocess, sys, zipfile

@@ -1,16 +1,16 @@
 #!/usr/bin/env bash
 # Create (or reuse) one virtual environment per Blender version for the render tests: .venv-blender/<version>, with
-# the bpy, numpy, OpenImageIO and pytest pinned in scripts/blender-versions.txt, and the project's Python module.
+# the bpy, numpy, OpenImageIO and pytest pinned in scripts/pins/blender-versions.txt, and the project's Python module.
 # The module is the extension's own wheel (scripts/build-wheel.sh: abi3, cp311-abi3, so it loads in Python 3.11 and
 # 3.13 alike; manylinux2014 on Linux), built once into target/wheels and installed into every venv.
 #
-# Usage: bash scripts/setup-blender.sh [VERSION...]     (default: every version in scripts/blender-versions.txt)
+# Usage: bash scripts/setup-blender.sh [VERSION...]     (default: every version in scripts/pins/blender-versions.txt)
 # Needs: the Rust toolchain, python3.11, and python3.13 for Blender 5.2+ (found as python3.13, or through pyenv);
 # .venv with the test tools (made here by bash scripts/setup-python.sh --test if missing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=.venv-blender
-PINS=scripts/blender-versions.txt
+PINS=scripts/pins/blender-versions.txt
 
 all_versions() { grep -v '^\s*#' "$PINS" | awk 'NF {print $1}'; }
 pin_line() { grep -v '^\s*#' "$PINS" | awk -v v="$1" '$1 == v'; }

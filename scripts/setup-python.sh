@@ -3,11 +3,11 @@
 # `spectral-skin` command it carries, so that `.venv/bin/spectral-skin` and `.venv/bin/python -c "import spectral_skin"`
 # work.
 #
-#   bash scripts/setup-python.sh          # what the main job needs: scripts/requirements.txt (maturin, numpy)
-#   bash scripts/setup-python.sh --test   # and the test and lint tools: scripts/requirements-test.txt (pytest, mypy,
-#                                         # OpenImageIO) and scripts/requirements-dev.txt (ruff, check-jsonschema,
-#                                         # ziglang, auditwheel, bpy 5.0.1, openjd-cli) and Node.js where
-#                                         # missing (apt, as root); the module is then the extension's wheel
+#   bash scripts/setup-python.sh          # what the main job needs: scripts/pins/requirements.txt (maturin, numpy)
+#   bash scripts/setup-python.sh --test   # and the test and lint tools: scripts/pins/requirements-test.txt
+#                                         # (pytest, mypy, OpenImageIO) and scripts/pins/requirements-dev.txt (ruff,
+#                                         # check-jsonschema, ziglang, auditwheel, bpy 5.0.1, openjd-cli) and Node.js
+#                                         # where missing (apt, as root); the module is then the extension's wheel
 #
 # Needs only the Rust toolchain and Python 3.11+ with pip (PYTHON=... picks the interpreter; default python3).
 # The module (cargo features `python` and `cli`) and cargo's own builds (feature `cli`) are compiled with different
@@ -30,8 +30,8 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install -q --upgrade pip
 say "installing the pinned Python packages"
-requirements=(-r scripts/requirements.txt)
-[ "$test_tools" -eq 0 ] || requirements+=(-r scripts/requirements-test.txt -r scripts/requirements-dev.txt)
+requirements=(-r scripts/pins/requirements.txt)
+[ "$test_tools" -eq 0 ] || requirements+=(-r scripts/pins/requirements-test.txt -r scripts/pins/requirements-dev.txt)
 .venv/bin/python -m pip install "${requirements[@]}"
 if [ "$test_tools" -eq 1 ] && ! command -v node >/dev/null && ! command -v nodejs >/dev/null; then
     # The farm tests compile the Flamenco job type under Node (tests/python/test_farm_jobs.py).

@@ -19,14 +19,14 @@ stage rust; bash scripts/test-rust.sh
 stage fuzz; bash scripts/fuzz-smoke.sh
 stage python; bash scripts/test-python.sh
 # The Blender extension (built and validated by Blender's own validator), then the add-on and render tests via bpy in
-# each version of scripts/blender-versions.txt.
+# each version of scripts/pins/blender-versions.txt.
 stage extension; bash scripts/build_addon.sh
 stage blender; bash scripts/setup-blender.sh && bash scripts/test-blender.sh
 # The map performance report in its reduced form, so the report code cannot rot (the full one: docs/maps-performance.md).
 stage reports
-.venv/bin/python scripts/maps_report.py --quick --out "$run_tmp/maps-performance.md"
-# The Live-mode cost report, reduced (the full one: .venv-blender/5.0/bin/python scripts/live_mode_report.py).
-.venv-blender/5.0/bin/python scripts/live_mode_report.py --quick --out "$run_tmp/live-mode.md"
+.venv/bin/python scripts/reports/maps_report.py --quick --out "$run_tmp/maps-performance.md"
+# The Live-mode cost report, reduced (the full one: .venv-blender/5.0/bin/python scripts/reports/live_mode_report.py).
+.venv-blender/5.0/bin/python scripts/reports/live_mode_report.py --quick --out "$run_tmp/live-mode.md"
 # The accuracy-vs-time report, reduced (the full one: bash scripts/accuracy_report.sh).
 bash scripts/accuracy_report.sh --quick
 stage done

@@ -3,12 +3,12 @@
 # version after the other, and print one summary line per version at the end.
 #
 # Usage: bash scripts/test-blender.sh [VERSION...] [-- PYTEST_ARGS...]
-#   default: every version in scripts/blender-versions.txt; e.g. bash scripts/test-blender.sh 4.5 5.3 -- -k edge -s
+#   default: every version in scripts/pins/blender-versions.txt; e.g. bash scripts/test-blender.sh 4.5 5.3 -- -k edge -s
 # Exit status: 0 if every version passed, 1 otherwise. Each version's full output: .venv-blender/logs/<version>.log.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=.venv-blender
-PINS=scripts/blender-versions.txt
+PINS=scripts/pins/blender-versions.txt
 
 versions=()
 while [ $# -gt 0 ] && [ "$1" != "--" ]; do versions+=("$1"); shift; done

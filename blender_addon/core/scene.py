@@ -50,8 +50,8 @@ from typing import Any
 from .material_plan import MaterialPlan, freeze
 
 # Largest subsurface radius, in pixels of the smallest footprint, below which subsurface scattering is dropped.
-# Chosen from the measurement in docs/scene-effects.md (scripts/scene_effects_report.py): at and below this radius
-# the Burley slab and the plain-diffuse slab of the same albedo differ by a mean under 0.5 % of the albedo.
+# Chosen from the measurement in docs/scene-effects.md (scripts/reports/scene_effects_report.py): at and below this
+# radius the Burley slab and the plain-diffuse slab of the same albedo differ by a mean under 0.5 % of the albedo.
 SUBSURFACE_MIN_RADIUS_PX = 0.25
 
 OVERRIDES = ("AUTO", "ON", "OFF")

@@ -35,7 +35,7 @@ struct Args {
     /// skipping the references' checks: for working on one knob. The report then lacks the other sections.
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
-    /// Cycles samples measurements written by scripts/cycles_samples.py (optional).
+    /// Cycles samples measurements written by scripts/reports/cycles_samples.py (optional).
     #[arg(long, default_value = "docs/data/cycles_samples.json")]
     cycles_json: PathBuf,
 }

@@ -411,7 +411,7 @@ fn write_cycles(md: &mut String, r: &Report, out_dir: &Path) -> Result<(), Box<d
     let Some(data) = &r.cycles else {
         let _ = writeln!(
             md,
-            "*Not measured in this run: `scripts/cycles_samples.py` writes `docs/data/cycles_samples.json`.*\n"
+            "*Not measured in this run: `scripts/reports/cycles_samples.py` writes `docs/data/cycles_samples.json`.*\n"
         );
         return Ok(());
     };

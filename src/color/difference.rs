@@ -5,7 +5,8 @@
 //!   out-of-gamut linear RGB colour still gives a finite L*a*b*).
 //! - CIEDE2000: G. Sharma, W. Wu, E. N. Dalal, "The CIEDE2000 color-difference formula: implementation notes,
 //!   supplementary test data, and mathematical observations", Color Research and Application 30(1), 21-30 (2005),
-//!   equations (1)-(22), k_L = k_C = k_H = 1. The same formula as scripts/color_difference.py (the Python reports').
+//!   equations (1)-(22), k_L = k_C = k_H = 1. The same formula as scripts/lib/color_difference.py (the Python
+//!   reports').
 
 use super::rgb::{mat_vec, WorkingSpace};
 use super::WavelengthGrid;

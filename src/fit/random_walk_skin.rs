@@ -18,8 +18,9 @@ use crate::numeric::{bisect, clamp_nan_to_low};
 pub const SKIN_SUBSURFACE_IOR: f64 = 1.4;
 
 /// The flat-slab response of a Skin walk as rendered, compiled in: `docs/data/random_walk_skin_flat.json` (written by
-/// `<venv>/bin/python scripts/measure_skin_flat.py`: a thick slab under a uniform white world, `RANDOM_WALK_SKIN`,
-/// Specular IOR Level 0, Subsurface IOR 1.4; the same figures to 4 digits in bpy 4.2, 5.0 and 5.3).
+/// `<venv>/bin/python scripts/calibration/measure_skin_flat.py`: a thick slab under a uniform white world,
+/// `RANDOM_WALK_SKIN`, Specular IOR Level 0, Subsurface IOR 1.4; the same figures to 4 digits in bpy 4.2, 5.0 and
+/// 5.3).
 const FLAT_RESPONSE_JSON: &str = include_str!("../../docs/data/random_walk_skin_flat.json");
 
 #[derive(serde::Deserialize)]

@@ -2,12 +2,13 @@
 //! per unit of the walk's transport mean free path, against Base Color.
 //!
 //! The measurements live once, in `docs/data/random_walk_width.json` (written by
-//! `<venv>/bin/python scripts/calibrate_random_walk.py`, scene and method in `docs/blender-render-tests.md`); they are
-//! compiled in with `include_str!` and read here. Between measured Base Colors `ln k` is interpolated linearly (k > 0
-//! and rising, so the result is monotone). Below the lowest measured Base Color, k follows Christensen-Burley's
-//! `1/s(A)` scaled to meet the lowest point (continuous; the measured k tracks 1/s to within 10 % at A = 0.1-0.5).
-//! Above the highest one, the last segment's slope in `ln k` continues up to `a_max` (the Base Color past which the
-//! walk's medium stops changing: the Wrenninge fit's saturation, 1 otherwise) and k is held beyond.
+//! `<venv>/bin/python scripts/calibration/calibrate_random_walk.py`, scene and method in
+//! `docs/blender-render-tests.md`); they are compiled in with `include_str!` and read here. Between measured Base
+//! Colors `ln k` is interpolated linearly (k > 0 and rising, so the result is monotone). Below the lowest measured
+//! Base Color, k follows Christensen-Burley's `1/s(A)` scaled to meet the lowest point (continuous; the measured k
+//! tracks 1/s to within 10 % at A = 0.1-0.5). Above the highest one, the last segment's slope in `ln k` continues up
+//! to `a_max` (the Base Color past which the walk's medium stops changing: the Wrenninge fit's saturation, 1
+//! otherwise) and k is held beyond.
 
 use std::sync::OnceLock;
 

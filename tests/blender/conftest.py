@@ -1,9 +1,19 @@
-"""pytest fixtures of the Blender render tests; the scene helpers they use live in blender_scenes.py."""
+"""pytest fixtures of the Blender render tests. The scene helpers they use (blender_scenes.py) and the random-walk
+reference (walk_reference.py) live in scripts/lib/, shared with the measurement scripts: put on sys.path here, before
+any test module imports them."""
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import pytest
-from blender_scenes import _bpy, reset_scene
+
+SCRIPTS_LIB = str(Path(__file__).resolve().parents[2] / "scripts" / "lib")
+if SCRIPTS_LIB not in sys.path:
+    sys.path.insert(0, SCRIPTS_LIB)
+
+from blender_scenes import _bpy, reset_scene  # noqa: E402
 
 
 @pytest.fixture
@@ -26,9 +36,6 @@ def isolated_table_cache(tmp_path_factory: pytest.TempPathFactory):
 @pytest.fixture
 def addon():
     """An empty factory scene with the add-on registered (and unregistered afterwards if this fixture did it)."""
-    import sys
-    from pathlib import Path
-
     repo = str(Path(__file__).resolve().parents[2])
     if repo not in sys.path:
         sys.path.insert(0, repo)

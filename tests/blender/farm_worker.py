@@ -15,11 +15,11 @@ from blender_scenes import read_exr
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 BLENDER_CLI = REPO / "tests" / "farm" / "blender_cli.py"
-PINS = REPO / "scripts" / "blender-versions.txt"
+PINS = REPO / "scripts" / "pins" / "blender-versions.txt"
 
 
 def edge_versions() -> tuple[tuple[int, int], tuple[int, int]]:
-    """The oldest and the newest Blender of scripts/blender-versions.txt, as (major, minor)."""
+    """The oldest and the newest Blender of scripts/pins/blender-versions.txt, as (major, minor)."""
     rows = [line.split()[0] for line in PINS.read_text().splitlines() if line.strip() and not line.startswith("#")]
     versions = sorted(tuple(int(p) for p in v.split(".")) for v in rows)
     return versions[0], versions[-1]  # type: ignore[return-value]

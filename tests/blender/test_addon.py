@@ -217,7 +217,7 @@ INSTALL_SCRIPT = textwrap.dedent("""
 
 @pytest.mark.skipif(not ZIP.exists(), reason=f"no {ZIP.relative_to(REPO)}: run bash scripts/build_addon.sh")
 def test_built_zip_validates_and_installs(tmp_path):
-    # The add-on's own files, without the render-only script (scripts/render_blend.py needs no add-on).
+    # The add-on's own files, without the render-only script (scripts/tools/render_blend.py needs no add-on).
     import zipfile
 
     with zipfile.ZipFile(ZIP) as archive:

@@ -1,6 +1,6 @@
-"""scripts/cycles_samples.py in quick mode (caucasian, both subsurface methods, 32x32 px, 1-64 spp): the JSON holds
-every case, pixel noise falls with samples about as 1/sqrt(samples) or faster, render time rises with samples, and
-the 64-spp Burley image mean is the core's expected albedo.
+"""scripts/reports/cycles_samples.py in quick mode (caucasian, both subsurface methods, 32x32 px, 1-64 spp): the JSON
+holds every case, pixel noise falls with samples about as 1/sqrt(samples) or faster, render time rises with samples,
+and the 64-spp Burley image mean is the core's expected albedo.
 
 Run: .venv/bin/python -m pytest tests/blender/test_cycles_samples.py -q -s   (-s shows the script's table)
 """
@@ -20,11 +20,11 @@ bpy = pytest.importorskip("bpy")
 pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "cycles_samples.py"
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "reports" / "cycles_samples.py"
 
 
 def _load_script() -> ModuleType:
-    """Import scripts/cycles_samples.py from its path."""
+    """Import scripts/reports/cycles_samples.py from its path."""
     spec = importlib.util.spec_from_file_location("_cycles_samples_script", SCRIPT)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)

@@ -3,9 +3,9 @@
 The add-on's output is plain Blender data (a Principled BSDF, image textures saved next to the .blend or packed into
 it), so a render node needs only Blender. These tests save such a .blend, render it in a fresh process that cannot
 import spectral_skin nor the add-on, and compare with the render made where the add-on is registered. Also: the
-packed .blend after its texture folder is deleted, the headless render script ``scripts/render_blend.py`` (not part
-of the extension; run without spectral_skin), and "nothing lost" when a parameter map cannot be read. Small renders
-(64x64, 32 spp, fixed seed).
+packed .blend after its texture folder is deleted, the headless render script ``scripts/tools/render_blend.py`` (not
+part of the extension; run without spectral_skin), and "nothing lost" when a parameter map cannot be read. Small
+renders (64x64, 32 spp, fixed seed).
 
 Run: .venv/bin/python -m pytest tests/blender/test_farm.py -s   (-s shows the 2048² apply timing)
 """
@@ -32,9 +32,9 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-sys.path.insert(0, str(REPO / "scripts"))
+sys.path.insert(0, str(REPO / "scripts" / "tools"))
 
-import render_blend  # noqa: E402  (scripts/render_blend.py)
+import render_blend  # noqa: E402  (scripts/tools/render_blend.py)
 from blender_scenes import (  # noqa: E402
     add_slab,
     add_sun,
@@ -52,8 +52,8 @@ from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
 
 BATCH = REPO / "blender_addon" / "batch.py"
-RENDER = REPO / "scripts" / "render_blend.py"
-# scripts/render_blend.py as a render node runs it: an isolated Python (-I) where importing spectral_skin fails.
+RENDER = REPO / "scripts" / "tools" / "render_blend.py"
+# scripts/tools/render_blend.py as a render node runs it: an isolated Python (-I) where importing spectral_skin fails.
 RENDER_NODE = ("import runpy, sys; sys.modules['spectral_skin'] = None; sys.argv = sys.argv[1:]; "
                "runpy.run_path(sys.argv[0], run_name='__main__')")
 SIZE = 64
@@ -226,7 +226,7 @@ def test_render_script_cli(addon, tmp_path):
         assert proc.stderr.startswith("render_blend:") and message in proc.stderr, proc.stderr
     # The add-on's batch.py no longer renders: it names the script.
     proc = _run_batch("render", str(blend), "--out", str(tmp_path / "x"), cwd=tmp_path)
-    assert proc.returncode == 2 and "scripts/render_blend.py" in proc.stderr, proc.stderr
+    assert proc.returncode == 2 and "scripts/tools/render_blend.py" in proc.stderr, proc.stderr
 
 
 def test_unreadable_map_changes_nothing(addon, tmp_path):

@@ -1,7 +1,7 @@
 """The Open Job Description template farm/spectral_skin_render.openjd.yaml run by ``openjd run`` (openjd-cli, as a
 Deadline Cloud worker runs a job) on a tiny scene: haemoglobin keyed on a Baked skin, two frames, 32 x 32 px. The
 template's "blender" is this Blender's stand-in (tests/farm/blender_cli.py: no add-on, no spectral_skin, auto-run
-off); the frames it writes must equal the same frames rendered locally by scripts/render_blend.py. Oldest and
+off); the frames it writes must equal the same frames rendered locally by scripts/tools/render_blend.py. Oldest and
 newest supported Blender only.
 
 Run: python -m pytest tests/blender/test_openjd.py -s
@@ -25,9 +25,9 @@ pytest.importorskip("spectral_skin")
 import blender_scenes  # noqa: E402
 from farm_worker import BLENDER_CLI, REPO, only_in_edge_versions  # noqa: E402
 
-if str(REPO / "scripts") not in sys.path:
-    sys.path.insert(0, str(REPO / "scripts"))
-import render_blend  # noqa: E402  (scripts/render_blend.py)
+if str(REPO / "scripts" / "tools") not in sys.path:
+    sys.path.insert(0, str(REPO / "scripts" / "tools"))
+import render_blend  # noqa: E402  (scripts/tools/render_blend.py)
 from test_live_mode import _apply, _skin, _slab_scene  # noqa: E402
 
 pytestmark = only_in_edge_versions(bpy.app.version)
@@ -36,13 +36,13 @@ TEMPLATE = REPO / "farm" / "spectral_skin_render.openjd.yaml"
 
 
 def _openjd() -> str:
-    """openjd from the project's .venv (scripts/requirements-dev.txt), else a .venv-openjd, else PATH."""
+    """openjd from the project's .venv (scripts/pins/requirements-dev.txt), else a .venv-openjd, else PATH."""
     for candidate in (REPO / ".venv" / "bin" / "openjd", REPO / ".venv-openjd" / "bin" / "openjd"):
         if candidate.exists():
             return str(candidate)
     found = shutil.which("openjd")
     if found is None:
-        pytest.skip("openjd not installed: bash scripts/setup-python.sh --test (scripts/requirements-dev.txt)")
+        pytest.skip("openjd not installed: bash scripts/setup-python.sh --test (scripts/pins/requirements-dev.txt)")
     return found
 
 

@@ -2,7 +2,7 @@
 object's material renders plain diffuse with the core's albedo, a close one keeps subsurface, zero oiliness writes
 no specular texture, overrides win and survive re-applying, and the batch path decides exactly as the operator;
 thin and open objects get a subsurface method recommended; a driven parameter stores the core's values per frame and
-a keyframed haemoglobin renders the core's albedo at two frames of a headless render (scripts/render_blend.py); a
+a keyframed haemoglobin renders the core's albedo at two frames of a headless render (scripts/tools/render_blend.py); a
 far head-sized sphere with the example face map renders within the report's bound of its full-subsurface render.
 
 Run: .venv-blender/5.0/bin/python -m pytest tests/blender/test_scene_effects.py -q
@@ -26,9 +26,9 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-sys.path.insert(0, str(REPO / "scripts"))
+sys.path.insert(0, str(REPO / "scripts" / "tools"))
 
-import render_blend  # noqa: E402  (scripts/render_blend.py)
+import render_blend  # noqa: E402  (scripts/tools/render_blend.py)
 from blender_scenes import add_box, assign  # noqa: E402
 
 from blender_addon import anim, batch  # noqa: E402
@@ -420,10 +420,11 @@ def test_batch_apply_follows_the_materials_animation(addon, tmp_path):
 
 
 def _report_script():
-    """scripts/scene_effects_report.py, imported from its path (its head measurement and bound)."""
+    """scripts/reports/scene_effects_report.py, imported from its path (its head measurement and bound)."""
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("_scene_effects_report", REPO / "scripts" / "scene_effects_report.py")
+    script = REPO / "scripts" / "reports" / "scene_effects_report.py"
+    spec = importlib.util.spec_from_file_location("_scene_effects_report", script)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_color_difference import color_difference
-
 import spectral_skin
+from test_color_difference import color_difference
 
 
 def test_cielab_of_white_grey_and_the_srgb_red_primary() -> None:

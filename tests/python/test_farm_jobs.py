@@ -3,7 +3,7 @@
 template validated by ``openjd check``. (``openjd run`` of the template renders in tests/blender/test_openjd.py.)
 
 Needs ``node`` (Debian's nodejs: scripts/setup-python.sh --test installs it where missing) and ``openjd``
-(openjd-cli, scripts/requirements-dev.txt).
+(openjd-cli, scripts/pins/requirements-dev.txt).
 """
 
 from __future__ import annotations
@@ -120,7 +120,7 @@ def test_bad_jobs_are_refused(tmp_path):
 def _openjd() -> str:
     found = shutil.which("openjd", path=str(pathlib.Path(sys.executable).parent)) or shutil.which("openjd")
     if found is None:
-        pytest.fail("openjd not found: scripts/requirements-dev.txt pins openjd-cli (bash scripts/setup-python.sh "
+        pytest.fail("openjd not found: scripts/pins/requirements-dev.txt pins openjd-cli (bash scripts/setup-python.sh "
                     "--test)")
     return found
 

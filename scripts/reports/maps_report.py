@@ -2,8 +2,8 @@
 """Map pipeline performance report: wall time and peak memory per strategy and size, the lookup table's build time
 and measured error, and the ratio to the memory-bandwidth floor. Writes docs/maps-performance.md.
 
-    .venv/bin/python scripts/maps_report.py                 # 512, 2048, 4096 (a few minutes on 2 cores)
-    .venv/bin/python scripts/maps_report.py --quick --out /tmp/report.md   # 64, 128: what CI runs
+    .venv/bin/python scripts/reports/maps_report.py                 # 512, 2048, 4096 (a few minutes on 2 cores)
+    .venv/bin/python scripts/reports/maps_report.py --quick --out /tmp/report.md   # 64, 128: what CI runs
 
 Needs the release CLI (cargo build --release) and numpy (to measure copy bandwidth).
 """
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 CLI = ROOT / "target" / "release" / "spectral-skin"
 
 
@@ -228,7 +228,7 @@ def main() -> None:
     lines = [
         "# Map pipeline performance",
         "",
-        f"Regenerate: `.venv/bin/python scripts/maps_report.py` (after `cargo build --release`). Generated {time.strftime('%Y-%m-%d')} "
+        f"Regenerate: `.venv/bin/python scripts/reports/maps_report.py` (after `cargo build --release`). Generated {time.strftime('%Y-%m-%d')} "
         f"on {os.cpu_count()} cores, load average {load_before:.1f} before and {load_after:.1f} after (other jobs share the "
         f"machine: CPU seconds, user + system, are steadier than wall times); medians of {repeats} runs of `spectral-skin "
         "maps` on the built-in examples (`spectral-skin example --kind uniform|mask|face`: half-float PIZ files), on the "

@@ -10,7 +10,7 @@ tests/blender/test_renders.py (thick slab, uniform white world of strength 1, or
 Subsurface IOR 1.4, Radius 1 mm (the response does not depend on it: 0.3 mm gives the same figures to 4 digits).
 Three Base Colors share one render (one per RGB channel).
 
-    .venv-blender/5.0/bin/python scripts/measure_skin_flat.py        # rewrites docs/data/random_walk_skin_flat.json
+    .venv-blender/5.0/bin/python scripts/calibration/measure_skin_flat.py        # rewrites docs/data/random_walk_skin_flat.json
 
 The JSON is compiled into the core (`fit::random_walk_skin`); written atomically.
 """
@@ -24,8 +24,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parent.parent
-TESTS = ROOT / "tests" / "blender"
+ROOT = Path(__file__).resolve().parents[2]
+LIB = ROOT / "scripts" / "lib"  # blender_scenes
 DEFAULT_OUT = ROOT / "docs" / "data" / "random_walk_skin_flat.json"
 # Dense below 0.05, where the african preset's Base Colors lie (0.02-0.04) and the response bends fastest.
 BASE_COLORS = (0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.05, 0.07, 0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 0.9,
@@ -52,7 +52,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     import bpy
 
 
-    sys.path.insert(0, str(TESTS))
+    sys.path.insert(0, str(LIB))
     import blender_scenes as helpers
     colors = sorted(args.base_colors)
     cases = []
@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         raise SystemExit("measured response is not rising in Base Color: more samples needed")
     data = {
         "description": "Random Walk (Skin) thick flat slab under a uniform white world: rendered value / Base Color; "
-        "regenerate: <venv>/bin/python scripts/measure_skin_flat.py",
+        "regenerate: <venv>/bin/python scripts/calibration/measure_skin_flat.py",
         "blender": "{}.{}".format(*bpy.app.version[:2]),
         "bpy": bpy.app.version_string,
         "scene": {"ortho_m": ORTHO_M, "image_px": SIZE_PX, "region_px": REGION_PX, "samples": args.samples,

@@ -7,10 +7,10 @@ example face parameter map applied through the add-on at camera distances from 0
 difference, full material vs the decision's plain diffuse: head_rows) and the apply time with and without the
 analysis (apply_times); writes it all to docs/scene-effects.md. Needs target/release/spectral-skin (the example map).
 
-    .venv-blender/5.0/bin/python scripts/scene_effects_report.py            # 6 footprints, 96x64 px, 512 spp; 9 heads
-    .venv-blender/5.0/bin/python scripts/scene_effects_report.py --quick --out /tmp/se.md   # 3 footprints, 3 heads
+    .venv-blender/5.0/bin/python scripts/reports/scene_effects_report.py            # 6 footprints, 96x64 px, 512 spp; 9 heads
+    .venv-blender/5.0/bin/python scripts/reports/scene_effects_report.py --quick --out /tmp/se.md   # 3 footprints, 3 heads
 
-Scene: tests/blender/blender_scenes.shadow_edge_scene (a thick slab under a sun of irradiance 1 W/m^2 from straight
+Scene: shadow_edge_scene of scripts/lib/blender_scenes.py (a thick slab under a sun of irradiance 1 W/m^2 from straight
 above, a black world, and a black occluder, invisible to the camera, casting a hard shadow over x > 0), orthographic
 top camera, Cycles CPU, fixed seed, no denoising, Blender's default pixel filter (Blackman-Harris 1.5 px). A uniformly
 lit slab would show no difference at all (the Base Color is the total reflectance either way): the shadow edge is
@@ -35,10 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests" / "blender"))
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "scripts"))
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))  # blender_addon
+sys.path.insert(0, str(ROOT / "scripts" / "lib"))  # blender_scenes, color_difference
 
 MEAN_BOUND = 0.005  # mean |difference| / albedo over the image: the issue's example bound
 
@@ -315,7 +314,7 @@ with `-s` to print the figures): a closed UV sphere of 80 mm radius with a 2 mm 
 same mesh, half of it outside the sphere (an "ear"): the bounding box says 160 mm (any method), the per-part
 measure finds 6.0 % of the surface thinner than 3 radii (13 mm), 2.0 mm thick (the plate's two large
 faces; area-weighted median and smallest 2.0 mm) and recommends a random walk; a plain sphere: no thin part
-(thinnest 158 mm, a chord through the centre). Cost (`scripts/part_thickness_timing.py`,
+(thinnest 158 mm, a chord through the centre). Cost (`scripts/reports/part_thickness_timing.py`,
 Blender 5.0.1, a shared machine at load 7): on a UV sphere of 100 000 faces, 0.38 s per object (best of 5;
 0.38 to 0.74 s), of which about 0.12 s builds the BVH tree, 0.13 s reads the mesh's loops (the closed-mesh count)
 and faces, and the 2048 ray casts take 7 ms; once per object using the material, at the current frame.
@@ -341,8 +340,8 @@ A Spectral Skin parameter (melanin, melanin blend, haemoglobin, oiliness) keyfra
 Acceptance (`tests/blender/test_scene_effects.py::test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames`,
 run with `-s` to print the figures): haemoglobin keyframed 0.005 at frame 1 and 0.05 at frame 2 on a Burley flat
 slab under a white world, applied through the operator, saved, and rendered at frames 1 and 2 by
-`scripts/render_blend.py` with the add-on unregistered (512 samples, central 32 × 32 of 64 × 64 px): the rendered mean
-is the core's albedo of each frame within 0.2 % (measured: −0.005, −0.004, +0.009 % at frame 1; −0.022, +0.008,
+`scripts/tools/render_blend.py` with the add-on unregistered (512 samples, central 32 × 32 of 64 × 64 px): the rendered
+mean is the core's albedo of each frame within 0.2 % (measured: −0.005, −0.004, +0.009 % at frame 1; −0.022, +0.008,
 +0.014 % at frame 2, the same in Blender 4.2.23, 5.0.1 and 5.3.0). When the values lived in a frame-change handler,
 a worker without it rendered frame 1's albedo at frame 2 (+22 %, +33 %, +9 %); tests/blender/test_farm_animation.py
 now renders both frames on such a worker.
@@ -400,7 +399,7 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         "",
         "A head-sized object with the example face parameter map (`spectral-skin example --kind face`, "
         f"{HEAD_MAP_SIZE}² texels, caucasian preset otherwise) applied through the add-on's own Apply "
-        "(`ops.apply_skin`), in a metre scene (`head_scene` of tests/blender/blender_scenes.py): a closed UV sphere "
+        "(`ops.apply_skin`), in a metre scene (`head_scene` of scripts/lib/blender_scenes.py): a closed UV sphere "
         "0.2 m across, and Suzanne (an open mesh with thin ears) scaled to 0.2 m wide; a sun from the front left "
         f"above (hard shadows) and a dim world; a 50 mm lens on a 36 mm sensor, {size}×{size} px frames, Cycles CPU. "
         "Per distance (camera to the object's centre) the add-on decides; then the object is rendered with subsurface "
@@ -414,7 +413,7 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         "Differences, full vs plain, over the object: *mean* = |difference of the object's mean colours| / the full "
         "render's mean colour, worst channel (sum of RGB over sum of alpha: the colour the object averages to); "
         "*max* the largest |difference| of a covered pixel (alpha ≥ 0.5) relative to the same mean colour (mostly "
-        "noise); ΔE00 (CIEDE2000, Sharma et al. 2005: `scripts/color_difference.py`, linear Rec.709 to CIELAB D65 "
+        "noise); ΔE00 (CIEDE2000, Sharma et al. 2005: `scripts/lib/color_difference.py`, linear Rec.709 to CIELAB D65 "
         "with white = 1.0) per covered pixel (mean, max) and of the object's mean colours. Where the decision keeps "
         "subsurface, the decided render *is* the full one (difference 0, no time saved) and the columns show what "
         "dropping it there would change.",
@@ -547,7 +546,7 @@ def main(argv: list[str] | None = None) -> int:
     load_after = os.getloadavg()
     print("apply times", applies)
 
-    command = "scripts/scene_effects_report.py" + (" --quick" if args.quick else "")
+    command = "scripts/reports/scene_effects_report.py" + (" --quick" if args.quick else "")
     lines = [
         "# Scene effects: when subsurface scattering can be dropped",
         "",
@@ -566,7 +565,7 @@ def main(argv: list[str] | None = None) -> int:
         "",
         "Measured on a Burley slab with the caucasian preset's values (albedo "
         f"{', '.join(f'{a:.4f}' for a in albedo)}, radius {', '.join(f'{r:.3f}' for r in radius_mm)} mm) across a "
-        "hard shadow edge (`shadow_edge_scene` of tests/blender/blender_scenes.py: a sun from straight above, a black "
+        "hard shadow edge (`shadow_edge_scene` of scripts/lib/blender_scenes.py: a sun from straight above, a black "
         "occluder casting the shadow, a black world): the worst case, a sharp edge of light; a uniformly lit slab "
         "shows no difference at all. Differences are |full − plain| / albedo, worst channel, of the rows' mean (the "
         f"edge profile: pixel noise averaged over {height} rows): *mean* over the image's columns, *edge profile* "

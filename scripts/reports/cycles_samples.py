@@ -4,11 +4,12 @@ Christensen-Burley and Random Walk subsurface methods at the presets' albedos, r
 
 Scene: the flat-slab albedo test of tests/blender/test_renders.py (a Principled BSDF slab, Subsurface Weight 1,
 Specular IOR Level 0, under a uniform white world, seen by an orthographic top camera over 100 mm of the slab's
-centre). The scene helpers are imported from tests/blender/blender_scenes.py. Every pixel of the image lies more than
-450 mm from the slab's edges, so every pixel's expected value is the core's ``expected_albedo`` for the method.
+centre). The scene helpers are those of the render tests, scripts/lib/blender_scenes.py. Every pixel of the image lies
+more than 450 mm from the slab's edges, so every pixel's expected value is the core's ``expected_albedo`` for the
+method.
 
-    .venv/bin/python scripts/cycles_samples.py                      # 3 presets x 2 methods, 64x64 px, 1-1024 spp
-    .venv/bin/python scripts/cycles_samples.py --quick --out /tmp/cs.json   # caucasian, 32x32 px, 1-64 spp
+    .venv/bin/python scripts/reports/cycles_samples.py                      # 3 presets x 2 methods, 64x64 px, 1-1024 spp
+    .venv/bin/python scripts/reports/cycles_samples.py --quick --out /tmp/cs.json   # caucasian, 32x32 px, 1-64 spp
 
 Per render it records the wall time of the bpy.ops.render.render call alone (after a warm-up render of the same
 scene, so kernel loading and the first scene sync are not counted), per channel: the relative rms pixel noise
@@ -33,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-SCENES_DIR = ROOT / "tests" / "blender"
+ROOT = Path(__file__).resolve().parents[2]
+SCENES_DIR = ROOT / "scripts" / "lib"  # blender_scenes
 DEFAULT_OUT = ROOT / "docs" / "data" / "cycles_samples.json"
 
 METHODS: dict[str, str] = {"burley": "BURLEY", "random_walk": "RANDOM_WALK"}  # core name -> Cycles method
@@ -50,7 +51,7 @@ WARMUP_SAMPLES = 1
 
 
 def load_helpers() -> ModuleType:
-    """The render tests' scene helpers (tests/blender/blender_scenes.py, a plain module without pytest)."""
+    """The scene helpers the render tests share (scripts/lib/blender_scenes.py, a plain module without pytest)."""
     if str(SCENES_DIR) not in sys.path:
         sys.path.insert(0, str(SCENES_DIR))
     import blender_scenes

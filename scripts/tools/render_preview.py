@@ -3,7 +3,7 @@
 Headless (bpy as a Python module, no Blender UI): Cycles CPU, Christensen-Burley subsurface, a sun and a dim sky,
 256x128 px, 128 samples, written as an sRGB PNG (Standard view transform).
 
-    .venv/bin/python scripts/render_preview.py [--out docs/images/presets.png] [--samples 128] [--size 256x128]
+    .venv/bin/python scripts/tools/render_preview.py [--out docs/images/presets.png] [--samples 128] [--size 256x128]
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import pathlib
 import sys
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
+REPO = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 
 import bpy  # noqa: E402

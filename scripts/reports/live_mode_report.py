@@ -16,8 +16,8 @@ material in that scene; the median of REPEATS renders, Live and Baked alternated
 "Cost per shading sample" is (Live - Baked) / (pixels x samples). Cold table builds use a new empty
 SPECTRAL_SKIN_CACHE_DIR each (the shader table is the map pipeline's lookup table and shares its cache).
 
-    .venv-blender/5.0/bin/python scripts/live_mode_report.py            # -> docs/live-mode.md, docs/data/live_mode.json
-    .venv-blender/5.0/bin/python scripts/live_mode_report.py --quick --out /tmp/live.md   # one size, 1 repeat
+    .venv-blender/5.0/bin/python scripts/reports/live_mode_report.py            # -> docs/live-mode.md, docs/data/live_mode.json
+    .venv-blender/5.0/bin/python scripts/reports/live_mode_report.py --quick --out /tmp/live.md   # one size, 1 repeat
 """
 
 from __future__ import annotations
@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-for path in (ROOT, ROOT / "tests" / "blender"):
+ROOT = Path(__file__).resolve().parents[2]
+for path in (ROOT, ROOT / "scripts" / "lib"):  # blender_addon; blender_scenes
     if str(path) not in sys.path:
         sys.path.insert(0, str(path))
 
@@ -51,7 +51,7 @@ ORTHO_SCALE_M = 0.1
 TABLE_METHODS = ("burley", "random_walk")
 DEFAULT_DOC = ROOT / "docs" / "live-mode.md"
 DEFAULT_JSON = ROOT / "docs" / "data" / "live_mode.json"
-COMMAND = ".venv-blender/5.0/bin/python scripts/live_mode_report.py"
+COMMAND = ".venv-blender/5.0/bin/python scripts/reports/live_mode_report.py"
 
 
 def _median(values: list[float]) -> float:

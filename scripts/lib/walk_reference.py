@@ -1,7 +1,8 @@
 """An independent reference for Cycles' random-walk subsurface scattering in a thin flat slab: a Monte Carlo of the
 walk as the Cycles source describes it (docs/blender-targets.md, with the Cycles source lines), in numpy.
 
-Used by the length-scale test (test_versions.py): a slab of thickness T under a sun from straight above, seen from
+Used by the length-scale test (tests/blender/test_versions.py) and the calibration
+(scripts/calibration/calibrate_random_walk.py): a slab of thickness T under a sun from straight above, seen from
 straight above, renders piL/E = the probability that a walk entering the top face leaves through the top face again
 (the walk's throughput is divided by Base Color, which the closure weight multiplies back; the exit point gathers the
 sun with a Lambertian of weight 1). Only the top face is lit and the world is black, so walks leaving through the

@@ -12,8 +12,8 @@ scale * BurleyEdge(x; d) with the scale (the rendered flat albedo) and d free. R
 d / (Radius*Scale), d / mfp, the scale, and the rms residual of the fit over the image / scale (how Burley-shaped the
 walk's edge is). Three albedos share one render (one per RGB channel, radius per channel).
 
-    .venv-blender/5.0/bin/python scripts/calibrate_random_walk.py          # adds 5.0's entries to the JSON
-    .venv-blender/5.3/bin/python scripts/calibrate_random_walk.py --samples 256 --out /tmp/rw.json
+    .venv-blender/5.0/bin/python scripts/calibration/calibrate_random_walk.py          # adds 5.0's entries to the JSON
+    .venv-blender/5.3/bin/python scripts/calibration/calibrate_random_walk.py --samples 256 --out /tmp/rw.json
 
 The JSON (default docs/data/random_walk_width.json) holds one entry per (Blender version, method); running the
 script in another version adds or replaces that version's entries. Written atomically.
@@ -29,8 +29,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parent.parent
-TESTS = ROOT / "tests" / "blender"
+ROOT = Path(__file__).resolve().parents[2]
+LIB = ROOT / "scripts" / "lib"  # blender_scenes, walk_reference
 DEFAULT_OUT = ROOT / "docs" / "data" / "random_walk_width.json"
 ALBEDOS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
 MFP_MM = 0.3
@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
     import bpy
 
-    sys.path.insert(0, str(TESTS))
+    sys.path.insert(0, str(LIB))
     import blender_scenes as helpers
     import walk_reference as walk
     version = "{}.{}".format(*bpy.app.version[:2])
@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     data = {
         "description": "Burley-equivalent length d of Cycles' random-walk edge vs Base Color (fit of "
         "scale * BurleyEdge(x; d) to a half-shadow edge render); regenerate: "
-        "<venv>/bin/python scripts/calibrate_random_walk.py",
+        "<venv>/bin/python scripts/calibration/calibrate_random_walk.py",
         "scene": {"ortho_mm": ORTHO_MM, "image_px": [WIDTH, HEIGHT], "samples": args.samples, "seed": SEED,
                   "mfp_mm": args.mfp_mm},
         "entries": sorted(keep + entries, key=lambda e: (e["blender"], e["method"])),

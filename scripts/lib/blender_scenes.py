@@ -1,6 +1,7 @@
-"""Cycles scene helpers shared by the Blender render tests (tests/blender) and the measurement scripts (scripts/):
-scene set-up, materials, rendering, EXR input/output and the Burley edge model. No pytest here (the fixtures live in
-conftest.py), so a script imports this module as it is.
+"""Cycles scene helpers shared by the Blender render tests (tests/blender, whose conftest.py puts scripts/lib on
+sys.path) and the measurement scripts (scripts/reports, scripts/calibration): scene set-up, materials, rendering,
+EXR input/output and the Burley edge model. No pytest here (the fixtures live in tests/blender/conftest.py), so a
+script imports this module as it is.
 
 Everything here imports bpy lazily, so collecting this directory without bpy installed does not fail: the test
 modules themselves call ``pytest.importorskip("bpy")``.

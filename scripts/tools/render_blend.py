@@ -3,7 +3,7 @@
 
 From Python with bpy (``import bpy`` as a module, or Blender's own Python)::
 
-    python scripts/render_blend.py out.blend --out DIR [--frames 1-3,7] [--samples N] [--resolution 640x480]
+    python scripts/tools/render_blend.py out.blend --out DIR [--frames 1-3,7] [--samples N] [--resolution 640x480]
         [--engine CYCLES] [--format EXR|PNG] [--seed N] [--allow-missing-textures]
 
 or, imported, :func:`render_frames`. Cycles always on the CPU; the .blend's own settings unless overridden. The

@@ -1,7 +1,8 @@
 """Colour difference of rendered images: linear Rec.709 RGB -> CIELAB (D65) and the CIEDE2000 difference ΔE00.
 
 No dependencies beyond numpy (colour-science is not installed in the Blender venvs). Used by
-scripts/scene_effects_report.py; checked against the published test pairs in tests/python/test_color_difference.py.
+scripts/reports/scene_effects_report.py and, as the tests' independent CIEDE2000, by test_inverse_albedo.py and
+test_addon_udim.py; checked against the published test pairs in tests/python/test_color_difference.py.
 
 References:
 - CIEDE2000: G. Sharma, W. Wu, E. N. Dalal, "The CIEDE2000 color-difference formula: implementation notes,

@@ -4,7 +4,7 @@ closed-mesh count, the BVH tree and the ray casts from up to THICKNESS_SAMPLES f
 faces, and on the same sphere with a thin plate, in Blender, headless. Prints the figures quoted in
 docs/scene-effects.md ("Thin and open geometry").
 
-    .venv-blender/5.0/bin/python scripts/part_thickness_timing.py [--segments 400 --rings 250 --repeat 3]
+    .venv-blender/5.0/bin/python scripts/reports/part_thickness_timing.py [--segments 400 --rings 250 --repeat 3]
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 
 
