@@ -37,7 +37,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))  # blender_addon
-sys.path.insert(0, str(ROOT / "scripts" / "lib"))  # blender_scenes, color_difference
+sys.path.insert(0, str(ROOT / "scripts" / "lib"))  # blender_scenes
 
 MEAN_BOUND = 0.005  # mean |difference| / albedo over the image: the issue's example bound
 
@@ -117,18 +117,18 @@ def object_differences(a: np.ndarray, b: np.ndarray) -> dict[str, float]:
     the object covers (alpha >= 0.5; mostly noise), ``de_mean`` / ``de_max`` ΔE00 per covered pixel (colours
     unpremultiplied, white = 1), ``de_object`` ΔE00 of the object's mean colours, ``pixels`` the coverage in
     pixels."""
-    from color_difference import delta_e00_linear_rgb
+    from spectral_skin import delta_e00
 
     coverage = float(a[..., 3].sum())
     mean_a, mean_b = a[..., :3].reshape(-1, 3).sum(axis=0) / coverage, b[..., :3].reshape(-1, 3).sum(axis=0) / coverage
     covered = (a[..., 3] >= 0.5) & (b[..., 3] >= 0.5)
     result = {"pixels": coverage, "mean": float((np.abs(mean_a - mean_b) / mean_a).max()),
-              "de_object": float(delta_e00_linear_rgb(mean_a, mean_b)),
+              "de_object": float(delta_e00(mean_a, mean_b)),
               "max": float("nan"), "de_mean": float("nan"), "de_max": float("nan")}
     if covered.any():
         pa = a[covered][:, :3] / a[covered][:, 3:]
         pb = b[covered][:, :3] / b[covered][:, 3:]
-        de = delta_e00_linear_rgb(pa, pb)
+        de = delta_e00(pa, pb)
         result.update(max=float((np.abs(pa - pb) / mean_a).max()), de_mean=float(de.mean()), de_max=float(de.max()))
     return result
 
@@ -413,7 +413,7 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         "Differences, full vs plain, over the object: *mean* = |difference of the object's mean colours| / the full "
         "render's mean colour, worst channel (sum of RGB over sum of alpha: the colour the object averages to); "
         "*max* the largest |difference| of a covered pixel (alpha ≥ 0.5) relative to the same mean colour (mostly "
-        "noise); ΔE00 (CIEDE2000, Sharma et al. 2005: `scripts/lib/color_difference.py`, linear Rec.709 to CIELAB D65 "
+        "noise); ΔE00 (CIEDE2000, Sharma et al. 2005: the core's, `spectral_skin.delta_e00`, linear Rec.709 to CIELAB D65 "
         "with white = 1.0) per covered pixel (mean, max) and of the object's mean colours. Where the decision keeps "
         "subsurface, the decided render *is* the full one (difference 0, no time saved) and the columns show what "
         "dropping it there would change.",

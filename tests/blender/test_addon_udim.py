@@ -3,7 +3,7 @@ for the set: one thickness, a parameter tile set beside the .blend set as a tile
 mode (the tiles computed as one texture, each texture written as a tile set and loaded as a tiled image). Each
 written albedo tile is checked against the core's maps() of that tile's parameters alone (read back with
 OpenImageIO) and against the texture's own colours (within the fit's residual + 0.1 ΔE00, by the independent
-CIEDE2000 of scripts/lib/color_difference.py). Live mode's reading of a tile set is rendered in test_live_mode.py.
+CIEDE2000 of tests/python/color_difference.py). Live mode's reading of a tile set is rendered in test_live_mode.py.
 
 Headless, no rendering. Run: .venv-blender/5.3/bin/python -m pytest tests/blender/test_addon_udim.py
 """
@@ -28,7 +28,7 @@ if str(REPO) not in sys.path:
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 
-_spec = importlib.util.spec_from_file_location("_color_difference", REPO / "scripts" / "lib" / "color_difference.py")
+_spec = importlib.util.spec_from_file_location("_color_difference", REPO / "tests" / "python" / "color_difference.py")
 assert _spec is not None and _spec.loader is not None
 color_difference = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(color_difference)

@@ -1,4 +1,4 @@
-"""scripts/lib/color_difference.py (ΔE00 of the scene-effects report) against published references.
+"""tests/python/color_difference.py (the tests' independent CIEDE2000) against published references.
 
 CIEDE2000: the 34 test pairs of Sharma, Wu and Dalal (2005), Table 1 (Color Research and Application 30(1), p. 24),
 given to 4 decimals: each pair must match to 1e-4 and be symmetric. CIELAB: white, and the sRGB red primary's
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "lib" / "color_difference.py"
+SCRIPT = Path(__file__).resolve().parent / "color_difference.py"
 _spec = importlib.util.spec_from_file_location("_color_difference", SCRIPT)
 assert _spec is not None and _spec.loader is not None
 color_difference = importlib.util.module_from_spec(_spec)

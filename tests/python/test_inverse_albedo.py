@@ -1,6 +1,6 @@
 """fit_albedo and fit_albedo_map (src/inverse/albedo.rs): parameters -> albedo by evaluate() -> fit -> the fitted
 parameters' albedo by evaluate() again, within ΔE00 0.5 of the target, measured with the independent numpy CIEDE2000
-of scripts/lib/color_difference.py (checked against Sharma et al.'s table in test_color_difference.py)."""
+of tests/python/color_difference.py (checked against Sharma et al.'s table in test_color_difference.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import spectral_skin
 
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "lib" / "color_difference.py"
+SCRIPT = Path(__file__).resolve().parent / "color_difference.py"
 _spec = importlib.util.spec_from_file_location("_color_difference", SCRIPT)
 assert _spec is not None and _spec.loader is not None
 color_difference = importlib.util.module_from_spec(_spec)

@@ -1,8 +1,9 @@
-"""Colour difference of rendered images: linear Rec.709 RGB -> CIELAB (D65) and the CIEDE2000 difference ΔE00.
+"""The tests' independent colour difference: linear Rec.709 RGB -> CIELAB (D65) and the CIEDE2000 difference ΔE00,
+written apart from the core's (src/color/difference.rs, spectral_skin.delta_e00) so that tests can check it.
 
-No dependencies beyond numpy (colour-science is not installed in the Blender venvs). Used by
-scripts/reports/scene_effects_report.py and, as the tests' independent CIEDE2000, by test_inverse_albedo.py and
-test_addon_udim.py; checked against the published test pairs in tests/python/test_color_difference.py.
+No dependencies beyond numpy (colour-science is not installed in the Blender venvs). Used by test_inverse_albedo.py,
+test_delta_e00.py and tests/blender/test_addon_udim.py; checked against the published test pairs in
+test_color_difference.py.
 
 References:
 - CIEDE2000: G. Sharma, W. Wu, E. N. Dalal, "The CIEDE2000 color-difference formula: implementation notes,
