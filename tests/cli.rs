@@ -344,7 +344,7 @@ fn a_new_run_leaves_no_stale_outputs() {
     let work = &sidecar["report"]["work"];
     let texels = work["texels"].as_u64().unwrap();
     assert_eq!((work["specular_evaluations"].as_u64(), work["outputs"]["specular"].as_u64()), (Some(1), Some(0)));
-    assert_eq!(work["outputs"]["base_color"].as_u64(), Some(texels));
+    assert_eq!(work["outputs"]["albedo"].as_u64(), Some(texels));
 }
 
 /// Ctrl-C during `maps` stops it within seconds with exit code 130 and leaves the output folder as it was: no new

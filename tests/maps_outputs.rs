@@ -75,12 +75,12 @@ fn without_radius_no_radius_is_fitted() {
         let fw = full.report.work;
         assert_eq!(fw.radius_fits, 3 * (fw.evaluations + fw.table_nodes_built), "{name}: {fw:?}");
         assert!(fw.radius_fits > 0, "{name}: {fw:?}");
-        assert_eq!((fw.outputs.base_color, fw.outputs.radius), (n, n), "{name}");
+        assert_eq!((fw.outputs.albedo, fw.outputs.radius), (n, n), "{name}");
         for method in [SubsurfaceMethod::Burley, SubsurfaceMethod::RandomWalk, SubsurfaceMethod::RandomWalkSkin] {
             let r = run(&image, method, strategy, outputs(true, false, true));
             let w = r.report.work;
             assert_eq!(w.radius_fits, 0, "{name} {method:?}: {w:?}");
-            assert_eq!((w.outputs.base_color, w.outputs.radius), (n, 0), "{name} {method:?}");
+            assert_eq!((w.outputs.albedo, w.outputs.radius), (n, 0), "{name} {method:?}");
             // The same evaluations and nodes, each the albedo alone.
             assert_eq!(
                 (w.evaluations, w.table_nodes_built, w.table_lookups),
@@ -146,7 +146,7 @@ fn specular_is_computed_only_when_asked() {
         let w = s.report.work;
         assert_eq!(s.report.strategy, Strategy::None, "{name}");
         assert_eq!((w.evaluations, w.table_nodes_built, w.table_lookups, w.radius_fits), (0, 0, 0, 0), "{name}");
-        assert_eq!((w.outputs.base_color, w.outputs.radius), (0, 0), "{name}");
+        assert_eq!((w.outputs.albedo, w.outputs.radius), (0, 0), "{name}");
         assert_eq!(w.specular_evaluations, full.report.work.specular_evaluations, "{name}");
         assert!(
             s.base_color.is_none() && s.radius_mm.is_none(),
@@ -170,7 +170,7 @@ fn specular_is_computed_only_when_asked() {
             r.base_color.as_ref().map(|p| p[0].len())
         );
         assert_eq!(r.radius_mm, full.radius_mm, "{name}");
-        assert_eq!(r.report.work.outputs.base_color, 0, "{name}");
+        assert_eq!(r.report.work.outputs.albedo, 0, "{name}");
     }
 }
 

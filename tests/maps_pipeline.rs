@@ -96,7 +96,7 @@ fn strategies_follow_the_input() {
     // the specular level.
     assert_eq!((w.texels, w.evaluations, w.radius_fits, w.specular_evaluations), (4096, 1, 3, 1), "{w:?}");
     assert_eq!((w.table_nodes_built, w.table_lookups), (0, 0));
-    assert_eq!((w.outputs.base_color, w.outputs.radius, w.outputs.specular), (4096, 4096, 0));
+    assert_eq!((w.outputs.albedo, w.outputs.radius, w.outputs.specular), (4096, 4096, 0));
     // A map whose texels all hold one value is constant too.
     let uniform = image(
         64,

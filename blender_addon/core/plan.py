@@ -231,9 +231,10 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)
-    images: dict[str, Any] = {"albedo": result["base_color"]}
+    # The maps by their one name: the output asked for, the result's key, the texture's file (<prefix>_<name>.exr).
+    images: dict[str, Any] = {"albedo": result["albedo"]}
     if radius:
-        images["radius"] = result["radius_mm"]
+        images["radius"] = result["radius"]
     # Roughness and IOR always (without specular: the surface's constants, which an evaluation of no output gives);
     # the level is a map of its own when the oiliness varies.
     specular_ior_level: float | None = 0.0
@@ -241,12 +242,12 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
         c = settings.constants()
         constants: dict[str, Any] = dict(spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"],
                                                                 c["oiliness"], outputs=())["surface"])
-    elif "specular_ior_level" in result:
-        constants = dict(result["specular"])
-        images["specular"] = result["specular_ior_level"]
+    elif "specular" in result:
+        constants = dict(result["specular_constants"])
+        images["specular"] = result["specular"]
         specular_ior_level = None
     else:
-        constants = dict(result["specular"])
+        constants = dict(result["specular_constants"])
         specular_ior_level = float(constants["specular_ior_level"])
     roughness = float(constants["roughness"])
     ior = float(constants["ior"])
@@ -278,17 +279,13 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
         "images": images,
         "work": dict(report["work"]),
         "summary": {
-            "albedo": _rgb(np.asarray(result["base_color"], dtype=np.float64).reshape(-1, 3).mean(axis=0)),
-            "radius_mm": _rgb(np.asarray(result["radius_mm"], dtype=np.float64).reshape(-1, 3).mean(axis=0))
+            "albedo": _rgb(np.asarray(result["albedo"], dtype=np.float64).reshape(-1, 3).mean(axis=0)),
+            "radius_mm": _rgb(np.asarray(result["radius"], dtype=np.float64).reshape(-1, 3).mean(axis=0))
             if radius else [0.0, 0.0, 0.0],
             "computed": computed,
             "warnings": warnings,
         },
     }
-
-
-# The plan's image keys and the keys of a ``spectral_skin.maps`` result that ``spectral_skin.write_maps`` writes.
-_RESULT_KEYS = {"albedo": "base_color", "radius": "radius_mm", "specular": "specular_ior_level"}
 
 
 def write_textures(plan: MaterialPlan) -> None:
@@ -310,7 +307,7 @@ def write_textures(plan: MaterialPlan) -> None:
     if plan.folder is None:
         raise ValueError("a plan with textures has a folder (core/plan.py _plan_from_maps)")
 
-    result = {_RESULT_KEYS[kind]: plan.images[kind] for kind in plan.textures}
+    result = {kind: plan.images[kind] for kind in plan.textures}
     written = {kind: str(path) for kind, path in spectral_skin.write_maps(
         result, plan.folder, plan.prefix, tiles=list(plan.tiles) or None).items()}
     if written != dict(plan.textures):

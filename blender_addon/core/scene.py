@@ -54,6 +54,10 @@ from .material_plan import MaterialPlan, freeze
 # radius the Burley slab and the plain-diffuse slab of the same albedo differ by a mean under 0.5 % of the albedo.
 SUBSURFACE_MIN_RADIUS_PX = 0.25
 
+# The plan field (a Principled input's one value) that stands in for each texture (named by its map, as the core names
+# it: albedo.exr feeds Base Color) when the texture is dropped for a constant.
+PRINCIPLED_FIELD_OF_TEXTURE = {"albedo": "base_color", "radius": "radius", "specular": "specular_ior_level"}
+
 OVERRIDES = ("AUTO", "ON", "OFF")
 # Effects an artist can force on or off (engine/version is required by the target). "constant maps" on: an output
 # map of one value is set as a value; off: written as a texture all the same.
@@ -566,8 +570,7 @@ def apply_decisions(plan: dict[str, Any], effects: list[dict[str, Any]], albedo:
         if kind not in plan["images"]:
             continue
         value = [float(v) for v in _texels(plan["images"][kind])[0]]
-        key = {"albedo": "base_color", "radius": "radius", "specular": "specular_ior_level"}[kind]
-        plan[key] = value[0] if kind == "specular" else value
+        plan[PRINCIPLED_FIELD_OF_TEXTURE[kind]] = value[0] if kind == "specular" else value
         _drop_texture(plan, kind)
 
 

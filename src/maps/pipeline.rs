@@ -213,7 +213,7 @@ pub struct MapWork {
 /// Texels produced per output map (0: the output is not a map, or was not asked for).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct OutputTexels {
-    pub base_color: usize,
+    pub albedo: usize,
     pub radius: usize,
     pub specular: usize,
 }
@@ -530,7 +530,7 @@ pub fn compute_maps_cancellable(
         work.outputs.radius = n;
     }
     if wanted.albedo {
-        work.outputs.base_color = n;
+        work.outputs.albedo = n;
     }
     let oiliness = image.plane_of(&OILINESS);
     let specular = wanted.specular.then(|| match (uniform_value(oiliness), oiliness) {
@@ -686,10 +686,50 @@ fn rgb(p: &[Vec<f32>; 3]) -> Vec<(&'static str, &[f32])> {
     vec![("R", p[0].as_slice()), ("G", p[1].as_slice()), ("B", p[2].as_slice())]
 }
 
+/// One kind of texture map: its one name on every front (the `outputs` request, the key of the Python result and of
+/// `write_maps`' images and written files, the add-on's texture, the file stem), its file, channels and unit, and
+/// the Principled BSDF input it feeds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MapKind {
+    pub name: &'static str,
+    pub file: &'static str,
+    pub channels: &'static [&'static str],
+    /// The values' unit ("" for a dimensionless one).
+    pub unit: &'static str,
+    pub principled_input: &'static str,
+}
+
+/// Principled Base Color for the method (the albedo itself without the radius output), linear RGB.
+pub const ALBEDO_MAP: MapKind = MapKind {
+    name: "albedo",
+    file: "albedo.exr",
+    channels: &["R", "G", "B"],
+    unit: "",
+    principled_input: "Base Color",
+};
+/// Principled Subsurface Radius x Subsurface Scale for the method, mm.
+pub const RADIUS_MAP: MapKind = MapKind {
+    name: "radius",
+    file: "radius.exr",
+    channels: &["R", "G", "B"],
+    unit: "mm",
+    principled_input: "Subsurface Radius",
+};
+/// Principled Specular IOR Level per texel (written only when the oiliness varies).
+pub const SPECULAR_MAP: MapKind = MapKind {
+    name: "specular",
+    file: "specular.exr",
+    channels: &["Y"],
+    unit: "",
+    principled_input: "Specular IOR Level",
+};
+/// Every map kind, in the order results list them.
+pub const MAP_KINDS: [MapKind; 3] = [ALBEDO_MAP, RADIUS_MAP, SPECULAR_MAP];
+
 /// Output file names.
-pub const ALBEDO_FILE: &str = "albedo.exr";
-pub const RADIUS_FILE: &str = "radius.exr";
-pub const SPECULAR_FILE: &str = "specular.exr";
+pub const ALBEDO_FILE: &str = ALBEDO_MAP.file;
+pub const RADIUS_FILE: &str = RADIUS_MAP.file;
+pub const SPECULAR_FILE: &str = SPECULAR_MAP.file;
 pub const SIDECAR_FILE: &str = "skin_maps.json";
 
 /// Read the inputs, check them, compute and write `albedo.exr`, `radius.exr`, `specular.exr` (if oiliness varies)

@@ -21,7 +21,8 @@ use crate::maps::io::{
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
     check_planes, check_prefix, commit_map_files, compute_maps_cancellable, output_name, stage_map_files,
-    tile_output_name, MapFiles, MapSettings, SpecularOutput, StrategyChoice, ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE,
+    tile_output_name, MapFiles, MapSettings, SpecularOutput, StrategyChoice, ALBEDO_MAP, MAP_KINDS, RADIUS_MAP,
+    SPECULAR_MAP,
 };
 use crate::maps::udim::{check_tile, stacked_tile_rows, tile_set_file_name, TileRows};
 use crate::Outputs;
@@ -313,15 +314,16 @@ pub(super) fn read_parameter_map_py<'py>(
 ///     A :class:`Maps`, read-only, which reads like a dict of the outputs asked for (an output not asked for is
 ///     absent; each is also an attribute, None when absent) and writes itself (``Maps.write``: one image, or a UDIM
 ///     tile set stacked top to bottom):
-///     "base_color" (with "albedo"): float32 (H, W, 3), Principled Base Color for ``method`` (without "radius": the
-///     albedo), linear RGB in ``working_space``;
-///     "radius_mm" (with "radius"): float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for
-///     ``method``, mm (with Radius set to these values, Scale is 0.001 in a scene whose unit is the metre);
-///     "specular" (with "specular"): the specular constants: when the oiliness is one value everywhere (a float, or an
-///     array of one value), {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
-///     "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``); when it varies, the
-///     ones that do not depend on it: {"roughness", "ior", "beckmann_m"} (Principled IOR is 1.4 everywhere);
-///     "specular_ior_level": only with "specular" and when the oiliness varies, float32 (H, W): Principled Specular IOR Level per texel;
+///     "albedo": float32 (H, W, 3), Principled Base Color for ``method`` (without "radius": the albedo), linear RGB
+///     in ``working_space``;
+///     "radius": float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for ``method``, mm (with Radius
+///     set to these values, Scale is 0.001 in a scene whose unit is the metre);
+///     "specular": only when the oiliness varies, float32 (H, W): Principled Specular IOR Level per texel;
+///     "specular_constants" (with the "specular" output): the specular inputs that are one value: when the oiliness
+///     is one value everywhere (a float, or an array of one value), {"oiliness", "specular_ior_level", "roughness",
+///     "ior", "beckmann_m", "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``);
+///     when it varies, the ones that do not depend on it: {"roughness", "ior", "beckmann_m"} (Principled IOR is 1.4
+///     everywhere);
 ///     "report": what was done: {"crate_version", "width", "height", "method", "target" ({"blender", "engine",
 ///     "tested"}), "color_space", "strategy" ({"name":
 ///     "constant" | "distinct_tuples" | "table" | "exact" | "none" (neither Base Color nor radius asked for), with
@@ -330,7 +332,7 @@ pub(super) fn read_parameter_map_py<'py>(
 ///     with bad values: {"parameter", "nan", "infinite", "out_of_range", "first": [[x, y], ...]}),
 ///     "constant_parameters" (the names of the parameters, the four and the extended physiology, that are one value
 ///     everywhere), "constant_values" ({name: value} of those), "request" (accuracy, model and transport), "work" ({"texels", "evaluations",
-///     "table_nodes_built", "table_lookups", "radius_fits", "specular_evaluations", "outputs": {"base_color",
+///     "table_nodes_built", "table_lookups", "radius_fits", "specular_evaluations", "outputs": {"albedo",
 ///     "radius", "specular"}}: what was computed), "seconds" ({"read", "compute", "write", "total"})}.
 ///     The arrays are new and C-contiguous, handed to numpy without a copy and flagged read-only (numpy refuses to
 ///     write into them or to make them writeable again: ``np.array(a)`` is a writeable copy).
@@ -550,7 +552,7 @@ pub(super) fn maps_py<'py>(
         return Err(progress.map(Progress::into_error).unwrap_or_else(|| internal("stopped without a progress hook")));
     };
 
-    let (base_color, radius_mm, specular_ior_level, specular) = {
+    let (albedo, radius, specular, specular_constants) = {
         let rgb = |data: Option<Vec<f32>>| {
             data.map(|d| rgb_image(py, height, width, d).and_then(|a| frozen(a.as_any()).map(|()| a.unbind())))
                 .transpose()
@@ -570,7 +572,7 @@ pub(super) fn maps_py<'py>(
     };
     let mut report = computed.report;
     report.seconds.total = start.elapsed().as_secs_f64();
-    Ok(MapsPy { height, width, base_color, radius_mm, specular_ior_level, specular, report })
+    Ok(MapsPy { height, width, albedo, radius, specular, specular_constants, report })
 }
 
 /// Flag a numpy array the core made read-only. Its memory belongs to the core's container (no writeable buffer), so
@@ -585,22 +587,23 @@ fn writeable(array: &Bound<'_, PyAny>) -> PyResult<bool> {
 }
 
 /// The keys of a :func:`maps` result, in the order the result lists those present.
-const MAPS_KEYS: [&str; 5] = ["base_color", "radius_mm", "specular_ior_level", "specular", "report"];
+const MAPS_KEYS: [&str; 5] = [ALBEDO_MAP.name, RADIUS_MAP.name, SPECULAR_MAP.name, "specular_constants", "report"];
 
 /// The result of :func:`maps`: the texture maps of the outputs asked for, the specular constants and the report.
 /// Read-only: its arrays are flagged not writeable (numpy refuses writes into them; copy one with ``np.array(a)``
-/// to change it) and ``specular`` and ``report`` are new dicts on each access.
+/// to change it) and ``specular_constants`` and ``report`` are new dicts on each access. Each map has one name,
+/// the same as the output that asks for it and the file it is written to (``albedo`` -> ``albedo.exr``).
 ///
 /// Attributes (None when the output was not asked for):
-///     base_color: float32 (H, W, 3), Principled Base Color (see :func:`maps`).
-///     radius_mm: float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale, mm.
-///     specular_ior_level: float32 (H, W), Principled Specular IOR Level per texel; None also when the oiliness is
-///         one value everywhere (``specular`` then holds the level).
-///     specular: the specular constants (dict; see :func:`maps`).
+///     albedo: float32 (H, W, 3), Principled Base Color (see :func:`maps`).
+///     radius: float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale, mm.
+///     specular: float32 (H, W), Principled Specular IOR Level per texel; None also when the oiliness is one value
+///         everywhere (``specular_constants`` then holds the level).
+///     specular_constants: the specular inputs that are one value (dict; see :func:`maps`).
 ///     report: what was done (dict; see :func:`maps`).
 ///     shape: (H, W).
 ///
-/// It reads like the dict :func:`maps` returned before: ``result["base_color"]``, ``"radius_mm" in result``,
+/// It reads like a dict: ``result["albedo"]``, ``"radius" in result``,
 /// ``result.keys()`` (those present, in the order above: an output not asked for is absent), ``result.get(key)``,
 /// ``result.items()``, ``len(result)``, iteration over the keys, ``dict(result)``; it is a
 /// ``collections.abc.Mapping``.
@@ -610,46 +613,52 @@ const MAPS_KEYS: [&str; 5] = ["base_color", "radius_mm", "specular_ior_level", "
 pub(super) struct MapsPy {
     height: usize,
     width: usize,
-    base_color: Option<Py<PyArray3<f32>>>,
-    radius_mm: Option<Py<PyArray3<f32>>>,
-    specular_ior_level: Option<Py<PyArray2<f32>>>,
-    /// The specular constants; with `specular_ior_level` (the oiliness varies) only those of `SPECULAR_CONSTANTS`
+    albedo: Option<Py<PyArray3<f32>>>,
+    radius: Option<Py<PyArray3<f32>>>,
+    specular: Option<Py<PyArray2<f32>>>,
+    /// The specular constants; with the `specular` map (the oiliness varies) only those of `SPECULAR_CONSTANTS`
     /// are shown.
-    specular: Option<SpecularParams>,
+    specular_constants: Option<SpecularParams>,
     report: crate::maps::MapReport,
 }
 
 impl MapsPy {
     /// The value of `key`, or None when the result has no such key.
     fn item<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
-        Ok(match key {
-            "base_color" => self.base_color.as_ref().map(|a| a.bind(py).clone().into_any()),
-            "radius_mm" => self.radius_mm.as_ref().map(|a| a.bind(py).clone().into_any()),
-            "specular_ior_level" => self.specular_ior_level.as_ref().map(|a| a.bind(py).clone().into_any()),
-            "specular" => self.specular_dict(py)?,
-            "report" => Some(self.report_dict(py)?),
-            _ => None,
+        let [albedo, radius, specular, constants, report] = MAPS_KEYS;
+        Ok(if key == albedo {
+            self.albedo.as_ref().map(|a| a.bind(py).clone().into_any())
+        } else if key == radius {
+            self.radius.as_ref().map(|a| a.bind(py).clone().into_any())
+        } else if key == specular {
+            self.specular.as_ref().map(|a| a.bind(py).clone().into_any())
+        } else if key == constants {
+            self.specular_dict(py)?
+        } else if key == report {
+            Some(self.report_dict(py)?)
+        } else {
+            None
         })
     }
 
     /// The keys present, in [`MAPS_KEYS`] order.
     fn present(&self) -> Vec<&'static str> {
         let has = [
-            self.base_color.is_some(),
-            self.radius_mm.is_some(),
-            self.specular_ior_level.is_some(),
+            self.albedo.is_some(),
+            self.radius.is_some(),
             self.specular.is_some(),
+            self.specular_constants.is_some(),
             true,
         ];
         MAPS_KEYS.iter().zip(has).filter(|(_, has)| *has).map(|(k, _)| *k).collect()
     }
 
     fn specular_dict<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
-        let Some(constants) = &self.specular else {
+        let Some(constants) = &self.specular_constants else {
             return Ok(None);
         };
         let all = to_py(py, constants)?;
-        if self.specular_ior_level.is_none() {
+        if self.specular.is_none() {
             return Ok(Some(all));
         }
         // Only the constants that do not depend on the oiliness (fit::principled_specular::specular_from_oiliness).
@@ -679,10 +688,9 @@ impl MapsPy {
         exr: ExrOptions,
         tiling: Tiling,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let base_color = self.base_color.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
-        let radius_mm = self.radius_mm.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
-        let specular =
-            self.specular_ior_level.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
+        let base_color = self.albedo.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
+        let radius_mm = self.radius.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
+        let specular = self.specular.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
         let images = MapImages::new(
             self.height,
             self.width,
@@ -698,27 +706,27 @@ impl MapsPy {
 impl MapsPy {
     /// float32 (H, W, 3), Principled Base Color (read-only); None without the "albedo" output.
     #[getter]
-    fn base_color<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f32>>> {
-        self.base_color.as_ref().map(|a| a.bind(py).clone())
+    fn albedo<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f32>>> {
+        self.albedo.as_ref().map(|a| a.bind(py).clone())
     }
 
     /// float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale, mm (read-only); None without the "radius"
     /// output.
     #[getter]
-    fn radius_mm<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f32>>> {
-        self.radius_mm.as_ref().map(|a| a.bind(py).clone())
+    fn radius<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f32>>> {
+        self.radius.as_ref().map(|a| a.bind(py).clone())
     }
 
     /// float32 (H, W), Principled Specular IOR Level per texel (read-only); None without the "specular" output or
     /// when the oiliness is one value everywhere.
     #[getter]
-    fn specular_ior_level<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f32>>> {
-        self.specular_ior_level.as_ref().map(|a| a.bind(py).clone())
+    fn specular<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f32>>> {
+        self.specular.as_ref().map(|a| a.bind(py).clone())
     }
 
-    /// The specular constants (a new dict; see :func:`maps`); None without the "specular" output.
+    /// The specular inputs that are one value (a new dict; see :func:`maps`); None without the "specular" output.
     #[getter]
-    fn specular<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+    fn specular_constants<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
         self.specular_dict(py)
     }
 
@@ -757,7 +765,7 @@ impl MapsPy {
         PyList::new(py, self.present())?.try_iter()
     }
 
-    /// The keys present, in the order "base_color", "radius_mm", "specular_ior_level", "specular", "report" (a
+    /// The keys present, in the order "albedo", "radius", "specular", "specular_constants", "report" (a
     /// ``KeysView``, as a dict's).
     fn keys<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
         mapping_view(slf, "KeysView")
@@ -789,9 +797,9 @@ impl MapsPy {
     }
 
     /// Write the maps this result holds as float EXRs with the core's writer (that of ``spectral-skin maps``),
-    /// straight from its arrays, in ``folder`` (created if missing): ``base_color`` -> ``albedo.exr`` (channels R, G,
-    /// B), ``radius_mm`` -> ``radius.exr`` (R, G, B), ``specular_ior_level`` -> ``specular.exr`` (Y); the file names
-    /// and everything else as :func:`write_maps`.
+    /// straight from its arrays, in ``folder`` (created if missing): ``albedo`` -> ``albedo.exr`` (channels R, G, B),
+    /// ``radius`` -> ``radius.exr`` (R, G, B), ``specular`` -> ``specular.exr`` (Y); the file names and everything
+    /// else as :func:`write_maps`.
     ///
     /// Arguments:
     ///     folder: the output folder.
@@ -962,9 +970,8 @@ fn write_images<'py>(
     })?;
     let dict = PyDict::new(py);
     let present = [images.base_color.is_some(), images.radius_mm.is_some(), images.specular_ior_level.is_some()];
-    for ((key, file), present) in
-        [("albedo", ALBEDO_FILE), ("radius", RADIUS_FILE), ("specular", SPECULAR_FILE)].into_iter().zip(present)
-    {
+    for (kind, present) in MAP_KINDS.iter().zip(present) {
+        let (key, file) = (kind.name, kind.file);
         if present {
             let name = match &tiling {
                 Tiling::One(tile) => tile_output_name(prefix, *tile, file),
@@ -1059,9 +1066,8 @@ impl<'py> Texels<'py> {
 
 /// Write the images of a :func:`maps` result as float EXRs, with the core's writer (that of ``spectral-skin maps``).
 ///
-/// Each image present (and not None) becomes one file in ``folder`` (created if missing): "base_color" ->
-/// ``albedo.exr`` (channels R, G, B), "radius_mm" -> ``radius.exr`` (R, G, B), "specular_ior_level" ->
-/// ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc.; with ``tile`` (a UDIM tile number),
+/// Each image present (and not None) becomes one file in ``folder`` (created if missing): "albedo" -> ``albedo.exr``
+/// (channels R, G, B), "radius" -> ``radius.exr`` (R, G, B), "specular" -> ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc.; with ``tile`` (a UDIM tile number),
 /// ``albedo.1001.exr`` etc., one tile of a tile set Blender loads as ``albedo.<UDIM>.exr``; with ``tiles``, a tile
 /// set stacked top to bottom, each tile's rows as that tile's files. Row 0 at the top; ``precision`` and
 /// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files (of every tile) are written as
@@ -1075,9 +1081,9 @@ impl<'py> Texels<'py> {
 /// to float32) first.
 ///
 /// Arguments:
-///     result: a :class:`Maps` (the result of :func:`maps`), or a mapping with any of "base_color" (H, W, 3),
-///         "radius_mm" (H, W, 3) and "specular_ior_level" (H, W), float32 or float64 numpy arrays (float64 is rounded
-///         to float32); other keys are ignored.
+///     result: a :class:`Maps` (the result of :func:`maps`), or a mapping with any of "albedo" (H, W, 3), "radius"
+///         (H, W, 3, mm) and "specular" (H, W), float32 or float64 numpy arrays (float64 is rounded to float32);
+///         other keys are ignored.
 ///     folder: the output folder.
 ///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
 ///     precision: "half" (16-bit, within 0.049 % of each value; the default) or "float" (32-bit).
@@ -1122,12 +1128,14 @@ pub(super) fn write_maps_py<'py>(
         return maps.write_as(py, &folder, prefix, exr, Tiling::of(tile, tiles, maps.height)?);
     }
     let mut images = Vec::with_capacity(3);
-    for (key, channels) in [("base_color", 3), ("radius_mm", 3), ("specular_ior_level", 1)] {
-        images.push(result_array(result, key, channels)?.map(|(a, shape)| (key, shape, a)));
+    for kind in &MAP_KINDS {
+        let key = kind.name;
+        images.push(result_array(result, key, kind.channels.len())?.map(|(a, shape)| (key, shape, a)));
     }
     let sizes: Vec<(&str, usize, usize)> = images.iter().flatten().map(|(key, s, _)| (*key, s[0], s[1])).collect();
     let Some(&(_, height, width)) = sizes.first() else {
-        return Err(invalid("result", "holds none of base_color, radius_mm, specular_ior_level: nothing to write"));
+        let names: Vec<&str> = MAP_KINDS.iter().map(|k| k.name).collect();
+        return Err(invalid("result", format!("holds none of {}: nothing to write", names.join(", "))));
     };
     if sizes.iter().any(|&(_, h, w)| (h, w) != (height, width)) {
         let listed: Vec<String> = sizes.iter().map(|(n, h, w)| format!("{n} ({h}, {w})")).collect();

@@ -97,8 +97,8 @@ def test_four_channel_parameter_exr_gives_the_cli_material(addon, tmp_path):
     # Reference: OpenImageIO's reading of the same file, through the core's maps().
     channels = read_channels(path)
     reference = reference_maps(np.stack([channels[p] for p in PARAMETERS], axis=2))
-    np.testing.assert_array_equal(albedo, reference["base_color"])
-    np.testing.assert_array_equal(radius, reference["radius_mm"])
+    np.testing.assert_array_equal(albedo, reference["albedo"])
+    np.testing.assert_array_equal(radius, reference["radius"])
     assert albedo.std(axis=(0, 1)).min() > 1e-3  # the map shows through: not one colour
     if CLI.exists():  # the CLI on the same file writes the same maps
         out = tmp_path / "cli"
@@ -119,7 +119,7 @@ def test_one_channel_exr_named_melanin(addon, tmp_path):
     asian = spectral_skin.presets()["asian"]
     reference = reference_maps(melanin=read_channels(path)["melanin"], melanin_blend=asian["melanin_blend"],
                                    hemoglobin=asian["hemoglobin"], oiliness=asian["oiliness"])
-    np.testing.assert_array_equal(albedo, reference["base_color"])
+    np.testing.assert_array_equal(albedo, reference["albedo"])
     # Not the whitish material of melanin 0 everywhere.
     zero = spectral_skin.evaluate(0.0, asian["melanin_blend"], asian["hemoglobin"], asian["oiliness"])
     assert np.all(albedo.reshape(-1, 3)[:, 2] < np.asarray(zero["methods"]["burley"]["base_color"])[2])
@@ -136,7 +136,7 @@ def test_packed_parameter_map_is_read_from_its_bytes(addon, tmp_path):
     material.spectral_skin.params_map = image
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
     albedo, _ = written(tmp_path, "scene_Skin")
-    np.testing.assert_array_equal(albedo, reference_maps(params)["base_color"])
+    np.testing.assert_array_equal(albedo, reference_maps(params)["albedo"])
 
 
 def test_unusable_parameter_file_is_a_clear_error(addon, tmp_path):
@@ -235,7 +235,7 @@ def test_out_of_range_texels_offer_the_clamp_checkbox(addon, tmp_path):
     presets = spectral_skin.presets()["caucasian"]
     reference = reference_maps(melanin=clamped, melanin_blend=presets["melanin_blend"],
                                    hemoglobin=presets["hemoglobin"], oiliness=presets["oiliness"])
-    np.testing.assert_array_equal(albedo, reference["base_color"])
+    np.testing.assert_array_equal(albedo, reference["albedo"])
 
 
 def test_remove_restores_the_previous_shader(addon):
@@ -295,7 +295,7 @@ def test_8_bit_png_maps_onto_the_range_once(addon, tmp_path):
     reference = reference_maps(melanin=caucasian["melanin"], melanin_blend=caucasian["melanin_blend"],
                                hemoglobin=(low + (high - low) * grey / 255.0).astype(np.float32),
                                oiliness=caucasian["oiliness"])
-    np.testing.assert_allclose(albedo, reference["base_color"], rtol=1e-6)
+    np.testing.assert_allclose(albedo, reference["albedo"], rtol=1e-6)
 
 
 def _save_grey_exr_from_blender(path: pathlib.Path, grey: np.ndarray, color_mode: str) -> None:
@@ -332,7 +332,7 @@ def test_grey_rgb_exr_saved_from_blender_applies(addon, tmp_path):
     asian = spectral_skin.presets()["asian"]
     reference = reference_maps(melanin=channels["R"], melanin_blend=asian["melanin_blend"],
                                hemoglobin=asian["hemoglobin"], oiliness=asian["oiliness"])
-    np.testing.assert_array_equal(albedo, reference["base_color"])
+    np.testing.assert_array_equal(albedo, reference["albedo"])
     # RGBA: applies too, and Apply reports the ignored alpha.
     rgba = tmp_path / "melanin_rgba.exr"
     _save_grey_exr_from_blender(rgba, melanin, "RGBA")

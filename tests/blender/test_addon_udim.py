@@ -113,7 +113,7 @@ def test_a_tile_set_goes_from_albedo_to_baked_tiled_maps(addon, tmp_path):
     for tile in TILES:
         written = _read_rgb(tmp_path / "textures" / f"head_Skin_albedo.{tile}.exr")
         alone = spectral_skin.maps(**spectral_skin.read_parameter_map(str(tmp_path / f"head_Skin_params.{tile}.exr")),
-                                   outputs=["albedo"], blender=bpy.app.version)["base_color"]
+                                   outputs=["albedo"], blender=bpy.app.version)["albedo"]
         np.testing.assert_allclose(written, alone, rtol=2e-3, atol=1e-4)  # half-float files
         residual = _read_rgb_one(tmp_path / f"head_Skin_residual.{tile}.exr")
         de = color_difference.delta_e00_linear_rgb(_srgb_decode(codes[tile].astype(np.float64)).reshape(-1, 3),

@@ -263,7 +263,7 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
         _closest(material)
     # Burley's Base Color is the albedo (test_renders.py).
     core = np.asarray(spectral_skin.maps(params, blender=tuple(bpy.app.version), engine="cycles",
-                                         method="burley")["base_color"], dtype=np.float64)[0]
+                                         method="burley")["albedo"], dtype=np.float64)[0]
     live, baked = _texels(scene, live_material), _texels(scene, baked_material)
     worst = {"live vs core": 0.0, "live vs baked": 0.0, "baked vs core": 0.0}
     for k in range(4):
@@ -277,7 +277,7 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
         params[0, :, 2] = params[0, ::-1, 2]
         _painted(params[0, :, 2], image)
         core = np.asarray(spectral_skin.maps(params, blender=tuple(bpy.app.version), engine="cycles",
-                                             method="burley")["base_color"], dtype=np.float64)[0]
+                                             method="burley")["albedo"], dtype=np.float64)[0]
         repainted = _texels(scene, live_material)
         for k in range(4):
             _check(f"repainted texel {k} live, no Apply", repainted[k], core[k])
@@ -341,7 +341,7 @@ def test_live_reads_a_udim_tile_set_as_baked_and_the_core_per_texel(addon, tmp_p
     for material in materials:
         _closest(material)
     core = np.asarray(spectral_skin.maps(params, blender=tuple(bpy.app.version), engine="cycles",
-                                         method="burley")["base_color"], dtype=np.float64)[0]
+                                         method="burley")["albedo"], dtype=np.float64)[0]
     live, baked = _texels(scene, live_material), _texels(scene, baked_material)
     for k in range(4):
         _check(f"{source} texel {k} live", live[k], core[k])

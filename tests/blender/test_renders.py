@@ -108,12 +108,12 @@ def test_burley_per_texel_maps(scene, tmp_path):
     params[0, :, 2] = [0.005, 0.02, 0.05, 0.1]  # hemoglobin
     params[0, :, 3] = 0.3  # oiliness
     m = spectral_skin.maps(params, method="burley")
-    base = np.asarray(m["base_color"], dtype=np.float64)[0]  # (n, 3)
-    radius = np.asarray(m["radius_mm"], dtype=np.float64)[0]
+    base = np.asarray(m["albedo"], dtype=np.float64)[0]  # (n, 3)
+    radius = np.asarray(m["radius"], dtype=np.float64)[0]
     albedo_path = os.path.join(tmp_path, "base_color.exr")
     radius_path = os.path.join(tmp_path, "radius_mm.exr")
-    write_exr(albedo_path, m["base_color"])
-    write_exr(radius_path, m["radius_mm"])
+    write_exr(albedo_path, m["albedo"])
+    write_exr(radius_path, m["radius"])
 
     set_world(scene, strength=1.0)
     slab = add_slab(size=1.0)

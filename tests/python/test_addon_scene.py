@@ -385,7 +385,7 @@ def test_dropped_effects_with_maps_are_not_kept(tmp_path, method):
     work = plan.work
     assert work["texels"] == 16 and work["evaluations"] == 16
     assert work["radius_fits"] == 0 and work["specular_evaluations"] == 0, work
-    assert work["outputs"] == {"base_color": 16, "radius": 0, "specular": 0}, work
+    assert work["outputs"] == {"albedo": 16, "radius": 0, "specular": 0}, work
     assert plan.specular_ior_level == 0.0 and plan.roughness > 0.0
     c = settings.constants()
     # A map run holds every parameter as float32, the constants too: evaluate() gets the same float32 values.

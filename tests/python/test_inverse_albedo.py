@@ -55,7 +55,7 @@ def test_the_thickness_is_chosen_by_default_and_written_into_the_parameter_map(t
     four = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
     np.testing.assert_array_equal(np.stack([planes[p] for p in four], axis=-1), fit.params)
     out = spectral_skin.maps(**planes, outputs=["albedo"])
-    de = color_difference.delta_e00_linear_rgb(texture[0].astype(np.float64), out["base_color"][0].astype(np.float64))
+    de = color_difference.delta_e00_linear_rgb(texture[0].astype(np.float64), out["albedo"][0].astype(np.float64))
     assert np.all(de <= fit.residual_delta_e00[0] + 0.1), (de, fit.residual_delta_e00)
 
 

@@ -98,19 +98,19 @@ def test_write_maps_writes_what_it_was_given(tmp_path: Path) -> None:
     # Exactly the three maps: no sidecar, no temporaries left.
     assert sorted(p.name for p in out.iterdir()) == ["scene_Skin_albedo.exr", "scene_Skin_radius.exr",
                                                      "scene_Skin_specular.exr"]
-    for name, key, channels in (("albedo", "base_color", ("R", "G", "B")), ("radius", "radius_mm", ("R", "G", "B")),
-                                ("specular", "specular_ior_level", ("Y",))):
+    # Each map's one name: the output, the result's key, the file.
+    for name, channels in (("albedo", ("R", "G", "B")), ("radius", ("R", "G", "B")), ("specular", ("Y",))):
         names, pixels = read(out / f"scene_Skin_{name}.exr")
         assert names == channels, name
         # Half floats by default: what maps() returned rounded to nearest half (as numpy rounds), row 0 at the top.
-        expected = result[key].astype(np.float16).astype(np.float32)
-        np.testing.assert_array_equal(pixels.reshape(result[key].shape), expected, err_msg=name)
+        expected = result[name].astype(np.float16).astype(np.float32)
+        np.testing.assert_array_equal(pixels.reshape(result[name].shape), expected, err_msg=name)
     # precision="float": bit for bit what maps() returned; float64 input is rounded to float32, as maps() does with
     # its inputs. The compression names are the CLI's.
-    radius64 = {"radius_mm": result["radius_mm"].astype(np.float64)}
+    radius64 = {"radius": result["radius"].astype(np.float64)}
     spectral_skin.write_maps(radius64, tmp_path / "f64", precision="float", compression="zips")
-    np.testing.assert_array_equal(read(tmp_path / "f64" / "radius.exr")[1].reshape(result["radius_mm"].shape),
-                                  result["radius_mm"])
+    np.testing.assert_array_equal(read(tmp_path / "f64" / "radius.exr")[1].reshape(result["radius"].shape),
+                                  result["radius"])
     with pytest.raises(spectral_skin.SpectralSkinError, match="unknown compression"):
         spectral_skin.write_maps(radius64, tmp_path / "f64", compression="PIZ")
 
@@ -119,8 +119,8 @@ def test_write_maps_removes_outputs_it_no_longer_writes(tmp_path: Path) -> None:
     spectral_skin.write_maps(_result(), tmp_path, "Skin")
     spectral_skin.write_maps(_result(), tmp_path, "Other")
     constant = _result(oiliness_varies=False)
-    assert "specular_ior_level" not in constant
-    written = spectral_skin.write_maps({"base_color": constant["base_color"], "radius_mm": None}, tmp_path, "Skin")
+    assert "specular" not in constant
+    written = spectral_skin.write_maps({"albedo": constant["albedo"], "radius": None}, tmp_path, "Skin")
     assert sorted(written) == ["albedo"]
     # This prefix's radius and specular maps are gone; another prefix's files are untouched.
     assert sorted(p.name for p in tmp_path.iterdir()) == ["Other_albedo.exr", "Other_radius.exr",
@@ -132,15 +132,15 @@ def test_write_maps_failure_leaves_existing_files(tmp_path: Path) -> None:
     spectral_skin.write_maps(result, tmp_path)
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     other = _result(oiliness_varies=False)
-    bad_shape = {"base_color": other["base_color"], "radius_mm": other["radius_mm"][:4]}
-    with pytest.raises(spectral_skin.SpectralSkinError, match=r"radius_mm \(4, 7\)"):
+    bad_shape = {"albedo": other["albedo"], "radius": other["radius"][:4]}
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"radius \(4, 7\)"):
         spectral_skin.write_maps(bad_shape, tmp_path)
     with pytest.raises(spectral_skin.SpectralSkinError, match="nothing to write"):
-        spectral_skin.write_maps({"specular": other["specular"]}, tmp_path)
+        spectral_skin.write_maps({"specular_constants": other["specular_constants"]}, tmp_path)
     with pytest.raises(spectral_skin.SpectralSkinError, match="prefix"):
         spectral_skin.write_maps(other, tmp_path, "../x")
-    with pytest.raises(TypeError, match="base_color"):
-        spectral_skin.write_maps({"base_color": other["base_color"].astype(np.float16)}, tmp_path)
+    with pytest.raises(TypeError, match="albedo"):
+        spectral_skin.write_maps({"albedo": other["albedo"].astype(np.float16)}, tmp_path)
     # A folder that cannot be created (a file is in the way): an error naming it, nothing written anywhere.
     blocker = tmp_path / "blocker"
     blocker.write_bytes(b"")

@@ -49,9 +49,9 @@ def relative_error(approx, exact):
 def test_exact_map_equals_evaluate_per_texel(method):
     params = random_params(6, 7, seed=1)
     result = spectral_skin.maps(params, method=method, exact=True)
-    assert_image(result["base_color"], 6, 7)
-    assert_image(result["radius_mm"], 6, 7)
-    assert_image(result["specular_ior_level"], 6, 7, channels=1)
+    assert_image(result["albedo"], 6, 7)
+    assert_image(result["radius"], 6, 7)
+    assert_image(result["specular"], 6, 7, channels=1)
     report = result["report"]
     assert report["strategy"] == {"name": "exact", "evaluations": 42}
     assert (report["width"], report["height"]) == (7, 6)
@@ -63,8 +63,8 @@ def test_exact_map_equals_evaluate_per_texel(method):
     for y in range(6):
         for x in range(7):
             color, radius = evaluate_texel(params[y, x], method)
-            np.testing.assert_allclose(result["base_color"][y, x], color, rtol=1e-6, err_msg=f"texel {(x, y)}")
-            np.testing.assert_allclose(result["radius_mm"][y, x], radius, rtol=1e-6, err_msg=f"texel {(x, y)}")
+            np.testing.assert_allclose(result["albedo"][y, x], color, rtol=1e-6, err_msg=f"texel {(x, y)}")
+            np.testing.assert_allclose(result["radius"][y, x], radius, rtol=1e-6, err_msg=f"texel {(x, y)}")
 
 
 def test_specular_map_follows_oiliness():
@@ -72,15 +72,15 @@ def test_specular_map_follows_oiliness():
     params[0, 0, 3] = 0.0
     params[4, 3, 3] = 1.0
     result = spectral_skin.maps(params)
-    specular = result["specular_ior_level"]
+    specular = result["specular"]
     assert_image(specular, 5, 4, channels=1)
     oil = params[..., 3]
     for y, x in [(0, 0), (4, 3), (2, 1)]:
         expected = spectral_skin.evaluate(0.1, 0.5, 0.01, float(oil[y, x]), outputs=("specular",))["specular"]
         assert specular[y, x] == pytest.approx(expected["specular_ior_level"], rel=1e-6, abs=0)
         # The constants beside the map: those of every texel (they do not depend on the oiliness).
-        assert set(result["specular"]) == {"roughness", "ior", "beckmann_m"}
-        for key, value in result["specular"].items():
+        assert set(result["specular_constants"]) == {"roughness", "ior", "beckmann_m"}
+        for key, value in result["specular_constants"].items():
             assert value == pytest.approx(expected[key], rel=1e-12), key
     assert specular[0, 0] == 0.0
 
@@ -103,8 +103,8 @@ def test_table_against_exact():
     assert not subset.flags["C_CONTIGUOUS"]
     exact = spectral_skin.maps(subset, exact=True)
     assert exact["report"]["strategy"]["name"] == "exact"
-    albedo_error = relative_error(table["base_color"][::4, ::4], exact["base_color"])
-    radius_error = relative_error(table["radius_mm"][::4, ::4], exact["radius_mm"])
+    albedo_error = relative_error(table["albedo"][::4, ::4], exact["albedo"])
+    radius_error = relative_error(table["radius"][::4, ::4], exact["radius"])
     assert albedo_error < TABLE_ALBEDO_RTOL, albedo_error
     assert radius_error < TABLE_RADIUS_RTOL, radius_error
     assert albedo_error > 0  # the table is interpolated, not the exact path under another name
@@ -127,10 +127,10 @@ def test_constant_parameters():
     assert report["strategy"] == {"name": "constant"}
     assert report["constant_parameters"] == ["melanin", "melanin_blend", "hemoglobin", *EXTENDED]
     color, radius = evaluate_texel([0.15, 0.0, 0.01, 0.0], "burley")
-    for image, expected in [(result["base_color"], color), (result["radius_mm"], radius)]:
+    for image, expected in [(result["albedo"], color), (result["radius"], radius)]:
         assert_image(image, 3, 4)
         np.testing.assert_allclose(image, np.broadcast_to(expected, (3, 4, 3)), rtol=1e-6)
-    assert_image(result["specular_ior_level"], 3, 4, channels=1)
+    assert_image(result["specular"], 3, 4, channels=1)
 
 
 def test_few_distinct_values():
@@ -144,25 +144,25 @@ def test_few_distinct_values():
     assert result["report"]["strategy"] == {"name": "distinct_tuples", "tuples": 3}
     # Oiliness is 0.3 everywhere: an array holding one value counts as a constant.
     assert result["report"]["constant_parameters"] == ["oiliness", *EXTENDED]
-    assert result["specular"]["specular_ior_level"] == pytest.approx(0.15, rel=1e-6)
+    assert result["specular_constants"]["specular_ior_level"] == pytest.approx(0.15, rel=1e-6)
     for region in range(3):
         color, radius = evaluate_texel(values[region], "random_walk")
         inside = mask == region
-        np.testing.assert_allclose(result["base_color"][inside], np.tile(color, (inside.sum(), 1)), rtol=1e-6)
-        np.testing.assert_allclose(result["radius_mm"][inside], np.tile(radius, (inside.sum(), 1)), rtol=1e-6)
+        np.testing.assert_allclose(result["albedo"][inside], np.tile(color, (inside.sum(), 1)), rtol=1e-6)
+        np.testing.assert_allclose(result["radius"][inside], np.tile(radius, (inside.sum(), 1)), rtol=1e-6)
 
 
 def test_constant_oiliness_gives_specular_constants():
     params = random_params(4, 4, seed=5)
     result = spectral_skin.maps(params, oiliness=0.3)
-    specular = result["specular"]
-    assert isinstance(specular, dict) and "specular_ior_level" not in result
+    specular = result["specular_constants"]
+    assert isinstance(specular, dict) and "specular" not in result
     expected = spectral_skin.evaluate(preset="caucasian", outputs=("specular",))["specular"]  # oiliness 0.3
     assert set(specular) == set(expected)
     for key, value in expected.items():
         assert specular[key] == pytest.approx(value, rel=1e-6), key
     assert "oiliness" in result["report"]["constant_parameters"]
-    zero = spectral_skin.maps(params, oiliness=0.0)["specular"]
+    zero = spectral_skin.maps(params, oiliness=0.0)["specular_constants"]
     assert zero["specular_ior_level"] == 0.0 and zero["oiliness"] == 0.0
 
 
@@ -171,21 +171,21 @@ def test_keywords_override_params_and_accept_float64_and_any_layout():
     reference = spectral_skin.maps(params, exact=True)
     # float64 input converted to the same float32 values.
     as64 = spectral_skin.maps(params.astype(np.float64), exact=True)
-    np.testing.assert_array_equal(as64["base_color"], reference["base_color"])
+    np.testing.assert_array_equal(as64["albedo"], reference["albedo"])
     # Fortran order and separate keyword planes (one of them a transposed view).
     fortran = spectral_skin.maps(np.asfortranarray(params), exact=True)
-    np.testing.assert_array_equal(fortran["radius_mm"], reference["radius_mm"])
+    np.testing.assert_array_equal(fortran["radius"], reference["radius"])
     planes = {name: params[..., c] for c, name in enumerate(CHANNELS)}
     planes["hemoglobin"] = np.ascontiguousarray(params[..., 2].T).T
     separate = spectral_skin.maps(**planes, exact=True)
-    np.testing.assert_array_equal(separate["base_color"], reference["base_color"])
-    np.testing.assert_array_equal(separate["specular_ior_level"], reference["specular_ior_level"])
+    np.testing.assert_array_equal(separate["albedo"], reference["albedo"])
+    np.testing.assert_array_equal(separate["specular"], reference["specular"])
     # A keyword replaces its channel of params.
     other = random_params(8, 8, seed=7)[..., 0]
     override = spectral_skin.maps(params, melanin=other, exact=True)
     expected = spectral_skin.maps(np.stack([other, *(params[..., c] for c in (1, 2, 3))], axis=-1), exact=True)
-    np.testing.assert_array_equal(override["base_color"], expected["base_color"])
-    assert not np.array_equal(override["base_color"], reference["base_color"])
+    np.testing.assert_array_equal(override["albedo"], expected["albedo"])
+    assert not np.array_equal(override["albedo"], reference["albedo"])
 
 
 def test_working_space_is_passed_through():
@@ -193,10 +193,10 @@ def test_working_space_is_passed_through():
     rec709 = spectral_skin.maps(params, wavelength_step_nm=10.0)
     rec2020 = spectral_skin.maps(params, wavelength_step_nm=10.0, working_space="Linear Rec.2020")
     assert rec2020["report"]["color_space"] == "Linear Rec.2020"
-    assert not np.allclose(rec709["base_color"], rec2020["base_color"])
+    assert not np.allclose(rec709["albedo"], rec2020["albedo"])
     m, b, h, o = (float(v) for v in params[1, 0])
     ev = spectral_skin.evaluate(m, b, h, o, wavelength_step_nm=10.0, working_space="Linear Rec.2020")
-    np.testing.assert_allclose(rec2020["base_color"][1, 0], ev["methods"]["burley"]["base_color"], rtol=1e-6)
+    np.testing.assert_allclose(rec2020["albedo"][1, 0], ev["methods"]["burley"]["base_color"], rtol=1e-6)
 
 
 # --- bad texels -----------------------------------------------------------------------------------------------------
@@ -228,8 +228,8 @@ def test_bad_texels_are_clamped_and_counted():
     fixed = params.copy()
     fixed[0, 7, 0], fixed[2, 3, 0], fixed[5, 1, 0] = 0.5, 0.0, 0.5  # NaN to the minimum, +inf and 0.7 to the maximum
     expected = spectral_skin.maps(fixed, exact=True)
-    np.testing.assert_array_equal(result["base_color"], expected["base_color"])
-    np.testing.assert_array_equal(result["radius_mm"], expected["radius_mm"])
+    np.testing.assert_array_equal(result["albedo"], expected["albedo"])
+    np.testing.assert_array_equal(result["radius"], expected["radius"])
     assert np.isnan(params[2, 3, 0])  # the input array is not modified
 
 
@@ -302,7 +302,7 @@ def test_numpy_scalars_are_constants():
     params = random_params(3, 3, seed=11)
     a = spectral_skin.maps(params, melanin=np.float32(0.25), oiliness=np.float64(0.5), hemoglobin=0)
     b = spectral_skin.maps(params, melanin=0.25, oiliness=0.5, hemoglobin=0.0)
-    np.testing.assert_array_equal(a["base_color"], b["base_color"])
+    np.testing.assert_array_equal(a["albedo"], b["albedo"])
     assert a["report"]["strategy"]["name"] == "distinct_tuples"
 
 
@@ -331,7 +331,7 @@ def test_table_cache_is_reused(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()), "the table was not kept"
     second = spectral_skin.maps(params, table_resolution=small)
     assert second["report"]["strategy"]["from_cache"] is True
-    np.testing.assert_array_equal(first["base_color"], second["base_color"])
+    np.testing.assert_array_equal(first["albedo"], second["albedo"])
     fresh = spectral_skin.maps(params, table_resolution=small, table_cache=False)
     assert fresh["report"]["strategy"]["from_cache"] is False
 
@@ -348,21 +348,21 @@ def test_outputs_choice_computes_only_what_is_asked(exact):
     no_radius = spectral_skin.maps(params, outputs=("albedo", "specular"), **kwargs)
     work = no_radius["report"]["work"]
     assert work["radius_fits"] == 0 and work["outputs"]["radius"] == 0, work
-    assert "radius_mm" not in no_radius
-    np.testing.assert_array_equal(no_radius["specular_ior_level"], full["specular_ior_level"])
+    assert "radius" not in no_radius
+    np.testing.assert_array_equal(no_radius["specular"], full["specular"])
     if exact:
         for y, x in [(0, 0), (2, 5), (5, 3)]:
             m, b, h, o = (float(v) for v in params[y, x])
             albedo = spectral_skin.evaluate(m, b, h, o, outputs=("albedo",))["diffuse_reflectance_rgb"]
-            np.testing.assert_array_equal(no_radius["base_color"][y, x], np.float32(albedo))
+            np.testing.assert_array_equal(no_radius["albedo"][y, x], np.float32(albedo))
     else:
         assert no_radius["report"]["strategy"]["name"] == "table"
         assert work["table_nodes_built"] == full["report"]["work"]["table_nodes_built"] > 0
     no_specular = spectral_skin.maps(params, outputs=("albedo", "radius"), **kwargs)
     assert no_specular["report"]["work"]["specular_evaluations"] == 0
-    assert "specular" not in no_specular and "specular_ior_level" not in no_specular
-    np.testing.assert_array_equal(no_specular["base_color"], full["base_color"])
-    np.testing.assert_array_equal(no_specular["radius_mm"], full["radius_mm"])
+    assert "specular_constants" not in no_specular and "specular" not in no_specular
+    np.testing.assert_array_equal(no_specular["albedo"], full["albedo"])
+    np.testing.assert_array_equal(no_specular["radius"], full["radius"])
 
 
 @pytest.mark.parametrize("outputs", [(), ("profile_rgb",), ("albedo", "spectrum")])
@@ -380,8 +380,8 @@ def test_extended_defaults_give_identical_maps():
     defaults = {p["name"]: p["default"] for p in spectral_skin.parameters() if p["name"] in EXTENDED}
     assert defaults == {"epidermis_thickness_mm": 0.25, "baseline_absorption_scale": 1.0, "blood_oxygenation": 0.75}
     given = spectral_skin.maps(params, table_cache=False, **defaults)
-    np.testing.assert_array_equal(plain["base_color"], given["base_color"])
-    np.testing.assert_array_equal(plain["radius_mm"], given["radius_mm"])
+    np.testing.assert_array_equal(plain["albedo"], given["albedo"])
+    np.testing.assert_array_equal(plain["radius"], given["radius"])
     assert set(EXTENDED) <= set(given["report"]["constant_parameters"])
     assert given["report"]["constant_values"]["blood_oxygenation"] == 0.75
 
@@ -397,10 +397,10 @@ def test_extended_constant_gives_evaluates_values(exact):
         m, b, h, o = (float(v) for v in params[y, x])
         ev = spectral_skin.evaluate(m, b, h, o, epidermis_thickness_mm=0.08, blood_oxygenation=float(np.float32(0.9)))
         expected = ev["methods"]["burley"]
-        np.testing.assert_allclose(result["base_color"][y, x], expected["base_color"], rtol=1e-6)
-        np.testing.assert_allclose(result["radius_mm"][y, x], expected["subsurface_radius_mm"], rtol=1e-6)
+        np.testing.assert_allclose(result["albedo"][y, x], expected["base_color"], rtol=1e-6)
+        np.testing.assert_allclose(result["radius"][y, x], expected["subsurface_radius_mm"], rtol=1e-6)
     paper = spectral_skin.maps(params)
-    assert relative_error(paper["base_color"], result["base_color"].astype(np.float64)) > 0.01
+    assert relative_error(paper["albedo"], result["albedo"].astype(np.float64)) > 0.01
 
 
 def test_extended_map_varies_per_texel():
@@ -413,7 +413,7 @@ def test_extended_map_varies_per_texel():
     for y, x in np.ndindex(3, 4):
         ev = spectral_skin.evaluate(0.1, float(np.float32(0.5)), float(np.float32(0.02)), float(np.float32(0.3)),
                                     epidermis_thickness_mm=float(thickness[y, x]))
-        np.testing.assert_allclose(result["base_color"][y, x], ev["methods"]["burley"]["base_color"], rtol=1e-6)
+        np.testing.assert_allclose(result["albedo"][y, x], ev["methods"]["burley"]["base_color"], rtol=1e-6)
 
 
 def test_extended_bad_values_name_the_parameter():

@@ -15,8 +15,8 @@ from spectral_skin import SpectralSkinError
 # A UDIM tile set stacked top to bottom: tile 1001 rows 0-1, 1002 rows 2-4, 1011 rows 5-8.
 TILES = [(1001, 2), (1002, 3), (1011, 4)]
 HEIGHT, WIDTH = sum(rows for _, rows in TILES), 5
-FILES = {"albedo": ("base_color", ("R", "G", "B")), "radius": ("radius_mm", ("R", "G", "B")),
-         "specular": ("specular_ior_level", ("Y",))}
+# Each map's one name (the output, the result's key and attribute, the file) and its file's channels.
+FILES = {"albedo": ("R", "G", "B"), "radius": ("R", "G", "B"), "specular": ("Y",)}
 
 
 def params(seed: int = 3, oiliness: float | None = None) -> np.ndarray:
@@ -49,30 +49,35 @@ def as_half(a: np.ndarray) -> np.ndarray:
 
 def test_attributes_and_shapes(result: spectral_skin.Maps) -> None:
     assert isinstance(result, spectral_skin.Maps) and result.shape == (HEIGHT, WIDTH)
-    for name, shape in (("base_color", (HEIGHT, WIDTH, 3)), ("radius_mm", (HEIGHT, WIDTH, 3)),
-                        ("specular_ior_level", (HEIGHT, WIDTH))):
+    for name, shape in (("albedo", (HEIGHT, WIDTH, 3)), ("radius", (HEIGHT, WIDTH, 3)),
+                        ("specular", (HEIGHT, WIDTH))):
         a = getattr(result, name)
         assert isinstance(a, np.ndarray) and a.dtype == np.float32 and a.shape == shape, name
         assert a.flags["C_CONTIGUOUS"] and np.isfinite(a).all(), name
-    # The oiliness varies: the per-texel level is a map, "specular" holds the constants that do not depend on it.
-    assert set(result.specular or {}) == {"roughness", "ior", "beckmann_m"}
+    # The oiliness varies: the per-texel level is the "specular" map, "specular_constants" holds the inputs that do
+    # not depend on it.
+    assert set(result.specular_constants or {}) == {"roughness", "ior", "beckmann_m"}
     assert (result.report["width"], result.report["height"]) == (WIDTH, HEIGHT)
     assert result.report["strategy"]["name"] == "exact"
-    assert repr(result).startswith(f"Maps({WIDTH} x {HEIGHT}, base_color, radius_mm, specular_ior_level, specular")
+    assert repr(result).startswith(f"Maps({WIDTH} x {HEIGHT}, albedo, radius, specular, specular_constants")
     # An output not asked for is None (and absent from the mapping); one oiliness everywhere: no level map.
     albedo = spectral_skin.maps(params(oiliness=0.3), outputs=["albedo", "specular"], exact=True)
-    assert albedo.radius_mm is None and albedo.specular_ior_level is None and albedo.base_color is not None
-    assert albedo.specular is not None and albedo.specular["specular_ior_level"] == pytest.approx(0.15)
-    assert list(albedo.keys()) == ["base_color", "specular", "report"]
-    assert "radius_mm" not in albedo and albedo.get("radius_mm") is None
-    with pytest.raises(KeyError, match="radius_mm"):
-        albedo["radius_mm"]
+    assert albedo.radius is None and albedo.specular is None and albedo.albedo is not None
+    constants = albedo.specular_constants
+    assert constants is not None and constants["specular_ior_level"] == pytest.approx(0.15)
+    assert list(albedo.keys()) == ["albedo", "specular_constants", "report"]
+    assert "radius" not in albedo and albedo.get("radius") is None
+    with pytest.raises(KeyError, match="radius"):
+        albedo["radius"]
+    # The names of earlier releases are gone, not kept as second names.
+    for old in ("base_color", "radius_mm", "specular_ior_level"):
+        assert old not in result and not hasattr(result, old), old
 
 
 def test_arrays_are_read_only(result: spectral_skin.Maps) -> None:
     """numpy refuses writes into the arrays, and refuses to make them (or a view of them) writeable again; the
     attributes cannot be assigned; the dicts are new on each access, so changing one changes nothing held."""
-    for name in ("base_color", "radius_mm", "specular_ior_level"):
+    for name in ("albedo", "radius", "specular"):
         a = getattr(result, name)
         assert not a.flags["WRITEABLE"], name
         with pytest.raises(ValueError, match="read-only"):
@@ -88,11 +93,11 @@ def test_arrays_are_read_only(result: spectral_skin.Maps) -> None:
     report = result.report
     report["width"] = 0
     assert result.report["width"] == WIDTH
-    assert result["base_color"] is result.base_color  # the one array, not a copy per access
+    assert result["albedo"] is result.albedo  # the one array, not a copy per access
 
 
 def test_mapping_access_equals_the_attributes(result: spectral_skin.Maps) -> None:
-    keys = ["base_color", "radius_mm", "specular_ior_level", "specular", "report"]
+    keys = ["albedo", "radius", "specular", "specular_constants", "report"]
     assert list(result.keys()) == list(result) == keys and len(result) == 5
     assert result.keys() == set(keys)  # a KeysView, as a dict's
     assert isinstance(result, Mapping)
@@ -117,9 +122,9 @@ def test_write_one_image_round_trips(result: spectral_skin.Maps, tmp_path: Path)
     out = tmp_path / "out"
     assert written == {kind: out / f"scene_Skin_{kind}.exr" for kind in FILES}
     assert sorted(p.name for p in out.iterdir()) == sorted(f"scene_Skin_{kind}.exr" for kind in FILES)
-    for kind, (key, channels) in FILES.items():
+    for kind, channels in FILES.items():
         names, pixels = read(written[kind])
-        array = result[key]
+        array = result[kind]
         assert names == channels, kind
         np.testing.assert_array_equal(pixels.reshape(array.shape), as_half(array), err_msg=kind)
     # write_maps takes the Maps itself (its held arrays) and writes the same files.
@@ -135,8 +140,8 @@ def test_write_a_tile_set_writes_each_tiles_rows(result: spectral_skin.Maps, tmp
         f"Skin_{kind}.{tile}.exr" for kind in FILES for tile, _ in TILES)
     first = 0
     for tile, rows in TILES:
-        for kind, (key, _) in FILES.items():
-            expected = result[key][first:first + rows]
+        for kind in FILES:
+            expected = result[kind][first:first + rows]
             _, pixels = read(tmp_path / f"Skin_{kind}.{tile}.exr")
             np.testing.assert_array_equal(pixels.reshape(expected.shape), as_half(expected), err_msg=f"{kind} {tile}")
         first += rows

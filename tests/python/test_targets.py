@@ -61,8 +61,8 @@ def test_maps_for_a_target_equal_evaluate():
         result = spectral_skin.maps(params, method=method, blender=blender, engine=engine, exact=True)
         assert result["report"]["target"] == {"blender": blender, "engine": engine, "tested": True}
         ev = spectral_skin.evaluate(0.2, 0.5, 0.02, 0.3, blender=blender, engine=engine)["methods"][method]
-        np.testing.assert_allclose(result["base_color"][0, 0], ev["base_color"], rtol=1e-6)
-        np.testing.assert_allclose(result["radius_mm"][0, 0], ev["subsurface_radius_mm"], rtol=1e-6)
+        np.testing.assert_allclose(result["albedo"][0, 0], ev["base_color"], rtol=1e-6)
+        np.testing.assert_allclose(result["radius"][0, 0], ev["subsurface_radius_mm"], rtol=1e-6)
 
 
 @pytest.mark.parametrize("call, needles", [
