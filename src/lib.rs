@@ -19,6 +19,7 @@ pub mod maps;
 mod numeric;
 pub mod skin;
 pub mod surface;
+pub mod surface_lobes;
 mod table;
 pub mod transport;
 

@@ -24,6 +24,8 @@ Functions:
     fit_albedo_map: parameter maps and a per-texel ΔE00 residual from an albedo texture.
     fit_spectrum: model parameters fitted to a measured reflectance spectrum.
     cielab, delta_e00: the core's CIELAB and CIEDE2000 colour difference of linear RGB colours (the fits' own).
+    surface_brdf, surface_albedo: the skin surface's reflection (BRDF and directional albedo), the measured two-lobe
+        model or the paper's oil layer.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
@@ -55,6 +57,8 @@ from ._core import (
     profile,
     read_parameter_map,
     shader_table,
+    surface_albedo,
+    surface_brdf,
     transports,
     write_maps,
     write_shader_table,
@@ -83,6 +87,8 @@ __all__ = [
     "profile",
     "read_parameter_map",
     "shader_table",
+    "surface_albedo",
+    "surface_brdf",
     "transports",
     "write_maps",
     "write_shader_table",

@@ -38,6 +38,8 @@ __all__ = [
     "profile",
     "read_parameter_map",
     "shader_table",
+    "surface_albedo",
+    "surface_brdf",
     "transports",
     "write_maps",
     "write_shader_table",
@@ -63,6 +65,7 @@ _ExtendedParameter = Literal["epidermis_thickness_mm", "baseline_absorption_scal
 _RgbMapping = Literal["linear", "non_negative"]
 _Boundaries = Literal["paper", "capped"]
 _Transport = Literal["adding_doubling", "diffusion"]
+_SurfaceModel = Literal["measured", "paper"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
 _MapOutputName = Literal["albedo", "radius", "specular"]
 
@@ -233,21 +236,21 @@ class Maps(Mapping[str, Any]):
     """Documented once, in the compiled module: ``help(spectral_skin.Maps)``."""
 
     @property
-    def base_color(self) -> _Float32Array | None: ...
+    def albedo(self) -> _Float32Array | None: ...
     @property
-    def radius_mm(self) -> _Float32Array | None: ...
+    def radius(self) -> _Float32Array | None: ...
     @property
-    def specular_ior_level(self) -> _Float32Array | None: ...
+    def specular(self) -> _Float32Array | None: ...
     @property
-    def specular(self) -> _SpecularConstants | _SpecularMapConstants | None: ...
+    def specular_constants(self) -> _SpecularConstants | _SpecularMapConstants | None: ...
     @property
     def report(self) -> dict[str, Any]: ...
     @property
     def shape(self) -> tuple[int, int]: ...
     @overload
-    def __getitem__(self, key: Literal["base_color", "radius_mm", "specular_ior_level"], /) -> _Float32Array: ...
+    def __getitem__(self, key: _MapOutputName, /) -> _Float32Array: ...
     @overload
-    def __getitem__(self, key: Literal["specular"], /) -> _SpecularConstants | _SpecularMapConstants: ...
+    def __getitem__(self, key: Literal["specular_constants"], /) -> _SpecularConstants | _SpecularMapConstants: ...
     @overload
     def __getitem__(self, key: Literal["report"], /) -> dict[str, Any]: ...
     @overload
@@ -461,6 +464,26 @@ def delta_e00(
     white_luminance: float = 1.0,
 ) -> npt.NDArray[np.float64]:
     """Documented once, in the compiled module: ``help(spectral_skin.delta_e00)``."""
+    ...
+
+def surface_brdf(
+    theta_in_deg: npt.ArrayLike,
+    theta_out_deg: npt.ArrayLike,
+    phi_deg: npt.ArrayLike = 180.0,
+    *,
+    oiliness: float = 0.3,
+    surface: _SurfaceModel | str = "measured",
+) -> npt.NDArray[np.float64]:
+    """Documented once, in the compiled module: ``help(spectral_skin.surface_brdf)``."""
+    ...
+
+def surface_albedo(
+    theta_in_deg: npt.ArrayLike,
+    *,
+    oiliness: float = 0.3,
+    surface: _SurfaceModel | str = "measured",
+) -> npt.NDArray[np.float64]:
+    """Documented once, in the compiled module: ``help(spectral_skin.surface_albedo)``."""
     ...
 
 def fit_spectrum(

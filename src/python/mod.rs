@@ -14,6 +14,7 @@ mod inverse;
 mod inverse_albedo;
 mod maps;
 mod shader_table;
+mod surface;
 
 use pyo3::prelude::*;
 
@@ -25,6 +26,7 @@ use inverse::fit_spectrum_py;
 use inverse_albedo::{fit_albedo_map_py, fit_albedo_py, AlbedoMapFitPy};
 use maps::{maps_py, read_parameter_map_py, write_maps_py, MapsPy};
 use shader_table::{shader_table_py, write_shader_table_py};
+use surface::{surface_albedo_py, surface_brdf_py};
 
 /// spectral-skin's compiled core: Donner & Jensen 2006's spectral skin BSSRDF.
 #[pymodule]
@@ -56,6 +58,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit_spectrum_py, m)?)?;
     m.add_function(wrap_pyfunction!(cielab_py, m)?)?;
     m.add_function(wrap_pyfunction!(delta_e00_py, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_brdf_py, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_albedo_py, m)?)?;
     #[cfg(feature = "cli")]
     m.add_function(wrap_pyfunction!(cli::cli_main_py, m)?)?;
     Ok(())

@@ -267,7 +267,7 @@ def test_error_and_warning_classes_are_exported():
         "AlbedoMapFit", "Maps", "SpectralSkinError", "SpectralSkinIOError", "SpectralSkinWarning", "__version__", "blender_targets", "cielab", "delta_e00", "evaluate",
         "fit_albedo", "fit_albedo_map", "fit_spectrum", "layered_reflectance", "maps",
         "parameter_ranges", "parameters", "accuracy_levels", "presets", "profile", "read_parameter_map", "shader_table",
-        "transports", "write_maps", "write_shader_table"
+        "surface_albedo", "surface_brdf", "transports", "write_maps", "write_shader_table"
     }
 
 
@@ -352,4 +352,4 @@ def test_work_counts_only_what_was_asked():
                                   oiliness=0.3)["report"]["work"]
     assert (constant["texels"], constant["evaluations"], constant["radius_fits"]) == (64, 1, 3), constant
     assert (constant["table_nodes_built"], constant["table_lookups"], constant["specular_evaluations"]) == (0, 0, 1)
-    assert constant["outputs"] == {"base_color": 64, "radius": 64, "specular": 0}
+    assert constant["outputs"] == {"albedo": 64, "radius": 64, "specular": 0}

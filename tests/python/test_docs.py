@@ -21,7 +21,7 @@ def test_every_public_function_is_checked() -> None:
     assert FUNCTIONS == ["accuracy_levels", "blender_targets", "cielab", "delta_e00", "evaluate", "fit_albedo", "fit_albedo_map",
                          "fit_spectrum", "layered_reflectance", "maps",
                          "parameter_ranges", "parameters", "presets", "profile", "read_parameter_map", "shader_table",
-                         "transports", "write_maps", "write_shader_table"]
+                         "surface_albedo", "surface_brdf", "transports", "write_maps", "write_shader_table"]
 
 
 @pytest.mark.parametrize("name", FUNCTIONS)
