@@ -40,7 +40,7 @@ def reference_maps(*args, **kwargs):
     """``spectral_skin.maps`` for this Blender and Cycles (the scenes of these tests), its images rounded to half
     floats as the add-on writes them (``write_maps``' default precision): a dict (the core's ``Maps`` is read-only)."""
     result = dict(spectral_skin.maps(*args, blender=bpy.app.version, engine="cycles", **kwargs))
-    for key in ("base_color", "radius_mm"):
+    for key in ("albedo", "radius"):
         if result.get(key) is not None:
             result[key] = result[key].astype(np.float16).astype(np.float32)
     return result
