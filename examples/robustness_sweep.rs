@@ -1,7 +1,7 @@
 //! The random sweeps behind the tables of docs/robustness.md: layer splitting, monotonicity in absorption and negative
 //! profile lobes, by class, over seeded random cases, each for the paper's extrapolated boundaries and for the capped
 //! ones (`diffusion::Boundaries`); then the skin presets and thin epidermis under both. The property tests in
-//! tests/robustness_properties.rs assert the classes that hold; this prints how far the others are off.
+//! tests/physics/robustness_properties.rs assert the classes that hold; this prints how far the others are off.
 //!
 //!     cargo run --release --example robustness_sweep            # about a minute
 

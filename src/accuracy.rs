@@ -96,7 +96,7 @@ impl Accuracy {
     /// The converged reference: 1 nm wavelength steps (the colour tables' own resolution: the spectrum is integrated
     /// against the 1 nm CMF x D65 product, so finer steps cannot change a colour), the whole multipole series, 16 fit
     /// frequencies per decade, and an inverse-Hankel grid twice as fine with 12-point panels and a 1e-15 cut-off.
-    /// `tests/accuracy.rs` checks that refining it further changes nothing and how far the default is from it.
+    /// `tests/physics/accuracy.rs` checks that refining it further changes nothing and how far the default is from it.
     pub fn reference() -> Accuracy {
         Accuracy {
             wavelength_step_nm: 1.0,
@@ -112,7 +112,7 @@ impl Accuracy {
 
     /// Every knob refined once more: half the wavelength step, twice the fit frequencies, four more nodes per panel,
     /// panels half as wide, a cut-off ten times lower and twice the streams (at most `STREAMS_RANGE`'s maximum).
-    /// `reference().refined()` is the check that the reference has converged (tests/accuracy.rs,
+    /// `reference().refined()` is the check that the reference has converged (tests/physics/accuracy.rs,
     /// docs/accuracy-vs-time.md).
     pub fn refined(&self) -> Accuracy {
         let h = self.hankel;

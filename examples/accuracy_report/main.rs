@@ -41,7 +41,7 @@ struct Args {
 }
 
 /// Acceptance bounds of the default level against the reference: albedo 0.2 % from the numerical knobs (issue 5) plus
-/// 0.01 % from the transport's 10 streams against the reference's 32 (issue 20; tests/accuracy.rs checks the two
+/// 0.01 % from the transport's 10 streams against the reference's 32 (issue 20; tests/physics/accuracy.rs checks the two
 /// apart), radius 1 %.
 const DEFAULT_ALBEDO_BOUND: f64 = 0.002 + 0.0001;
 const DEFAULT_RADIUS_BOUND: f64 = 0.01;

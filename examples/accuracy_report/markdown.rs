@@ -281,7 +281,7 @@ pub fn write(out_dir: &Path, report: &Report) -> Result<(), Box<dyn std::error::
         fmt_log_error(c.profile_log)
     );
     let _ = writeln!(md, "**Default against the reference** (acceptance: albedo within 0.21 %: 0.2 % from the numerical knobs and 0.01 % from \
-         the transport's 10 streams against the reference's 32, checked apart in `tests/accuracy.rs`; radius within 1 %):\n");
+         the transport's 10 streams against the reference's 32, checked apart in `tests/physics/accuracy.rs`; radius within 1 %):\n");
     let _ = writeln!(md, "| preset | albedo err (max rel.) | ΔE00 | radius err (max rel.) | edge misfit | profile err |\n|---|---:|---:|---:|---:|---:|");
     for d in &r.default_rows {
         let _ = writeln!(
@@ -308,7 +308,7 @@ pub fn write(out_dir: &Path, report: &Report) -> Result<(), Box<dyn std::error::
          (closed-form multipole) and by the exact adding-doubling solver at 4-32 streams, against the project's Monte \
          Carlo photon walk (`tests/support/mc.rs`: isotropic scattering with σs = σs′, Fresnel boundaries at n = 1.4, \
          validated against Beer–Lambert, energy conservation and Chandrasekhar's H-function in \
-         `tests/monte_carlo.rs`). Columns: each total / MC − 1.\n"
+         `tests/physics/monte_carlo.rs`). Columns: each total / MC − 1.\n"
     );
     let streams_header: String = crate::checks::MC_STREAMS.iter().map(|n| format!(" {n} streams |")).collect();
     let streams_rule: String = crate::checks::MC_STREAMS.iter().map(|_| "---:|").collect();

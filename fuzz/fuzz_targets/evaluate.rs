@@ -1,7 +1,7 @@
 //! `evaluate` with parameters, model, accuracy knobs, colour space, target and outputs decoded from the input,
 //! inside and beyond the accepted ranges. The knobs that set the amount of work are kept small (at most 64 image
 //! pairs, 32 profile radii, a wavelength step of 5 nm or more, the draft and default levels) so that one execution
-//! stays in milliseconds; their ranges are the property tests' and `tests/accuracy.rs`' business.
+//! stays in milliseconds; their ranges are the property tests' and `tests/physics/accuracy.rs`' business.
 //! Asserts: Ok gives finite values everywhere; spectral reflectance in [0, 1]; spectral profiles >= 0, and the RGB
 //! profile too under `RgbMapping::NonNegative`; radii > 0; an error has a message; nothing panics.
 

@@ -300,7 +300,7 @@ def main() -> None:
         "(`encode.rs`, `zip_block`: half the CPU of miniz_oxide's level 4 for about 8 % more bytes; level 1 would be a "
         "third faster again but 45 % larger); the lookup works on 64 texels of a row at a time, so the cube roots, the "
         "interpolation and the exponentials are vector loops, and a texel equal to its left neighbour is not looked up "
-        "again (the same values, bit for bit: `tests/maps_lookup_rows.rs`); the parameter check runs in parallel; half "
+        "again (the same values, bit for bit: `tests/maps/maps_lookup_rows.rs`); the parameter check runs in parallel; half "
         "input is converted a row at a time; and the example is written in half floats: its PIZ decode takes about a third "
         "of the float file's CPU (the float samples' low mantissa bits are noise to PIZ's Huffman coder) and its rows repeat "
         "each tuple over about a dozen texels, so the lookup runs on a fraction of them. Now the half example's CPU goes "

@@ -124,7 +124,7 @@ pub enum Boundaries {
     /// still dip below zero, which is reported as a lobe of these boundaries (`NegativeLobe`). And the blend weight is the share that
     /// crosses without scattering, w = (1 - sigma_s' d)^2 below sigma_s' d = 1, which absorption does not change (light
     /// absorbed in a thin layer reveals no index): with both, more absorption never gives more reflectance
-    /// (tests/robustness_properties.rs). Where no cap acts and every finite layer has sigma_s' d >= 1 it is the paper's
+    /// (tests/physics/robustness_properties.rs). Where no cap acts and every finite layer has sigma_s' d >= 1 it is the paper's
     /// stack, bit for bit. Not the default: it moves the presets' red and thin epidermis away from Monte Carlo
     /// (docs/robustness.md).
     Capped,

@@ -235,7 +235,7 @@ const fn v(major: u16, minor: u16) -> BlenderVersion {
     BlenderVersion { major, minor }
 }
 
-/// The table, oldest first. A new Blender version: one row here, and one test in `tests/blender_targets.rs`.
+/// The table, oldest first. A new Blender version: one row here, and one test in `tests/maps/blender_targets.rs`.
 pub const VERSION_TABLE: &[VersionEntry] = &[
     VersionEntry { version: v(4, 2), eevee_id: EEVEE_NEXT, methods: METHODS_4_2, tested: true, eevee_tested: false },
     VersionEntry { version: v(4, 5), eevee_id: EEVEE_NEXT, methods: METHODS_4_2, tested: true, eevee_tested: true },

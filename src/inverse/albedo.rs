@@ -143,7 +143,7 @@ pub fn table_coordinates(p: &SkinParams) -> [f64; 3] {
 }
 
 /// Nodes per axis (u_m, beta_m, u_h) of the fit's forward table: chosen so that the table's colour error (ΔE00
-/// against direct evaluation, `tests/inverse_albedo.rs`) leaves room within the 0.5 ΔE00 a fit must reach.
+/// against direct evaluation, `tests/inverse/inverse_albedo.rs`) leaves room within the 0.5 ΔE00 a fit must reach.
 pub const ALBEDO_TABLE_RESOLUTION: TableResolution = TableResolution { melanin: 41, melanin_blend: 11, hemoglobin: 25 };
 
 /// The model albedo over the table coordinates at fixed extended physiology, for the fits: an albedo-only

@@ -25,7 +25,7 @@ pub const DEFAULT_STREAMS: usize = 10;
 pub const STREAMS_RANGE: (usize, usize) = (2, 64);
 /// A thin layer starts at an optical thickness no larger than this fraction of the smallest stream cosine (Prahl
 /// 1995 uses the whole cosine). With the extrapolated start ([`extrapolated_thin_layer`]) a layer cut anywhere then
-/// gives the whole layer's total within 1e-10 (tests/transport_properties.rs; at half the cosine, up to 1.2e-10).
+/// gives the whole layer's total within 1e-10 (tests/physics/transport_properties.rs; at half the cosine, up to 1.2e-10).
 const START_FRACTION_OF_NU_MIN: f64 = 0.25;
 /// A semi-infinite layer is doubled until no element of its reflection operator changes by more than this.
 const SEMI_INFINITE_TOLERANCE: f64 = 1e-13;
@@ -389,7 +389,7 @@ struct Quadrature {
 const SEMI_INFINITE_TABLE_NODES: usize = 256;
 /// Points of the Lagrange interpolation between the table's nodes (4 points left 5e-10 of the doubled operator: a
 /// layer split off a semi-infinite one then changed the total by 3.6e-10, against the 1e-10 of
-/// tests/transport_properties.rs).
+/// tests/physics/transport_properties.rs).
 const LAGRANGE_POINTS: usize = 6;
 /// Above this albedo (far beyond skin's, whose largest is about 0.99) the table's first interval, next to the
 /// ill-conditioned conservative node, was up to 2.4e-7 from doubling, which under a strong internal reflection moved a
@@ -664,7 +664,7 @@ mod tests {
     }
 
     /// A layer cut in halves is the same layer (both halves start from the thin layer the whole one starts from);
-    /// cut anywhere else, the halves' thin starts differ, within 1e-10 here (tests/transport_properties.rs tries random
+    /// cut anywhere else, the halves' thin starts differ, within 1e-10 here (tests/physics/transport_properties.rs tries random
     /// stacks).
     #[test]
     fn splitting_a_layer_changes_nothing() {

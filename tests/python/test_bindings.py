@@ -308,7 +308,7 @@ def test_parameter_ranges_bound_what_evaluate_accepts():
 
 def test_accuracy_levels():
     """A named level sets every knob; explicit knobs override it; the draft stays close to the reference (compared at
-    the same transport streams: the streams' own error is tests/accuracy.rs's)."""
+    the same transport streams: the streams' own error is tests/physics/accuracy.rs's)."""
     draft = spectral_skin.evaluate(preset="asian", accuracy="draft")
     default = spectral_skin.evaluate(preset="asian")
     reference = spectral_skin.evaluate(preset="asian", accuracy="reference")

@@ -1,8 +1,7 @@
 //! Regression tests for the hard cases of issue 10: each reproducer gets a right answer (against an independent
 //! reference computed here) or a clear error. The property tests over the whole domain are in
-//! `tests/robustness_properties.rs`.
+//! `tests/physics/robustness_properties.rs`.
 
-mod support;
 
 use std::f64::consts::PI;
 
@@ -17,7 +16,7 @@ use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::skin::{skin_layers, SkinModel};
 use spectral_skin::transport::Transport;
 use spectral_skin::{Outputs, Request, SkinParams};
-use support::mc::{simulate, McConfig, McLayer};
+use crate::support::mc::{simulate, McConfig, McLayer};
 
 const INF: f64 = f64::INFINITY;
 

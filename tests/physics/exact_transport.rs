@@ -6,14 +6,13 @@
 //! (the african preset at 450 and 550 nm) and a homogeneous medium. Each: 16 streams within the Monte Carlo's
 //! standard error plus 0.3 %; the default stream count within 1 %. The diffusion total's excess is printed beside.
 //!
-//! Run with `cargo test --release --test exact_transport -- --nocapture` to see the figures.
+//! Run with `cargo test --release --test physics exact_transport:: -- --nocapture` to see the figures.
 
-mod support;
 
 use spectral_skin::diffusion::{Combination, Layer, LayerStack, MultipoleTerms};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 use spectral_skin::transport::{total_diffuse_reflectance, DEFAULT_STREAMS};
-use support::mc::{simulate, McConfig, McLayer};
+use crate::support::mc::{simulate, McConfig, McLayer};
 
 fn layer(thickness_mm: f64, sigma_a_per_mm: f64, sigma_s_reduced_per_mm: f64) -> Layer {
     Layer { thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior: 1.4 }
@@ -90,7 +89,7 @@ fn homogeneous() {
 #[test]
 fn profile_encircled_energy() {
     use spectral_skin::diffusion::layered_reflectance;
-    use support::mc::log_edges;
+    use crate::support::mc::log_edges;
     let cases: [(&str, Vec<Layer>, f64, f64); 4] = [
         ("caucasian 550 nm", preset_layers("caucasian", 550.0), 0.10, 0.10),
         ("thin epidermis", vec![layer(0.25, 0.5, 2.5), layer(f64::INFINITY, 0.02, 1.25)], 0.5, 0.2),

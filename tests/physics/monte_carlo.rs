@@ -7,11 +7,10 @@
 //!     skin-like stacks (isotropic scattering with sigma_s = sigma_s', so the two solve the same transport problem;
 //!     diffusion is an approximation of it, known to be a few per cent off for high albedo and worse for low albedo).
 //!
-//! Run with `cargo test --release --test monte_carlo -- --nocapture` to see the measured figures.
+//! Run with `cargo test --release --test physics monte_carlo:: -- --nocapture` to see the measured figures.
 
-mod support;
 
-use support::mc::{annulus_area, fresnel_unpolarized, log_edges, simulate, McConfig, McLayer, McResult};
+use crate::support::mc::{annulus_area, fresnel_unpolarized, log_edges, simulate, McConfig, McLayer, McResult};
 
 use spectral_skin::diffusion::{multipole_reflectance, Layer};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};

@@ -10,7 +10,7 @@
 //! src/transport (4e-4 at 8 streams) 2-4.3 %; at the default 10 streams (3e-5) 0.15-0.33 %.
 //!
 //! The same spectra fitted with the diffusion forward model (the paper's) are printed beside: that is the error the
-//! exact transport removes. Run with `cargo test --release --test inverse_recovery -- --nocapture` for the table.
+//! exact transport removes. Run with `cargo test --release --test inverse inverse_recovery:: -- --nocapture` for the table.
 
 use spectral_skin::evaluate::Request;
 use spectral_skin::inverse::spectrum::{fit_spectrum, FitOptions, Specular, PAPER_FREE};

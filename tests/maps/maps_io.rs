@@ -226,7 +226,7 @@ fn single_channel_exrs_of_any_sample_type_and_layout() {
     assert_eq!(img.planes[3], Plane::Constant(0.3));
 
     // A multi-channel file without a channel named like the parameter is refused, unless it is a grey RGB image
-    // (tests/image_inputs.rs): this one's channels differ.
+    // (tests/maps/image_inputs.rs): this one's channels differ.
     let p_rgb = dir.path().join("rgb.exr");
     write_rgb_exr(&p_rgb, w, h, [&mel, &blend, &mel], ExrOptions::FLOAT_PIZ).unwrap();
     let e = err_text(read_params(&ParamInputs::Separate([

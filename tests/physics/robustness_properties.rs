@@ -1,7 +1,7 @@
 //! Property tests over the whole domain of `layered_reflectance` and `evaluate`, and beyond it (issue 10): random stacks
 //! of 1-4 layers with coefficients 1e-8..1e5 per mm, thicknesses 1e-6 mm..infinity, every accepted ior, radii
 //! 1e-6..1e4 mm. The stacks have index steps, which only the multipole takes (the exact transport refuses them), so the
-//! public front is asked for `Transport::Diffusion` (`multipole_reflectance`); tests/transport_properties.rs has the
+//! public front is asked for `Transport::Diffusion` (`multipole_reflectance`); tests/physics/transport_properties.rs has the
 //! exact transport's properties. Each property states the class of inputs it holds on; docs/robustness.md lists the classes, the
 //! counts and what is still outside. `PROPTEST_CASES` scales every test (default 256 cases each; CI runs the default).
 

@@ -12,8 +12,7 @@ use spectral_skin::maps::io::{
     read_exr_channels, write_channels_exr, write_rgb_exr, ExrOptions, EXTENDED_CHANNELS, PARAM_CHANNELS,
 };
 
-mod support;
-use support::measured::measured_skin_colours;
+use crate::support::measured::measured_skin_colours;
 
 fn cli(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_spectral-skin")).args(args).output().unwrap()

@@ -10,8 +10,7 @@ use spectral_skin::inverse::albedo_maps::{fit_albedo_map, EpidermisThickness, Te
 use spectral_skin::skin::params::EXTENDED_DEFAULTS;
 use spectral_skin::skin::SkinParams;
 
-mod support;
-use support::measured::{measured_skin_colours, tungsten_photograph, tungsten_white};
+use crate::support::measured::{measured_skin_colours, tungsten_photograph, tungsten_white};
 
 fn albedo_of(p: &SkinParams, space: WorkingSpace) -> [f64; 3] {
     let request = Request { working_space: space, ..Request::new(Outputs { albedo: true, ..Outputs::default() }) };

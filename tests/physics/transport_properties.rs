@@ -1,6 +1,6 @@
 //! Issue 20, item 3: with `Transport::AddingDoubling` (the default) `layered_reflectance`'s total is exact radiative
 //! transfer for any stack, so it has the properties an exact solution has and diffusion lacks
-//! (tests/robustness_properties.rs states diffusion's looser versions): (a) a material cut into 100 slices is the
+//! (tests/physics/robustness_properties.rs states diffusion's looser versions): (a) a material cut into 100 slices is the
 //! homogeneous slab, (b) more absorption in any layer never reflects more, (c) splitting a layer in two changes
 //! nothing, (d) any number of layers gives a finite total in [0, 1). Each adding-doubling solve is 10-100 µs, so the
 //! case counts are modest (run in release mode, as scripts/test-rust.sh does).

@@ -1,0 +1,10 @@
+//! Fits from colours and spectra back to physiology: albedo inversion, recovery of known parameters, measured in-vivo spectra.
+//!
+//! One test crate of several modules: linked once (see docs/tests.md).
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod inverse_albedo;
+mod inverse_recovery;
+mod measured_spectra;
