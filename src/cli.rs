@@ -19,6 +19,7 @@ use crate::skin::params::{
     ParamSpec, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN,
     MELANIN_BLEND, OILINESS, PARAMS,
 };
+use crate::surface_lobes::SurfaceModel;
 use crate::transport::Transport;
 use crate::{evaluate, AccuracyLevel, Evaluation, MaterialOutput, Outputs, Request, SkinError, SkinParams, PRESETS};
 use clap::{Args, Parser, Subcommand};
@@ -53,6 +54,11 @@ enum Command {
         /// always lists every method the target offers.
         #[arg(long, value_enum)]
         method: Option<SubsurfaceMethod>,
+        /// The surface reflection the specular inputs stand in for: paper (DJ2006's oil layer, one lobe scaled by
+        /// the oiliness) or measured (a broad base lobe and a sharp Coat, a dielectric's reflection at every
+        /// oiliness; docs/model.md, "Principled mapping of the measured surface").
+        #[arg(long, value_enum, default_value_t = SurfaceModel::Paper)]
+        surface: SurfaceModel,
         /// Print the stable JSON interface instead of a summary.
         #[arg(long)]
         json: bool,
@@ -436,13 +442,13 @@ mod ctrl_c {
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
-        Command::Eval { skin, accuracy, target, method, json } => {
+        Command::Eval { skin, accuracy, target, method, surface, json } => {
             let params = skin.params()?;
             let target = target.target();
             if let Some(m) = method {
                 target.method_entry(m)?;
             }
-            let request = Request { target, ..accuracy.request(Outputs::material()) };
+            let request = Request { target, surface, ..accuracy.request(Outputs::material()) };
             let ev = evaluate(&params, &request)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&ev)?);
@@ -731,6 +737,9 @@ fn print_summary(ev: &Evaluation, only: Option<SubsurfaceMethod>) {
     }
     if let Some(s) = &ev.specular {
         println!("specular: IOR level {:.4}, roughness {:.4}, IOR {}", s.specular_ior_level, s.roughness, s.ior);
+        if s.coat_weight > 0.0 {
+            println!("coat: weight {:.4}, roughness {:.4}, IOR {}", s.coat_weight, s.coat_roughness, s.coat_ior);
+        }
     }
     println!("computed in {:.1} ms", 1e3 * ev.seconds);
 }

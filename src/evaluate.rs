@@ -15,10 +15,11 @@ use crate::fit::blender_target::{Target, TargetInfo};
 use crate::fit::burley::{
     fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM,
 };
-use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams, SurfaceConstants};
+use crate::fit::principled_specular::{specular_for, SpecularParams, SurfaceConstants};
 pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
+use crate::surface_lobes::SurfaceModel;
 use crate::transport::{total_diffuse_reflectance, Transport};
 
 /// Which outputs to compute. Each costs only what it needs: albedo is one transform value per wavelength, the radius
@@ -109,6 +110,10 @@ pub struct Request {
     /// ([`Transport`]). Always in JSON, so every result, sidecar and cache key names it.
     #[serde(default)]
     pub transport: Transport,
+    /// The surface reflection the specular inputs stand in for (`surface_lobes::SurfaceModel`): DJ2006's oil layer
+    /// (the default for now) or the measured two-lobe surface (base lobe plus Coat). Absent from JSON when the paper's.
+    #[serde(default, skip_serializing_if = "SurfaceModel::is_paper")]
+    pub surface: SurfaceModel,
 }
 
 impl Request {
@@ -426,7 +431,10 @@ pub fn evaluate_cancellable(
         None
     };
 
-    let specular = out.specular.then(|| specular_from_oiliness(params.oiliness));
+    let specular = match out.specular {
+        true => Some(specular_for(request.surface, params.oiliness, request.target.engine)?),
+        false => None,
+    };
     work.specular_evaluations += usize::from(specular.is_some());
     Ok(Evaluation {
         params,
@@ -442,7 +450,7 @@ pub fn evaluate_cancellable(
         methods,
         radius_fit,
         specular,
-        surface: SurfaceConstants::of_model(),
+        surface: SurfaceConstants::of(request.surface),
         wavelengths_nm: (out.spectrum || out.profile_spectral).then(|| prepared.grid.wavelengths_nm.clone()),
         spectral_reflectance: out.spectrum.then_some(totals),
         profile,

@@ -26,14 +26,25 @@ use crate::surface::{
     torrance_sparrow_unit_albedos, Lobe, ALBEDO_THETA_PANELS, SKIN_SURFACE_IOR,
 };
 
-/// Which surface reflection: Python's `surface=` takes the serde names.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Hash)]
+/// Which surface reflection: Python's `surface=` takes the serde names. A material's default ([`Default`]) is still
+/// the paper's until every front maps the measured model (issue 24: maps and Live mode); `surface_brdf` and
+/// `surface_albedo` default to `measured`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Hash, Default)]
 #[serde(rename_all = "snake_case")]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 pub enum SurfaceModel {
     /// Two Beckmann lobes sharing the Fresnel term of the skin surface, weights summing to 1 ([`TWO_LOBE_TABLE`]).
     Measured,
     /// DJ2006's oil layer as `surface` computes it: one lobe scaled by the oiliness.
+    #[default]
     Paper,
+}
+
+impl SurfaceModel {
+    /// True for `paper` (serde leaves the field out then, so earlier results and cache keys stay as they were).
+    pub fn is_paper(&self) -> bool {
+        *self == SurfaceModel::Paper
+    }
 }
 
 /// Every surface model, the bindings' default (`measured`) first.

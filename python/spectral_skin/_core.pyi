@@ -131,6 +131,7 @@ def evaluate(
     boundaries: _Boundaries | str = "paper",
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
+    surface: _SurfaceModel | str = "paper",
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.evaluate)``."""
 

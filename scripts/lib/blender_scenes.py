@@ -67,6 +67,13 @@ def reset_scene():
     return scene
 
 
+def eevee_engine_id() -> str:
+    """This Blender's EEVEE engine id (BLENDER_EEVEE_NEXT in 4.2-4.5, BLENDER_EEVEE from 5.0)."""
+    bpy = _bpy()
+    ids = [i.identifier for i in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items]
+    return [i for i in ids if "EEVEE" in i][-1]
+
+
 def set_world(scene, strength: float, color: Sequence[float] = (1.0, 1.0, 1.0)):
     """A uniform world (Background shader) of the given colour and strength."""
     bpy = _bpy()
@@ -273,6 +280,48 @@ def render(scene, samples: int, filter_width: float = 1.5, seed: int = 1, alpha:
     if not (scene.render.use_border and scene.render.use_crop_to_border):  # a cropped border render is smaller
         assert img.shape[:2] == (scene.render.resolution_y, scene.render.resolution_x), img.shape
     return img[:, :, : 4 if alpha else 3].astype(np.float64)
+
+
+def render_eevee(scene, samples: int) -> np.ndarray:
+    """Render the scene with this Blender's EEVEE to a temporary EXR; returns its RGB as float64 (H, W, 3), row 0 = top
+    row."""
+    bpy = _bpy()
+    scene.render.engine = eevee_engine_id()
+    scene.eevee.taa_render_samples = samples
+    with tempfile.TemporaryDirectory(prefix="spectral_skin_render_") as tmp:
+        path = os.path.join(tmp, "render.exr")
+        scene.render.filepath = path
+        bpy.ops.render.render(write_still=True)
+        img = read_exr(path)
+    return img[:, :, :3].astype(np.float64)
+
+
+# Normal-incidence surface reflection: one plane per surface, 8 x 8 pixels each, the middle 4 x 4 averaged.
+_PLANE_M, _PLANE_PX, _PLANE_EDGE_PX = 0.01, 8, 2
+
+
+def render_normal_incidence_reflection(surfaces: Sequence[dict], engine: str, samples: int) -> list[float]:
+    """The normal-incidence directional albedo Blender renders for each surface: a fresh scene with one plane (z = 0)
+    per surface in a row, each a Principled BSDF with the surface's inputs (Principled input name -> value) over Base
+    Color black and Subsurface Weight 0, under a uniform white world of strength 1, seen straight down by an
+    orthographic camera, so that each plane's pixels are the reflection of its surface along the normal (green
+    channel). ``engine``: "cycles" or "eevee"."""
+    scene = reset_scene()
+    set_world(scene, strength=1.0)
+    for i, inputs in enumerate(surfaces):
+        plane = add_plane(f"Surface{i}", i * _PLANE_M, (i + 1) * _PLANE_M, 0.0, _PLANE_M, 0.0)
+        mat, bsdf = new_material(f"Surface{i}")
+        bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+        bsdf.inputs["Subsurface Weight"].default_value = 0.0
+        for name, value in inputs.items():
+            bsdf.inputs[name].default_value = value
+        assign(plane, mat)
+    n = len(surfaces)
+    add_top_camera(scene, ortho_scale=n * _PLANE_M, width=n * _PLANE_PX, height=_PLANE_PX,
+                   center=(n * _PLANE_M / 2, _PLANE_M / 2))
+    img = render(scene, samples=samples) if engine == "cycles" else render_eevee(scene, samples)
+    lo, hi = _PLANE_EDGE_PX, _PLANE_PX - _PLANE_EDGE_PX
+    return [float(img[lo:hi, i * _PLANE_PX + lo : i * _PLANE_PX + hi, 1].mean()) for i in range(n)]
 
 
 def pixel_centres_x(ortho_scale: float, width: int, center_x: float = 0.0) -> np.ndarray:

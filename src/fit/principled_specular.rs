@@ -8,14 +8,18 @@
 //! subsurface included, by `1 - E_spec(view)`, the lobe's directional albedo in the view direction only.
 
 use std::f64::consts::PI;
+use std::sync::OnceLock;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
+use crate::error::SkinError;
+use crate::fit::blender_target::Engine;
 use crate::numeric::clamp_nan_to_low;
 use crate::surface::{
     clamp_unit_or_zero, f0_from_ior, fresnel_dielectric, hemispherical_average, microfacet_albedo,
     torrance_sparrow_unit_albedos, Lobe, ALBEDO_THETA_PANELS, BECKMANN_ROUGHNESS_M, SKIN_SURFACE_IOR,
 };
+use crate::surface_lobes::{SurfaceModel, SurfaceReflection, TWO_LOBE_TABLE};
 
 /// Principled BSDF's Specular IOR Level that leaves F0(IOR) unchanged (closure.h: `if (specular_ior_level != 0.5f)`).
 pub const PRINCIPLED_NEUTRAL_SPECULAR_IOR_LEVEL: f64 = 0.5;
@@ -74,44 +78,70 @@ pub fn principled_specular_eta(ior: f64, specular_ior_level: f64) -> f64 {
     ior_from_f0(f0_from_ior(ior) * 2.0 * level)
 }
 
-/// Specular inputs of Blender's Principled BSDF that stand in for DJ2006's oily surface, with the DJ2006 albedos.
+/// Principled BSDF's surface inputs for a surface model at one oiliness (base specular lobe and Coat), with the
+/// model's own albedos.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SpecularParams {
-    /// DJ2006's rho_s, clamped to [0, 1].
+    /// The surface model these inputs stand in for (`surface_lobes::SurfaceModel`).
+    pub surface: SurfaceModel,
+    /// rho_s (`paper`) or o (`measured`), clamped to [0, 1].
     pub oiliness: f64,
-    /// Principled "Specular IOR Level": 0.5 rho_s (0 switches Cycles' specular closure off).
+    /// Principled "Specular IOR Level". `paper`: 0.5 rho_s (0 switches Cycles' specular closure off); `measured`: the
+    /// level at which the rendered normal-incidence reflection equals the model's ([`measured_specular_ior_level`]).
     pub specular_ior_level: f64,
-    /// Principled "Roughness": sqrt(m), so that GGX alpha = Roughness^2 = m.
+    /// Principled "Roughness": sqrt(m) of the base lobe (GGX alpha = Roughness^2 = m).
     pub roughness: f64,
     /// Principled "IOR": 1.4.
     pub ior: f64,
-    /// DJ2006's Beckmann m (0.35), for reference.
+    /// Principled "Coat Weight": 0 for `paper` (one lobe); the sharp lobe's weight for `measured`.
+    pub coat_weight: f64,
+    /// Principled "Coat Roughness": sqrt(m) of the sharp lobe (`measured`); the base Roughness for `paper`.
+    pub coat_roughness: f64,
+    /// Principled "Coat IOR": the skin surface's 1.4.
+    pub coat_ior: f64,
+    /// Beckmann m of the base lobe: DJ2006's 0.35 (`paper`), the broad lobe's 0.5 (`measured`).
     pub beckmann_m: f64,
-    /// DJ2006 `rho_dr` at normal incidence, dimensionless.
+    /// The model's directional albedo at normal incidence, dimensionless (`surface_lobes`).
     pub directional_albedo_normal: f64,
-    /// DJ2006 `2 int rho_dr(mu) mu dmu`: the fraction of diffuse light the oil layer reflects, dimensionless.
+    /// The model's `2 int E(mu) mu dmu`: the fraction of diffuse light the surface reflects, dimensionless.
     pub hemispherical_albedo: f64,
 }
 
 /// The Principled inputs of the surface that do not depend on the oiliness: the [`SpecularParams`] fields of every
-/// oiliness that stay the same (IOR, Roughness, Beckmann m).
+/// oiliness that stay the same (base Roughness, IOR, Coat IOR, the base lobe's Beckmann m).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SurfaceConstants {
-    /// Principled "Roughness": sqrt(m).
+    /// The surface model.
+    pub surface: SurfaceModel,
+    /// Principled "Roughness": sqrt(m) of the base lobe.
     pub roughness: f64,
     /// Principled "IOR" (and Subsurface IOR): the skin surface's 1.4 (`surface::SKIN_SURFACE_IOR`).
     pub ior: f64,
-    /// DJ2006's Beckmann m.
+    /// Principled "Coat IOR": 1.4.
+    pub coat_ior: f64,
+    /// Beckmann m of the base lobe.
     pub beckmann_m: f64,
 }
 
 impl SurfaceConstants {
-    /// The model's constants (DJ2006: m = 0.35, eta = 1.4).
+    /// The paper's constants (DJ2006: m = 0.35, eta = 1.4).
     pub fn of_model() -> SurfaceConstants {
+        SurfaceConstants::of(SurfaceModel::Paper)
+    }
+
+    /// `model`'s constants: `paper` m = 0.35 (DJ2006); `measured` the broad lobe's m = 0.5
+    /// (`surface_lobes::TWO_LOBE_TABLE`); eta = 1.4 for both.
+    pub fn of(model: SurfaceModel) -> SurfaceConstants {
+        let beckmann_m = match model {
+            SurfaceModel::Paper => BECKMANN_ROUGHNESS_M,
+            SurfaceModel::Measured => TWO_LOBE_TABLE.broad_beckmann_m,
+        };
         SurfaceConstants {
-            roughness: BECKMANN_ROUGHNESS_M.sqrt(),
+            surface: model,
+            roughness: beckmann_m.sqrt(),
             ior: SKIN_SURFACE_IOR,
-            beckmann_m: BECKMANN_ROUGHNESS_M,
+            coat_ior: SKIN_SURFACE_IOR,
+            beckmann_m,
         }
     }
 }
@@ -142,15 +172,120 @@ impl SurfaceConstants {
 pub fn specular_from_oiliness(oiliness: f64) -> SpecularParams {
     let rho_s = clamp_unit_or_zero(oiliness);
     let (normal, hemispherical) = torrance_sparrow_unit_albedos();
+    let constants = SurfaceConstants::of(SurfaceModel::Paper);
     SpecularParams {
+        surface: SurfaceModel::Paper,
         oiliness: rho_s,
         specular_ior_level: PRINCIPLED_NEUTRAL_SPECULAR_IOR_LEVEL * rho_s,
-        roughness: SurfaceConstants::of_model().roughness,
-        ior: SurfaceConstants::of_model().ior,
-        beckmann_m: SurfaceConstants::of_model().beckmann_m,
+        roughness: constants.roughness,
+        ior: constants.ior,
+        coat_weight: 0.0,
+        coat_roughness: constants.roughness,
+        coat_ior: constants.coat_ior,
+        beckmann_m: constants.beckmann_m,
         directional_albedo_normal: rho_s * normal,
         hemispherical_albedo: rho_s * hemispherical,
     }
+}
+
+/// The surface's Principled inputs for `model` at `oiliness` (finite, in [0, 1]; else an error naming "oiliness"),
+/// rendered by `engine`. `paper`: [`specular_from_oiliness`] (no Coat). `measured` (docs/model.md, "Principled
+/// mapping of the measured surface"): the broad lobe as the base specular (Roughness = sqrt(m_broad), IOR 1.4),
+/// the sharp lobe as the Coat (Coat Weight = w_sharp(o), Coat Roughness = sqrt(m_sharp(o)), Coat IOR 1.4), and the
+/// Specular IOR Level [`measured_specular_ior_level`]; the albedos are the two-lobe model's (its hemispherical
+/// albedo is integrated here, a few tens of ms).
+pub fn specular_for(model: SurfaceModel, oiliness: f64, engine: Engine) -> Result<SpecularParams, SkinError> {
+    let surface = SurfaceReflection::new(model, oiliness)?;
+    if model == SurfaceModel::Paper {
+        return Ok(specular_from_oiliness(oiliness));
+    }
+    let [_, sharp] = TWO_LOBE_TABLE.lobes(oiliness);
+    let constants = SurfaceConstants::of(model);
+    let hemispherical_albedo = hemispherical_average(|mu| {
+        surface.directional_albedo(mu.clamp(0.0, 1.0).acos().to_degrees().min(89.999_999)).unwrap_or(0.0)
+    });
+    Ok(SpecularParams {
+        surface: model,
+        oiliness,
+        specular_ior_level: measured_specular_ior_level(oiliness, engine)?,
+        roughness: constants.roughness,
+        ior: constants.ior,
+        coat_weight: sharp.weight,
+        coat_roughness: sharp.beckmann_m.sqrt(),
+        coat_ior: constants.coat_ior,
+        beckmann_m: constants.beckmann_m,
+        directional_albedo_normal: surface.normal_incidence_reflectance(),
+        hemispherical_albedo,
+    })
+}
+
+/// The measured normal-incidence reflection of the measured surface's Principled set-up, compiled in: one file per
+/// engine, written by `scripts/calibration/measure_coat_level.py` (planes under a uniform white world, Base Color
+/// black, seen along the normal, at nine levels per oiliness node).
+const COAT_LEVEL_CYCLES_JSON: &str = include_str!("../../docs/data/coat_level_cycles.json");
+const COAT_LEVEL_EEVEE_JSON: &str = include_str!("../../docs/data/coat_level_eevee.json");
+
+#[derive(Deserialize)]
+struct CoatLevelCase {
+    oiliness: f64,
+    specular_ior_level: f64,
+    rendered: f64,
+}
+
+#[derive(Deserialize)]
+struct CoatLevelData {
+    cases: Vec<CoatLevelCase>,
+}
+
+/// Specular IOR Level per oiliness node: where the rendered reflection meets the model's.
+#[derive(Debug)]
+struct LevelCurve {
+    oiliness: Vec<f64>,
+    level: Vec<f64>,
+}
+
+/// The curve of `json`: at each oiliness node, the level where the rendered reflection, linear between the measured
+/// levels (and extended from the nearest pair beyond them), equals the model's normal-incidence reflectance.
+fn level_curve(json: &str) -> LevelCurve {
+    let data: CoatLevelData = serde_json::from_str(json).expect("docs/data/coat_level_*.json parses");
+    let mut nodes: Vec<f64> = data.cases.iter().map(|c| c.oiliness).collect();
+    nodes.sort_by(f64::total_cmp);
+    nodes.dedup();
+    let level = nodes
+        .iter()
+        .map(|&o| {
+            let mut pairs: Vec<(f64, f64)> =
+                data.cases.iter().filter(|c| c.oiliness == o).map(|c| (c.specular_ior_level, c.rendered)).collect();
+            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let target = SurfaceReflection::new(SurfaceModel::Measured, o)
+                .expect("calibration oiliness in [0, 1]")
+                .normal_incidence_reflectance();
+            let k = pairs.partition_point(|p| p.1 <= target).clamp(1, pairs.len() - 1);
+            let ((l0, r0), (l1, r1)) = (pairs[k - 1], pairs[k]);
+            l0 + (target - r0) * (l1 - l0) / (r1 - r0)
+        })
+        .collect();
+    LevelCurve { oiliness: nodes, level }
+}
+
+/// Principled "Specular IOR Level" of the measured surface's base lobe at oiliness `o` in [0, 1] for `engine`:
+/// the level at which Blender renders the set-up's normal-incidence reflection (Coat plus base lobe) equal to the
+/// two-lobe model's `E(0)`, interpolated linearly between the calibration's oiliness nodes (0, 0.1, ..., 1).
+/// Measured in Cycles 5.0 and EEVEE 5.0; Cycles 4.2-5.3 render the same set-up within 0.2 % (docs/model.md).
+/// Above 0.5 at low oiliness: the rough GGX lobes reflect less than their Fresnel factor at normal incidence
+/// (docs/blender-coat.md), which the raised level makes up.
+pub fn measured_specular_ior_level(oiliness: f64, engine: Engine) -> Result<f64, SkinError> {
+    static CYCLES: OnceLock<LevelCurve> = OnceLock::new();
+    static EEVEE: OnceLock<LevelCurve> = OnceLock::new();
+    let o = SurfaceReflection::new(SurfaceModel::Measured, oiliness)?.oiliness();
+    let curve = match engine {
+        Engine::Cycles => CYCLES.get_or_init(|| level_curve(COAT_LEVEL_CYCLES_JSON)),
+        Engine::Eevee => EEVEE.get_or_init(|| level_curve(COAT_LEVEL_EEVEE_JSON)),
+    };
+    let k = curve.oiliness.partition_point(|&x| x <= o).clamp(1, curve.oiliness.len() - 1);
+    let (x0, x1) = (curve.oiliness[k - 1], curve.oiliness[k]);
+    let t = (o - x0) / (x1 - x0);
+    Ok(curve.level[k - 1] + t * (curve.level[k] - curve.level[k - 1]))
 }
 
 /// `E_spec(theta_i)`: directional albedo of Principled BSDF's specular lobe for these inputs, dimensionless:
@@ -195,6 +330,110 @@ mod tests {
     use super::*;
     use crate::numeric::relative_error as rel;
     use crate::surface::torrance_sparrow_f_r;
+
+    const OILINESS_STEPS: [f64; 7] = [0.0, 0.05, 0.3, 0.5, 0.75, 0.95, 1.0];
+
+    #[test]
+    fn paper_choice_is_the_one_lobe_mapping() {
+        for engine in Engine::ALL {
+            for o in OILINESS_STEPS {
+                let paper = specular_for(SurfaceModel::Paper, o, engine).unwrap();
+                assert_eq!(paper, specular_from_oiliness(o), "oiliness {o}, {engine:?}");
+                assert_eq!(paper.coat_weight, 0.0, "oiliness {o}: the paper's surface has no coat");
+            }
+        }
+    }
+
+    /// The coat is the sharp lobe and the base the broad one (issue 24's brief and docs/model.md: w_sharp = 0.15 +
+    /// 0.70 o, m_sharp = 0.25 - 0.10 o, m_broad = 0.5, eta 1.4; written out here, not read from the table).
+    #[test]
+    fn measured_inputs_are_the_two_lobes() {
+        for engine in Engine::ALL {
+            for o in OILINESS_STEPS {
+                let s = specular_for(SurfaceModel::Measured, o, engine).unwrap();
+                let want = [
+                    ("coat_weight", s.coat_weight, 0.15 + 0.70 * o),
+                    ("coat_roughness", s.coat_roughness, (0.25 - 0.10 * o).sqrt()),
+                    ("roughness", s.roughness, 0.5f64.sqrt()),
+                    ("ior", s.ior, 1.4),
+                    ("coat_ior", s.coat_ior, 1.4),
+                ];
+                for (name, got, expected) in want {
+                    assert!((got - expected).abs() < 1e-12, "{name} at oiliness {o}, {engine:?}: {got} vs {expected}");
+                }
+            }
+        }
+    }
+
+    /// The rendered calibration, read here on its own: at each node the level the core gives, put through the
+    /// rendered reflection (linear between the measured levels), returns the model's normal-incidence reflectance;
+    /// the level falls as the coat takes over, and dry skin still reflects like a dielectric (0.024-0.05).
+    #[test]
+    fn measured_level_meets_the_rendered_reflection() {
+        for (engine, json) in [(Engine::Cycles, COAT_LEVEL_CYCLES_JSON), (Engine::Eevee, COAT_LEVEL_EEVEE_JSON)] {
+            let data: serde_json::Value = serde_json::from_str(json).unwrap();
+            let cases = data["cases"].as_array().unwrap();
+            let mut previous = f64::INFINITY;
+            for node in 0..=10 {
+                let o = node as f64 / 10.0;
+                let mut row: Vec<(f64, f64)> = cases
+                    .iter()
+                    .filter(|c| (c["oiliness"].as_f64().unwrap() - o).abs() < 1e-12)
+                    .map(|c| (c["specular_ior_level"].as_f64().unwrap(), c["rendered"].as_f64().unwrap()))
+                    .collect();
+                row.sort_by(|a, b| a.0.total_cmp(&b.0));
+                assert!(row.len() >= 2, "{engine:?} oiliness {o}: {} rendered levels", row.len());
+                let level = measured_specular_ior_level(o, engine).unwrap();
+                let k = row.iter().position(|p| p.0 >= level).unwrap_or(row.len() - 1).max(1);
+                let ((l0, r0), (l1, r1)) = (row[k - 1], row[k]);
+                let rendered = r0 + (level - l0) * (r1 - r0) / (l1 - l0);
+                let model = surface_normal_incidence(o);
+                assert!(
+                    (rendered - model).abs() < 1e-9,
+                    "{engine:?} oiliness {o}: level {level} renders {rendered}, model {model}"
+                );
+                assert!((0.024..=0.05).contains(&rendered), "{engine:?} oiliness {o}: {rendered}");
+                assert!(level > 0.0 && level < previous, "{engine:?} oiliness {o}: level {level} after {previous}");
+                previous = level;
+            }
+        }
+    }
+
+    fn surface_normal_incidence(o: f64) -> f64 {
+        SurfaceReflection::new(SurfaceModel::Measured, o).unwrap().normal_incidence_reflectance()
+    }
+
+    #[test]
+    fn measured_albedos_are_the_two_lobe_models() {
+        let s = specular_for(SurfaceModel::Measured, 0.3, Engine::Cycles).unwrap();
+        let hemispherical = hemispherical_average(|mu| {
+            SurfaceReflection::new(SurfaceModel::Measured, 0.3)
+                .unwrap()
+                .directional_albedo(mu.acos().to_degrees())
+                .unwrap()
+        });
+        assert!(
+            (s.directional_albedo_normal - surface_normal_incidence(0.3)).abs() < 1e-15,
+            "{} vs {}",
+            s.directional_albedo_normal,
+            surface_normal_incidence(0.3)
+        );
+        assert!(
+            (s.hemispherical_albedo - hemispherical).abs() < 1e-12,
+            "{} vs {hemispherical}",
+            s.hemispherical_albedo
+        );
+        // A dielectric's diffuse reflectance at eta 1.4 with rough lobes: above the normal-incidence value.
+        assert!(s.hemispherical_albedo > s.directional_albedo_normal, "{s:?}");
+    }
+
+    #[test]
+    fn measured_oiliness_out_of_range_is_refused() {
+        for o in [-0.1, 1.5, f64::NAN, f64::INFINITY] {
+            let err = specular_for(SurfaceModel::Measured, o, Engine::Cycles).unwrap_err().to_string();
+            assert!(err.contains("oiliness") && err.contains("[0, 1]"), "oiliness {o}: {err}");
+        }
+    }
 
     #[test]
     fn mapping_inputs() {

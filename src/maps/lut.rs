@@ -4,7 +4,7 @@
 //! optical effect of a chromophore saturates: from 0.005 to 0.05 changes skin more than from 0.45 to 0.5; Jimenez et
 //! al. 2010 sample C_m and C_h on cube-root axes too), linear for the melanin blend. The table stores the natural
 //! logarithm of each output (all positive, spanning decades) and interpolates trilinearly. Its error against direct
-//! evaluation is measured, not assumed: see `measure_error` and `tests/maps_pipeline.rs`.
+//! evaluation is measured, not assumed: see `measure_error` and `tests/maps/maps_pipeline.rs`.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -14,10 +14,11 @@ use serde::Serialize;
 
 use super::io::write_atomic;
 use crate::error::SkinError;
-use crate::evaluate::{Material, Prepared};
+use crate::evaluate::{Material, Prepared, Request};
 use crate::fit::SubsurfaceMethod;
 use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN, MELANIN_BLEND};
 use crate::skin::SkinParams;
+use crate::surface_lobes::SurfaceModel;
 
 /// Outputs per texel that depend on (C_m, beta_m, C_h), for one subsurface method on the request's target: the
 /// model's albedo, and the method's Base Color and Subsurface Radius there (for EEVEE the radius is compensated per
@@ -692,10 +693,12 @@ pub fn cache_key_text(
     radius: bool,
     extended: [f64; 3],
 ) -> String {
+    // The surface model changes only the specular inputs, which no table holds.
+    let request = Request { surface: SurfaceModel::Paper, ..*prepared.request() };
     let mut text = format!(
         "{}|{}|{}|{:?}",
         env!("CARGO_PKG_VERSION"),
-        serde_json::to_string(prepared.request()).unwrap_or_default(),
+        serde_json::to_string(&request).unwrap_or_default(),
         if radius { method.name() } else { "albedo only" },
         resolution
     );

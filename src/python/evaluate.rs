@@ -8,8 +8,9 @@ use pyo3::types::PyDict;
 use serde_json::Value;
 
 use crate::diffusion::{Layer, LayeredOptions, ALL_BOUNDARIES};
-use crate::evaluate::{Evaluation, MethodParams};
+use crate::evaluate::{Evaluation, MethodParams, Request};
 use crate::fit::blender_target::Target;
+use crate::surface_lobes::ALL_SURFACE_MODELS;
 use crate::Outputs;
 
 use super::convert::{
@@ -135,6 +136,10 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///         radiative transfer; the default) or "diffusion" (the paper's layered multipole: reproduces DJ2006).
 ///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; None: the level's
 ///         (8 at "default"). Unused with transport="diffusion".
+///     surface: the surface reflection the specular inputs stand in for: "paper" (DJ2006's oil layer, one lobe
+///         scaled by the oiliness; the default for now) or "measured" (two lobes, a broad base lobe and a sharp
+///         Coat, reflecting like a dielectric at every oiliness: docs/model.md, "Principled mapping of the measured
+///         surface").
 ///
 /// Returns:
 ///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy" (with "streams"), "model"
@@ -143,15 +148,16 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///     sentence a front shows, when tested is False), "default_method", "work"
 ///     ({"wavelengths", "transform_samples", "radial_profiles", "radius_fits", "specular_evaluations",
 ///     "transport_solves"}: what was computed),
-///     "surface" ({"roughness", "ior", "beckmann_m"}: the inputs no parameter changes), "seconds". Per requested
+///     "surface" ({"surface", "roughness", "ior", "coat_ior", "beckmann_m"}: the inputs no parameter changes),
+///     "seconds". Per requested
 ///     output, numpy arrays where array-valued:
 ///     albedo or radius: "diffuse_reflectance_rgb" (3,);
 ///     radius: "methods", one entry per subsurface method the target's Blender offers ("burley", "random_walk",
 ///     "random_walk_skin", and "random_walk_legacy" from 5.2) -> {"base_color" (3,), "subsurface_radius_mm" (3,),
 ///     mm, "expected_albedo" (3,)} and "radius_fit" (a list of 3 dicts {"d_mm", "radius_mm", "edge_residual"}:
 ///     the Cycles Burley fit);
-///     specular: "specular" {"oiliness", "specular_ior_level", "roughness", "ior", "beckmann_m",
-///     "directional_albedo_normal", "hemispherical_albedo"};
+///     specular: "specular" {"surface", "oiliness", "specular_ior_level", "roughness", "ior", "coat_weight",
+///     "coat_roughness", "coat_ior", "beckmann_m", "directional_albedo_normal", "hemispherical_albedo"};
 ///     spectrum: "wavelengths_nm" (K,), "spectral_reflectance" (K,);
 ///     profile_rgb / profile_spectral: "profile" {"radii_mm" (N,), "rgb_per_mm2" (N, 3) and/or
 ///     "spectral_per_mm2" (K, N), mm^-2, and "negative_lobe" {"wavelength_nm", "boundaries", "radius_mm",
@@ -173,7 +179,8 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles",
-        rgb_mapping = "linear", boundaries = "paper", transport = "adding_doubling", streams = None
+        rgb_mapping = "linear", boundaries = "paper", transport = "adding_doubling", streams = None,
+        surface = "paper"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -203,6 +210,7 @@ pub(super) fn evaluate_py<'py>(
     boundaries: &str,
     transport: &str,
     streams: Option<&Bound<'py, PyAny>>,
+    surface: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = params_arg(
         preset,
@@ -225,7 +233,10 @@ pub(super) fn evaluate_py<'py>(
         transport,
         streams,
     )?;
-    let request = knobs.request(parse_outputs(outputs)?)?;
+    let request = Request {
+        surface: by_name("surface", surface, &ALL_SURFACE_MODELS)?,
+        ..knobs.request(parse_outputs(outputs)?)?
+    };
     let cancel = AtomicBool::new(false);
     let evaluation =
         detached_interruptible(py, &cancel, || crate::evaluate::evaluate_cancellable(&params, &request, &cancel))?;

@@ -2,12 +2,12 @@
 //!
 //! One test crate of several modules: linked once (see docs/tests.md).
 
+mod blender_targets;
+mod image_inputs;
 mod maps_cancel;
 mod maps_extended;
 mod maps_io;
 mod maps_lookup_rows;
 mod maps_outputs;
 mod maps_pipeline;
-mod image_inputs;
 mod shader_table;
-mod blender_targets;

@@ -8,11 +8,10 @@
 //!
 //! Run with `cargo test --release --test physics exact_transport:: -- --nocapture` to see the figures.
 
-
+use crate::support::mc::{simulate, McConfig, McLayer};
 use spectral_skin::diffusion::{Combination, Layer, LayerStack, MultipoleTerms};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 use spectral_skin::transport::{total_diffuse_reflectance, DEFAULT_STREAMS};
-use crate::support::mc::{simulate, McConfig, McLayer};
 
 fn layer(thickness_mm: f64, sigma_a_per_mm: f64, sigma_s_reduced_per_mm: f64) -> Layer {
     Layer { thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior: 1.4 }
@@ -88,8 +87,8 @@ fn homogeneous() {
 /// the shape to the exact total cannot move these radii (docs/model.md, Exact transport).
 #[test]
 fn profile_encircled_energy() {
-    use spectral_skin::diffusion::layered_reflectance;
     use crate::support::mc::log_edges;
+    use spectral_skin::diffusion::layered_reflectance;
     let cases: [(&str, Vec<Layer>, f64, f64); 4] = [
         ("caucasian 550 nm", preset_layers("caucasian", 550.0), 0.10, 0.10),
         ("thin epidermis", vec![layer(0.25, 0.5, 2.5), layer(f64::INFINITY, 0.02, 1.25)], 0.5, 0.2),

@@ -5,15 +5,15 @@
 #[path = "../support/mod.rs"]
 mod support;
 
-mod reference_numbers;
-mod diffusion_references;
-mod monte_carlo;
-mod exact_transport;
-mod transport_properties;
-mod transport_fronts;
-mod fft_route;
 mod accuracy;
+mod diffusion_references;
+mod exact_transport;
+mod fft_route;
+mod monte_carlo;
 mod physiology;
+mod profile_rgb_mapping;
+mod reference_numbers;
 mod robustness;
 mod robustness_properties;
-mod profile_rgb_mapping;
+mod transport_fronts;
+mod transport_properties;

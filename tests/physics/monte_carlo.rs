@@ -9,7 +9,6 @@
 //!
 //! Run with `cargo test --release --test physics monte_carlo:: -- --nocapture` to see the measured figures.
 
-
 use crate::support::mc::{annulus_area, fresnel_unpolarized, log_edges, simulate, McConfig, McLayer, McResult};
 
 use spectral_skin::diffusion::{multipole_reflectance, Layer};

@@ -2,9 +2,9 @@
 //! reference computed here) or a clear error. The property tests over the whole domain are in
 //! `tests/physics/robustness_properties.rs`.
 
-
 use std::f64::consts::PI;
 
+use crate::support::mc::{simulate, McConfig, McLayer};
 use spectral_skin::accuracy::ProfileGrid;
 use spectral_skin::diffusion::{
     layered_reflectance, layered_reflectance_with, multipole_reflectance, raw_reflectance_profiles,
@@ -16,7 +16,6 @@ use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::skin::{skin_layers, SkinModel};
 use spectral_skin::transport::Transport;
 use spectral_skin::{Outputs, Request, SkinParams};
-use crate::support::mc::{simulate, McConfig, McLayer};
 
 const INF: f64 = f64::INFINITY;
 

@@ -232,3 +232,38 @@ def test_other_bad_arguments_are_refused() -> None:
     raises_naming(TypeError, "theta_in_deg", lambda: spectral_skin.surface_albedo([10.0, None]))  # type: ignore[arg-type]
     raises_naming(TypeError, "oiliness", lambda: spectral_skin.surface_brdf(10.0, 10.0, oiliness=True))
     raises_naming(TypeError, "oiliness", lambda: spectral_skin.surface_albedo(10.0, oiliness="0.3"))  # type: ignore[arg-type]
+
+
+# The Principled inputs of each surface choice (evaluate's "specular"): docs/model.md, "Principled mapping of the
+# measured surface".
+
+
+@pytest.mark.parametrize("engine", ["cycles", "eevee"])
+def test_evaluate_surface_choice_gives_the_two_lobes_as_base_and_coat(engine: str) -> None:
+    for oiliness in OILINESS:
+        spec = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",),
+                                      surface="measured", engine=engine)["specular"]
+        (w_broad, m_broad), (w_sharp, m_sharp) = _lobes(oiliness)
+        got = (spec["surface"], spec["coat_weight"], spec["coat_roughness"], spec["roughness"], spec["ior"],
+               spec["coat_ior"])
+        assert got == pytest.approx(("measured", w_sharp, math.sqrt(m_sharp), math.sqrt(m_broad), ETA, ETA)), got
+        albedo = float(spectral_skin.surface_albedo(0.0, oiliness=oiliness))
+        assert spec["directional_albedo_normal"] == pytest.approx(albedo, rel=1e-12), (spec, albedo)
+        assert 0.0 < spec["specular_ior_level"] < 1.0, spec
+
+
+def test_evaluate_paper_surface_is_the_default_and_has_no_coat() -> None:
+    for oiliness in OILINESS:
+        default = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",))
+        paper = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",), surface="paper")
+        assert default["specular"] == paper["specular"], (default["specular"], paper["specular"])
+        # DJ2006's oil layer as Principled: level 0.5 rho_s, Roughness sqrt(0.35), no coat.
+        spec = paper["specular"]
+        got = (spec["specular_ior_level"], spec["roughness"], spec["coat_weight"])
+        assert got == pytest.approx((0.5 * oiliness, math.sqrt(0.35), 0.0)), got
+        assert paper["surface"]["surface"] == "paper", paper["surface"]
+
+
+def test_evaluate_refuses_an_unknown_surface_naming_the_choices() -> None:
+    with pytest.raises(SpectralSkinError, match=r'surface.*"shiny".*"measured", "paper"'):
+        spectral_skin.evaluate(preset="caucasian", surface="shiny")
