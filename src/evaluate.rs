@@ -336,7 +336,7 @@ impl Prepared {
     /// without subsurface, whatever the method.
     pub fn albedo(&self, params: &SkinParams) -> Result<[f64; 3], SkinError> {
         let optics = self.optics(params)?;
-        Ok(spectrum_to_rgb(&self.totals(&optics, false)?.total, &self.weights))
+        Ok(albedo_rgb(&self.totals(&optics, false)?.total, &self.weights))
     }
 
     /// Albedo and both methods' Base Color and radius for one parameter set, computed on the calling thread (callers
@@ -344,7 +344,7 @@ impl Prepared {
     pub fn material(&self, params: &SkinParams) -> Result<Material, SkinError> {
         let optics = self.optics(params)?;
         let totals = self.totals(&optics, false)?;
-        let albedo = spectrum_to_rgb(&totals.total, &self.weights);
+        let albedo = albedo_rgb(&totals.total, &self.weights);
         let fits = self.fits(&optics.stacks, &totals.scale, albedo, false);
         Ok(Material { albedo, fits, methods: methods_from(&self.request.target, albedo, &fits)? })
     }
@@ -376,7 +376,7 @@ pub fn evaluate_cancellable(
     let Totals { total: totals, scale, solves } = prepared.totals(&optics, true)?;
     work.transform_samples += stacks.len();
     work.transport_solves += solves;
-    let albedo = spectrum_to_rgb(&totals, &prepared.weights);
+    let albedo = albedo_rgb(&totals, &prepared.weights);
     let needs_albedo = out.albedo || out.radius;
 
     let (methods, radius_fit) = if out.radius {
@@ -484,6 +484,25 @@ struct Totals {
     solves: usize,
 }
 
+/// How far above 1 a total or an albedo channel may come from round-off alone (measured: 4e-16 for a multipole total
+/// of a skin absorbing nothing, 1e-15 for its RGB); such a value is 1. A larger excess is left as it is, for the checks
+/// downstream to see.
+const ROUND_OFF_ABOVE_ONE: f64 = 1e-12;
+
+/// `v`, or 1 where `v` exceeds 1 by round-off only ([`ROUND_OFF_ABOVE_ONE`]).
+fn one_at_round_off(v: f64) -> f64 {
+    if v > 1.0 && v < 1.0 + ROUND_OFF_ABOVE_ONE {
+        1.0
+    } else {
+        v
+    }
+}
+
+/// The RGB albedo of per-wavelength totals: a perfect reflector is (1, 1, 1), not 1 + 1e-15.
+fn albedo_rgb(totals: &[f64], weights: &[[f64; 3]]) -> [f64; 3] {
+    spectrum_to_rgb(totals, weights).map(one_at_round_off)
+}
+
 /// The total diffuse reflectance of each wavelength: the multipole's `R~(0)` (the request's combination and multipole
 /// terms), or with `Transport::AddingDoubling` the exact one at the request's streams. The one place totals come from.
 fn totals_of(optics: &Optics, request: &Request, parallel: bool) -> Result<Totals, SkinError> {
@@ -492,7 +511,8 @@ fn totals_of(optics: &Optics, request: &Request, parallel: bool) -> Result<Total
     match request.transport {
         Transport::Diffusion => {
             let scale = vec![1.0; multipole.len()];
-            Ok(Totals { total: multipole, scale, solves: 0 })
+            // A skin that absorbs nothing reflects exactly everything; the multipole's sum reaches 1 + 4e-16.
+            Ok(Totals { total: multipole.into_iter().map(one_at_round_off).collect(), scale, solves: 0 })
         }
         Transport::AddingDoubling => {
             let streams = request.accuracy.streams;

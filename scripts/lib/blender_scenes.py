@@ -324,6 +324,54 @@ def render_normal_incidence_reflection(surfaces: Sequence[dict], engine: str, sa
     return [float(img[lo:hi, i * _PLANE_PX + lo : i * _PLANE_PX + hi, 1].mean()) for i in range(n)]
 
 
+def render_in_plane_slices(inputs: dict, engine: str, incidences_deg: Sequence[float], samples: int,
+                           width_px: int = 400) -> list[dict]:
+    """In-plane BRDF slices of a surface as Blender renders it, one render per incidence: a long cylinder of radius 1
+    (axis along y, 720 smooth-shaded sides) with a Principled BSDF of the given inputs (Principled input name -> value)
+    over Base Color black and Subsurface Weight 0, lit only by a sun of irradiance 1 (angle 0.5 deg) tilted by the
+    incidence toward +x, in a black world, seen straight down by an orthographic camera 2 units wide. Each pixel column
+    sees one normal, tilted by beta = asin(x) in the x-z plane, so a render holds the plane of incidence's whole slice
+    (the image-based measurement of Marschner et al. 1999): theta_in = |incidence - beta|, theta_out = |beta|, phi =
+    180 deg where the sun and the camera lie on opposite sides of the normal, else 0. Returns per incidence
+    {"incidence_deg", "theta_in_deg", "theta_out_deg", "phi_deg", "radiance"}: arrays over the columns with
+    theta_out < 80 deg and theta_in < 89 deg; radiance = f_r cos(theta_in) (green channel, middle rows)."""
+    bpy = _bpy()
+    slices = []
+    for incidence in incidences_deg:
+        scene = reset_scene()
+        set_world(scene, strength=0.0)
+        mesh = bpy.data.meshes.new("Cylinder")
+        sides = 720
+        angles = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+        verts = [(float(np.cos(a)), y, float(np.sin(a))) for y in (-0.2, 0.2) for a in angles]
+        faces = [(i, (i + 1) % sides, sides + (i + 1) % sides, sides + i) for i in range(sides)]
+        mesh.from_pydata(verts, [], faces)
+        mesh.update()
+        for polygon in mesh.polygons:
+            polygon.use_smooth = True
+        cylinder = bpy.data.objects.new("Cylinder", mesh)
+        scene.collection.objects.link(cylinder)
+        mat, bsdf = new_material("Surface")
+        bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+        bsdf.inputs["Subsurface Weight"].default_value = 0.0
+        for name, value in inputs.items():
+            bsdf.inputs[name].default_value = value
+        assign(cylinder, mat)
+        add_top_camera(scene, ortho_scale=2.0, width=width_px, height=8, z=5.0)
+        sun = add_sun(scene, strength=1.0, angle=float(np.radians(0.5)))
+        sun.rotation_euler = (0.0, float(np.radians(incidence)), 0.0)
+        img = render(scene, samples=samples) if engine == "cycles" else render_eevee(scene, samples)
+        radiance = img[2:6, :, 1].mean(axis=0)
+        x = pixel_centres_x(2.0, width_px)
+        beta = np.degrees(np.arcsin(np.clip(x, -1.0, 1.0)))
+        theta_in, theta_out = np.abs(incidence - beta), np.abs(beta)
+        phi = np.where((incidence - beta) * beta > 0.0, 180.0, 0.0)
+        keep = (theta_out < 80.0) & (theta_in < 89.0)
+        slices.append({"incidence_deg": float(incidence), "theta_in_deg": theta_in[keep],
+                       "theta_out_deg": theta_out[keep], "phi_deg": phi[keep], "radiance": radiance[keep]})
+    return slices
+
+
 def pixel_centres_x(ortho_scale: float, width: int, center_x: float = 0.0) -> np.ndarray:
     """World x (m) of each image column's pixel centre for add_top_camera's camera."""
     return center_x + ((np.arange(width) + 0.5) / width - 0.5) * ortho_scale

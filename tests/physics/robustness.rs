@@ -572,3 +572,26 @@ fn lobe_messages_name_the_boundaries_used() {
     );
     assert!(!capped.contains("the paper's boundaries") && !capped.contains("boundaries \"capped\""), "{capped}");
 }
+
+/// Issue 23: a skin that absorbs nothing (no melanin, no blood, no baseline absorption) reflects everything that
+/// enters; the paper's diffusion summed it to 1 + 4e-16. Every total and every albedo channel, by both transports,
+/// stays within [0, 1], and reaches 1 to round-off.
+#[test]
+fn a_non_absorbing_skin_reflects_at_most_everything() {
+    let params = SkinParams {
+        melanin: 0.0,
+        hemoglobin: 0.0,
+        baseline_absorption_scale: 0.0,
+        ..SkinParams::preset("caucasian").unwrap()
+    };
+    for transport in [Transport::Diffusion, Transport::AddingDoubling] {
+        let outputs = Outputs { albedo: true, spectrum: true, ..Outputs::default() };
+        let request = Request { transport, ..Request::new(outputs) };
+        let ev = spectral_skin::evaluate(&params, &request).unwrap();
+        let spectrum = ev.spectral_reflectance.unwrap();
+        let albedo = ev.diffuse_reflectance_rgb.unwrap();
+        let most = spectrum.iter().chain(&albedo).cloned().fold(f64::NEG_INFINITY, f64::max);
+        let least = spectrum.iter().chain(&albedo).cloned().fold(f64::INFINITY, f64::min);
+        assert!(most <= 1.0 && least > 1.0 - 1e-6, "{transport:?}: totals and albedo in [{least:e}, {most:e}]");
+    }
+}
