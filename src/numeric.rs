@@ -263,10 +263,10 @@ mod tests {
     #[test]
     fn expm1_ratio_limits() {
         assert_eq!(expm1_ratio(1.0, 4.0, 0.0), 0.25);
-        assert!((expm1_ratio(1.0, 4.0, 1e-300) - 0.25).abs() < 1e-15);
+        assert!((expm1_ratio(1.0, 4.0, 1e-300) - 0.25).abs() < 1e-15, "{}", expm1_ratio(1.0, 4.0, 1e-300));
         let q: f64 = 0.3;
         let direct = (1.0 - (-q).exp()) / (1.0 - (-4.0 * q).exp());
-        assert!((expm1_ratio(1.0, 4.0, q) - direct).abs() < 1e-15);
+        assert!((expm1_ratio(1.0, 4.0, q) - direct).abs() < 1e-15, "{} vs {direct}", expm1_ratio(1.0, 4.0, q));
         assert_eq!(expm1_ratio(1.0, 4.0, 1e6), 1.0);
     }
 
@@ -290,7 +290,7 @@ mod tests {
     fn composite_rule_integrates_polynomials() {
         let (x, w) = composite_gauss_legendre(&[0.0, 0.1, 1.3, 2.0], 4);
         assert_eq!((x.len(), w.len()), (12, 12));
-        assert!(x.windows(2).all(|p| p[1] > p[0]) && x[0] > 0.0 && x[11] < 2.0);
+        assert!(x.windows(2).all(|p| p[1] > p[0]) && x[0] > 0.0 && x[11] < 2.0, "{x:?}");
         let integral: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(7)).sum();
         assert!((integral - 32.0).abs() < 1e-12, "{integral}");
     }
@@ -301,9 +301,9 @@ mod tests {
         assert_eq!(clamp_nan_to_low(f64::NEG_INFINITY, 0.2, 0.9), 0.2);
         assert_eq!(clamp_nan_to_low(f64::INFINITY, 0.2, 0.9), 0.9);
         assert_eq!(clamp_nan_to_low(0.5, 0.2, 0.9), 0.5);
-        assert!(clamp_nan_to_low(-0.0, 0.0, 1.0).is_sign_negative());
+        assert!(clamp_nan_to_low(-0.0, 0.0, 1.0).is_sign_negative(), "{:?}", clamp_nan_to_low(-0.0, 0.0, 1.0));
         assert_eq!(clamp_zero(f64::NAN), 0.0);
-        assert!(clamp_zero(-0.0).is_sign_positive());
+        assert!(clamp_zero(-0.0).is_sign_positive(), "{:?}", clamp_zero(-0.0));
         assert_eq!(clamp_zero(-3.0), 0.0);
         assert_eq!(clamp_zero(f64::INFINITY), f64::INFINITY);
     }
@@ -313,8 +313,8 @@ mod tests {
     fn bisect_finds_sqrt_two() {
         let b = bisect(1.0, 2.0, 52, |x| x * x >= 2.0);
         assert!(b.lo < std::f64::consts::SQRT_2 && b.hi >= std::f64::consts::SQRT_2, "{b:?}");
-        assert!(b.hi - b.lo <= 2f64.powi(-52));
-        assert!(b.last_midpoint == b.lo || b.last_midpoint == b.hi);
+        assert!(b.hi - b.lo <= 2f64.powi(-52), "{b:?}");
+        assert!(b.last_midpoint == b.lo || b.last_midpoint == b.hi, "{b:?}");
         assert_eq!(bisect(1.0, 2.0, 0, |_| true).last_midpoint, 1.5);
         assert_eq!(bisect(0.0, 1.0, 1, |_| true), Bisection { lo: 0.0, hi: 0.5, last_midpoint: 0.5 });
     }
@@ -347,8 +347,8 @@ mod tests {
     fn gauss_legendre_integrates_polynomials() {
         let (x, w) = gauss_legendre(8);
         let integral: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(14)).sum();
-        assert!((integral - 2.0 / 15.0).abs() < 1e-14);
-        assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-14);
+        assert!((integral - 2.0 / 15.0).abs() < 1e-14, "{integral} vs {}", 2.0 / 15.0);
+        assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-14, "{}", w.iter().sum::<f64>());
     }
 
     #[test]

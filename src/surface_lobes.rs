@@ -469,7 +469,7 @@ mod tests {
     fn normal_incidence_brdf_written_out() {
         let eta = 1.4f64;
         let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
-        assert!((f0 - 0.0278).abs() < 1e-4);
+        assert!((f0 - 0.0278).abs() < 1e-4, "F0 = {f0}");
         for o in OILINESS {
             let w_sharp = 0.15 + 0.70 * o;
             let m_sharp = 0.25 - 0.10 * o;
@@ -585,12 +585,27 @@ mod tests {
         let mut last: Option<[BeckmannLobe; 2]> = None;
         for k in 0..=10 {
             let lobes = measured_lobes(k as f64 / 10.0).unwrap();
-            assert!((lobes[0].weight + lobes[1].weight - 1.0).abs() < 1e-15);
-            assert_eq!(lobes[0].beckmann_m, 0.5);
-            assert!(lobes[1].beckmann_m < lobes[0].beckmann_m && lobes[1].beckmann_m > 0.0);
+            assert!(
+                (lobes[0].weight + lobes[1].weight - 1.0).abs() < 1e-15,
+                "k {k}: weights {} + {}",
+                lobes[0].weight,
+                lobes[1].weight
+            );
+            assert_eq!(lobes[0].beckmann_m, 0.5, "k {k}");
+            assert!(
+                lobes[1].beckmann_m < lobes[0].beckmann_m && lobes[1].beckmann_m > 0.0,
+                "k {k}: sharp m {} vs broad m {}",
+                lobes[1].beckmann_m,
+                lobes[0].beckmann_m
+            );
             // DJ2006's and d'Eon & Luebke's single lobes lie between the two.
             for single in [BECKMANN_ROUGHNESS_M, 0.3] {
-                assert!(lobes[1].beckmann_m < single && single < lobes[0].beckmann_m);
+                assert!(
+                    lobes[1].beckmann_m < single && single < lobes[0].beckmann_m,
+                    "k {k}: single m {single} vs sharp m {} and broad m {}",
+                    lobes[1].beckmann_m,
+                    lobes[0].beckmann_m
+                );
             }
             if let Some(prev) = last {
                 assert!(lobes[1].weight > prev[1].weight, "oil raises the sharp lobe's weight");
@@ -600,7 +615,7 @@ mod tests {
         }
         // Oil sharpens the highlight: the mirror peak at 30 degrees rises with oiliness.
         let peak = |o: f64| measured(o).f_r_per_sr(30.0, 30.0, 180.0).unwrap();
-        assert!(peak(0.0) < peak(0.3) && peak(0.3) < peak(1.0));
+        assert!(peak(0.0) < peak(0.3) && peak(0.3) < peak(1.0), "{} {} {}", peak(0.0), peak(0.3), peak(1.0));
     }
 
     /// Dry skin reflects: E(0) of the measured model is about F0 at every oiliness; the paper's is o times it.
@@ -609,7 +624,7 @@ mod tests {
         for o in OILINESS {
             let e0 = measured(o).normal_incidence_reflectance();
             assert!((0.024..=0.05).contains(&e0), "o {o}: {e0}");
-            assert_eq!(e0, measured(o).directional_albedo(0.0).unwrap());
+            assert_eq!(e0, measured(o).directional_albedo(0.0).unwrap(), "o {o}");
         }
         assert_eq!(surface_normal_incidence_reflectance(SurfaceModel::Paper, 0.0).unwrap(), 0.0);
         assert_eq!(surface_f_r_per_sr(SurfaceModel::Paper, 0.0, 20.0, 20.0, 180.0).unwrap(), 0.0);
@@ -625,15 +640,15 @@ mod tests {
                 let (so, co) = f64::to_radians(to).sin_cos();
                 let (sp, cp) = f64::to_radians(phi).sin_cos();
                 let want = torrance_sparrow_f_r([st, 0.0, ct], [so * cp, so * sp, co], o);
-                assert_eq!(s.f_r_per_sr(ti, to, phi).unwrap().to_bits(), want.to_bits());
+                assert_eq!(s.f_r_per_sr(ti, to, phi).unwrap().to_bits(), want.to_bits(), "o {o} ({ti}, {to}, {phi})");
             }
             for theta in [0.0f64, 30.0, 60.0, 75.0] {
                 let want = torrance_sparrow_directional_albedo(theta.to_radians().cos(), o);
-                assert_eq!(s.directional_albedo(theta).unwrap().to_bits(), want.to_bits());
+                assert_eq!(s.directional_albedo(theta).unwrap().to_bits(), want.to_bits(), "o {o} theta {theta}");
             }
             let want = specular_from_oiliness(o).directional_albedo_normal;
-            assert_eq!(s.normal_incidence_reflectance().to_bits(), want.to_bits());
-            assert_eq!(s.directional_albedo(0.0).unwrap().to_bits(), want.to_bits());
+            assert_eq!(s.normal_incidence_reflectance().to_bits(), want.to_bits(), "o {o}");
+            assert_eq!(s.directional_albedo(0.0).unwrap().to_bits(), want.to_bits(), "o {o}");
         }
     }
 
@@ -656,13 +671,29 @@ mod tests {
             assert!(e.contains("theta_in_deg") && e.contains("[0, 90)"), "{e}");
         }
         for bad in [f64::NAN, f64::INFINITY] {
-            assert!(message(s.f_r_per_sr(10.0, 10.0, bad).unwrap_err()).contains("phi_deg"));
+            assert!(
+                message(s.f_r_per_sr(10.0, 10.0, bad).unwrap_err()).contains("phi_deg"),
+                "phi {bad}: {}",
+                message(s.f_r_per_sr(10.0, 10.0, bad).unwrap_err())
+            );
         }
-        assert!(message(s.f_r_per_sr_each(&[1.0], &[1.0, 2.0], &[180.0]).unwrap_err()).contains("theta_out_deg"));
+        assert!(
+            message(s.f_r_per_sr_each(&[1.0], &[1.0, 2.0], &[180.0]).unwrap_err()).contains("theta_out_deg"),
+            "{}",
+            message(s.f_r_per_sr_each(&[1.0], &[1.0, 2.0], &[180.0]).unwrap_err())
+        );
         let never = AtomicBool::new(false);
-        assert!(message(s.directional_albedo_each(&[10.0, 90.0], &never).unwrap_err()).contains("theta_in_deg"));
+        assert!(
+            message(s.directional_albedo_each(&[10.0, 90.0], &never).unwrap_err()).contains("theta_in_deg"),
+            "{}",
+            message(s.directional_albedo_each(&[10.0, 90.0], &never).unwrap_err())
+        );
         let stopped = AtomicBool::new(true);
-        assert!(message(s.directional_albedo_each(&[10.0], &stopped).unwrap_err()).contains("interrupted"));
+        assert!(
+            message(s.directional_albedo_each(&[10.0], &stopped).unwrap_err()).contains("interrupted"),
+            "{}",
+            message(s.directional_albedo_each(&[10.0], &stopped).unwrap_err())
+        );
     }
 
     #[test]
@@ -671,7 +702,7 @@ mod tests {
         let thetas = [60.0, 0.0, 30.0, 60.0, 0.0];
         let each = s.directional_albedo_each(&thetas, &AtomicBool::new(false)).unwrap();
         for (theta, e) in thetas.iter().zip(&each) {
-            assert_eq!(e.to_bits(), s.directional_albedo(*theta).unwrap().to_bits());
+            assert_eq!(e.to_bits(), s.directional_albedo(*theta).unwrap().to_bits(), "theta {theta}");
         }
         let f = s.f_r_per_sr_each(&[10.0, 20.0], &[10.0, 50.0], &[180.0, 90.0]).unwrap();
         assert_eq!(f[1].to_bits(), s.f_r_per_sr(20.0, 50.0, 90.0).unwrap().to_bits());

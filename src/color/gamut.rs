@@ -93,8 +93,8 @@ mod tests {
     #[test]
     fn in_gamut_colours_are_unchanged() {
         for rgb in [[0.0, 0.0, 0.0], [0.5, 0.2, 0.1], [3.0, 0.0, 1e-300], [1.0, 1.0, 1.0]] {
-            assert_eq!(desaturate_to_non_negative(rgb, BT709_LUMA), rgb);
-            assert_eq!(RgbMapping::Linear.apply([-1.0, 2.0, 0.5], BT709_LUMA), [-1.0, 2.0, 0.5]);
+            assert_eq!(desaturate_to_non_negative(rgb, BT709_LUMA), rgb, "{rgb:?}");
+            assert_eq!(RgbMapping::Linear.apply([-1.0, 2.0, 0.5], BT709_LUMA), [-1.0, 2.0, 0.5], "{rgb:?}");
         }
     }
 
@@ -109,7 +109,7 @@ mod tests {
         for c in 0..3 {
             assert!((out[c] - expected[c]).abs() < 1e-12, "{out:?} vs {expected:?}");
         }
-        assert!((luma(out) - luma(rgb)).abs() < 1e-12);
+        assert!((luma(out) - luma(rgb)).abs() < 1e-12, "{} vs {}", luma(out), luma(rgb));
     }
 
     /// Random colours with negative channels: every channel >= 0, one of them 0 (on the boundary, not inside), the
@@ -150,7 +150,7 @@ mod tests {
     #[test]
     fn names_are_serde_names() {
         for m in ALL_RGB_MAPPINGS {
-            assert_eq!(serde_json::to_string(&m).unwrap(), format!("\"{}\"", m.name()));
+            assert_eq!(serde_json::to_string(&m).unwrap(), format!("\"{}\"", m.name()), "{m:?}");
         }
     }
 }

@@ -156,7 +156,7 @@ mod tests {
         assert_eq!(g.wavelengths_nm.len(), 81);
         assert_eq!(*g.wavelengths_nm.last().unwrap(), 780.0);
         let g = WavelengthGrid::uniform(30.0);
-        assert!(*g.wavelengths_nm.last().unwrap() >= 780.0);
+        assert!(*g.wavelengths_nm.last().unwrap() >= 780.0, "{:?}", g.wavelengths_nm.last());
     }
 
     /// White of D65 over 380-780 nm with these tables, summed at 1 nm by a separate script: XYZ = (0.950423, 1,

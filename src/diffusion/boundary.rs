@@ -28,12 +28,12 @@ mod tests {
     /// Independently computed values (docs/model.md, Boundary).
     #[test]
     fn spec_values() {
-        assert!((fdr(1.4) - 0.52949).abs() < 5e-5);
-        assert!((internal_reflection_a(1.4) - 3.2507).abs() < 5e-4);
-        assert!((fdr(1.0) - 0.0016).abs() < 1e-4);
-        assert!((internal_reflection_a(1.0) - 1.0032).abs() < 2e-4);
+        assert!((fdr(1.4) - 0.52949).abs() < 5e-5, "{}", fdr(1.4));
+        assert!((internal_reflection_a(1.4) - 3.2507).abs() < 5e-4, "{}", internal_reflection_a(1.4));
+        assert!((fdr(1.0) - 0.0016).abs() < 1e-4, "{}", fdr(1.0));
+        assert!((internal_reflection_a(1.0) - 1.0032).abs() < 2e-4, "{}", internal_reflection_a(1.0));
         // pitfall 13: eta = 1/1.4 would give 0.078
-        assert!((fdr(1.0 / 1.4) - 0.078).abs() < 2e-3);
+        assert!((fdr(1.0 / 1.4) - 0.078).abs() < 2e-3, "{}", fdr(1.0 / 1.4));
     }
 
     #[test]

@@ -474,7 +474,7 @@ mod tests {
             transpose_in_place(&mut buf, n);
             for i in 0..n {
                 for j in 0..n {
-                    assert_eq!(buf[i * n + j], orig[j * n + i]);
+                    assert_eq!(buf[i * n + j], orig[j * n + i], "n={n} ({i},{j})");
                 }
             }
         }
@@ -503,7 +503,7 @@ mod tests {
         }
         fft2_transposed(&mut buf, plans.inverse.as_ref(), &mut scratch, n);
         for (a, b) in buf.iter().zip(&wave) {
-            assert!((a / (n * n) as f64 - b).norm() < 1e-12);
+            assert!((a / (n * n) as f64 - b).norm() < 1e-12, "{} vs {b}", a / (n * n) as f64);
         }
     }
 

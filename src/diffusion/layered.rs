@@ -288,8 +288,12 @@ mod tests {
         assert!(e.to_string().contains("sigma_s_reduced_per_mm"), "{e}");
         let e = LayerStack::new(&[layer(1.0, 0.1, 1.0, 0.5)]).unwrap_err();
         assert!(e.to_string().contains("ior"), "{e}");
-        assert!(LayerStack::new(&[]).is_err());
-        assert!(LayerStack::new(&[layer(1.0, 0.0, 0.0, 1.4)]).is_err());
+        assert!(LayerStack::new(&[]).is_err(), "{:?}", LayerStack::new(&[]));
+        assert!(
+            LayerStack::new(&[layer(1.0, 0.0, 0.0, 1.4)]).is_err(),
+            "{:?}",
+            LayerStack::new(&[layer(1.0, 0.0, 0.0, 1.4)])
+        );
     }
 
     /// A very thick slab is the semi-infinite medium.

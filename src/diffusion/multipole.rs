@@ -322,11 +322,11 @@ mod tests {
     #[test]
     fn derived_quantities() {
         let s = epidermis_550();
-        assert!((s.alpha_prime - 0.95891).abs() < 2e-5);
-        assert!((s.sigma_tr_per_mm - 2.22694).abs() < 2e-4);
-        assert!((s.source_depth_mm - 0.15766).abs() < 2e-5);
-        assert!((s.zb_top_mm - 0.34166).abs() < 2e-4);
-        assert!((s.zb_bottom_mm - 0.10544).abs() < 2e-4);
+        assert!((s.alpha_prime - 0.95891).abs() < 2e-5, "alpha' = {}", s.alpha_prime);
+        assert!((s.sigma_tr_per_mm - 2.22694).abs() < 2e-4, "sigma_tr = {}", s.sigma_tr_per_mm);
+        assert!((s.source_depth_mm - 0.15766).abs() < 2e-5, "source depth = {}", s.source_depth_mm);
+        assert!((s.zb_top_mm - 0.34166).abs() < 2e-4, "zb_top = {}", s.zb_top_mm);
+        assert!((s.zb_bottom_mm - 0.10544).abs() < 2e-4, "zb_bottom = {}", s.zb_bottom_mm);
     }
 
     /// docs/model.md, Adding layers: R1+ = 0.252, T1+ = 0.592, R1- = 0.491, T1- = 0.344 at 550 nm, Caucasian.
@@ -334,10 +334,18 @@ mod tests {
     fn directional_layer_totals() {
         let s = epidermis_550();
         let t = MultipoleTerms::All;
-        assert!((s.reflectance_hat(0.0, t) - 0.252).abs() < 1e-3);
-        assert!((s.transmittance_hat(0.0, t) - 0.592).abs() < 1e-3);
-        assert!((s.flipped().reflectance_hat(0.0, t) - 0.491).abs() < 1e-3);
-        assert!((s.flipped().transmittance_hat(0.0, t) - 0.344).abs() < 1e-3);
+        assert!((s.reflectance_hat(0.0, t) - 0.252).abs() < 1e-3, "R1+ = {}", s.reflectance_hat(0.0, t));
+        assert!((s.transmittance_hat(0.0, t) - 0.592).abs() < 1e-3, "T1+ = {}", s.transmittance_hat(0.0, t));
+        assert!(
+            (s.flipped().reflectance_hat(0.0, t) - 0.491).abs() < 1e-3,
+            "R1- = {}",
+            s.flipped().reflectance_hat(0.0, t)
+        );
+        assert!(
+            (s.flipped().transmittance_hat(0.0, t) - 0.344).abs() < 1e-3,
+            "T1- = {}",
+            s.flipped().transmittance_hat(0.0, t)
+        );
     }
 
     /// The closed-form series equals the explicit sum of many pairs.
@@ -386,7 +394,7 @@ mod tests {
         let t = slab.transmittance_hat(0.0, MultipoleTerms::All);
         assert!((r + t - 1.0).abs() < 1e-14, "{r} + {t}");
         let (l, zb0, zbd, d) = (slab.source_depth_mm, slab.zb_top_mm, slab.zb_bottom_mm, slab.thickness_mm);
-        assert!((r - (d + zbd - l) / (d + zb0 + zbd)).abs() < 1e-14);
+        assert!((r - (d + zbd - l) / (d + zb0 + zbd)).abs() < 1e-14, "{r} vs {}", (d + zbd - l) / (d + zb0 + zbd));
     }
 
     /// The semi-infinite total is Jensen et al. 2001's closed form.
@@ -398,7 +406,11 @@ mod tests {
             let a = internal_reflection_a(1.4);
             let root = (3.0 * (1.0 - ap)).sqrt();
             let jensen = 0.5 * ap * (1.0 + (-(4.0 / 3.0) * a * root).exp()) * (-root).exp();
-            assert!((slab.reflectance_hat(0.0, MultipoleTerms::All) - jensen).abs() < 1e-14);
+            assert!(
+                (slab.reflectance_hat(0.0, MultipoleTerms::All) - jensen).abs() < 1e-14,
+                "sigma_a {sa} sigma_s' {ss}: {} vs {jensen}",
+                slab.reflectance_hat(0.0, MultipoleTerms::All)
+            );
         }
     }
 
@@ -413,7 +425,7 @@ mod tests {
         let sigma_t_at_cap = 1.0 / d;
         let (r_lo, t_lo) = at(sigma_t_at_cap - 0.1 - 1e-9);
         let (r_hi, t_hi) = at(sigma_t_at_cap - 0.1 + 1e-9);
-        assert!((r_lo - r_hi).abs() < 1e-7 && (t_lo - t_hi).abs() < 1e-7);
+        assert!((r_lo - r_hi).abs() < 1e-7 && (t_lo - t_hi).abs() < 1e-7, "R {r_lo} vs {r_hi}, T {t_lo} vs {t_hi}");
         for ss in [1e-6, 0.01, 0.5, 3.0, 3.9, 4.0, 100.0] {
             let (r, t) = at(ss);
             assert!(r.is_finite() && t.is_finite() && r >= 0.0 && t >= 0.0 && r + t <= 1.0, "ss={ss}: {r} {t}");

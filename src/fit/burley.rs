@@ -123,7 +123,7 @@ mod tests {
             let n: Vec<f64> = s.iter().map(|&x| burley_transform(x, d)).collect();
             let fit = fit_burley(&s, &n);
             assert!((fit.d_mm / d - 1.0).abs() < 1e-5, "{d}: {}", fit.d_mm);
-            assert!(fit.edge_residual < 1e-4);
+            assert!(fit.edge_residual < 1e-4, "{d}: {}", fit.edge_residual);
         }
     }
 

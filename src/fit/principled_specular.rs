@@ -443,18 +443,32 @@ mod tests {
         assert_eq!(principled_specular_directional_albedo(1.0, &zero), 0.0);
         assert_eq!((zero.directional_albedo_normal, zero.hemispherical_albedo), (0.0, 0.0));
         let p = specular_from_oiliness(0.3);
-        assert!((p.specular_ior_level - 0.15).abs() < 1e-15);
-        assert!((p.roughness * p.roughness - BECKMANN_ROUGHNESS_M).abs() < 1e-15);
+        assert!((p.specular_ior_level - 0.15).abs() < 1e-15, "{}", p.specular_ior_level);
+        assert!(
+            (p.roughness * p.roughness - BECKMANN_ROUGHNESS_M).abs() < 1e-15,
+            "{} vs {BECKMANN_ROUGHNESS_M}",
+            p.roughness * p.roughness
+        );
         assert_eq!((p.ior, p.beckmann_m), (1.4, 0.35));
         // F0 of the Principled lobe equals rho_s F0(1.4).
         let eta = principled_specular_eta(p.ior, p.specular_ior_level);
-        assert!((f0_from_ior(eta) - 0.3 * f0_from_ior(1.4)).abs() < 1e-15);
+        assert!(
+            (f0_from_ior(eta) - 0.3 * f0_from_ior(1.4)).abs() < 1e-15,
+            "{} vs {}",
+            f0_from_ior(eta),
+            0.3 * f0_from_ior(1.4)
+        );
         assert_eq!(principled_specular_eta(1.4, 0.5), 1.4);
-        assert!((p.hemispherical_albedo - 0.3 * torrance_sparrow_unit_albedos().1).abs() < 1e-15);
-        assert!(p.hemispherical_albedo > p.directional_albedo_normal);
+        assert!(
+            (p.hemispherical_albedo - 0.3 * torrance_sparrow_unit_albedos().1).abs() < 1e-15,
+            "{} vs {}",
+            p.hemispherical_albedo,
+            0.3 * torrance_sparrow_unit_albedos().1
+        );
+        assert!(p.hemispherical_albedo > p.directional_albedo_normal, "{p:?}");
         for x in [f64::NAN, -1.0, f64::INFINITY] {
             let q = specular_from_oiliness(x);
-            assert!(q.specular_ior_level.is_finite() && q.hemispherical_albedo.is_finite());
+            assert!(q.specular_ior_level.is_finite() && q.hemispherical_albedo.is_finite(), "oiliness {x}: {q:?}");
         }
         assert_eq!(specular_from_oiliness(f64::NAN).oiliness, 0.0);
         assert_eq!(specular_from_oiliness(7.0).oiliness, 1.0);

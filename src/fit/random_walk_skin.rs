@@ -169,6 +169,6 @@ mod tests {
             let c = skin_base_color(t);
             assert!(!c.saturated && (skin_flat_albedo(c.base_color) - t).abs() < 1e-12, "t = {t}: {c:?}");
         }
-        assert!(skin_base_color(0.99).saturated);
+        assert!(skin_base_color(0.99).saturated, "{:?}", skin_base_color(0.99));
     }
 }

@@ -142,15 +142,28 @@ mod tests {
                 assert!(mid > w[0].1 && mid < w[1].1, "{walk:?}: {mid} not in {w:?}");
             }
             let (a0, k0) = t[0];
-            assert!((measured_k(walk, a0 - 1e-9, 1.0) / k0 - 1.0).abs() < 1e-7);
+            assert!(
+                (measured_k(walk, a0 - 1e-9, 1.0) / k0 - 1.0).abs() < 1e-7,
+                "{walk:?}: {} vs {k0}",
+                measured_k(walk, a0 - 1e-9, 1.0)
+            );
             // Below: the 1/s shape (k(0)/k(0.05) = s(0.05)/s(0)).
             let r = measured_k(walk, 0.0, 1.0) / measured_k(walk, 0.05, 1.0);
-            assert!((r - christensen_burley_s(0.05) / christensen_burley_s(0.0)).abs() < 1e-12);
-            assert!(measured_k(walk, f64::NAN, 1.0) == measured_k(walk, 0.0, 1.0));
+            assert!(
+                (r - christensen_burley_s(0.05) / christensen_burley_s(0.0)).abs() < 1e-12,
+                "{walk:?}: {r} vs {}",
+                christensen_burley_s(0.05) / christensen_burley_s(0.0)
+            );
+            assert!(
+                measured_k(walk, f64::NAN, 1.0) == measured_k(walk, 0.0, 1.0),
+                "{walk:?}: {} vs {}",
+                measured_k(walk, f64::NAN, 1.0),
+                measured_k(walk, 0.0, 1.0)
+            );
             // Above: continues rising to a_max, then holds.
             let top = t[t.len() - 1];
-            assert!(measured_k(walk, 0.95, 1.0) > top.1);
-            assert_eq!(measured_k(walk, 0.95, 0.92), measured_k(walk, 0.92, 0.92));
+            assert!(measured_k(walk, 0.95, 1.0) > top.1, "{walk:?}: {} vs {}", measured_k(walk, 0.95, 1.0), top.1);
+            assert_eq!(measured_k(walk, 0.95, 0.92), measured_k(walk, 0.92, 0.92), "{walk:?}");
         }
     }
 }

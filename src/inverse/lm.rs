@@ -247,7 +247,7 @@ mod tests {
         let f = |x: &[f64; 2]| [x[0] - 2.0, x[1] + 1.0];
         let res = minimize(f, [0.5, 0.5], [0.0; 2], [1.0; 2], &LmSettings::default());
         assert_eq!(res.x, [1.0, 0.0]);
-        assert!((res.cost - 2.0).abs() < 1e-12);
+        assert!((res.cost - 2.0).abs() < 1e-12, "{res:?}");
     }
 
     /// A variable with equal bounds is held there and costs no evaluation: the other is fitted as if alone (the same

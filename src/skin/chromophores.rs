@@ -86,6 +86,11 @@ mod tests {
     #[test]
     fn soret_peak() {
         let peak = sigma_a_oxy_blood_per_mm(414.0);
-        assert!(peak > sigma_a_oxy_blood_per_mm(406.0) && peak > sigma_a_oxy_blood_per_mm(422.0));
+        assert!(
+            peak > sigma_a_oxy_blood_per_mm(406.0) && peak > sigma_a_oxy_blood_per_mm(422.0),
+            "414 nm {peak} vs 406 nm {} and 422 nm {}",
+            sigma_a_oxy_blood_per_mm(406.0),
+            sigma_a_oxy_blood_per_mm(422.0)
+        );
     }
 }

@@ -116,6 +116,6 @@ mod tests {
         let [epi, derm] = skin_layers(&p, &SkinModel::default(), 550.0);
         assert!((epi.sigma_a_per_mm - 0.26062).abs() < 3e-4, "{}", epi.sigma_a_per_mm);
         assert!((derm.sigma_a_per_mm - 0.16783).abs() < 3e-4, "{}", derm.sigma_a_per_mm);
-        assert!((derm.sigma_s_reduced_per_mm - 3.04113).abs() < 3e-4);
+        assert!((derm.sigma_s_reduced_per_mm - 3.04113).abs() < 3e-4, "{}", derm.sigma_s_reduced_per_mm);
     }
 }

@@ -371,7 +371,7 @@ mod tests {
         assert_eq!(names[..3], ["caucasian", "asian", "african"]);
         for p in &PRESETS[..3] {
             let q = p.params;
-            assert_eq!(SkinParams::new(q.melanin, q.melanin_blend, q.hemoglobin, q.oiliness).unwrap(), q);
+            assert_eq!(SkinParams::new(q.melanin, q.melanin_blend, q.hemoglobin, q.oiliness).unwrap(), q, "{}", p.name);
         }
         for p in &PRESETS[3..] {
             assert_eq!(p.params.validated().unwrap(), p.params, "{}", p.name);
@@ -401,10 +401,13 @@ mod tests {
         // The extended physiology defaults to the paper's values, in JSON too (a sidecar from before it existed).
         let old = r#"{"melanin":0.005,"melanin_blend":0.7,"hemoglobin":0.005,"oiliness":0.3}"#;
         let q: SkinParams = serde_json::from_str(old).unwrap();
-        assert!(q.is_paper_model() && q.epidermis_thickness_mm == 0.25 && q.blood_oxygenation == 0.75);
+        assert!(q.is_paper_model() && q.epidermis_thickness_mm == 0.25 && q.blood_oxygenation == 0.75, "{q:?}");
         assert_eq!(q, SkinParams::preset("caucasian").unwrap());
         assert!(
-            PAPER_PARAMS.iter().all(|s| s.default.is_none()) && EXTENDED_PARAMS.iter().all(|s| s.default.is_some())
+            PAPER_PARAMS.iter().all(|s| s.default.is_none()) && EXTENDED_PARAMS.iter().all(|s| s.default.is_some()),
+            "{:?} / {:?}",
+            PAPER_PARAMS.map(|s| s.default),
+            EXTENDED_PARAMS.map(|s| s.default)
         );
         assert_eq!(param_spec("hemoglobin").map(|s| s.max), Some(0.1));
         // values() is in PARAMS order: each value is the field of that name.
@@ -421,7 +424,11 @@ mod tests {
         assert!(e.contains("melanin") && e.contains("[0, 0.5]") && e.contains("0.6"), "{e}");
         let e = SkinParams::new(0.1, 0.5, f64::NAN, 0.3).unwrap_err().to_string();
         assert!(e.contains("hemoglobin") && e.contains("NaN"), "{e}");
-        assert!(SkinParams::preset("martian").unwrap_err().to_string().contains("caucasian"));
-        assert!(SkinParams::preset("Caucasian").is_ok());
+        assert!(
+            SkinParams::preset("martian").unwrap_err().to_string().contains("caucasian"),
+            "{}",
+            SkinParams::preset("martian").unwrap_err()
+        );
+        assert!(SkinParams::preset("Caucasian").is_ok(), "{:?}", SkinParams::preset("Caucasian"));
     }
 }

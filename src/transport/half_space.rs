@@ -176,7 +176,7 @@ mod tests {
         assert!((h1 - 2.90781).abs() < 1e-5, "H(1; 1) = {h1}");
         let h_half = chandrasekhar_h(0.5, 1.0);
         assert!((h_half - 2.01278).abs() < 1e-5, "H(0.5; 1) = {h_half}");
-        assert!((chandrasekhar_h(0.0, 0.9) - 1.0).abs() < 1e-12);
+        assert!((chandrasekhar_h(0.0, 0.9) - 1.0).abs() < 1e-12, "{}", chandrasekhar_h(0.0, 0.9));
         assert_eq!(chandrasekhar_h(0.5, 0.0), 1.0);
     }
 
@@ -212,7 +212,7 @@ mod tests {
             let m0: f64 = weights.iter().zip(&h).map(|(w, h)| w * h).sum();
             let want = 2.0 * (1.0 - (1.0 - a).sqrt()) / a;
             assert!(rel(m0, want) < 1e-10, "a = {a}: {m0} vs {want}");
-            assert_eq!(nodes.len(), h.len());
+            assert_eq!(nodes.len(), h.len(), "a = {a}");
         }
     }
 }

@@ -483,3 +483,24 @@ def test_every_method_decides_alike_on_the_same_scene(preset):
             decided[method] = plan.subsurface_weight == 1.0
         assert len(set(decided.values())) == 1, (preset, radius_px, decided)
         assert decided["BURLEY"] == (radius_px * depth / (depth + 0.1) >= scene.SUBSURFACE_MIN_RADIUS_PX), radius_px
+
+
+def test_the_plan_is_read_only(tmp_path):
+    """Issue 23: operators, batch, panels and node glue only read the plan: its fields cannot be set, its mappings
+    cannot be changed and its texels cannot be written."""
+    import dataclasses
+
+    maps = {"melanin": core.ParameterMap(np.linspace(0.01, 0.2, 16, dtype=np.float32).reshape(4, 4), False)}
+    plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path)), None)
+    assert sorted(plan.images) == ["albedo", "radius"], sorted(plan.images)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        plan.roughness = 0.1  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        plan.textures["albedo"] = "elsewhere.exr"  # type: ignore[index]
+    with pytest.raises(TypeError):
+        plan.target["blender"] = "4.2"  # type: ignore[index]
+    for name, image in plan.images.items():
+        assert not image.flags.writeable, name
+        with pytest.raises(ValueError):
+            image[0, 0] = 0.0
+    assert isinstance(plan.effects, tuple), type(plan.effects)
