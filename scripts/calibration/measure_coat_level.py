@@ -21,58 +21,48 @@ The JSON is compiled into the core (`fit::principled_specular`); written atomica
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
 ROOT = Path(__file__).resolve().parents[2]
-LIB = ROOT / "scripts" / "lib"  # blender_scenes
+LIB = ROOT / "scripts" / "lib"  # blender_scenes, calibration
+sys.path.insert(0, str(LIB))
+from calibration import engine_and_output, provenance, run_and_exit  # noqa: E402
+
 OILINESS = tuple(i / 10 for i in range(11))
 LEVELS = (0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7)
 SAMPLES = {"cycles": 1024, "eevee": 16}
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--engine", choices=("cycles", "eevee"), required=True)
-    parser.add_argument("--out", type=Path, default=None, help="default: docs/data/coat_level_<engine>.json")
-    args = parser.parse_args(argv)
-    out = args.out or ROOT / "docs" / "data" / f"coat_level_{args.engine}.json"
+    engine, out = engine_and_output(__doc__ or "", "coat_level", argv)
 
+    import blender_scenes as helpers
     import bpy
     import spectral_skin
 
-    sys.path.insert(0, str(LIB))
-    import blender_scenes as helpers
-
     inputs = {o: spectral_skin.evaluate(preset="caucasian", oiliness=o, surface="measured", outputs=("specular",),
-                                        engine=args.engine)["specular"] for o in OILINESS}
+                                        engine=engine)["specular"] for o in OILINESS}
     grid = [(o, level) for level in LEVELS for o in OILINESS]
-    surfaces = [{"Roughness": inputs[o]["roughness"], "IOR": inputs[o]["ior"], "Specular IOR Level": level,
-                 "Coat Weight": inputs[o]["coat_weight"], "Coat Roughness": inputs[o]["coat_roughness"],
-                 "Coat IOR": inputs[o]["coat_ior"]} for o, level in grid]
+    surfaces = [{**helpers.principled_surface_inputs(inputs[o]), "Specular IOR Level": level} for o, level in grid]
     t0 = time.perf_counter()
-    rendered = helpers.render_normal_incidence_reflection(surfaces, args.engine, SAMPLES[args.engine])
+    rendered = helpers.render_normal_incidence_reflection(surfaces, engine, SAMPLES[engine])
     seconds = time.perf_counter() - t0
     cases = [{"oiliness": o, "specular_ior_level": level, "rendered": r} for (o, level), r in zip(grid, rendered,
                                                                                                    strict=True)]
     for oiliness in OILINESS:
         row = [c for c in cases if c["oiliness"] == oiliness]
-        print(f"[{bpy.app.version_string} {args.engine}] oiliness {oiliness:.1f}: "
+        print(f"[{bpy.app.version_string} {engine}] oiliness {oiliness:.1f}: "
               + ", ".join(f"level {c['specular_ior_level']:.2f} -> {c['rendered']:.5f}" for c in row), flush=True)
         if any(b["rendered"] <= a["rendered"] for a, b in zip(row, row[1:], strict=False)):
             raise SystemExit(f"the reflection does not rise with the level at oiliness {oiliness}")
     data = {
-        "description": "Normal-incidence directional albedo of the measured surface's Principled set-up (base lobe "
-        "under a Coat, Base Color black) under a uniform white world, per oiliness and Specular IOR Level; "
-        f"regenerate: <venv>/bin/python scripts/calibration/measure_coat_level.py --engine {args.engine}",
-        "engine": args.engine,
-        "blender": "{}.{}".format(*bpy.app.version[:2]),
-        "bpy": bpy.app.version_string,
-        "scene": {"samples": SAMPLES[args.engine], "seconds": round(seconds, 1)},
+        **provenance("Normal-incidence directional albedo of the measured surface's Principled set-up (base lobe "
+                     "under a Coat, Base Color black) under a uniform white world, per oiliness and Specular IOR Level",
+                     __file__, engine),
+        "scene": {"samples": SAMPLES[engine], "seconds": round(seconds, 1)},
         "cases": cases,
     }
     helpers.write_json_atomically(out, data)
@@ -80,6 +70,4 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    main()
-    sys.stdout.flush()
-    os._exit(0)  # bpy 4.5 can hang at interpreter exit
+    run_and_exit(main)

@@ -296,6 +296,27 @@ def render_eevee(scene, samples: int) -> np.ndarray:
     return img[:, :, :3].astype(np.float64)
 
 
+# The Principled inputs of the skin surface -> the key of evaluate()'s "specular" that holds each.
+PRINCIPLED_SURFACE_INPUTS = {"Roughness": "roughness", "IOR": "ior", "Specular IOR Level": "specular_ior_level",
+                             "Coat Weight": "coat_weight", "Coat Roughness": "coat_roughness", "Coat IOR": "coat_ior"}
+
+
+def principled_surface_inputs(specular: dict) -> dict:
+    """The surface's Principled inputs (input name -> value) of ``evaluate(...)["specular"]``."""
+    return {name: specular[key] for name, key in PRINCIPLED_SURFACE_INPUTS.items()}
+
+
+def surface_only_material(name: str, inputs: dict):
+    """A Principled material that shows its surface reflection alone: Base Color black, Subsurface Weight 0, and the
+    given inputs (Principled input name -> value)."""
+    mat, bsdf = new_material(name)
+    bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    bsdf.inputs["Subsurface Weight"].default_value = 0.0
+    for input_name, value in inputs.items():
+        bsdf.inputs[input_name].default_value = value
+    return mat
+
+
 # Normal-incidence surface reflection: one plane per surface, 8 x 8 pixels each, the middle 4 x 4 averaged.
 _PLANE_M, _PLANE_PX, _PLANE_EDGE_PX = 0.01, 8, 2
 
@@ -310,12 +331,7 @@ def render_normal_incidence_reflection(surfaces: Sequence[dict], engine: str, sa
     set_world(scene, strength=1.0)
     for i, inputs in enumerate(surfaces):
         plane = add_plane(f"Surface{i}", i * _PLANE_M, (i + 1) * _PLANE_M, 0.0, _PLANE_M, 0.0)
-        mat, bsdf = new_material(f"Surface{i}")
-        bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-        bsdf.inputs["Subsurface Weight"].default_value = 0.0
-        for name, value in inputs.items():
-            bsdf.inputs[name].default_value = value
-        assign(plane, mat)
+        assign(plane, surface_only_material(f"Surface{i}", inputs))
     n = len(surfaces)
     add_top_camera(scene, ortho_scale=n * _PLANE_M, width=n * _PLANE_PX, height=_PLANE_PX,
                    center=(n * _PLANE_M / 2, _PLANE_M / 2))
@@ -324,51 +340,62 @@ def render_normal_incidence_reflection(surfaces: Sequence[dict], engine: str, sa
     return [float(img[lo:hi, i * _PLANE_PX + lo : i * _PLANE_PX + hi, 1].mean()) for i in range(n)]
 
 
-def render_in_plane_slices(inputs: dict, engine: str, incidences_deg: Sequence[float], samples: int,
-                           width_px: int = 400) -> list[dict]:
-    """In-plane BRDF slices of a surface as Blender renders it, one render per incidence: a long cylinder of radius 1
-    (axis along y, 720 smooth-shaded sides) with a Principled BSDF of the given inputs (Principled input name -> value)
-    over Base Color black and Subsurface Weight 0, lit only by a sun of irradiance 1 (angle 0.5 deg) tilted by the
-    incidence toward +x, in a black world, seen straight down by an orthographic camera 2 units wide. Each pixel column
-    sees one normal, tilted by beta = asin(x) in the x-z plane, so a render holds the plane of incidence's whole slice
-    (the image-based measurement of Marschner et al. 1999): theta_in = |incidence - beta|, theta_out = |beta|, phi =
-    180 deg where the sun and the camera lie on opposite sides of the normal, else 0. Returns per incidence
+# In-plane slices: one coaxial cylinder of radius 1 per surface, 8 pixel rows each, the middle 4 rows averaged.
+_SLICE_ROWS_PX, _SLICE_EDGE_PX, _SLICE_SIDES = 8, 2, 720
+
+
+def render_in_plane_slices(surfaces: Sequence[dict], engine: str, incidences_deg: Sequence[float], samples: int,
+                           width_px: int = 400) -> list[list[dict]]:
+    """In-plane BRDF slices of surfaces as Blender renders them, one render per incidence for all of them: coaxial
+    cylinders of radius 1 (axis along y, 720 smooth-shaded sides, one per surface, side by side along the axis), each
+    a Principled BSDF of the surface's inputs (Principled input name -> value) over Base Color black and Subsurface
+    Weight 0, lit only by a sun of irradiance 1 (angle 0.5 deg) tilted by the incidence toward +x, in a black world,
+    seen straight down by an orthographic camera 2 units wide. Each pixel column sees one normal, tilted by
+    beta = asin(x) in the x-z plane, so a render holds the plane of incidence's whole slice (the image-based
+    measurement of Marschner et al. 1999): theta_in = |incidence - beta|, theta_out = |beta|, phi = 180 deg where the
+    sun and the camera lie on opposite sides of the normal, else 0. Returns, per surface, per incidence
     {"incidence_deg", "theta_in_deg", "theta_out_deg", "phi_deg", "radiance"}: arrays over the columns with
-    theta_out < 80 deg and theta_in < 89 deg; radiance = f_r cos(theta_in) (green channel, middle rows)."""
+    theta_out < 80 deg and theta_in < 89 deg; radiance = f_r cos(theta_in) (green channel)."""
     bpy = _bpy()
-    slices = []
+    n = len(surfaces)
+    length = 2.0 * _SLICE_ROWS_PX / width_px  # world units per cylinder: 8 pixel rows
+    angles = np.linspace(0.0, 2.0 * np.pi, _SLICE_SIDES, endpoint=False)
+    x = pixel_centres_x(2.0, width_px)
+    beta = np.degrees(np.arcsin(np.clip(x, -1.0, 1.0)))
+    images = []
     for incidence in incidences_deg:
         scene = reset_scene()
         set_world(scene, strength=0.0)
-        mesh = bpy.data.meshes.new("Cylinder")
-        sides = 720
-        angles = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
-        verts = [(float(np.cos(a)), y, float(np.sin(a))) for y in (-0.2, 0.2) for a in angles]
-        faces = [(i, (i + 1) % sides, sides + (i + 1) % sides, sides + i) for i in range(sides)]
-        mesh.from_pydata(verts, [], faces)
-        mesh.update()
-        for polygon in mesh.polygons:
-            polygon.use_smooth = True
-        cylinder = bpy.data.objects.new("Cylinder", mesh)
-        scene.collection.objects.link(cylinder)
-        mat, bsdf = new_material("Surface")
-        bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-        bsdf.inputs["Subsurface Weight"].default_value = 0.0
-        for name, value in inputs.items():
-            bsdf.inputs[name].default_value = value
-        assign(cylinder, mat)
-        add_top_camera(scene, ortho_scale=2.0, width=width_px, height=8, z=5.0)
+        for k, inputs in enumerate(surfaces):
+            y0 = (k - n / 2) * length
+            mesh = bpy.data.meshes.new(f"Cylinder{k}")
+            verts = [(float(np.cos(a)), y, float(np.sin(a))) for y in (y0, y0 + length) for a in angles]
+            sides = _SLICE_SIDES
+            faces = [(i, (i + 1) % sides, sides + (i + 1) % sides, sides + i) for i in range(sides)]
+            mesh.from_pydata(verts, [], faces)
+            mesh.update()
+            for polygon in mesh.polygons:
+                polygon.use_smooth = True
+            cylinder = bpy.data.objects.new(f"Cylinder{k}", mesh)
+            scene.collection.objects.link(cylinder)
+            assign(cylinder, surface_only_material(f"Surface{k}", inputs))
+        add_top_camera(scene, ortho_scale=2.0, width=width_px, height=n * _SLICE_ROWS_PX, z=5.0)
         sun = add_sun(scene, strength=1.0, angle=float(np.radians(0.5)))
         sun.rotation_euler = (0.0, float(np.radians(incidence)), 0.0)
-        img = render(scene, samples=samples) if engine == "cycles" else render_eevee(scene, samples)
-        radiance = img[2:6, :, 1].mean(axis=0)
-        x = pixel_centres_x(2.0, width_px)
-        beta = np.degrees(np.arcsin(np.clip(x, -1.0, 1.0)))
-        theta_in, theta_out = np.abs(incidence - beta), np.abs(beta)
-        phi = np.where((incidence - beta) * beta > 0.0, 180.0, 0.0)
-        keep = (theta_out < 80.0) & (theta_in < 89.0)
-        slices.append({"incidence_deg": float(incidence), "theta_in_deg": theta_in[keep],
-                       "theta_out_deg": theta_out[keep], "phi_deg": phi[keep], "radiance": radiance[keep]})
+        images.append(render(scene, samples=samples) if engine == "cycles" else render_eevee(scene, samples))
+    slices = []
+    for k in range(n):
+        # Image row 0 is the top (+y): surface k's rows count from the bottom.
+        top = (n - 1 - k) * _SLICE_ROWS_PX
+        per_surface = []
+        for incidence, img in zip(incidences_deg, images, strict=True):
+            radiance = img[top + _SLICE_EDGE_PX : top + _SLICE_ROWS_PX - _SLICE_EDGE_PX, :, 1].mean(axis=0)
+            theta_in, theta_out = np.abs(incidence - beta), np.abs(beta)
+            phi = np.where((incidence - beta) * beta > 0.0, 180.0, 0.0)
+            keep = (theta_out < 80.0) & (theta_in < 89.0)
+            per_surface.append({"incidence_deg": float(incidence), "theta_in_deg": theta_in[keep],
+                                "theta_out_deg": theta_out[keep], "phi_deg": phi[keep], "radiance": radiance[keep]})
+        slices.append(per_surface)
     return slices
 
 

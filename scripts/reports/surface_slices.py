@@ -7,7 +7,7 @@ Scene: `blender_scenes.render_in_plane_slices` (a cylinder under a small sun, se
 (theta_in, theta_out) pair of the plane of incidence; Base Color black, so the render is the surface reflection
 alone). Incidences 0-75 deg; columns with theta_out < 80 deg.
 
-    .venv/bin/python scripts/reports/surface_slices.py            # bpy 5.0 in .venv; ~3 min (EEVEE's part the most)
+    .venv/bin/python scripts/reports/surface_slices.py            # bpy 5.0 in .venv; about a minute
     .venv-blender/5.3/bin/python scripts/reports/surface_slices.py --out /tmp/slices-5.3.md
 """
 
@@ -25,9 +25,6 @@ DEFAULT_OUT = ROOT / "docs" / "surface-slices.md"
 INCIDENCES_DEG = (0, 15, 30, 45, 60, 75)
 OILINESS = (0.0, 0.3, 1.0)
 SAMPLES = {"cycles": 256, "eevee": 16}
-# Principled input -> evaluate()'s "specular" key.
-PRINCIPLED_SURFACE_INPUTS = {"Roughness": "roughness", "IOR": "ior", "Specular IOR Level": "specular_ior_level",
-                             "Coat Weight": "coat_weight", "Coat Roughness": "coat_roughness", "Coat IOR": "coat_ior"}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -45,24 +42,26 @@ def main(argv: list[str] | None = None) -> None:
 
     rows = []
     start = time.perf_counter()
+    cases = [(s, o) for s in ("measured", "paper") for o in OILINESS if not (s == "paper" and o == 0.0)]
+    # (the paper's dry skin reflects nothing: no peak to compare with)
     for engine in args.engines:
-        for surface in ("measured", "paper"):
-            for oiliness in OILINESS:
-                if surface == "paper" and oiliness == 0.0:
-                    continue  # the paper's dry skin reflects nothing: no peak to compare with
-                specular = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",),
-                                                  surface=surface, engine=engine, blender=bpy.app.version)["specular"]
-                inputs = {name: specular[key] for name, key in PRINCIPLED_SURFACE_INPUTS.items()}
-                rms, peaks = [], []
-                for s in helpers.render_in_plane_slices(inputs, engine, INCIDENCES_DEG, SAMPLES[engine]):
-                    model = spectral_skin.surface_brdf(s["theta_in_deg"], s["theta_out_deg"], s["phi_deg"],
-                                                       oiliness=oiliness, surface=surface)
-                    model = model * np.cos(np.radians(s["theta_in_deg"]))
-                    rms.append(float(np.sqrt(np.mean((s["radiance"] - model) ** 2)) / model.max()))
-                    peaks.append(float(s["radiance"].max() / model.max()))
-                rows.append((engine, surface, oiliness, rms, peaks))
-                print(f"[{bpy.app.version_string} {engine}] {surface} oiliness {oiliness}: RMS/peak "
-                      + " ".join(f"{r:.3f}" for r in rms), flush=True)
+        surfaces = []
+        for surface, oiliness in cases:
+            specular = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",),
+                                              surface=surface, engine=engine, blender=bpy.app.version)["specular"]
+            surfaces.append(helpers.principled_surface_inputs(specular))
+        rendered = helpers.render_in_plane_slices(surfaces, engine, INCIDENCES_DEG, SAMPLES[engine])
+        for (surface, oiliness), slices in zip(cases, rendered, strict=True):
+            rms, peaks = [], []
+            for s in slices:
+                model = spectral_skin.surface_brdf(s["theta_in_deg"], s["theta_out_deg"], s["phi_deg"],
+                                                   oiliness=oiliness, surface=surface)
+                model = model * np.cos(np.radians(s["theta_in_deg"]))
+                rms.append(float(np.sqrt(np.mean((s["radiance"] - model) ** 2)) / model.max()))
+                peaks.append(float(s["radiance"].max() / model.max()))
+            rows.append((engine, surface, oiliness, rms, peaks))
+            print(f"[{bpy.app.version_string} {engine}] {surface} oiliness {oiliness}: RMS/peak "
+                  + " ".join(f"{r:.3f}" for r in rms), flush=True)
     seconds = time.perf_counter() - start
     head = " | ".join(f"{i}°" for i in INCIDENCES_DEG)
     lines = [

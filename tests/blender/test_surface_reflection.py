@@ -20,21 +20,18 @@ bpy = pytest.importorskip("bpy")
 pytest.importorskip("OpenImageIO")
 
 import spectral_skin  # noqa: E402
-from blender_scenes import render_normal_incidence_reflection  # noqa: E402
+from blender_scenes import principled_surface_inputs, render_normal_incidence_reflection  # noqa: E402
 
 OILINESS = (0.0, 0.3, 1.0)
 TOLERANCE = {"cycles": 0.01, "eevee": 0.025}
 SAMPLES = {"cycles": 512, "eevee": 16}
 EEVEE_VERSIONS = ((4, 2), (5, 3))
-# Principled input -> evaluate()'s "specular" key.
-PRINCIPLED_SURFACE_INPUTS = {"Roughness": "roughness", "IOR": "ior", "Specular IOR Level": "specular_ior_level",
-                             "Coat Weight": "coat_weight", "Coat Roughness": "coat_roughness", "Coat IOR": "coat_ior"}
 
 
 def _surface_inputs(oiliness: float, engine: str, surface: str) -> dict[str, float]:
     specular = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",), surface=surface,
                                       engine=engine, blender=bpy.app.version)["specular"]
-    return {name: specular[key] for name, key in PRINCIPLED_SURFACE_INPUTS.items()}
+    return principled_surface_inputs(specular)
 
 
 @pytest.mark.parametrize("engine", ["cycles", "eevee"])
