@@ -2,7 +2,7 @@
 //! inside and beyond the accepted ranges. The knobs that set the amount of work are kept small (at most 64 image
 //! pairs, 32 profile radii, a wavelength step of 5 nm or more, the draft and default levels) so that one execution
 //! stays in milliseconds; their ranges are the property tests' and `tests/physics/accuracy.rs`' business.
-//! Asserts: Ok gives finite values everywhere; spectral reflectance in [0, 1]; spectral profiles >= 0, and the RGB
+//! Asserts: Ok gives finite values everywhere (the specular inputs of either surface model too); spectral reflectance in [0, 1]; spectral profiles >= 0, and the RGB
 //! profile too under `RgbMapping::NonNegative`; radii > 0; an error has a message; nothing panics.
 
 #![no_main]
@@ -15,6 +15,7 @@ use spectral_skin::color::{RgbMapping, WavelengthPlacement, ALL_RGB_MAPPINGS, AL
 use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target};
+use spectral_skin::surface_lobes::ALL_SURFACE_MODELS;
 use spectral_skin::{evaluate, AccuracyLevel, Outputs, Request, SkinModel, SkinParams};
 
 fuzz_target!(|data: &[u8]| {
@@ -75,6 +76,7 @@ fuzz_target!(|data: &[u8]| {
         engine: if b.byte() % 2 == 0 { Engine::Cycles } else { Engine::Eevee },
     };
     request.rgb_mapping = ALL_RGB_MAPPINGS[usize::from(b.byte() % 2)];
+    request.surface = ALL_SURFACE_MODELS[usize::from(b.byte() % 2)];
 
     let ev = match evaluate(&params, &request) {
         Ok(ev) => ev,
@@ -113,6 +115,11 @@ fuzz_target!(|data: &[u8]| {
     }
     if let Some(s) = &ev.specular {
         let v = serde_json::to_value(s).expect("specular serialises");
-        assert!(v.as_object().is_some_and(|o| o.values().all(|x| x.as_f64().is_some_and(f64::is_finite))), "{v}");
+        let fields = v.as_object().expect("specular is an object");
+        // Every field a finite number, but the surface model's name.
+        let finite = |(k, x): (&String, &serde_json::Value)| k == "surface" || x.as_f64().is_some_and(f64::is_finite);
+        assert!(fields.iter().all(finite), "{v}");
+        assert!(matches!(fields["surface"].as_str(), Some("paper" | "measured")), "{v}");
+        assert!((0.0..=1.0).contains(&s.coat_weight) && s.specular_ior_level >= 0.0, "{v}");
     }
 });
