@@ -23,15 +23,9 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
-from blender_scenes import read_exr  # noqa: E402
+from blender_scenes import eevee_engine_id, read_exr  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
-
-
-def _eevee_id() -> str:
-    """This Blender's EEVEE engine id, as Blender lists it (BLENDER_EEVEE_NEXT in 4.2-4.5, BLENDER_EEVEE from 5.0)."""
-    ids = [i.identifier for i in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items]
-    return [i for i in ids if "EEVEE" in i][-1]
 
 
 def _s(albedo: np.ndarray) -> np.ndarray:
@@ -56,7 +50,7 @@ def test_eevee_scene_gets_the_compensated_radius(addon, preset):
     cycles_radius = _radius_mm(node)
     assert "CYCLES" in material.spectral_skin.result_target
 
-    bpy.context.scene.render.engine = _eevee_id()
+    bpy.context.scene.render.engine = eevee_engine_id()
     assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
     assert "EEVEE" in material.spectral_skin.result_target
     np.testing.assert_allclose(node.inputs["Base Color"].default_value[:3], cycles_albedo, rtol=1e-6)
@@ -78,14 +72,14 @@ def test_eevee_radius_map_is_compensated_per_texel(addon, tmp_path):
     material.spectral_skin.melanin_map = bpy.data.images.load(str(path))
     material.spectral_skin.output_dir = str(tmp_path / "maps")
     radius = {}
-    for engine in ("CYCLES", _eevee_id()):
+    for engine in ("CYCLES", eevee_engine_id()):
         bpy.context.scene.render.engine = engine
         assert bpy.ops.spectral_skin.apply(material="Skin") == {"FINISHED"}
         radius[engine] = read_exr(str(tmp_path / "maps" / "Skin_radius.exr"))[:, :, :3]
         albedo = read_exr(str(tmp_path / "maps" / "Skin_albedo.exr"))[:, :, :3]
     # Both radius maps and the albedo are written as half floats (within 2^-11 each): rtol 2e-3, against
     # compensation factors s(A_n) of 1.0 to 2.1 here.
-    np.testing.assert_allclose(radius[_eevee_id()], radius["CYCLES"] * _s(albedo.astype(np.float64)), rtol=2e-3)
+    np.testing.assert_allclose(radius[eevee_engine_id()], radius["CYCLES"] * _s(albedo.astype(np.float64)), rtol=2e-3)
 
 
 def test_method_menu_is_this_blenders(addon):

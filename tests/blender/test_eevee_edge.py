@@ -42,6 +42,7 @@ from blender_scenes import (  # noqa: E402
     add_top_camera,
     assign,
     burley_edge_response,
+    eevee_engine_id,
     fit_burley_edge,
     pixel_centres_x,
     principled_sss,
@@ -91,12 +92,6 @@ EEVEE_TAA = 16
 CYCLES_SPP = 1024
 LIGHTING_TAA = 4
 LIGHTING_SPP = 16
-
-
-def _eevee_id() -> str:
-    """This Blender's EEVEE engine id (BLENDER_EEVEE_NEXT in 4.2-4.5, BLENDER_EEVEE from 5.0)."""
-    ids = [i.identifier for i in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items]
-    return [i for i in ids if "EEVEE" in i][-1]
 
 
 def _s(albedo_n):
@@ -174,7 +169,7 @@ class Material:
 
 def _render_eevee(scene, samples: int) -> np.ndarray:
     """EEVEE render to a float EXR; returns RGB (H, W, 3) float64."""
-    scene.render.engine = _eevee_id()
+    scene.render.engine = eevee_engine_id()
     eevee = scene.eevee
     eevee.taa_render_samples = samples
     for name in ("use_shadows", "use_raytracing", "use_gtao"):  # nothing here casts shadows or needs them

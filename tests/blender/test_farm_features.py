@@ -26,7 +26,7 @@ pytest.importorskip("OpenImageIO")
 pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
-from blender_scenes import add_box, add_top_camera, assign, set_world, write_exr  # noqa: E402
+from blender_scenes import add_box, add_top_camera, assign, eevee_engine_id, set_world, write_exr  # noqa: E402
 from farm_worker import only_in_edge_versions, worker_render  # noqa: E402
 
 from blender_addon import masks  # noqa: E402
@@ -47,11 +47,6 @@ MELANIN_MAP = np.array([[0.01, 0.05, 0.10, 0.20],
                         [0.02, 0.08, 0.15, 0.30],
                         [0.03, 0.12, 0.25, 0.40],
                         [0.005, 0.04, 0.18, 0.45]], dtype=np.float32)
-
-
-def _eevee_id() -> str:
-    ids = [i.identifier for i in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items]
-    return [i for i in ids if "EEVEE" in i][-1]
 
 
 def _slab(index: int, name: str):
@@ -126,7 +121,7 @@ def _build(engine: str, tmp: pathlib.Path) -> tuple[pathlib.Path, list]:
     scene.cycles.samples = SAMPLES["CYCLES"]
     scene.cycles.seed = 5
     if engine == "EEVEE":
-        scene.render.engine = _eevee_id()
+        scene.render.engine = eevee_engine_id()
         scene.eevee.taa_render_samples = SAMPLES["EEVEE"]
     blend = tmp / "shot.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))  # saved first: the textures get paths relative to it

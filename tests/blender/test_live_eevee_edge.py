@@ -25,7 +25,7 @@ bpy = pytest.importorskip("bpy")
 pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
-from blender_scenes import assign, fit_burley_edge  # noqa: E402
+from blender_scenes import assign, eevee_engine_id, fit_burley_edge  # noqa: E402
 from test_eevee_edge import (  # noqa: E402
     BLENDER,
     EEVEE_BAND_ROWS,
@@ -35,7 +35,6 @@ from test_eevee_edge import (  # noqa: E402
     Layout,
     Material,
     _build_scene,
-    _eevee_id,
     _render_eevee,
     pytestmark,  # noqa: F401  (skipped where test_eevee_edge.py is: bpy 4.2)
 )
@@ -61,7 +60,7 @@ def _edge_profiles() -> tuple[Layout, np.ndarray, dict[str, np.ndarray]]:
     # The scene with a placeholder material; then the two skins applied by the add-on for EEVEE in it.
     scene = _build_scene(layout, Material([1.0, 1.0, 1.0], [1.0, 1.0, 1.0], subsurface=False), EEVEE_ROWS,
                          EEVEE_PIXEL_ASPECT)
-    scene.render.engine = _eevee_id()
+    scene.render.engine = eevee_engine_id()
     scene.unit_settings.scale_length = layout.unit_mm / 1000.0  # metres per world unit
     preset = spectral_skin.presets()[PRESET]
     values = {p: float(preset[p]) for p in ("melanin", "melanin_blend", "hemoglobin")}

@@ -25,7 +25,7 @@ oiio = pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
-from blender_scenes import add_slab, add_top_camera, assign, render, set_world  # noqa: E402
+from blender_scenes import add_slab, add_top_camera, assign, eevee_engine_id, render, set_world  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
@@ -386,18 +386,12 @@ def test_remove_restores_the_previous_shader_and_drops_the_packed_copies(addon, 
     assert not any(name in bpy.data.images for name in copies)
 
 
-def _eevee_id() -> str:
-    """This Blender's EEVEE engine id (test_eevee_edge.py)."""
-    ids = [i.identifier for i in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items]
-    return [i for i in ids if "EEVEE" in i][-1]
-
-
 @pytest.mark.skipif(tuple(bpy.app.version[:2]) < (4, 5), reason="bpy 4.2's EEVEE subsurface is not repeatable under "
                     "Mesa llvmpipe (docs/blender-render-tests.md, EEVEE edge)")
 def test_live_in_eevee_renders_as_baked(addon):
     """EEVEE: the group compiles and evaluates there; Live and Baked (each for EEVEE's target) render the same slab."""
     scene = blender_scenes.reset_scene()
-    scene.render.engine = _eevee_id()
+    scene.render.engine = eevee_engine_id()
     scene.eevee.taa_render_samples = 16
     live_material = _skin("Live", "LIVE", melanin=0.05, hemoglobin=0.02)
     baked_material = _skin("Baked", "BAKED", melanin=0.05, hemoglobin=0.02)
