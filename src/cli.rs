@@ -54,11 +54,8 @@ enum Command {
         /// always lists every method the target offers.
         #[arg(long, value_enum)]
         method: Option<SubsurfaceMethod>,
-        /// The surface reflection the specular inputs stand in for: paper (DJ2006's oil layer, one lobe scaled by
-        /// the oiliness) or measured (a broad base lobe and a sharp Coat, a dielectric's reflection at every
-        /// oiliness; docs/model.md, "Principled mapping of the measured surface").
-        #[arg(long, value_enum, default_value_t = SurfaceModel::Paper)]
-        surface: SurfaceModel,
+        #[command(flatten)]
+        surface: SurfaceArgs,
         /// Print the stable JSON interface instead of a summary.
         #[arg(long)]
         json: bool,
@@ -196,7 +193,7 @@ struct MapsArgs {
     #[arg(long)]
     exact: bool,
     /// The maps to compute, comma-separated: albedo (Base Color: albedo.exr), radius (radius.exr), specular
-    /// (specular.exr when the oiliness varies). Without radius no radius is fitted and Base Color is the albedo
+    /// (specular.exr when the oiliness varies, with coat_weight.exr and coat_roughness.exr for --surface measured). Without radius no radius is fitted and Base Color is the albedo
     /// whatever the method (a material without subsurface); without specular no specular input is computed.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "albedo,radius,specular")]
     outputs: Vec<MaterialOutput>,
@@ -220,6 +217,18 @@ struct MapsArgs {
     compression: Compression,
     #[command(flatten)]
     accuracy: AccuracyArgs,
+    #[command(flatten)]
+    surface: SurfaceArgs,
+}
+
+/// The surface model of `eval` and `maps`.
+#[derive(Args)]
+struct SurfaceArgs {
+    /// The surface reflection the specular inputs stand in for: paper (DJ2006's oil layer, one lobe scaled by the
+    /// oiliness) or measured (a broad base lobe and a sharp Coat, a dielectric's reflection at every oiliness;
+    /// docs/model.md, "Principled mapping of the measured surface").
+    #[arg(long, value_enum, default_value_t = SurfaceModel::default())]
+    surface: SurfaceModel,
 }
 
 #[derive(Args)]
@@ -442,7 +451,7 @@ mod ctrl_c {
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
-        Command::Eval { skin, accuracy, target, method, surface, json } => {
+        Command::Eval { skin, accuracy, target, method, surface: SurfaceArgs { surface }, json } => {
             let params = skin.params()?;
             let target = target.target();
             if let Some(m) = method {
@@ -596,7 +605,8 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         table_cache: if args.no_cache { None } else { crate::maps::lut::default_cache_dir() },
         ..MapSettings::default()
     };
-    settings.request = Request { target, ..args.accuracy.request(Outputs::of_material(&args.outputs)) };
+    settings.request =
+        Request { target, surface: args.surface.surface, ..args.accuracy.request(Outputs::of_material(&args.outputs)) };
     let exr = ExrOptions { precision: args.precision, compression: args.compression };
     // A progress bar for work that lasts over a second (hidden until then).
     let bar = ProgressBar::hidden();

@@ -9,7 +9,7 @@ except the images of :func:`maps` (float32). Every function releases the GIL whi
 import os
 import pathlib
 from collections.abc import Callable, ItemsView, Iterable, Iterator, KeysView, Mapping, Sequence, ValuesView
-from typing import Any, Literal, TypedDict, final, overload
+from typing import Any, Literal, NotRequired, TypedDict, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -68,6 +68,7 @@ _Transport = Literal["adding_doubling", "diffusion"]
 _SurfaceModel = Literal["measured", "paper"]
 _OutputName = Literal["albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular"]
 _MapOutputName = Literal["albedo", "radius", "specular"]
+_MapName = Literal["albedo", "radius", "specular", "coat_weight", "coat_roughness"]
 
 class SpectralSkinError(ValueError):
     """Invalid input to spectral-skin.
@@ -217,20 +218,29 @@ def layered_reflectance(
 class _SpecularConstants(TypedDict):
     """The specular inputs of Principled BSDF for a constant oiliness (as ``evaluate(...)["specular"]``)."""
 
+    surface: _SurfaceModel
     oiliness: float
     specular_ior_level: float
     roughness: float
     ior: float
+    coat_weight: float
+    coat_roughness: float
+    coat_ior: float
     beckmann_m: float
     directional_albedo_normal: float
     hemispherical_albedo: float
 
 class _SpecularMapConstants(TypedDict):
-    """The specular inputs of Principled BSDF that do not depend on the oiliness (when the oiliness varies)."""
+    """The specular inputs of Principled BSDF that do not depend on the oiliness (when the oiliness varies); the
+    ``paper`` surface's Coat too (weight 0)."""
 
+    surface: _SurfaceModel
     roughness: float
     ior: float
+    coat_ior: float
     beckmann_m: float
+    coat_weight: NotRequired[float]
+    coat_roughness: NotRequired[float]
 
 @final
 class Maps(Mapping[str, Any]):
@@ -243,13 +253,17 @@ class Maps(Mapping[str, Any]):
     @property
     def specular(self) -> _Float32Array | None: ...
     @property
+    def coat_weight(self) -> _Float32Array | None: ...
+    @property
+    def coat_roughness(self) -> _Float32Array | None: ...
+    @property
     def specular_constants(self) -> _SpecularConstants | _SpecularMapConstants | None: ...
     @property
     def report(self) -> dict[str, Any]: ...
     @property
     def shape(self) -> tuple[int, int]: ...
     @overload
-    def __getitem__(self, key: _MapOutputName, /) -> _Float32Array: ...
+    def __getitem__(self, key: _MapName, /) -> _Float32Array: ...
     @overload
     def __getitem__(self, key: Literal["specular_constants"], /) -> _SpecularConstants | _SpecularMapConstants: ...
     @overload
@@ -301,6 +315,7 @@ def maps(
     boundaries: _Boundaries | str = "paper",
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
+    surface: _SurfaceModel | str = "paper",
 ) -> Maps:
     """Documented once, in the compiled module: ``help(spectral_skin.maps)``."""
 

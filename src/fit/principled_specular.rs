@@ -199,7 +199,7 @@ pub fn specular_for(model: SurfaceModel, oiliness: f64, engine: Engine) -> Resul
     if model == SurfaceModel::Paper {
         return Ok(specular_from_oiliness(oiliness));
     }
-    let [_, sharp] = TWO_LOBE_TABLE.lobes(oiliness);
+    let inputs = surface_inputs(model, oiliness, engine)?;
     let constants = SurfaceConstants::of(model);
     let hemispherical_albedo = hemispherical_average(|mu| {
         surface.directional_albedo(mu.clamp(0.0, 1.0).acos().to_degrees().min(89.999_999)).unwrap_or(0.0)
@@ -207,15 +207,46 @@ pub fn specular_for(model: SurfaceModel, oiliness: f64, engine: Engine) -> Resul
     Ok(SpecularParams {
         surface: model,
         oiliness,
-        specular_ior_level: measured_specular_ior_level(oiliness, engine)?,
+        specular_ior_level: inputs.specular_ior_level,
         roughness: constants.roughness,
         ior: constants.ior,
-        coat_weight: sharp.weight,
-        coat_roughness: sharp.beckmann_m.sqrt(),
+        coat_weight: inputs.coat_weight,
+        coat_roughness: inputs.coat_roughness,
         coat_ior: constants.coat_ior,
         beckmann_m: constants.beckmann_m,
         directional_albedo_normal: surface.normal_incidence_reflectance(),
         hemispherical_albedo,
+    })
+}
+
+/// The Principled surface inputs that depend on the oiliness: what a map holds per texel when the oiliness varies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceInputs {
+    /// Principled "Specular IOR Level".
+    pub specular_ior_level: f64,
+    /// Principled "Coat Weight" (0 for `paper`).
+    pub coat_weight: f64,
+    /// Principled "Coat Roughness" (`paper`: the base Roughness, unused at Coat Weight 0).
+    pub coat_roughness: f64,
+}
+
+/// [`specular_for`]'s oiliness-dependent inputs alone, without the model's albedos: cheap enough per texel (a
+/// table lookup and a square root). Oiliness finite in [0, 1], else an error naming "oiliness".
+pub fn surface_inputs(model: SurfaceModel, oiliness: f64, engine: Engine) -> Result<SurfaceInputs, SkinError> {
+    let o = SurfaceReflection::new(model, oiliness)?.oiliness();
+    Ok(match model {
+        SurfaceModel::Paper => {
+            let p = specular_from_oiliness(o);
+            SurfaceInputs { specular_ior_level: p.specular_ior_level, coat_weight: 0.0, coat_roughness: p.roughness }
+        }
+        SurfaceModel::Measured => {
+            let [_, sharp] = TWO_LOBE_TABLE.lobes(o);
+            SurfaceInputs {
+                specular_ior_level: measured_specular_ior_level(o, engine)?,
+                coat_weight: sharp.weight,
+                coat_roughness: sharp.beckmann_m.sqrt(),
+            }
+        }
     })
 }
 

@@ -21,7 +21,7 @@ use super::udim::{find_tiles, stack_tiles, tile_file_name, tile_set_file_name, T
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
 use crate::fit::blender_target::TargetInfo;
-use crate::fit::principled_specular::{specular_from_oiliness, SpecularParams};
+use crate::fit::principled_specular::{specular_for, surface_inputs, SpecularParams, SurfaceInputs};
 use crate::fit::SubsurfaceMethod;
 use crate::skin::params::{
     ParamSpec, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MATERIAL_PARAMS, MELANIN, MELANIN_BLEND, OILINESS,
@@ -130,16 +130,43 @@ pub struct BadTexels {
     pub first: Vec<(usize, usize)>,
 }
 
-/// Specular output: a map when oiliness varies, else the constants.
+/// Specular output: maps when oiliness varies, else the constants.
 #[derive(Debug, Clone)]
 pub enum SpecularOutput {
     Constant(SpecularParams),
-    /// Principled Specular IOR Level per texel. Roughness and IOR do not depend on oiliness in the surface mapping
-    /// (`fit::principled_specular::specular_from_oiliness`): they are the constants in `roughness_and_ior`.
+    /// The surface inputs that depend on the oiliness, per texel (`fit::principled_specular::surface_inputs`):
+    /// Specular IOR Level always, Coat Weight and Coat Roughness for a surface with a coat (`measured`). The others
+    /// (Roughness, IOR, Coat IOR; Coat Weight 0 for `paper`) are one value: the fields of `constants` that are not
+    /// maps.
     Map {
         specular_ior_level: Vec<f32>,
+        coat: Option<CoatPlanes>,
         constants: SpecularParams,
     },
+}
+
+/// Principled Coat Weight and Coat Roughness per texel.
+#[derive(Debug, Clone)]
+pub struct CoatPlanes {
+    pub weight: Vec<f32>,
+    pub roughness: Vec<f32>,
+}
+
+impl SpecularOutput {
+    /// The single-channel surface maps held, in [`MAP_KINDS`] order, with their kinds (none for constants).
+    pub fn maps(&self) -> Vec<(MapKind, &[f32])> {
+        match self {
+            SpecularOutput::Constant(_) => Vec::new(),
+            SpecularOutput::Map { specular_ior_level, coat, .. } => {
+                let mut maps = vec![(SPECULAR_MAP, specular_ior_level.as_slice())];
+                if let Some(coat) = coat {
+                    maps.push((COAT_WEIGHT_MAP, coat.weight.as_slice()));
+                    maps.push((COAT_ROUGHNESS_MAP, coat.roughness.as_slice()));
+                }
+                maps
+            }
+        }
+    }
 }
 
 /// Everything a map run computed, before it is written; an output not asked for (`MapSettings::request`) is None.
@@ -533,16 +560,10 @@ pub fn compute_maps_cancellable(
         work.outputs.albedo = n;
     }
     let oiliness = image.plane_of(&OILINESS);
-    let specular = wanted.specular.then(|| match (uniform_value(oiliness), oiliness) {
-        (Some(v), _) => SpecularOutput::Constant(specular_from_oiliness(v as f64)),
-        (None, Plane::Constant(_)) => unreachable!("a constant plane is uniform"),
-        (None, Plane::Texels(values)) => {
-            // The mapping is cheap and exact per texel; only the level depends on oiliness (surface.rs).
-            let specular_ior_level =
-                values.par_iter().map(|&o| specular_from_oiliness(o as f64).specular_ior_level as f32).collect();
-            SpecularOutput::Map { specular_ior_level, constants: specular_from_oiliness(0.0) }
-        }
-    });
+    let specular = match wanted.specular {
+        true => Some(specular_output(oiliness, &settings.request)?),
+        false => None,
+    };
     (work.specular_evaluations, work.outputs.specular) = match &specular {
         None => (0, 0),
         Some(SpecularOutput::Constant(_)) => (1, 0),
@@ -699,6 +720,27 @@ pub struct MapKind {
     pub principled_input: &'static str,
 }
 
+/// The surface inputs of an oiliness plane for the request's surface model and engine: the constants of one value,
+/// or maps (per texel: cheap and exact, `surface_inputs`); the plane's values were checked to lie in [0, 1].
+fn specular_output(oiliness: &Plane, request: &Request) -> Result<SpecularOutput, SkinError> {
+    let (model, engine) = (request.surface, request.target.engine);
+    let values = match (uniform_value(oiliness), oiliness) {
+        (Some(v), _) => return Ok(SpecularOutput::Constant(specular_for(model, v as f64, engine)?)),
+        (None, Plane::Constant(_)) => unreachable!("a constant plane is uniform"),
+        (None, Plane::Texels(values)) => values,
+    };
+    let inputs: Vec<SurfaceInputs> =
+        values.par_iter().map(|&o| surface_inputs(model, o as f64, engine)).collect::<Result<_, _>>()?;
+    let plane = |f: fn(&SurfaceInputs) -> f64| inputs.par_iter().map(|i| f(i) as f32).collect::<Vec<f32>>();
+    let coat = (!model.is_paper())
+        .then(|| CoatPlanes { weight: plane(|i| i.coat_weight), roughness: plane(|i| i.coat_roughness) });
+    Ok(SpecularOutput::Map {
+        specular_ior_level: plane(|i| i.specular_ior_level),
+        coat,
+        constants: specular_for(model, 0.0, engine)?,
+    })
+}
+
 /// Principled Base Color for the method (the albedo itself without the radius output), linear RGB.
 pub const ALBEDO_MAP: MapKind = MapKind {
     name: "albedo",
@@ -723,8 +765,26 @@ pub const SPECULAR_MAP: MapKind = MapKind {
     unit: "",
     principled_input: "Specular IOR Level",
 };
+/// Principled Coat Weight per texel (the `measured` surface's sharp lobe; written only when the oiliness varies).
+pub const COAT_WEIGHT_MAP: MapKind = MapKind {
+    name: "coat_weight",
+    file: "coat_weight.exr",
+    channels: &["Y"],
+    unit: "",
+    principled_input: "Coat Weight",
+};
+/// Principled Coat Roughness per texel (as [`COAT_WEIGHT_MAP`]).
+pub const COAT_ROUGHNESS_MAP: MapKind = MapKind {
+    name: "coat_roughness",
+    file: "coat_roughness.exr",
+    channels: &["Y"],
+    unit: "",
+    principled_input: "Coat Roughness",
+};
 /// Every map kind, in the order results list them.
-pub const MAP_KINDS: [MapKind; 3] = [ALBEDO_MAP, RADIUS_MAP, SPECULAR_MAP];
+pub const MAP_KINDS: [MapKind; 5] = [ALBEDO_MAP, RADIUS_MAP, SPECULAR_MAP, COAT_WEIGHT_MAP, COAT_ROUGHNESS_MAP];
+/// The single-channel surface maps: the specular output's, when the oiliness varies.
+pub const SURFACE_MAP_KINDS: [MapKind; 3] = [SPECULAR_MAP, COAT_WEIGHT_MAP, COAT_ROUGHNESS_MAP];
 
 /// Output file names.
 pub const ALBEDO_FILE: &str = ALBEDO_MAP.file;
@@ -803,10 +863,7 @@ pub fn run_maps_cancellable(
         return Err(cancelled());
     }
     let write_start = Instant::now();
-    let specular_ior_level = match &result.specular {
-        Some(SpecularOutput::Map { specular_ior_level, .. }) => Some(specular_ior_level.as_slice()),
-        Some(SpecularOutput::Constant(_)) | None => None,
-    };
+    let surface_maps = result.specular.as_ref().map(SpecularOutput::maps).unwrap_or_default();
     let mut staged = Vec::new();
     let tiles: Vec<Option<u32>> = match &tile_rows {
         None => {
@@ -815,7 +872,7 @@ pub fn run_maps_cancellable(
                 height: result.height,
                 base_color: result.base_color.as_ref(),
                 radius_mm: result.radius_mm.as_ref(),
-                specular_ior_level,
+                surface: surface_maps.clone(),
             };
             staged.extend(stage_map_files(out_dir, None, None, &files, exr)?);
             vec![None]
@@ -835,7 +892,7 @@ pub fn run_maps_cancellable(
                     height,
                     base_color: base_color.as_ref(),
                     radius_mm: radius_mm.as_ref(),
-                    specular_ior_level: specular_ior_level.map(|s| &s[first * w..(first + height) * w]),
+                    surface: surface_maps.iter().map(|&(k, s)| (k, &s[first * w..(first + height) * w])).collect(),
                 };
                 staged.extend(stage_map_files(out_dir, None, Some(tile), &files, exr)?);
             }
@@ -863,14 +920,16 @@ pub fn run_maps_cancellable(
     Ok(report)
 }
 
-/// The maps one write puts in files: each present one becomes its EXR (`albedo.exr` RGB, `radius.exr` RGB,
-/// `specular.exr` Y), row-major planes of `width * height` values.
+/// The maps one write puts in files: each present one becomes its EXR (`albedo.exr` RGB, `radius.exr` RGB, and
+/// each single-channel surface map its kind's file, `specular.exr` Y etc.), row-major planes of `width * height`
+/// values.
 pub struct MapFiles<'a> {
     pub width: usize,
     pub height: usize,
     pub base_color: Option<&'a [Vec<f32>; 3]>,
     pub radius_mm: Option<&'a [Vec<f32>; 3]>,
-    pub specular_ior_level: Option<&'a [f32]>,
+    /// Single-channel maps of [`SURFACE_MAP_KINDS`], with their kinds.
+    pub surface: Vec<(MapKind, &'a [f32])>,
 }
 
 /// A file-name prefix for [`output_name`]: a non-empty file name part, no path separator, not "." or "..".
@@ -923,8 +982,8 @@ pub fn stage_map_files(
     if let Some(radius_mm) = files.radius_mm {
         jobs.push((path(RADIUS_FILE), rgb(radius_mm)));
     }
-    if let Some(specular_ior_level) = files.specular_ior_level {
-        jobs.push((path(SPECULAR_FILE), vec![("Y", specular_ior_level)]));
+    for &(kind, texels) in &files.surface {
+        jobs.push((path(kind.file), vec![(kind.channels[0], texels)]));
     }
     std::thread::scope(|scope| {
         let handles: Vec<_> =
@@ -949,8 +1008,7 @@ pub fn commit_map_files(
 ) -> Result<(), SkinError> {
     let written: Vec<PathBuf> = staged.iter().map(|s| s.target().to_path_buf()).collect();
     commit_all(staged)?;
-    let maps =
-        tiles.iter().flat_map(|&t| [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE].map(|f| tile_output_name(prefix, t, f)));
+    let maps = tiles.iter().flat_map(|&t| MAP_KINDS.map(|k| tile_output_name(prefix, t, k.file)));
     for name in maps.chain(std::iter::once(output_name(prefix, SIDECAR_FILE))) {
         let stale = out_dir.join(name);
         if written.contains(&stale) {
@@ -1024,7 +1082,7 @@ fn sidecar_json(
     let inputs_json = inputs_json(inputs);
     // A tile set's outputs are named as Blender loads them: albedo.<UDIM>.exr.
     let key = |file: &str| if report.tiles.is_empty() { file.to_string() } else { tile_set_file_name(file) };
-    let (albedo_key, radius_key, specular_key) = (key(ALBEDO_FILE), key(RADIUS_FILE), key(SPECULAR_FILE));
+    let (albedo_key, radius_key) = (key(ALBEDO_FILE), key(RADIUS_FILE));
     let mut outputs = serde_json::json!({});
     if result.base_color.is_some() {
         outputs[albedo_key.as_str()] = serde_json::json!({"channels": ["R", "G", "B"], "meaning": "Principled BSDF Base Color",
@@ -1036,16 +1094,20 @@ fn sidecar_json(
     }
     match &result.specular {
         None => {}
-        Some(SpecularOutput::Map { constants, .. }) => {
-            outputs[specular_key.as_str()] = serde_json::json!({"channels": ["Y"],
-                "meaning": "Principled Specular IOR Level", "units": "dimensionless", "color_space": "Non-Color",
-                "roughness": constants.roughness, "ior": constants.ior});
+        Some(specular @ SpecularOutput::Map { constants, .. }) => {
+            for (kind, _) in specular.maps() {
+                outputs[key(kind.file).as_str()] = serde_json::json!({"channels": kind.channels,
+                    "meaning": format!("Principled {}", kind.principled_input), "units": "dimensionless",
+                    "color_space": "Non-Color", "surface": constants.surface, "roughness": constants.roughness,
+                    "ior": constants.ior, "coat_ior": constants.coat_ior});
+            }
         }
         Some(SpecularOutput::Constant(s)) => outputs["specular_constants"] = serde_json::json!(s),
     }
     for (file, compression) in compressions {
         // A tile's file (albedo.1001.exr) under its set's key; every tile of a set is encoded alike.
-        let name = [ALBEDO_FILE, RADIUS_FILE, SPECULAR_FILE]
+        let name = MAP_KINDS
+            .map(|k| k.file)
             .into_iter()
             .find(|f| report.tiles.iter().any(|&t| tile_file_name(f, t) == *file))
             .map_or(file.clone(), key);

@@ -12,6 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyIterator, PyList, PyString};
 use rayon::prelude::*;
 
+use crate::evaluate::Request;
 use crate::fit::principled_specular::SpecularParams;
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{
@@ -21,10 +22,11 @@ use crate::maps::io::{
 use crate::maps::lut::TableResolution;
 use crate::maps::pipeline::{
     check_planes, check_prefix, commit_map_files, compute_maps_cancellable, output_name, stage_map_files,
-    tile_output_name, MapFiles, MapSettings, SpecularOutput, StrategyChoice, ALBEDO_MAP, MAP_KINDS, RADIUS_MAP,
-    SPECULAR_MAP,
+    tile_output_name, MapFiles, MapKind, MapSettings, SpecularOutput, StrategyChoice, ALBEDO_MAP, MAP_KINDS,
+    RADIUS_MAP, SURFACE_MAP_KINDS,
 };
 use crate::maps::udim::{check_tile, stacked_tile_rows, tile_set_file_name, TileRows};
+use crate::surface_lobes::ALL_SURFACE_MODELS;
 use crate::Outputs;
 
 use super::convert::{
@@ -34,9 +36,11 @@ use super::convert::{
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid, warn_notes};
 
-/// The fields of `SpecularParams` that do not depend on the oiliness: what `maps` returns in "specular" when the
-/// oiliness varies (beside the per-texel "specular_ior_level").
-pub(super) const SPECULAR_CONSTANTS: [&str; 3] = ["roughness", "ior", "beckmann_m"];
+/// The fields of `SpecularParams` that do not depend on the oiliness: what `maps` returns in "specular_constants"
+/// when the oiliness varies (beside the per-texel maps), and for the `paper` surface its Coat (weight 0).
+pub(super) const SPECULAR_CONSTANTS: [&str; 5] = ["surface", "roughness", "ior", "coat_ior", "beckmann_m"];
+/// The Coat fields that are one value under the `paper` surface (no Coat) even when the oiliness varies.
+const PAPER_COAT_CONSTANTS: [&str; 2] = ["coat_weight", "coat_roughness"];
 
 /// What `params` of `maps` must be, for messages.
 pub(super) const PARAMS_ARRAY: &str =
@@ -305,6 +309,8 @@ pub(super) fn read_parameter_map_py<'py>(
 ///         is kept per choice).
 ///     transport, streams: how the totals are computed, "adding_doubling" (the default) or "diffusion", and the
 ///         adding-doubling streams, as for :func:`evaluate` (a cached table is kept per choice).
+///     surface: the surface reflection the specular maps stand in for, "paper" or "measured", as for
+///         :func:`evaluate`; with "measured" the specular output also holds the Coat (maps when the oiliness varies).
 ///
 /// Ctrl-C (KeyboardInterrupt, or any exception a Python signal handler raises) stops the call the same way: the
 /// calling thread checks for signals every 0.1 s while the work runs, the rows or table nodes being computed are
@@ -319,11 +325,14 @@ pub(super) fn read_parameter_map_py<'py>(
 ///     "radius": float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale for ``method``, mm (with Radius
 ///     set to these values, Scale is 0.001 in a scene whose unit is the metre);
 ///     "specular": only when the oiliness varies, float32 (H, W): Principled Specular IOR Level per texel;
+///     "coat_weight", "coat_roughness": only when the oiliness varies and ``surface="measured"``, float32 (H, W):
+///     Principled Coat Weight and Coat Roughness per texel;
 ///     "specular_constants" (with the "specular" output): the specular inputs that are one value: when the oiliness
-///     is one value everywhere (a float, or an array of one value), {"oiliness", "specular_ior_level", "roughness",
-///     "ior", "beckmann_m", "directional_albedo_normal", "hemispherical_albedo"} (as ``evaluate(...)["specular"]``);
-///     when it varies, the ones that do not depend on it: {"roughness", "ior", "beckmann_m"} (Principled IOR is 1.4
-///     everywhere);
+///     is one value everywhere (a float, or an array of one value), {"surface", "oiliness", "specular_ior_level",
+///     "roughness", "ior", "coat_weight", "coat_roughness", "coat_ior", "beckmann_m", "directional_albedo_normal",
+///     "hemispherical_albedo"} (as ``evaluate(...)["specular"]``); when it varies, the ones that do not depend on it:
+///     {"surface", "roughness", "ior", "coat_ior", "beckmann_m"}, and for ``surface="paper"`` also "coat_weight" (0:
+///     no Coat) and "coat_roughness" (Principled IOR and Coat IOR are 1.4 everywhere);
 ///     "report": what was done: {"crate_version", "width", "height", "method", "target" ({"blender", "engine",
 ///     "tested"}), "color_space", "strategy" ({"name":
 ///     "constant" | "distinct_tuples" | "table" | "exact" | "none" (neither Base Color nor radius asked for), with
@@ -361,7 +370,8 @@ pub(super) fn read_parameter_map_py<'py>(
         epidermis_thickness_mm = None, baseline_absorption_scale = None, blood_oxygenation = None, method = "burley", outputs = None, exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
         wavelength_placement = None,
         working_space = "Linear Rec.709", table_resolution = None, table_cache = true, blender = None,
-        engine = "cycles", progress = None, boundaries = "paper", transport = "adding_doubling", streams = None
+        engine = "cycles", progress = None, boundaries = "paper", transport = "adding_doubling", streams = None,
+        surface = "paper"
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -391,6 +401,7 @@ pub(super) fn maps_py<'py>(
     boundaries: &str,
     transport: &str,
     streams: Option<&Bound<'py, PyAny>>,
+    surface: &str,
 ) -> PyResult<MapsPy> {
     let start = Instant::now();
     if let Some(callback) = progress.as_ref().filter(|c| !c.is_callable()) {
@@ -415,7 +426,10 @@ pub(super) fn maps_py<'py>(
         clamp,
         table: self::table_resolution(table_resolution)?,
         table_cache: if table_cache { crate::maps::lut::default_cache_dir() } else { None },
-        request: knobs.request(map_outputs(outputs)?)?,
+        request: Request {
+            surface: by_name("surface", surface, &ALL_SURFACE_MODELS)?,
+            ..knobs.request(map_outputs(outputs)?)?
+        },
         ..MapSettings::default()
     };
 
@@ -552,27 +566,36 @@ pub(super) fn maps_py<'py>(
         return Err(progress.map(Progress::into_error).unwrap_or_else(|| internal("stopped without a progress hook")));
     };
 
-    let (albedo, radius, specular, specular_constants) = {
+    let (albedo, radius, surface, specular_constants) = {
         let rgb = |data: Option<Vec<f32>>| {
             data.map(|d| rgb_image(py, height, width, d).and_then(|a| frozen(a.as_any()).map(|()| a.unbind())))
                 .transpose()
         };
         let (base_color, radius_mm) = (rgb(computed.base_color)?, rgb(computed.radius_mm)?);
-        let (level, specular) = match computed.specular {
-            None => (None, None),
-            Some(SpecularOutput::Constant(constants)) => (None, Some(constants)),
-            Some(SpecularOutput::Map { specular_ior_level, constants }) => {
-                let array = Array2::from_shape_vec((height, width), specular_ior_level).map_err(internal)?;
-                let array = PyArray::from_owned_array(py, array);
-                frozen(array.as_any())?;
-                (Some(array.unbind()), Some(constants))
+        let plane = |texels: Vec<f32>| -> PyResult<Py<PyArray2<f32>>> {
+            let array =
+                PyArray::from_owned_array(py, Array2::from_shape_vec((height, width), texels).map_err(internal)?);
+            frozen(array.as_any())?;
+            Ok(array.unbind())
+        };
+        let (surface, constants) = match computed.specular {
+            None => (Vec::new(), None),
+            Some(SpecularOutput::Constant(constants)) => (Vec::new(), Some(constants)),
+            Some(SpecularOutput::Map { specular_ior_level, coat, constants }) => {
+                let [level, weight, roughness] = SURFACE_MAP_KINDS;
+                let mut maps = vec![(level, plane(specular_ior_level)?)];
+                if let Some(coat) = coat {
+                    maps.push((weight, plane(coat.weight)?));
+                    maps.push((roughness, plane(coat.roughness)?));
+                }
+                (maps, Some(constants))
             }
         };
-        (base_color, radius_mm, level, specular)
+        (base_color, radius_mm, surface, constants)
     };
     let mut report = computed.report;
     report.seconds.total = start.elapsed().as_secs_f64();
-    Ok(MapsPy { height, width, albedo, radius, specular, specular_constants, report })
+    Ok(MapsPy { height, width, albedo, radius, surface, specular_constants, report })
 }
 
 /// Flag a numpy array the core made read-only. Its memory belongs to the core's container (no writeable buffer), so
@@ -586,8 +609,10 @@ fn writeable(array: &Bound<'_, PyAny>) -> PyResult<bool> {
     array.getattr("flags")?.getattr("writeable")?.extract()
 }
 
-/// The keys of a :func:`maps` result, in the order the result lists those present.
-const MAPS_KEYS: [&str; 5] = [ALBEDO_MAP.name, RADIUS_MAP.name, SPECULAR_MAP.name, "specular_constants", "report"];
+/// The keys of a :func:`maps` result that are not maps, after the maps ([`MAP_KINDS`] order) in the order the result
+/// lists those present.
+const CONSTANTS_KEY: &str = "specular_constants";
+const REPORT_KEY: &str = "report";
 
 /// The result of :func:`maps`: the texture maps of the outputs asked for, the specular constants and the report.
 /// Read-only: its arrays are flagged not writeable (numpy refuses writes into them; copy one with ``np.array(a)``
@@ -599,6 +624,8 @@ const MAPS_KEYS: [&str; 5] = [ALBEDO_MAP.name, RADIUS_MAP.name, SPECULAR_MAP.nam
 ///     radius: float32 (H, W, 3), Principled Subsurface Radius x Subsurface Scale, mm.
 ///     specular: float32 (H, W), Principled Specular IOR Level per texel; None also when the oiliness is one value
 ///         everywhere (``specular_constants`` then holds the level).
+///     coat_weight, coat_roughness: float32 (H, W), Principled Coat Weight and Coat Roughness per texel (the
+///         ``measured`` surface with varying oiliness); None otherwise (``specular_constants`` then holds them).
 ///     specular_constants: the specular inputs that are one value (dict; see :func:`maps`).
 ///     report: what was done (dict; see :func:`maps`).
 ///     shape: (H, W).
@@ -615,9 +642,10 @@ pub(super) struct MapsPy {
     width: usize,
     albedo: Option<Py<PyArray3<f32>>>,
     radius: Option<Py<PyArray3<f32>>>,
-    specular: Option<Py<PyArray2<f32>>>,
-    /// The specular constants; with the `specular` map (the oiliness varies) only those of `SPECULAR_CONSTANTS`
-    /// are shown.
+    /// The single-channel surface maps ([`SURFACE_MAP_KINDS`]) present, in that order.
+    surface: Vec<(MapKind, Py<PyArray2<f32>>)>,
+    /// The specular constants; with the surface maps (the oiliness varies) only those of `SPECULAR_CONSTANTS`
+    /// (and for `paper` its Coat's) are shown.
     specular_constants: Option<SpecularParams>,
     report: crate::maps::MapReport,
 }
@@ -625,32 +653,40 @@ pub(super) struct MapsPy {
 impl MapsPy {
     /// The value of `key`, or None when the result has no such key.
     fn item<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Option<Bound<'py, PyAny>>> {
-        let [albedo, radius, specular, constants, report] = MAPS_KEYS;
-        Ok(if key == albedo {
+        Ok(if key == ALBEDO_MAP.name {
             self.albedo.as_ref().map(|a| a.bind(py).clone().into_any())
-        } else if key == radius {
+        } else if key == RADIUS_MAP.name {
             self.radius.as_ref().map(|a| a.bind(py).clone().into_any())
-        } else if key == specular {
-            self.specular.as_ref().map(|a| a.bind(py).clone().into_any())
-        } else if key == constants {
+        } else if key == CONSTANTS_KEY {
             self.specular_dict(py)?
-        } else if key == report {
+        } else if key == REPORT_KEY {
             Some(self.report_dict(py)?)
         } else {
-            None
+            self.surface_map(py, key).map(Bound::into_any)
         })
     }
 
-    /// The keys present, in [`MAPS_KEYS`] order.
+    /// The surface map named `key` (a [`SURFACE_MAP_KINDS`] name), if held.
+    fn surface_map<'py>(&self, py: Python<'py>, key: &str) -> Option<Bound<'py, PyArray2<f32>>> {
+        self.surface.iter().find(|(k, _)| k.name == key).map(|(_, a)| a.bind(py).clone())
+    }
+
+    /// The keys present: the maps in [`MAP_KINDS`] order, then "specular_constants" and "report".
     fn present(&self) -> Vec<&'static str> {
-        let has = [
-            self.albedo.is_some(),
-            self.radius.is_some(),
-            self.specular.is_some(),
-            self.specular_constants.is_some(),
-            true,
-        ];
-        MAPS_KEYS.iter().zip(has).filter(|(_, has)| *has).map(|(k, _)| *k).collect()
+        let mut keys: Vec<&'static str> = MAP_KINDS
+            .iter()
+            .map(|k| k.name)
+            .filter(|&name| match name {
+                n if n == ALBEDO_MAP.name => self.albedo.is_some(),
+                n if n == RADIUS_MAP.name => self.radius.is_some(),
+                n => self.surface.iter().any(|(k, _)| k.name == n),
+            })
+            .collect();
+        if self.specular_constants.is_some() {
+            keys.push(CONSTANTS_KEY);
+        }
+        keys.push(REPORT_KEY);
+        keys
     }
 
     fn specular_dict<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
@@ -658,12 +694,13 @@ impl MapsPy {
             return Ok(None);
         };
         let all = to_py(py, constants)?;
-        if self.specular.is_none() {
+        if self.surface.is_empty() {
             return Ok(Some(all));
         }
-        // Only the constants that do not depend on the oiliness (fit::principled_specular::specular_from_oiliness).
+        // Only the constants that do not depend on the oiliness (fit::principled_specular::surface_inputs).
         let kept = PyDict::new(py);
-        for key in SPECULAR_CONSTANTS {
+        let paper_coat: &[&str] = if constants.surface.is_paper() { &PAPER_COAT_CONSTANTS } else { &[] };
+        for key in SPECULAR_CONSTANTS.iter().chain(paper_coat) {
             kept.set_item(key, all.get_item(key)?)?;
         }
         Ok(Some(kept.into_any()))
@@ -690,13 +727,18 @@ impl MapsPy {
     ) -> PyResult<Bound<'py, PyDict>> {
         let base_color = self.albedo.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
         let radius_mm = self.radius.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
-        let specular = self.specular.as_ref().map(|a| a.bind(py).try_readonly()).transpose().map_err(internal)?;
+        let surface: Vec<(MapKind, _)> = self
+            .surface
+            .iter()
+            .map(|(k, a)| a.bind(py).try_readonly().map(|r| (*k, r)))
+            .collect::<Result<_, _>>()
+            .map_err(internal)?;
         let images = MapImages::new(
             self.height,
             self.width,
             base_color.as_ref().map(|a| a.as_slice()).transpose().map_err(internal)?,
             radius_mm.as_ref().map(|a| a.as_slice()).transpose().map_err(internal)?,
-            specular.as_ref().map(|a| a.as_slice()).transpose().map_err(internal)?,
+            surface.iter().map(|(k, a)| a.as_slice().map(|s| (*k, s))).collect::<Result<_, _>>().map_err(internal)?,
         )?;
         write_images(py, &images, folder, prefix, exr, tiling)
     }
@@ -721,7 +763,20 @@ impl MapsPy {
     /// when the oiliness is one value everywhere.
     #[getter]
     fn specular<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f32>>> {
-        self.specular.as_ref().map(|a| a.bind(py).clone())
+        self.surface_map(py, SURFACE_MAP_KINDS[0].name)
+    }
+
+    /// float32 (H, W), Principled Coat Weight per texel (read-only); None unless the oiliness varies under the
+    /// "measured" surface.
+    #[getter]
+    fn coat_weight<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f32>>> {
+        self.surface_map(py, SURFACE_MAP_KINDS[1].name)
+    }
+
+    /// float32 (H, W), Principled Coat Roughness per texel (read-only); as ``coat_weight``.
+    #[getter]
+    fn coat_roughness<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f32>>> {
+        self.surface_map(py, SURFACE_MAP_KINDS[2].name)
     }
 
     /// The specular inputs that are one value (a new dict; see :func:`maps`); None without the "specular" output.
@@ -765,8 +820,8 @@ impl MapsPy {
         PyList::new(py, self.present())?.try_iter()
     }
 
-    /// The keys present, in the order "albedo", "radius", "specular", "specular_constants", "report" (a
-    /// ``KeysView``, as a dict's).
+    /// The keys present, in the order "albedo", "radius", "specular", "coat_weight", "coat_roughness",
+    /// "specular_constants", "report" (a ``KeysView``, as a dict's).
     fn keys<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
         mapping_view(slf, "KeysView")
     }
@@ -798,8 +853,9 @@ impl MapsPy {
 
     /// Write the maps this result holds as float EXRs with the core's writer (that of ``spectral-skin maps``),
     /// straight from its arrays, in ``folder`` (created if missing): ``albedo`` -> ``albedo.exr`` (channels R, G, B),
-    /// ``radius`` -> ``radius.exr`` (R, G, B), ``specular`` -> ``specular.exr`` (Y); the file names and everything
-    /// else as :func:`write_maps`.
+    /// ``radius`` -> ``radius.exr`` (R, G, B), ``specular`` -> ``specular.exr`` (Y), ``coat_weight`` ->
+    /// ``coat_weight.exr`` (Y), ``coat_roughness`` -> ``coat_roughness.exr`` (Y); the file names and everything else
+    /// as :func:`write_maps`.
     ///
     /// Arguments:
     ///     folder: the output folder.
@@ -816,7 +872,7 @@ impl MapsPy {
     /// earlier write with the same prefix (and tiles) that this one did not write are removed.
     ///
     /// Returns:
-    ///     {"albedo" | "radius" | "specular": path}, for the maps written; for a tile set the path holds ``<UDIM>``
+    ///     {map name: path}, for the maps written; for a tile set the path holds ``<UDIM>``
     ///     (``<folder>/albedo.<UDIM>.exr``).
     ///
     /// Raises:
@@ -886,14 +942,14 @@ fn write_options(prefix: Option<&str>, precision: &str, compression: &str) -> Py
 }
 
 /// The maps one write puts in files, row-major float32 texels: (H, W, 3) interleaved Base Color and radius, (H, W)
-/// Specular IOR Level. Borrowed: from a [`MapsPy`]'s arrays, or from (or gathered out of) the arrays given to
-/// `write_maps`.
+/// surface maps (Specular IOR Level, Coat Weight, Coat Roughness). Borrowed: from a [`MapsPy`]'s arrays, or from (or
+/// gathered out of) the arrays given to `write_maps`.
 struct MapImages<'a> {
     height: usize,
     width: usize,
     base_color: Option<&'a [f32]>,
     radius_mm: Option<&'a [f32]>,
-    specular_ior_level: Option<&'a [f32]>,
+    surface: Vec<(MapKind, &'a [f32])>,
 }
 
 impl<'a> MapImages<'a> {
@@ -903,14 +959,15 @@ impl<'a> MapImages<'a> {
         width: usize,
         base_color: Option<&'a [f32]>,
         radius_mm: Option<&'a [f32]>,
-        specular_ior_level: Option<&'a [f32]>,
+        surface: Vec<(MapKind, &'a [f32])>,
     ) -> PyResult<Self> {
-        for (texels, channels) in [(base_color, 3), (radius_mm, 3), (specular_ior_level, 1)] {
+        let sized = [(base_color, 3), (radius_mm, 3)].into_iter().chain(surface.iter().map(|&(_, s)| (Some(s), 1)));
+        for (texels, channels) in sized {
             if texels.is_some_and(|t| t.len() != height * width * channels) {
                 return Err(internal("an image whose size is not its shape's"));
             }
         }
-        Ok(MapImages { height, width, base_color, radius_mm, specular_ior_level })
+        Ok(MapImages { height, width, base_color, radius_mm, surface })
     }
 }
 
@@ -961,7 +1018,7 @@ fn write_images<'py>(
                 height: rows,
                 base_color: base_color.as_ref(),
                 radius_mm: radius_mm.as_ref(),
-                specular_ior_level: images.specular_ior_level.map(|s| &s[w * first..w * (first + rows)]),
+                surface: images.surface.iter().map(|&(k, s)| (k, &s[w * first..w * (first + rows)])).collect(),
             };
             staged.extend(stage_map_files(folder, prefix, tile, &files, exr)?);
         }
@@ -969,9 +1026,13 @@ fn write_images<'py>(
         commit_map_files(folder, prefix, &tiles, staged)
     })?;
     let dict = PyDict::new(py);
-    let present = [images.base_color.is_some(), images.radius_mm.is_some(), images.specular_ior_level.is_some()];
-    for (kind, present) in MAP_KINDS.iter().zip(present) {
+    for kind in &MAP_KINDS {
         let (key, file) = (kind.name, kind.file);
+        let present = match key {
+            k if k == ALBEDO_MAP.name => images.base_color.is_some(),
+            k if k == RADIUS_MAP.name => images.radius_mm.is_some(),
+            k => images.surface.iter().any(|(s, _)| s.name == k),
+        };
         if present {
             let name = match &tiling {
                 Tiling::One(tile) => tile_output_name(prefix, *tile, file),
@@ -1067,13 +1128,14 @@ impl<'py> Texels<'py> {
 /// Write the images of a :func:`maps` result as float EXRs, with the core's writer (that of ``spectral-skin maps``).
 ///
 /// Each image present (and not None) becomes one file in ``folder`` (created if missing): "albedo" -> ``albedo.exr``
-/// (channels R, G, B), "radius" -> ``radius.exr`` (R, G, B), "specular" -> ``specular.exr`` (Y); with ``prefix``, ``<prefix>_albedo.exr`` etc.; with ``tile`` (a UDIM tile number),
-/// ``albedo.1001.exr`` etc., one tile of a tile set Blender loads as ``albedo.<UDIM>.exr``; with ``tiles``, a tile
+/// (channels R, G, B), "radius" -> ``radius.exr`` (R, G, B), "specular" -> ``specular.exr`` (Y), "coat_weight" and
+/// "coat_roughness" -> ``coat_weight.exr`` and ``coat_roughness.exr`` (Y); with ``prefix``,
+/// ``<prefix>_albedo.exr`` etc.; with ``tile`` (a UDIM tile number), ``albedo.1001.exr`` etc., one tile of a tile set Blender loads as ``albedo.<UDIM>.exr``; with ``tiles``, a tile
 /// set stacked top to bottom, each tile's rows as that tile's files. Row 0 at the top; ``precision`` and
 /// ``compression`` as the CLI's ``--precision`` and ``--compression``. The files (of every tile) are written as
 /// temporary files in ``folder`` and renamed into place together once all are written, so a failure leaves the
 /// existing files as they were. Then the files of an earlier write with the same prefix (and tiles) that this one
-/// did not write (``albedo.exr``, ``radius.exr``, ``specular.exr``, ``skin_maps.json``) are removed, so the folder
+/// did not write (any of those files, and ``skin_maps.json``) are removed, so the folder
 /// holds exactly this result's maps. No sidecar is written: the report is in the result.
 ///
 /// A :class:`Maps` is written from its own arrays (as ``result.write(...)``). Read-only C-contiguous float32 arrays
@@ -1082,7 +1144,8 @@ impl<'py> Texels<'py> {
 ///
 /// Arguments:
 ///     result: a :class:`Maps` (the result of :func:`maps`), or a mapping with any of "albedo" (H, W, 3), "radius"
-///         (H, W, 3, mm) and "specular" (H, W), float32 or float64 numpy arrays (float64 is rounded to float32);
+///         (H, W, 3, mm), "specular", "coat_weight" and "coat_roughness" (H, W), float32 or float64 numpy arrays
+///         (float64 is rounded to float32);
 ///         other keys are ignored.
 ///     folder: the output folder.
 ///     prefix: None, or a file-name part prepended with "_" to each file name (no path separator).
@@ -1094,7 +1157,8 @@ impl<'py> Texels<'py> {
 ///         [(tile, rows), ...], each tile 1001 to 2000 given once, the rows adding up to H. Not with ``tile``.
 ///
 /// Returns:
-///     {"albedo" | "radius" | "specular": path of the file written}, for the images written; for ``tiles`` the path
+///     {map name ("albedo", "radius", "specular", "coat_weight", "coat_roughness"): path of the file written}, for
+///     the images written; for ``tiles`` the path
 ///     holds ``<UDIM>``.
 ///
 /// Raises:
@@ -1127,7 +1191,7 @@ pub(super) fn write_maps_py<'py>(
         let maps = maps.get();
         return maps.write_as(py, &folder, prefix, exr, Tiling::of(tile, tiles, maps.height)?);
     }
-    let mut images = Vec::with_capacity(3);
+    let mut images = Vec::with_capacity(MAP_KINDS.len());
     for kind in &MAP_KINDS {
         let key = kind.name;
         images.push(result_array(result, key, kind.channels.len())?.map(|(a, shape)| (key, shape, a)));
@@ -1145,7 +1209,13 @@ pub(super) fn write_maps_py<'py>(
     let texels: Vec<Option<Texels>> =
         images.into_iter().map(|image| image.map(|(_, _, a)| Texels::of(a)).transpose()).collect::<PyResult<_>>()?;
     let slice = |i: usize| texels[i].as_ref().map(Texels::as_slice).transpose();
-    let images = MapImages::new(height, width, slice(0)?, slice(1)?, slice(2)?)?;
+    let mut surface = Vec::new();
+    for (i, kind) in MAP_KINDS.iter().enumerate().skip(2) {
+        if let Some(s) = slice(i)? {
+            surface.push((*kind, s));
+        }
+    }
+    let images = MapImages::new(height, width, slice(0)?, slice(1)?, surface)?;
     write_images(py, &images, &folder, prefix, exr, tiling)
 }
 

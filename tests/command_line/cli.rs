@@ -750,3 +750,39 @@ fn eval_takes_a_surface() {
     assert_eq!(bad.status.code(), Some(2), "{err}");
     assert!(err.contains("shiny") && err.contains("measured") && err.contains("paper"), "{err}");
 }
+
+/// `maps --surface measured` with an oiliness that varies: the Coat's two maps beside the level, each described in
+/// the sidecar; a later paper run into the same folder removes them (the folder holds exactly one run's files).
+#[test]
+fn maps_take_a_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("face.exr");
+    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]);
+    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
+    let out_dir = dir.path().join("maps");
+    let (params, out) = (params.to_str().unwrap(), out_dir.to_str().unwrap());
+    let files = || {
+        let mut names: Vec<String> =
+            std::fs::read_dir(&out_dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+        names.sort();
+        names
+    };
+    let measured = run(&["maps", "--params", params, "--out", out, "--outputs", "specular", "--surface", "measured"]);
+    assert!(measured.status.success(), "{}", String::from_utf8_lossy(&measured.stderr));
+    assert_eq!(files(), ["coat_roughness.exr", "coat_weight.exr", "skin_maps.json", "specular.exr"]);
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+    for (file, input) in [
+        ("specular.exr", "Specular IOR Level"),
+        ("coat_weight.exr", "Coat Weight"),
+        ("coat_roughness.exr", "Coat Roughness"),
+    ] {
+        let entry = &sidecar["outputs"][file];
+        assert_eq!(entry["meaning"], format!("Principled {input}"), "{file}: {entry}");
+        assert_eq!(entry["surface"], "measured", "{file}: {entry}");
+    }
+    assert_eq!(sidecar["report"]["request"]["surface"], "measured");
+    let paper = run(&["maps", "--params", params, "--out", out, "--outputs", "specular"]);
+    assert!(paper.status.success(), "{}", String::from_utf8_lossy(&paper.stderr));
+    assert_eq!(files(), ["skin_maps.json", "specular.exr"]);
+}

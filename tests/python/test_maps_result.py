@@ -56,7 +56,10 @@ def test_attributes_and_shapes(result: spectral_skin.Maps) -> None:
         assert a.flags["C_CONTIGUOUS"] and np.isfinite(a).all(), name
     # The oiliness varies: the per-texel level is the "specular" map, "specular_constants" holds the inputs that do
     # not depend on it.
-    assert set(result.specular_constants or {}) == {"roughness", "ior", "beckmann_m"}
+    # (the paper's surface has no Coat: its weight 0 is one value too).
+    assert set(result.specular_constants or {}) == {"surface", "roughness", "ior", "coat_ior", "beckmann_m",
+                                                    "coat_weight", "coat_roughness"}
+    assert result.coat_weight is None and result.coat_roughness is None and "coat_weight" not in result
     assert (result.report["width"], result.report["height"]) == (WIDTH, HEIGHT)
     assert result.report["strategy"]["name"] == "exact"
     assert repr(result).startswith(f"Maps({WIDTH} x {HEIGHT}, albedo, radius, specular, specular_constants")
