@@ -169,6 +169,9 @@ def _apply_main(argv: list[str]) -> int:
     parser.add_argument("--transport", choices=list(core.TRANSPORTS), default=core.DEFAULT_TRANSPORT,
                         help="how the totals are computed: " + "; ".join(
                             f"{key}: {text}" for key, text in core.TRANSPORT_DESCRIPTIONS.items()))
+    parser.add_argument("--surface", choices=list(core.SURFACES), default=core.DEFAULT_SURFACE,
+                        help="the surface reflection the specular inputs stand in for: " + "; ".join(
+                            f"{key}: {text}" for key, text in core.SURFACE_DESCRIPTIONS.items()))
     parser.add_argument("--out-dir", default="", help="texture folder ('//' = next to the input .blend)")
     parser.add_argument("--pack", action="store_true", help="pack the textures into the .blend")
     args = parser.parse_args(argv)
@@ -176,7 +179,8 @@ def _apply_main(argv: list[str]) -> int:
         overrides = {n: getattr(args, n) for n in (*core.PARAMETERS, *core.EXTENDED_PARAMETERS)
                      if getattr(args, n) is not None}
         settings = core.SkinSettings.from_preset(args.preset, **overrides).replace(
-            method=args.method, accuracy=args.accuracy, transport=args.transport, output_dir=args.out_dir,
+            method=args.method, accuracy=args.accuracy, transport=args.transport, surface=args.surface,
+            output_dir=args.out_dir,
             clamp=args.clamp)
         maps = _read_map(args.params_map, None) if args.params_map else {}
         for n in core.PARAMETERS:

@@ -18,7 +18,8 @@ from .core import MaterialPlan
 # Per-frame values of an Apply before they became F-curves (JSON on the material): removed at the next Apply.
 LEGACY_PROPERTY = "spectral_skin_frames"
 # Plan key -> Principled input.
-SOCKETS = {"base_color": "Base Color", "radius": "Subsurface Radius", "specular_ior_level": "Specular IOR Level"}
+SOCKETS = {"base_color": "Base Color", "radius": "Subsurface Radius", "specular_ior_level": "Specular IOR Level",
+           "coat_weight": "Coat Weight", "coat_roughness": "Coat Roughness"}
 
 
 def _paths(node: bpy.types.Node) -> set[str]:
@@ -50,7 +51,7 @@ def store(material: bpy.types.Material, node: bpy.types.Node, plan: MaterialPlan
         socket = next((s for s in node.inputs if s.name == name), None)
         if socket is None or socket.is_linked or any(v is None for v in values):
             continue
-        if key == "specular_ior_level":
+        if not isinstance(values[0], (list, tuple)):  # one number per frame
             anim.write_keys(socket, "default_value", -1, frames, values)
             written += 1
             continue

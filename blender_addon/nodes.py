@@ -26,6 +26,8 @@ TEXTURE_INPUTS = {
     "albedo": ("Base Color", None),
     "radius": ("Subsurface Radius", "Non-Color"),
     "specular": ("Specular IOR Level", "Non-Color"),
+    "coat_weight": ("Coat Weight", "Non-Color"),
+    "coat_roughness": ("Coat Roughness", "Non-Color"),
 }
 
 
@@ -159,6 +161,10 @@ def apply_plan(material: bpy.types.Material, plan: MaterialPlan) -> bpy.types.No
         "Roughness": plan.roughness,
         "IOR": plan.ior,
         "Subsurface IOR": plan.subsurface_ior,
+        # The surface's sharp lobe (the measured surface; weight 0 for the paper's oil layer).
+        "Coat Weight": plan.coat_weight,
+        "Coat Roughness": plan.coat_roughness,
+        "Coat IOR": plan.coat_ior,
     }
     for name, value in values.items():
         socket = _socket(inputs, name)

@@ -46,6 +46,7 @@ class SPECTRAL_SKIN_PT_material(bpy.types.Panel):
             box.template_ID(props, f"{name}_map", open="image.open")
         box.prop(props, "clamp")
         layout.prop(props, "method")
+        layout.prop(props, "surface")
         layout.prop(props, "accuracy")
         row = layout.row()
         row.active = props.mode == "BAKED"  # Live mode writes no texture maps

@@ -14,12 +14,15 @@ import spectral_skin
 from .core import (
     ACCURACY_DESCRIPTIONS,
     ACCURACY_LEVELS,
+    DEFAULT_SURFACE,
     DEFAULT_TRANSPORT,
     DEFAULT_WORKING_SPACE,
     EXTENDED_DEFAULTS,
     EXTENDED_PARAMETERS,
     PARAMETER_INFO,
     PARAMETERS,
+    SURFACE_DESCRIPTIONS,
+    SURFACES,
     TRANSPORT_DESCRIPTIONS,
     TRANSPORTS,
     MaterialPlan,
@@ -80,6 +83,9 @@ ACCURACY_ITEMS = [(key, name.title(), ACCURACY_DESCRIPTIONS[key]) for key, name 
 # The core's transports and their descriptions (core/settings.py), the core's default first.
 TRANSPORT_ITEMS = [(key, name.replace("_", "-").title(), TRANSPORT_DESCRIPTIONS[key])
                    for key, name in TRANSPORTS.items()]
+# The core's surface models and their descriptions (core/settings.py).
+SURFACE_ITEMS = [(key, name.title(), SURFACE_DESCRIPTIONS[key][:1].upper() + SURFACE_DESCRIPTIONS[key][1:])
+                 for key, name in SURFACES.items()]
 
 
 # True while a preset writes the parameters, so that their update does not switch the menu to Custom (nor compute the
@@ -213,6 +219,9 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
         name="Transport", description="How the skin's total reflectance (Base Color, and the scale of the profile "
         "the radius is fitted to) is computed: the core's transports",
         items=TRANSPORT_ITEMS, default=DEFAULT_TRANSPORT, update=_transport_changed)
+    surface: bpy.props.EnumProperty(
+        name="Surface", description="The surface reflection the specular inputs stand in for (Baked mode; Live mode "
+        "computes the paper's): the core's surface models", items=SURFACE_ITEMS, default=DEFAULT_SURFACE)
     output_dir: bpy.props.StringProperty(
         name="Texture Folder",
         description="Folder for the texture maps computed from parameter maps ('//' is the .blend's folder); the "
@@ -223,8 +232,9 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
         name="Subsurface", description="Subsurface scattering: Auto drops it where no camera can resolve the largest "
         "radius (plain diffuse with the same albedo)", items=OVERRIDE_ITEMS, default="AUTO")
     override_specular: bpy.props.EnumProperty(
-        name="Specular", description="The oil layer's specular lobe: Auto drops it (Specular IOR Level 0, no "
-        "texture) where the oiliness is zero everywhere", items=OVERRIDE_ITEMS, default="AUTO")
+        name="Specular", description="The surface's specular reflection (and Coat): Auto drops it (Specular IOR "
+        "Level 0, Coat Weight 0, no texture) where nothing reflects: the paper's oil layer with the oiliness zero "
+        "everywhere (the measured surface always reflects)", items=OVERRIDE_ITEMS, default="AUTO")
     override_constant_maps: bpy.props.EnumProperty(
         name="Constant Maps", description="Auto (or On) sets an output map of one value as a value; Off writes it "
         "as a texture all the same", items=OVERRIDE_ITEMS, default="AUTO")
@@ -332,7 +342,7 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
     target = scene_target(scene)
     return SkinSettings(
         **{name: getattr(props, name) for name in (*PARAMETERS, *EXTENDED_PARAMETERS)}, method=props.method, accuracy=props.accuracy,
-        transport=props.transport,
+        transport=props.transport, surface=props.surface,
         clamp=props.clamp, output_dir=output_dir, file_prefix=texture_prefix(bpy.data.filepath, material.name),
         scale_length=scene.unit_settings.scale_length, working_space=scene_working_space(),
         blender=target["blender"], engine=target["engine"], mode=props.mode).with_maps(maps)

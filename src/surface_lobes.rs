@@ -41,6 +41,27 @@ pub enum SurfaceModel {
 }
 
 impl SurfaceModel {
+    /// The serde name (`surface=` in Python, `--surface` on the command line).
+    pub fn name(self) -> &'static str {
+        match self {
+            SurfaceModel::Measured => "measured",
+            SurfaceModel::Paper => "paper",
+        }
+    }
+
+    /// One line for the fronts' choices (tooltips, help).
+    pub fn description(self) -> &'static str {
+        match self {
+            SurfaceModel::Measured => {
+                "measured skin: a broad lobe and a sharp Coat, reflecting like a dielectric (about 2.8 % at normal \
+                 incidence) at every oiliness; oil sharpens the Coat and raises its weight"
+            }
+            SurfaceModel::Paper => {
+                "Donner & Jensen 2006's oil layer: one lobe scaled by the oiliness, no reflection on dry skin"
+            }
+        }
+    }
+
     /// True for `paper` (serde leaves the field out then, so earlier results and cache keys stay as they were).
     pub fn is_paper(&self) -> bool {
         *self == SurfaceModel::Paper

@@ -18,6 +18,15 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
+# The plan field (a Principled input's one value) of each texture, named by its map as the core names it
+# (``spectral_skin.maps``: albedo.exr feeds Base Color): the field is None while the texture supplies the input, and
+# takes the texture's value when the scene analysis sets a constant texture as a value.
+FIELD_OF_TEXTURE = {"albedo": "base_color", "radius": "radius", "specular": "specular_ior_level",
+                    "coat_weight": "coat_weight", "coat_roughness": "coat_roughness"}
+# The single-channel surface textures: the specular output's maps when the oiliness varies (the Coat's two only under
+# the measured surface).
+SURFACE_TEXTURES = ("specular", "coat_weight", "coat_roughness")
+
 
 @dataclass(frozen=True)
 class PlanSummary:
@@ -64,6 +73,13 @@ class MaterialPlan:
     # Principled Specular IOR Level, or None when the specular texture supplies it.
     specular_ior_level: float | None
     roughness: float
+    # The core's surface model the specular inputs stand in for ("measured" or "paper").
+    surface: str
+    # Principled Coat Weight and Coat Roughness (None when a texture supplies it: the measured surface's varying
+    # oiliness), and Coat IOR. The paper's surface has no Coat (weight 0).
+    coat_weight: float | None
+    coat_roughness: float | None
+    coat_ior: float
     # 0 where the scene analysis dropped subsurface scattering (plain diffuse with the same albedo), else 1.
     subsurface_weight: float
     # {"albedo" | "radius" | "specular": final absolute path} of the textures this plan writes (<folder>/<prefix>_
@@ -126,6 +142,9 @@ def freeze(draft: Mapping[str, Any]) -> MaterialPlan:
     """The plan of a draft (:func:`~core.plan.make_plan`'s dict, changed by the scene analysis's decisions)."""
     summary = draft["summary"]
     specular = draft["specular_ior_level"]
+
+    def optional(key: str) -> float | None:
+        return None if draft[key] is None else float(draft[key])
     return MaterialPlan(
         method=draft["method"],
         target=_frozen(draft["target"]),
@@ -141,6 +160,10 @@ def freeze(draft: Mapping[str, Any]) -> MaterialPlan:
         subsurface_ior=float(draft["subsurface_ior"]),
         specular_ior_level=None if specular is None else float(specular),
         roughness=float(draft["roughness"]),
+        surface=str(draft["surface"]),
+        coat_weight=optional("coat_weight"),
+        coat_roughness=optional("coat_roughness"),
+        coat_ior=float(draft["coat_ior"]),
         subsurface_weight=float(draft.get("subsurface_weight", 1.0)),
         textures=_frozen(draft["textures"]),
         images=_frozen(draft["images"]),

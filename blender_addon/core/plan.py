@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .material_plan import MaterialPlan
+from .material_plan import FIELD_OF_TEXTURE, SURFACE_TEXTURES, MaterialPlan
 from .settings import (
     ACCURACY_LEVELS,
     DEFAULT_TRANSPORT,
@@ -156,7 +156,7 @@ def _plan_from_constants(settings: SkinSettings, radius: bool, specular: bool) -
     ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"], outputs=outputs,
                                 accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
                                 blender=settings.blender, engine=settings.engine, **settings.transport_keywords(),
-                                **settings.extended())
+                                surface=settings.surface_name(), **settings.extended())
     albedo = _rgb(ev["diffuse_reflectance_rgb"])
     radius_mm: list[float] | None = None
     base_color = albedo
@@ -170,6 +170,9 @@ def _plan_from_constants(settings: SkinSettings, radius: bool, specular: bool) -
         base_color = _rgb(method["base_color"])
         radius_mm = _rgb(method["subsurface_radius_mm"])
     surface = ev["surface"]
+    # Without specular: no lobe and no Coat (the surface's constants for the rest).
+    spec = ev["specular"] if specular else {"specular_ior_level": 0.0, "coat_weight": 0.0,
+                                            "coat_roughness": surface["roughness"]}
     return {
         "base_color": base_color,
         "radius": radius_mm,
@@ -179,8 +182,12 @@ def _plan_from_constants(settings: SkinSettings, radius: bool, specular: bool) -
         "albedo": albedo,
         "ior": float(surface["ior"]),
         "subsurface_ior": float(surface["ior"]),
-        "specular_ior_level": float(ev["specular"]["specular_ior_level"]) if specular else 0.0,
+        "specular_ior_level": float(spec["specular_ior_level"]),
         "roughness": float(surface["roughness"]),
+        "coat_weight": float(spec["coat_weight"]),
+        "coat_roughness": float(spec["coat_roughness"]),
+        "coat_ior": float(surface["coat_ior"]),
+        "surface": str(surface["surface"]),
         "target": dict(ev["target"]),
         "textures": {},
         "images": {},
@@ -227,7 +234,7 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
                                 outputs=outputs, accuracy=ACCURACY_LEVELS[settings.accuracy],
                                 working_space=settings.working_space, clamp=settings.clamp, progress=progress,
                                 blender=settings.blender, engine=settings.engine, **settings.transport_keywords(),
-                                **extended)
+                                surface=settings.surface_name(), **extended)
     report = result["report"]
     prefix = _safe_name(settings.file_prefix)
     folder = os.path.abspath(settings.output_dir)
@@ -236,19 +243,24 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
     if radius:
         images["radius"] = result["radius"]
     # Roughness and IOR always (without specular: the surface's constants, which an evaluation of no output gives);
-    # the level is a map of its own when the oiliness varies.
-    specular_ior_level: float | None = 0.0
+    # each oiliness-dependent input (the level, and the Coat's weight and roughness) is a map of its own when the
+    # oiliness varies (None here), else a value.
+    surface_inputs: dict[str, float | None] = {"specular_ior_level": 0.0, "coat_weight": 0.0}
     if not specular:
         c = settings.constants()
         constants: dict[str, Any] = dict(spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"],
-                                                                c["oiliness"], outputs=())["surface"])
-    elif "specular" in result:
-        constants = dict(result["specular_constants"])
-        images["specular"] = result["specular"]
-        specular_ior_level = None
+                                                                c["oiliness"], outputs=(),
+                                                                surface=settings.surface_name())["surface"])
+        surface_inputs["coat_roughness"] = float(constants["roughness"])
     else:
         constants = dict(result["specular_constants"])
-        specular_ior_level = float(constants["specular_ior_level"])
+        for name in SURFACE_TEXTURES:
+            field = FIELD_OF_TEXTURE[name]
+            if name in result:
+                images[name] = result[name]
+                surface_inputs[field] = None
+            else:
+                surface_inputs[field] = float(constants[field])
     roughness = float(constants["roughness"])
     ior = float(constants["ior"])
     # A UDIM tile set (every map has the same tiles: check) is computed as one texture and written tile by tile.
@@ -269,8 +281,10 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
         "radius": None,
         "ior": ior,
         "subsurface_ior": ior,
-        "specular_ior_level": specular_ior_level,
+        **surface_inputs,
         "roughness": roughness,
+        "coat_ior": float(constants["coat_ior"]),
+        "surface": str(constants["surface"]),
         "target": dict(report["target"]),
         "folder": folder,
         "prefix": prefix,

@@ -47,16 +47,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from .material_plan import MaterialPlan, freeze
+from .material_plan import FIELD_OF_TEXTURE, SURFACE_TEXTURES, MaterialPlan, freeze
 
 # Largest subsurface radius, in pixels of the smallest footprint, below which subsurface scattering is dropped.
 # Chosen from the measurement in docs/scene-effects.md (scripts/reports/scene_effects_report.py): at and below this
 # radius the Burley slab and the plain-diffuse slab of the same albedo differ by a mean under 0.5 % of the albedo.
 SUBSURFACE_MIN_RADIUS_PX = 0.25
 
-# The plan field (a Principled input's one value) that stands in for each texture (named by its map, as the core names
-# it: albedo.exr feeds Base Color) when the texture is dropped for a constant.
-PRINCIPLED_FIELD_OF_TEXTURE = {"albedo": "base_color", "radius": "radius", "specular": "specular_ior_level"}
 
 OVERRIDES = ("AUTO", "ON", "OFF")
 # Effects an artist can force on or off (engine/version is required by the target). "constant maps" on: an output
@@ -380,7 +377,18 @@ def oiliness_zero_everywhere(settings: Any) -> bool:
     return not bool(np.any(np.asarray(pmap.pixels) != 0.0))
 
 
+def specular_needed(settings: Any) -> bool:
+    """Whether the surface reflects anywhere: always for a surface that reflects dry skin (the measured one, a
+    dielectric's Fresnel reflection at every oiliness); for the paper's oil layer, unless the oiliness is zero at
+    every texel."""
+    return bool(settings.surface_reflects_dry()) or not oiliness_zero_everywhere(settings)
+
+
 def _specular(plan: dict[str, Any], settings: Any) -> dict[str, Any]:
+    if settings.surface_reflects_dry():
+        return _entry("specular", True, f"the {settings.surface_name()} surface reflects at every oiliness (skin is a "
+                      "dielectric: Fresnel reflection even where it is dry)",
+                      {"specular_ior_level": plan["specular_ior_level"], "coat_weight": plan["coat_weight"]})
     if oiliness_zero_everywhere(settings):
         return _entry("specular", False, "oiliness is zero everywhere: no oil film, and the oil layer is the model's "
                       "only surface term, so there is no specular lobe (Specular IOR Level 0, no texture)",
@@ -563,14 +571,18 @@ def apply_decisions(plan: dict[str, Any], effects: list[dict[str, Any]], albedo:
             _drop_texture(plan, "albedo")
     if not enabled(effects, "specular"):
         plan["specular_ior_level"] = 0.0
-        _drop_texture(plan, "specular")
+        plan["coat_weight"] = 0.0
+        if plan.get("coat_roughness") is None:
+            plan["coat_roughness"] = plan["roughness"]  # unused at weight 0
+        for kind in SURFACE_TEXTURES:
+            _drop_texture(plan, kind)
     entry = next(e for e in effects if e["effect"] == "constant maps")
     constant = entry["figures"].get("constant", []) if entry["enabled"] else []
     for kind in constant:
         if kind not in plan["images"]:
             continue
         value = [float(v) for v in _texels(plan["images"][kind])[0]]
-        plan[PRINCIPLED_FIELD_OF_TEXTURE[kind]] = value[0] if kind == "specular" else value
+        plan[FIELD_OF_TEXTURE[kind]] = value[0] if kind in SURFACE_TEXTURES else value
         _drop_texture(plan, kind)
 
 
@@ -645,7 +657,7 @@ def sum_work(works: Sequence[dict[str, Any]]) -> dict[str, Any]:
 
 
 # The plan's values that the animation sets per frame (keys of the material plan).
-ANIMATED_VALUES = ("base_color", "radius", "specular_ior_level")
+ANIMATED_VALUES = ("base_color", "radius", "specular_ior_level", "coat_weight", "coat_roughness")
 
 
 def scene_plan(settings: Any, facts: SceneFacts | None, overrides: dict[str, str] | None = None,
@@ -685,8 +697,7 @@ def scene_draft(settings: Any, facts: SceneFacts | None, overrides: dict[str, st
         before = _entry("subsurface", True, "not compared: the radius is not computed when forced off",
                         {"threshold_px": SUBSURFACE_MIN_RADIUS_PX})
     radius = before is None
-    specular = choice["specular"] == "ON" or (choice["specular"] == "AUTO"
-                                              and not oiliness_zero_everywhere(decision_settings))
+    specular = choice["specular"] == "ON" or (choice["specular"] == "AUTO" and specular_needed(decision_settings))
     decision_plan: dict[str, Any] = {}
     if per_frame:
         distinct = {tuple(s.constants().items()): s for s in per_frame}
@@ -716,7 +727,9 @@ def scene_draft(settings: Any, facts: SceneFacts | None, overrides: dict[str, st
                              **{name: [p[name] for p in frames] for name in ANIMATED_VALUES},
                              "units": {"base_color": f"linear RGB, {settings.working_space}",
                                        "radius": "mm (Principled Subsurface Radius; Subsurface Scale makes it scene "
-                                       "units)", "specular_ior_level": "Principled Specular IOR Level"}}
+                                       "units)", "specular_ior_level": "Principled Specular IOR Level",
+                                       "coat_weight": "Principled Coat Weight",
+                                       "coat_roughness": "Principled Coat Roughness"}}
         entry = next(e for e in effects if e["effect"] == "animation")
         entry["figures"]["evaluations"] = len(distinct)
         entry["reason"] += f" ({len(distinct)} distinct parameter sets evaluated)"

@@ -53,6 +53,13 @@ TRANSPORTS = {t["name"].upper(): t["name"] for t in spectral_skin.transports()}
 TRANSPORT_DESCRIPTIONS = {t["name"].upper(): t["description"] for t in spectral_skin.transports()}
 DEFAULT_TRANSPORT = next(t["name"].upper() for t in spectral_skin.transports() if t["default"])
 
+# The core's surface models (``spectral_skin.surface_models()``): which surface reflection the specular inputs stand
+# in for (the measured two-lobe skin with a Coat, or the paper's oil layer). Blender's enum identifier -> the core's
+# name; SURFACE_DESCRIPTIONS: the core's one line for each; DEFAULT_SURFACE: the identifier of the core's default.
+SURFACES = {m["name"].upper(): m["name"] for m in spectral_skin.surface_models()}
+SURFACE_DESCRIPTIONS = {m["name"].upper(): m["description"] for m in spectral_skin.surface_models()}
+DEFAULT_SURFACE = next(m["name"].upper() for m in spectral_skin.surface_models() if m["default"])
+
 # Greek letters for the core's ASCII-spelled symbols ("beta_m" -> "β_m"), for labels.
 _GREEK = {"beta": "β", "rho": "ρ"}
 
@@ -172,6 +179,8 @@ class SkinSettings:
     accuracy: str = "DEFAULT"
     # How the totals are computed (a key of TRANSPORTS; the Advanced settings).
     transport: str = DEFAULT_TRANSPORT
+    # The surface reflection the specular inputs stand in for (a key of SURFACES).
+    surface: str = DEFAULT_SURFACE
     # parameter name -> ParameterMap; a parameter with a map ignores its constant.
     maps: dict[str, ParameterMap] = field(default_factory=dict)
     # Clamp NaN, infinite and out-of-range texels of the maps into range instead of refusing them.
@@ -253,6 +262,14 @@ class SkinSettings:
         default (the default calls the core as before, as the extended physiology's keywords do)."""
         return {} if self.transport == DEFAULT_TRANSPORT else {"transport": TRANSPORTS[self.transport]}
 
+    def surface_name(self) -> str:
+        """The core's ``surface=`` name of the settings' surface model."""
+        return SURFACES[self.surface]
+
+    def surface_reflects_dry(self) -> bool:
+        """Whether the surface reflects where the oiliness is zero (every model but the paper's oil layer)."""
+        return self.surface_name() != "paper"
+
 
 def check(settings: SkinSettings) -> None:
     """Raise ``spectral_skin.SpectralSkinError`` (a ValueError) for settings Blender would reject."""
@@ -265,6 +282,9 @@ def check(settings: SkinSettings) -> None:
     if settings.transport not in TRANSPORTS:
         raise spectral_skin.SpectralSkinError(
             f"transport must be one of {', '.join(TRANSPORTS)}; got {settings.transport!r}")
+    if settings.surface not in SURFACES:
+        raise spectral_skin.SpectralSkinError(
+            f"surface must be one of {', '.join(SURFACES)}; got {settings.surface!r}")
     if not settings.scale_length > 0.0:
         raise spectral_skin.SpectralSkinError(
             f"scene unit scale must be > 0 (metres per scene unit); got {settings.scale_length}")
@@ -273,6 +293,10 @@ def check(settings: SkinSettings) -> None:
             f"working space must be one of {', '.join(WORKING_SPACES)}; got {settings.working_space!r}")
     if settings.mode not in MODES:
         raise spectral_skin.SpectralSkinError(f"mode must be one of {', '.join(MODES)}; got {settings.mode!r}")
+    if settings.mode == "LIVE" and settings.surface_reflects_dry():
+        raise spectral_skin.SpectralSkinError(
+            f"Live mode's node group computes the paper's surface (Specular IOR Level 0.5 × oiliness, no Coat); the "
+            f"{settings.surface_name()} surface is computed in Baked mode: choose Baked, or the Paper surface")
     unknown = set(settings.maps) - set(PARAMETERS) - set(EXTENDED_PARAMETERS)
     if unknown:
         raise spectral_skin.SpectralSkinError(

@@ -10,6 +10,7 @@ Functions:
     parameters: each parameter's name, symbol, label, meaning, unit and range (the core's parameter table).
     parameter_ranges: the allowed range of each parameter.
     accuracy_levels: the named accuracy levels and what each is for.
+    surface_models: the surface reflections the specular inputs can stand in for (measured, paper).
     transports: how the totals are computed (adding-doubling, the default, or the paper's diffusion).
     presets: the named parameter sets.
     layered_reflectance: the layered solver alone (exact total, multipole profile), for checks against other solvers.
@@ -59,6 +60,7 @@ from ._core import (
     shader_table,
     surface_albedo,
     surface_brdf,
+    surface_models,
     transports,
     write_maps,
     write_shader_table,
@@ -89,6 +91,7 @@ __all__ = [
     "shader_table",
     "surface_albedo",
     "surface_brdf",
+    "surface_models",
     "transports",
     "write_maps",
     "write_shader_table",

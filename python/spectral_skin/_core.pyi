@@ -40,6 +40,7 @@ __all__ = [
     "shader_table",
     "surface_albedo",
     "surface_brdf",
+    "surface_models",
     "transports",
     "write_maps",
     "write_shader_table",
@@ -201,6 +202,14 @@ class _TransportSpec(TypedDict):
 
 def transports() -> list[_TransportSpec]:
     """Documented once, in the compiled module: ``help(spectral_skin.transports)``."""
+
+class _SurfaceModelSpec(TypedDict):
+    name: _SurfaceModel
+    description: str
+    default: bool
+
+def surface_models() -> list[_SurfaceModelSpec]:
+    """Documented once, in the compiled module: ``help(spectral_skin.surface_models)``."""
 
 def presets() -> dict[str, _Preset]:
     """Documented once, in the compiled module: ``help(spectral_skin.presets)``."""

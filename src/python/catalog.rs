@@ -6,6 +6,7 @@ use pyo3::types::{PyDict, PyList};
 use crate::accuracy::ALL_ACCURACY_LEVELS;
 use crate::fit::blender_target::describe_targets;
 use crate::skin::PARAMS;
+use crate::surface_lobes::{SurfaceModel, ALL_SURFACE_MODELS};
 use crate::transport::{Transport, ALL_TRANSPORTS};
 use crate::PRESETS;
 
@@ -109,6 +110,26 @@ pub(super) fn transports_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
         d.set_item("name", transport.name())?;
         d.set_item("description", transport.description())?;
         d.set_item("default", transport == Transport::default())?;
+        all.append(d)?;
+    }
+    Ok(all)
+}
+
+/// The surface models: which surface reflection the specular inputs stand in for (docs/model.md), in the core's
+/// order.
+///
+/// Returns:
+///     [{"name": "measured", "description": one line, "default": bool}, {"name": "paper", ...}]; the names are
+///     accepted by ``surface=`` of :func:`evaluate` and :func:`maps`; "default" marks what they take when not told.
+#[pyfunction]
+#[pyo3(name = "surface_models")]
+pub(super) fn surface_models_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let all = PyList::empty(py);
+    for model in ALL_SURFACE_MODELS {
+        let d = PyDict::new(py);
+        d.set_item("name", model.name())?;
+        d.set_item("description", model.description())?;
+        d.set_item("default", model == SurfaceModel::default())?;
         all.append(d)?;
     }
     Ok(all)

@@ -18,7 +18,10 @@ mod surface;
 
 use pyo3::prelude::*;
 
-use catalog::{accuracy_levels_py, blender_targets_py, parameter_ranges_py, parameters_py, presets_py, transports_py};
+use catalog::{
+    accuracy_levels_py, blender_targets_py, parameter_ranges_py, parameters_py, presets_py, surface_models_py,
+    transports_py,
+};
 use color::{cielab_py, delta_e00_py};
 use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
@@ -42,6 +45,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parameters_py, m)?)?;
     m.add_function(wrap_pyfunction!(accuracy_levels_py, m)?)?;
     m.add_function(wrap_pyfunction!(transports_py, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_models_py, m)?)?;
     m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
     m.add_function(wrap_pyfunction!(maps_py, m)?)?;
     m.add_function(wrap_pyfunction!(blender_targets_py, m)?)?;
