@@ -1,5 +1,5 @@
-"""The live "Spectral Skin" node group: Principled Base Color, Subsurface Radius and Specular IOR Level computed in the
-shader from Melanin, Melanin Blend, Hemoglobin and Oiliness inputs (values, textures, drivers, keyframes), with no
+"""The live "Spectral Skin" node group: Principled Base Color, Subsurface Radius, Specular IOR Level, Coat Weight and
+Coat Roughness computed in the shader from Melanin, Melanin Blend, Hemoglobin and Oiliness inputs (values, textures, drivers, keyframes), with no
 baking.
 
 Inside it there is only coordinate maths and, per output, two Image Texture lookups (Linear, Extend, Non-Color; for
@@ -8,7 +8,9 @@ core's shader table (``spectral_skin.shader_table``; layout and formulas in its 
 src/maps/shader_table.rs): slices over the melanin blend side by side, a grid over the cube-root warped melanin and
 haemoglobin in each, ln of the output per texel. The lookups of the two slices around the melanin blend are mixed
 linearly and exponentiated: the core's trilinear table lookup, whose error against direct evaluation is in
-docs/shader-table.md. The Specular IOR Level is exact: 0.5 * clamp(oiliness, 0, 1).
+docs/shader-table.md. The surface's inputs are the core's, linear in the oiliness between its nodes
+(``spectral_skin.surface_input_nodes``: exact for the level and the Coat Weight, the Coat Roughness within 6e-5; for
+the paper's surface 0.5 * clamp(oiliness, 0, 1) and no Coat).
 
 Apply in Live mode (core/live.py decides, :func:`wire` edits the material) puts the group node (tagged, as the
 add-on's other nodes: nodes.py) between the four inputs and the tagged Principled BSDF. Its inputs get the panel's
@@ -37,13 +39,18 @@ from .core import PARAMETER_INFO, PARAMETERS, MaterialPlan
 GROUP_NAME = "Spectral Skin"
 # The group's layout version, stored on the group: a group of another version (such as an EEVEE group from before
 # the group computed its own bilinear weights) is rebuilt at the next Apply, not reused.
-LAYOUT_KEY, LAYOUT_VERSION = "spectral_skin_layout", 2
+LAYOUT_KEY, LAYOUT_VERSION = "spectral_skin_layout", 3
 INPUTS = ("Melanin", "Melanin Blend", "Hemoglobin", "Oiliness")
 OUTPUTS = (
     ("Base Color", "NodeSocketColor"),
     ("Subsurface Radius", "NodeSocketVector"),
     ("Specular IOR Level", "NodeSocketFloat"),
+    ("Coat Weight", "NodeSocketFloat"),
+    ("Coat Roughness", "NodeSocketFloat"),
 )
+# Group output -> the key of its values in ``spectral_skin.surface_input_nodes``.
+SURFACE_OUTPUTS = {"Specular IOR Level": "specular_ior_level", "Coat Weight": "coat_weight",
+                   "Coat Roughness": "coat_roughness"}
 
 
 def table_image(name: str, log_rgb: np.ndarray) -> Any:
@@ -64,12 +71,20 @@ def table_image(name: str, log_rgb: np.ndarray) -> Any:
     return image
 
 
-def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | None = None) -> Any:
+def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | None = None,
+                surface_nodes: dict[str, Any] | None = None) -> Any:
     """The node group for a ``spectral_skin.shader_table`` result (created, or rebuilt in place if it exists).
     Its images are named ``<name> Base Color`` and ``<name> Radius``. ``exact``: bilinear weights computed in the
     group from four Closest lookups per slice (8 texture reads per output instead of 2), as EEVEE needs (GPU
     texture filtering is not exact); None: for EEVEE tables (the metadata's engine), not for Cycles, whose Linear
-    lookup is exact."""
+    lookup is exact. ``surface_nodes``: ``spectral_skin.surface_input_nodes(...)`` of the material's surface model
+    and target, which the group interpolates linearly in the oiliness; None: the paper's (level 0.5 × oiliness, no
+    Coat)."""
+    import spectral_skin
+
+    if surface_nodes is None:
+        surface_nodes = dict(spectral_skin.surface_input_nodes("paper", engine=table["metadata"].get("engine",
+                                                                                                       "cycles")))
     meta = table["metadata"]
     if exact is None:
         exact = meta.get("engine") == "eevee"
@@ -174,9 +189,21 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | Non
         for axis in "XYZ":
             links.new(math("EXPONENT", separate.outputs[axis]), combine.inputs[axis])
         links.new(combine.outputs["Vector"], group_out.inputs[output])
-    # Specular IOR Level = 0.5 * clamp(oiliness, 0, 1) (fit::principled_specular::specular_from_oiliness).
-    oiliness = math("MULTIPLY", group_in.outputs["Oiliness"], 1.0, clamp=True)
-    links.new(math("MULTIPLY", oiliness, 0.5), group_out.inputs["Specular IOR Level"])
+    # The surface's inputs, linear in the oiliness between the core's nodes o_k (exact for the level and the Coat
+    # Weight; the Coat Roughness within 6e-5: spectral_skin.surface_input_nodes): v(o) = v_0 + sum over segments of
+    # clamp((o - o_k) / (o_k+1 - o_k), 0, 1) (v_k+1 - v_k). The paper's one segment is 0.5 * clamp(oiliness, 0, 1).
+    knots = [float(o) for o in surface_nodes["oiliness"]]
+    ramps = [math("MULTIPLY_ADD", group_in.outputs["Oiliness"], 1.0 / (b - a), -a / (b - a), clamp=True)
+             for a, b in zip(knots, knots[1:], strict=False)]
+    for output, key in SURFACE_OUTPUTS.items():
+        values = [float(v) for v in surface_nodes[key]]
+        value: Any = values[0]
+        for ramp, (a, b) in zip(ramps, zip(values, values[1:], strict=False), strict=True):
+            value = math("MULTIPLY_ADD", ramp, b - a, value)
+        if isinstance(value, float):
+            group_out.inputs[output].default_value = value
+        else:
+            links.new(value, group_out.inputs[output])
     return group
 
 
@@ -338,7 +365,7 @@ def wire(material: Any, plan: MaterialPlan) -> Any:
     principled = nodes.tagged_nodes(tree, "principled")[0]
     name = info["group"]
     if info["table"] is not None:
-        group = build_group(info["table"], name)
+        group = build_group(info["table"], name, surface_nodes=dict(info["surface_nodes"]))
         for kind in ("Base Color", "Radius"):
             _packed(bpy.data.images[f"{name} {kind}"])
     elif has_group(name):
@@ -391,7 +418,7 @@ def wire(material: Any, plan: MaterialPlan) -> Any:
         tree.links.new(value, socket)
     pack_painted(tree)
     outputs = [("Base Color", True), ("Subsurface Radius", info["subsurface"]),
-               ("Specular IOR Level", info["specular"])]
+               *((output, info["specular"]) for output in SURFACE_OUTPUTS)]
     for output, used in outputs:
         target = nodes._socket(principled.inputs, output)
         if used:

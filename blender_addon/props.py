@@ -220,8 +220,8 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
         "the radius is fitted to) is computed: the core's transports",
         items=TRANSPORT_ITEMS, default=DEFAULT_TRANSPORT, update=_transport_changed)
     surface: bpy.props.EnumProperty(
-        name="Surface", description="The surface reflection the specular inputs stand in for (Baked mode; Live mode "
-        "computes the paper's): the core's surface models", items=SURFACE_ITEMS, default=DEFAULT_SURFACE)
+        name="Surface", description="The surface reflection the specular inputs (Specular IOR Level and Coat) stand "
+        "in for: the core's surface models", items=SURFACE_ITEMS, default=DEFAULT_SURFACE)
     output_dir: bpy.props.StringProperty(
         name="Texture Folder",
         description="Folder for the texture maps computed from parameter maps ('//' is the .blend's folder); the "

@@ -1,10 +1,10 @@
 """Live mode's decisions, without bpy: which shader table a material's target needs, what its plan is computed from,
 and which effects the live node group keeps (the bpy glue is blender_addon/live.py).
 
-In Live mode the Principled BSDF's Base Color, Subsurface Radius and Specular IOR Level come from the "Spectral Skin"
-node group, which looks its four inputs up in the core's shader table (``spectral_skin.shader_table``,
-docs/shader-table.md) in the shader: parameter maps, painted textures, drivers and keyframes change the skin without
-another Apply. Apply computes the table for the material's target (Blender version, engine, subsurface method:
+In Live mode the Principled BSDF's Base Color, Subsurface Radius and surface inputs (Specular IOR Level, Coat Weight,
+Coat Roughness) come from the "Spectral Skin" node group, which looks its four inputs up in the core's shader table
+(``spectral_skin.shader_table``, docs/shader-table.md) and the surface's inputs up in the core's oiliness nodes in
+the shader: parameter maps, painted textures, drivers and keyframes change the skin without another Apply. Apply computes the table for the material's target (Blender version, engine, subsurface method:
 chosen as the baked path chooses them) and extended physiology (baked into the table: one value per material) and the
 plan of the panel's constants, which gives everything else (Subsurface
 Scale, IOR, Roughness, the scene analysis).
@@ -63,6 +63,8 @@ def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
         parts.append(TRANSPORTS[settings.transport])
     if settings.working_space != "Linear Rec.709":
         parts.append(settings.working_space.removeprefix("Linear "))
+    if settings.surface_name() != "paper":  # the group computes the surface's inputs (its name in every other case)
+        parts.append(settings.surface_name())
     changed = settings.changed_extended()
     # The parameter's label's first word and its value to 7 significant digits (Blender's float properties hold
     # about 7: two values a slider can tell apart get two names).
@@ -92,7 +94,10 @@ def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | No
     constants (no maps, no per-frame values, subsurface and specular kept unless forced off), with ``plan.live``:
     {"group": the node group's name, "table": the shader table, or None when ``table_needed`` is False (the blend
     file has it), "maps": the parameter maps as the core read them (for the files Blender cannot read),
-    "constants", "subsurface", "specular"}."""
+    "constants", "surface_nodes" (the surface's inputs at the oiliness nodes the group interpolates), "subsurface",
+    "specular"}."""
+    import spectral_skin
+
     from .scene import scene_draft
 
     check(settings)  # with its maps: a varying extended-physiology map has no place in a Live group
@@ -107,6 +112,9 @@ def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | No
         "table": shader_table(settings, overrides) if table_needed else None,
         "maps": dict(settings.maps),
         "constants": settings.constants(),
+        # The surface's inputs at the oiliness nodes the group interpolates between (built into the group).
+        "surface_nodes": dict(spectral_skin.surface_input_nodes(settings.surface_name(), blender=settings.blender,
+                                                                engine=settings.engine)),
         "subsurface": kept(overrides, "subsurface"),
         "specular": kept(overrides, "specular"),
     }

@@ -293,10 +293,6 @@ def check(settings: SkinSettings) -> None:
             f"working space must be one of {', '.join(WORKING_SPACES)}; got {settings.working_space!r}")
     if settings.mode not in MODES:
         raise spectral_skin.SpectralSkinError(f"mode must be one of {', '.join(MODES)}; got {settings.mode!r}")
-    if settings.mode == "LIVE" and settings.surface_reflects_dry():
-        raise spectral_skin.SpectralSkinError(
-            f"Live mode's node group computes the paper's surface (Specular IOR Level 0.5 × oiliness, no Coat); the "
-            f"{settings.surface_name()} surface is computed in Baked mode: choose Baked, or the Paper surface")
     unknown = set(settings.maps) - set(PARAMETERS) - set(EXTENDED_PARAMETERS)
     if unknown:
         raise spectral_skin.SpectralSkinError(

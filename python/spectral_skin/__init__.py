@@ -27,6 +27,7 @@ Functions:
     cielab, delta_e00: the core's CIELAB and CIEDE2000 colour difference of linear RGB colours (the fits' own).
     surface_brdf, surface_albedo: the skin surface's reflection (BRDF and directional albedo), the measured two-lobe
         model or the paper's oil layer.
+    surface_input_nodes: the surface's oiliness-dependent Principled inputs at nodes to interpolate linearly.
 
 Invalid input raises :class:`SpectralSkinError`, a :class:`ValueError` whose message names the input, its allowed
 range and the value received; a file that cannot be read or written raises :class:`SpectralSkinIOError`, an
@@ -60,6 +61,7 @@ from ._core import (
     shader_table,
     surface_albedo,
     surface_brdf,
+    surface_input_nodes,
     surface_models,
     transports,
     write_maps,
@@ -91,6 +93,7 @@ __all__ = [
     "shader_table",
     "surface_albedo",
     "surface_brdf",
+    "surface_input_nodes",
     "surface_models",
     "transports",
     "write_maps",

@@ -40,6 +40,7 @@ __all__ = [
     "shader_table",
     "surface_albedo",
     "surface_brdf",
+    "surface_input_nodes",
     "surface_models",
     "transports",
     "write_maps",
@@ -501,6 +502,21 @@ def surface_brdf(
 ) -> npt.NDArray[np.float64]:
     """Documented once, in the compiled module: ``help(spectral_skin.surface_brdf)``."""
     ...
+
+class _SurfaceInputNodes(TypedDict):
+    surface: _SurfaceModel
+    oiliness: list[float]
+    specular_ior_level: list[float]
+    coat_weight: list[float]
+    coat_roughness: list[float]
+
+def surface_input_nodes(
+    surface: _SurfaceModel | str = "paper",
+    *,
+    blender: _BlenderVersion | None = None,
+    engine: _Engine | str = "cycles",
+) -> _SurfaceInputNodes:
+    """Documented once, in the compiled module: ``help(spectral_skin.surface_input_nodes)``."""
 
 def surface_albedo(
     theta_in_deg: npt.ArrayLike,

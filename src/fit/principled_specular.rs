@@ -250,6 +250,19 @@ pub fn surface_inputs(model: SurfaceModel, oiliness: f64, engine: Engine) -> Res
     })
 }
 
+/// [`surface_inputs`] at oiliness nodes over [0, 1], for a front that interpolates them linearly in the oiliness
+/// (Live mode's node group): `paper` at 0 and 1 (its level is linear: exact); `measured` at the level calibration's
+/// nodes (0, 0.1, ..., 1), where the level is piecewise linear and the Coat Weight linear (both exact) and the Coat
+/// Roughness `f = sqrt(m_sharp(o))` is within `h^2 |f''| / 8 < 6e-5` of its chord (h = 0.1,
+/// `|f''| = 0.01 / (4 f^3) <= 0.043`).
+pub fn surface_input_nodes(model: SurfaceModel, engine: Engine) -> Vec<(f64, SurfaceInputs)> {
+    let nodes: Vec<f64> = match model {
+        SurfaceModel::Paper => vec![0.0, 1.0],
+        SurfaceModel::Measured => level_curve_of(engine).oiliness.clone(),
+    };
+    nodes.into_iter().map(|o| (o, surface_inputs(model, o, engine).expect("calibration nodes lie in [0, 1]"))).collect()
+}
+
 /// The measured normal-incidence reflection of the measured surface's Principled set-up, compiled in: one file per
 /// engine, written by `scripts/calibration/measure_coat_level.py` (planes under a uniform white world, Base Color
 /// black, seen along the normal, at nine levels per oiliness node).
@@ -299,6 +312,16 @@ fn level_curve(json: &str) -> LevelCurve {
     LevelCurve { oiliness: nodes, level }
 }
 
+/// The engine's level curve, parsed once.
+fn level_curve_of(engine: Engine) -> &'static LevelCurve {
+    static CYCLES: OnceLock<LevelCurve> = OnceLock::new();
+    static EEVEE: OnceLock<LevelCurve> = OnceLock::new();
+    match engine {
+        Engine::Cycles => CYCLES.get_or_init(|| level_curve(COAT_LEVEL_CYCLES_JSON)),
+        Engine::Eevee => EEVEE.get_or_init(|| level_curve(COAT_LEVEL_EEVEE_JSON)),
+    }
+}
+
 /// Principled "Specular IOR Level" of the measured surface's base lobe at oiliness `o` in [0, 1] for `engine`:
 /// the level at which Blender renders the set-up's normal-incidence reflection (Coat plus base lobe) equal to the
 /// two-lobe model's `E(0)`, interpolated linearly between the calibration's oiliness nodes (0, 0.1, ..., 1).
@@ -306,13 +329,8 @@ fn level_curve(json: &str) -> LevelCurve {
 /// Above 0.5 at low oiliness: the rough GGX lobes reflect less than their Fresnel factor at normal incidence
 /// (docs/blender-coat.md), which the raised level makes up.
 pub fn measured_specular_ior_level(oiliness: f64, engine: Engine) -> Result<f64, SkinError> {
-    static CYCLES: OnceLock<LevelCurve> = OnceLock::new();
-    static EEVEE: OnceLock<LevelCurve> = OnceLock::new();
     let o = SurfaceReflection::new(SurfaceModel::Measured, oiliness)?.oiliness();
-    let curve = match engine {
-        Engine::Cycles => CYCLES.get_or_init(|| level_curve(COAT_LEVEL_CYCLES_JSON)),
-        Engine::Eevee => EEVEE.get_or_init(|| level_curve(COAT_LEVEL_EEVEE_JSON)),
-    };
+    let curve = level_curve_of(engine);
     let k = curve.oiliness.partition_point(|&x| x <= o).clamp(1, curve.oiliness.len() - 1);
     let (x0, x1) = (curve.oiliness[k - 1], curve.oiliness[k]);
     let t = (o - x0) / (x1 - x0);

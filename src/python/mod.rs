@@ -29,7 +29,7 @@ use inverse::fit_spectrum_py;
 use inverse_albedo::{fit_albedo_map_py, fit_albedo_py, AlbedoMapFitPy};
 use maps::{maps_py, read_parameter_map_py, write_maps_py, MapsPy};
 use shader_table::{shader_table_py, write_shader_table_py};
-use surface::{surface_albedo_py, surface_brdf_py};
+use surface::{surface_albedo_py, surface_brdf_py, surface_input_nodes_py};
 
 /// spectral-skin's compiled core: Donner & Jensen 2006's spectral skin BSSRDF.
 #[pymodule]
@@ -64,6 +64,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(delta_e00_py, m)?)?;
     m.add_function(wrap_pyfunction!(surface_brdf_py, m)?)?;
     m.add_function(wrap_pyfunction!(surface_albedo_py, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_input_nodes_py, m)?)?;
     #[cfg(feature = "cli")]
     m.add_function(wrap_pyfunction!(cli::cli_main_py, m)?)?;
     Ok(())

@@ -10,11 +10,13 @@ use numpy::{
 };
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
+use crate::fit::principled_specular::surface_input_nodes;
 use crate::maps::io::check_texel_count;
 use crate::surface_lobes::{SurfaceModel, SurfaceReflection, ALL_SURFACE_MODELS};
 
-use super::convert::{by_name, real_arg, shape_text};
+use super::convert::{by_name, real_arg, shape_text, target_from};
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
 
@@ -182,4 +184,38 @@ pub(super) fn surface_albedo_py<'py>(
     let cancel = AtomicBool::new(false);
     let values = detached_interruptible(py, &cancel, || s.directional_albedo_each(&thetas, &cancel))?;
     Ok(ArrayD::from_shape_vec(IxDyn(&shape), values).map_err(internal)?.to_pyarray(py))
+}
+
+/// The surface's Principled inputs that depend on the oiliness, at nodes between which they are linear (exact for
+/// the level and the Coat Weight; the Coat Roughness within 6e-5): what a shader that computes them from an oiliness
+/// input interpolates (the add-on's Live node group), and what ``maps`` and ``evaluate`` give at those oiliness values.
+///
+/// Arguments:
+///     surface: "measured" or "paper" (as ``surface=`` of :func:`evaluate`).
+///     blender, engine: the target, as for :func:`evaluate` (the measured level is calibrated per engine).
+///
+/// Returns:
+///     {"surface", "oiliness": [o_0 = 0, ..., 1], "specular_ior_level": [...], "coat_weight": [...],
+///     "coat_roughness": [...]}: lists of one value per node, the oiliness ascending.
+///
+/// Raises:
+///     SpectralSkinError: an unknown surface, engine or Blender version.
+#[pyfunction]
+#[pyo3(name = "surface_input_nodes", signature = (surface = "paper", *, blender = None, engine = "cycles"))]
+pub(super) fn surface_input_nodes_py<'py>(
+    py: Python<'py>,
+    surface: &str,
+    blender: Option<&Bound<'py, PyAny>>,
+    engine: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let model: SurfaceModel = by_name("surface", surface, &ALL_SURFACE_MODELS)?;
+    let target = target_from(blender, engine)?;
+    let nodes = surface_input_nodes(model, target.engine);
+    let dict = PyDict::new(py);
+    dict.set_item("surface", model.name())?;
+    dict.set_item("oiliness", nodes.iter().map(|n| n.0).collect::<Vec<_>>())?;
+    dict.set_item("specular_ior_level", nodes.iter().map(|n| n.1.specular_ior_level).collect::<Vec<_>>())?;
+    dict.set_item("coat_weight", nodes.iter().map(|n| n.1.coat_weight).collect::<Vec<_>>())?;
+    dict.set_item("coat_roughness", nodes.iter().map(|n| n.1.coat_roughness).collect::<Vec<_>>())?;
+    Ok(dict)
 }

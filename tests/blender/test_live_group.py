@@ -103,6 +103,46 @@ def test_live_group_in_cycles_matches_the_core(scene) -> None:
     np.testing.assert_allclose(level, exact["specular"]["specular_ior_level"], rtol=1e-6)
 
 
+def test_live_group_computes_the_measured_surface(scene) -> None:
+    """The group built with the measured surface's nodes: its Specular IOR Level, Coat Weight and Coat Roughness
+    outputs, rendered through an Emission shader at oiliness values on and between the nodes (and outside [0, 1]),
+    equal ``evaluate(surface="measured")``: the level and the weight exactly (piecewise linear in the core too), the
+    Coat Roughness within 6e-5 (linear between nodes of a square root)."""
+    spectral_skin = pytest.importorskip("spectral_skin")
+    if REPO not in sys.path:
+        sys.path.insert(0, REPO)
+    from blender_addon import live
+
+    bpy = _bpy()
+    table = spectral_skin.shader_table(method="burley", blender="5.0")
+    nodes = spectral_skin.surface_input_nodes("measured", engine="cycles")
+    group = live.build_group(table, "Measured", surface_nodes=dict(nodes))
+    set_world(scene, 0.0)
+    add_top_camera(scene, ortho_scale=0.5, width=2, height=2)
+    plane = add_plane("Plane", -1.0, 1.0, -1.0, 1.0, 0.0)
+    mat = bpy.data.materials.new("LiveSurface")
+    if mat.node_tree is None:
+        mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    emission = nt.nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = 1.0
+    nt.links.new(emission.outputs["Emission"], out.inputs["Surface"])
+    node = nt.nodes.new("ShaderNodeGroup")
+    node.node_tree = group
+    assign(plane, mat)
+    for oiliness in (0.0, 0.05, 0.3, 0.77, 1.0, 1.5, -0.2):
+        node.inputs["Oiliness"].default_value = oiliness
+        expected = spectral_skin.evaluate(preset="caucasian", oiliness=min(max(oiliness, 0.0), 1.0),
+                                          outputs=("specular",), surface="measured")["specular"]
+        for output, key in live.SURFACE_OUTPUTS.items():
+            nt.links.new(node.outputs[output], emission.inputs["Color"])
+            got = render(scene, samples=1, filter_width=0.01).reshape(-1, 3)
+            tolerance = 6e-5 if key == "coat_roughness" else 1e-6 * expected[key]
+            np.testing.assert_allclose(got, expected[key], rtol=0, atol=tolerance, err_msg=f"{output} at {oiliness}")
+
+
 def test_live_group_in_eevee_matches_the_emulated_lookup(scene) -> None:
     """EEVEE: the group built for an EEVEE table computes its bilinear weights itself (Closest lookups at texel
     centres; GPU filtering missed by up to 0.03 texel under llvmpipe, 4 % at steep points of the table): its outputs

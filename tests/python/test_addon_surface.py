@@ -1,10 +1,12 @@
 """The surface model in the add-on's portable part (blender_addon/core, loaded without bpy): the plan carries the
 measured surface's Coat (values, or textures when the oiliness varies), the scene analysis keeps the measured
 surface's reflection on dry skin (the paper's oil layer is dropped there), forced off drops the Coat too, animated
-oiliness gives the Coat per frame, and Live mode refuses a surface its node group does not compute. Values are
+oiliness gives the Coat per frame, and Live mode's group gets the core's oiliness nodes of the surface. Values are
 checked against the core's own ``evaluate`` (the add-on computes nothing itself)."""
 
 from __future__ import annotations
+
+import importlib
 
 import numpy as np
 import pytest
@@ -91,8 +93,20 @@ def test_animated_oiliness_gives_the_coat_per_frame():
     assert plan.animation["coat_weight"][0] < plan.animation["coat_weight"][2]
 
 
-def test_live_mode_refuses_the_measured_surface():
-    settings = core.SkinSettings.from_preset("caucasian", surface=MEASURED, mode="LIVE")
-    with pytest.raises(spectral_skin.SpectralSkinError, match="Live mode.*measured.*Baked"):
-        core.check(settings)
-    core.check(settings.replace(surface=PAPER))
+def test_live_plan_carries_the_surfaces_nodes():
+    """Live mode: the group is named for the surface (its outputs differ) and built from the core's oiliness nodes,
+    whose linear interpolation is what evaluate gives (level and Coat Weight exactly, Coat Roughness within 6e-5)."""
+    live = importlib.import_module("addon_core.live")
+    settings = core.SkinSettings.from_preset("caucasian", surface=MEASURED, mode="LIVE", blender="5.0")
+    plan = live.live_plan(settings, None, {}, table_needed=False)
+    nodes = plan.live["surface_nodes"]
+    assert nodes["surface"] == "measured" and nodes["oiliness"][0] == 0.0 and nodes["oiliness"][-1] == 1.0
+    names = {live.table_name(settings.replace(surface=s), {}) for s in core.SURFACES}
+    assert len(names) == len(core.SURFACES) and live.table_name(settings, {}).endswith("measured")
+    for oiliness in np.linspace(0.0, 1.0, 41):
+        expected = _specular(float(oiliness))
+        for key, atol in (("specular_ior_level", 1e-12), ("coat_weight", 1e-12), ("coat_roughness", 6e-5)):
+            interpolated = np.interp(oiliness, nodes["oiliness"], nodes[key])
+            assert interpolated == pytest.approx(expected[key], abs=atol), (key, oiliness)
+    # The plan's constants are the panel's oiliness's, as in Baked mode.
+    assert plan.coat_weight == pytest.approx(_specular(settings.oiliness)["coat_weight"])
