@@ -1,8 +1,10 @@
 //! Time of one `evaluate` for albedo only, albedo + radius, and a full RGB profile (criterion; median reported), with
 //! the default transport (exact totals) and with the paper's diffusion totals, so that the transport's cost reads as a
-//! ratio within one run.
+//! ratio within one run; and the specular inputs alone per surface model (the measured surface's hemispherical albedo
+//! is memoised per oiliness: this is its steady-state cost, the first call at an oiliness takes tens of ms).
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use spectral_skin::surface_lobes::ALL_SURFACE_MODELS;
 use spectral_skin::transport::ALL_TRANSPORTS;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
@@ -20,6 +22,12 @@ fn bench_evaluate(c: &mut Criterion) {
             let id = format!("{name}/{}", transport.name());
             group.bench_function(id, |b| b.iter(|| evaluate(&params, &request).unwrap()));
         }
+    }
+    for surface in ALL_SURFACE_MODELS {
+        let request = Request { surface, ..Request::new(Outputs { specular: true, ..Outputs::default() }) };
+        group.bench_function(format!("specular/{}", surface.name()), |b| {
+            b.iter(|| evaluate(&params, &request).unwrap())
+        });
     }
     group.finish();
 }

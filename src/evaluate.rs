@@ -110,9 +110,10 @@ pub struct Request {
     /// ([`Transport`]). Always in JSON, so every result, sidecar and cache key names it.
     #[serde(default)]
     pub transport: Transport,
-    /// The surface reflection the specular inputs stand in for (`surface_lobes::SurfaceModel`): DJ2006's oil layer
-    /// (the default for now) or the measured two-lobe surface (base lobe plus Coat). Absent from JSON when the paper's.
-    #[serde(default, skip_serializing_if = "SurfaceModel::is_paper")]
+    /// The surface reflection the specular inputs stand in for (`surface_lobes::SurfaceModel`): the measured two-lobe
+    /// surface (base lobe plus Coat; the default) or DJ2006's oil layer. Absent from JSON when the paper's, so a JSON
+    /// without it (also one written before the field existed) reads as the paper's.
+    #[serde(default = "SurfaceModel::absent", skip_serializing_if = "SurfaceModel::is_paper")]
     pub surface: SurfaceModel,
 }
 

@@ -269,6 +269,15 @@ pub(crate) fn hemispherical_average(f: impl Fn(f64) -> f64) -> f64 {
     mu.iter().zip(w).map(|(&m, &wm)| 2.0 * wm * m * f(m)).sum()
 }
 
+/// [`hemispherical_average`] with `f` evaluated at the nodes in parallel (for an `f` of milliseconds: a microfacet
+/// albedo); the same sum in the same order.
+pub(crate) fn hemispherical_average_par(f: impl Fn(f64) -> f64 + Sync) -> f64 {
+    use rayon::prelude::*;
+    let (mu, w) = &rules().mu;
+    let values: Vec<f64> = mu.par_iter().map(|&m| f(m)).collect();
+    mu.iter().zip(w).zip(values).map(|((&m, &wm), v)| 2.0 * wm * m * v).sum()
+}
+
 /// `rho_dr(0) / rho_s` and `rho_hemi / rho_s` of DJ2006's lobe, computed once (rho_dr is linear in rho_s).
 pub(crate) fn torrance_sparrow_unit_albedos() -> (f64, f64) {
     static ALBEDOS: OnceLock<(f64, f64)> = OnceLock::new();

@@ -14,29 +14,30 @@
 //! `fit::principled_specular` and its defaults are untouched by this module.
 
 use std::cell::Cell;
+use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
+use std::sync::{Mutex, OnceLock};
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::SkinError;
 use crate::surface::{
-    beckmann_d, fresnel_dielectric, microfacet_albedo, torrance_sparrow_directional_albedo, torrance_sparrow_f_r,
-    torrance_sparrow_unit_albedos, Lobe, ALBEDO_THETA_PANELS, SKIN_SURFACE_IOR,
+    beckmann_d, fresnel_dielectric, hemispherical_average_par, microfacet_albedo, torrance_sparrow_directional_albedo,
+    torrance_sparrow_f_r, torrance_sparrow_unit_albedos, Lobe, ALBEDO_THETA_PANELS, SKIN_SURFACE_IOR,
 };
 
-/// Which surface reflection: Python's `surface=` takes the serde names. A material's default ([`Default`]) is still
-/// the paper's until every front maps the measured model (issue 24: maps and Live mode); `surface_brdf` and
-/// `surface_albedo` default to `measured`.
+/// Which surface reflection: Python's `surface=` takes the serde names. The default ([`Default`], every front's) is
+/// the measured surface: skin reflects like a dielectric whether oily or dry; `paper` reproduces DJ2006's oil layer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Hash, Default)]
 #[serde(rename_all = "snake_case")]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 pub enum SurfaceModel {
     /// Two Beckmann lobes sharing the Fresnel term of the skin surface, weights summing to 1 ([`TWO_LOBE_TABLE`]).
+    #[default]
     Measured,
     /// DJ2006's oil layer as `surface` computes it: one lobe scaled by the oiliness.
-    #[default]
     Paper,
 }
 
@@ -60,6 +61,12 @@ impl SurfaceModel {
                 "Donner & Jensen 2006's oil layer: one lobe scaled by the oiliness, no reflection on dry skin"
             }
         }
+    }
+
+    /// `paper`: what a request's JSON without a surface means (written before the field existed, or by
+    /// [`SurfaceModel::is_paper`]'s omission).
+    pub fn absent() -> SurfaceModel {
+        SurfaceModel::Paper
     }
 
     /// True for `paper` (serde leaves the field out then, so earlier results and cache keys stay as they were).
@@ -227,6 +234,24 @@ fn lobes_albedo(lobes: &[BeckmannLobe], cos_theta_i: f64, panels: usize, eta: Op
         .sum()
 }
 
+/// `H(m) = 2 int E_m(mu) mu dmu` of one Beckmann-Smith lobe of roughness `m` with Fresnel at the skin's index (weight
+/// 1), memoised by `m` (at most 4096 values kept: a run over many oiliness values starts the memo afresh).
+fn lobe_hemispherical_albedo(beckmann_m: f64) -> f64 {
+    static MEMO: OnceLock<Mutex<HashMap<u64, f64>>> = OnceLock::new();
+    let memo = MEMO.get_or_init(Default::default);
+    if let Some(&h) = memo.lock().unwrap_or_else(|e| e.into_inner()).get(&beckmann_m.to_bits()) {
+        return h;
+    }
+    let lobe = [BeckmannLobe { weight: 1.0, beckmann_m }];
+    let h = hemispherical_average_par(|mu| lobes_albedo(&lobe, mu, ALBEDO_THETA_PANELS, Some(SKIN_SURFACE_IOR)));
+    let mut held = memo.lock().unwrap_or_else(|e| e.into_inner());
+    if held.len() >= 4096 {
+        held.clear();
+    }
+    held.insert(beckmann_m.to_bits(), h);
+    h
+}
+
 /// `oiliness` if finite and in [0, 1].
 fn check_oiliness(oiliness: f64) -> Result<f64, SkinError> {
     if oiliness.is_finite() && (0.0..=1.0).contains(&oiliness) {
@@ -334,6 +359,21 @@ impl SurfaceReflection {
                 lobes_albedo(&TWO_LOBE_TABLE.lobes(self.oiliness), cos_i, ALBEDO_THETA_PANELS, Some(SKIN_SURFACE_IOR))
             }
         })
+    }
+
+    /// `2 int E(mu) mu dmu`: the hemispherical (diffuse-light) albedo, dimensionless. `measured`: the model is linear
+    /// in its lobe weights, so this is `sum_k w_k H(m_k)` with `H(m)` one Fresnel-weighted Beckmann-Smith lobe's
+    /// average, each computed once per `m` (memoised: the broad lobe's once, the sharp lobe's once per oiliness), its
+    /// nodes in parallel: tens of ms the first time, nothing after. `paper`: linear in the oiliness (cached).
+    pub fn hemispherical_albedo(&self) -> f64 {
+        match self.model {
+            SurfaceModel::Paper => self.oiliness * torrance_sparrow_unit_albedos().1,
+            SurfaceModel::Measured => TWO_LOBE_TABLE
+                .lobes(self.oiliness)
+                .iter()
+                .map(|l| l.weight * lobe_hemispherical_albedo(l.beckmann_m))
+                .sum(),
+        }
     }
 
     /// [`Self::directional_albedo`] of each value of `theta_in_deg`, in parallel, each distinct value once. Stops with

@@ -25,6 +25,7 @@ from .material_plan import MaterialPlan, freeze
 from .plan import extended_keywords
 from .settings import (
     ACCURACY_LEVELS,
+    DEFAULT_SURFACE,
     DEFAULT_TRANSPORT,
     EXTENDED_PARAMETERS,
     PARAMETER_INFO,
@@ -52,8 +53,8 @@ MAX_NAME = 63 - len(" Base Color")
 
 def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
     """The name of the node group (and the prefix of its two images) for the table a material needs: one per table
-    key (Blender version, engine, method, accuracy, transport, working space, the extended physiology it is baked with;
-    the default accuracy and transport, Linear Rec.709, the paper's extended values left out), shared by materials that
+    key (Blender version, engine, method, accuracy, transport, working space, surface model, the extended physiology it
+    is baked with; the default accuracy, transport and surface, Linear Rec.709, the paper's extended values left out), shared by materials that
     need the same: changing an extended value gives another name, so Apply computes that table. A name too long for
     Blender ends in a hash of the whole key."""
     parts = [settings.blender or "current", settings.engine, table_method(settings, overrides)]
@@ -63,8 +64,8 @@ def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
         parts.append(TRANSPORTS[settings.transport])
     if settings.working_space != "Linear Rec.709":
         parts.append(settings.working_space.removeprefix("Linear "))
-    if settings.surface_name() != "paper":  # the group computes the surface's inputs (its name in every other case)
-        parts.append(settings.surface_name())
+    if settings.surface != DEFAULT_SURFACE:  # the group computes the surface's inputs (the layout version changed
+        parts.append(settings.surface_name())  # with the default, so an older group of no surface name is rebuilt)
     changed = settings.changed_extended()
     # The parameter's label's first word and its value to 7 significant digits (Blender's float properties hold
     # about 7: two values a slider can tell apart get two names).

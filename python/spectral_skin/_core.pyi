@@ -134,7 +134,7 @@ def evaluate(
     boundaries: _Boundaries | str = "paper",
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
-    surface: _SurfaceModel | str = "paper",
+    surface: _SurfaceModel | str | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.evaluate)``."""
 
@@ -325,7 +325,7 @@ def maps(
     boundaries: _Boundaries | str = "paper",
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
-    surface: _SurfaceModel | str = "paper",
+    surface: _SurfaceModel | str | None = None,
 ) -> Maps:
     """Documented once, in the compiled module: ``help(spectral_skin.maps)``."""
 
@@ -511,7 +511,7 @@ class _SurfaceInputNodes(TypedDict):
     coat_roughness: list[float]
 
 def surface_input_nodes(
-    surface: _SurfaceModel | str = "paper",
+    surface: _SurfaceModel | str | None = None,
     *,
     blender: _BlenderVersion | None = None,
     engine: _Engine | str = "cycles",

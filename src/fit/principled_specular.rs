@@ -193,7 +193,7 @@ pub fn specular_from_oiliness(oiliness: f64) -> SpecularParams {
 /// mapping of the measured surface"): the broad lobe as the base specular (Roughness = sqrt(m_broad), IOR 1.4),
 /// the sharp lobe as the Coat (Coat Weight = w_sharp(o), Coat Roughness = sqrt(m_sharp(o)), Coat IOR 1.4), and the
 /// Specular IOR Level [`measured_specular_ior_level`]; the albedos are the two-lobe model's (its hemispherical
-/// albedo is integrated here, a few tens of ms).
+/// albedo: `SurfaceReflection::hemispherical_albedo`, tens of ms for an oiliness not seen before, memoised).
 pub fn specular_for(model: SurfaceModel, oiliness: f64, engine: Engine) -> Result<SpecularParams, SkinError> {
     let surface = SurfaceReflection::new(model, oiliness)?;
     if model == SurfaceModel::Paper {
@@ -201,9 +201,7 @@ pub fn specular_for(model: SurfaceModel, oiliness: f64, engine: Engine) -> Resul
     }
     let inputs = surface_inputs(model, oiliness, engine)?;
     let constants = SurfaceConstants::of(model);
-    let hemispherical_albedo = hemispherical_average(|mu| {
-        surface.directional_albedo(mu.clamp(0.0, 1.0).acos().to_degrees().min(89.999_999)).unwrap_or(0.0)
-    });
+    let hemispherical_albedo = surface.hemispherical_albedo();
     Ok(SpecularParams {
         surface: model,
         oiliness,

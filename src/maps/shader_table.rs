@@ -24,8 +24,8 @@
 //! ```
 //!
 //! [`ShaderTable::sample`] does exactly that on the images (with the bilinear filter of Cycles' CPU image lookup), and
-//! [`measure_shader_error`] measures it against direct evaluation. The specular level needs no table: it is
-//! `0.5 * clamp(oiliness, 0, 1)` (`fit::principled_specular::specular_from_oiliness`), a Math node.
+//! [`measure_shader_error`] measures it against direct evaluation. The surface's inputs need no table: they are linear
+//! in the oiliness between `fit::principled_specular::surface_input_nodes`, a few Math nodes.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;

@@ -18,6 +18,7 @@ use crate::evaluate::ProfileGrid;
 use crate::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::maps::io::PARAM_CHANNELS;
 use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS};
+use crate::surface_lobes::{SurfaceModel, ALL_SURFACE_MODELS};
 use crate::transport::{Transport, ALL_TRANSPORTS, STREAMS_RANGE};
 use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
 
@@ -200,6 +201,11 @@ pub(super) fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) 
 
 /// `blender=` and `engine=` to a [`Target`]: the version as "MAJOR.MINOR" (or "MAJOR.MINOR.PATCH") or a tuple of
 /// ints such as `bpy.app.version`; None is the current release. The core validates both and names the range.
+/// The `surface=` keyword: a surface model's name, or None for the core's default (`SurfaceModel::default`).
+pub(super) fn surface_arg(surface: Option<&str>) -> PyResult<SurfaceModel> {
+    surface.map_or(Ok(SurfaceModel::default()), |name| by_name("surface", name, &ALL_SURFACE_MODELS))
+}
+
 pub(super) fn target_from(blender: Option<&Bound<'_, PyAny>>, engine: &str) -> PyResult<Target> {
     const EXPECTED: &str = "blender must be a version string such as \"5.3\" or a tuple such as (5, 3, 0)";
     let version = match blender {

@@ -10,12 +10,11 @@ use serde_json::Value;
 use crate::diffusion::{Layer, LayeredOptions, ALL_BOUNDARIES};
 use crate::evaluate::{Evaluation, MethodParams, Request};
 use crate::fit::blender_target::Target;
-use crate::surface_lobes::ALL_SURFACE_MODELS;
 use crate::Outputs;
 
 use super::convert::{
     by_name, json_to_py, nested_rows, params_arg, parse_outputs, real_sequence, real_vector, reject_string, rgb_rows,
-    streams_arg, target_from, to_py, transport_arg, Knobs,
+    streams_arg, surface_arg, target_from, to_py, transport_arg, Knobs,
 };
 use super::detach::detached_interruptible;
 use super::errors::{internal, invalid, warn_lobe};
@@ -136,10 +135,10 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///         radiative transfer; the default) or "diffusion" (the paper's layered multipole: reproduces DJ2006).
 ///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; None: the level's
 ///         (8 at "default"). Unused with transport="diffusion".
-///     surface: the surface reflection the specular inputs stand in for: "paper" (DJ2006's oil layer, one lobe
-///         scaled by the oiliness; the default for now) or "measured" (two lobes, a broad base lobe and a sharp
-///         Coat, reflecting like a dielectric at every oiliness: docs/model.md, "Principled mapping of the measured
-///         surface").
+///     surface: the surface reflection the specular inputs stand in for: "measured" (two lobes, a broad base lobe
+///         and a sharp Coat, reflecting like a dielectric at every oiliness: docs/model.md, "Principled mapping of
+///         the measured surface") or "paper" (DJ2006's oil layer, one lobe scaled by the oiliness, no reflection on
+///         dry skin); None: the core's default, "measured" (``surface_models()``).
 ///
 /// Returns:
 ///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy" (with "streams"), "model"
@@ -180,7 +179,7 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles",
         rgb_mapping = "linear", boundaries = "paper", transport = "adding_doubling", streams = None,
-        surface = "paper"
+        surface = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -210,7 +209,7 @@ pub(super) fn evaluate_py<'py>(
     boundaries: &str,
     transport: &str,
     streams: Option<&Bound<'py, PyAny>>,
-    surface: &str,
+    surface: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = params_arg(
         preset,
@@ -233,10 +232,7 @@ pub(super) fn evaluate_py<'py>(
         transport,
         streams,
     )?;
-    let request = Request {
-        surface: by_name("surface", surface, &ALL_SURFACE_MODELS)?,
-        ..knobs.request(parse_outputs(outputs)?)?
-    };
+    let request = Request { surface: surface_arg(surface)?, ..knobs.request(parse_outputs(outputs)?)? };
     let cancel = AtomicBool::new(false);
     let evaluation =
         detached_interruptible(py, &cancel, || crate::evaluate::evaluate_cancellable(&params, &request, &cancel))?;

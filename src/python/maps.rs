@@ -26,12 +26,11 @@ use crate::maps::pipeline::{
     RADIUS_MAP, SURFACE_MAP_KINDS,
 };
 use crate::maps::udim::{check_tile, stacked_tile_rows, tile_set_file_name, TileRows};
-use crate::surface_lobes::ALL_SURFACE_MODELS;
 use crate::Outputs;
 
 use super::convert::{
     by_name, count_sequence, float_array, is_boolean, material_outputs, parse_outputs, real_arg, shape_text,
-    streams_arg, target_from, to_py, type_name, FloatArray, Knobs,
+    streams_arg, surface_arg, target_from, to_py, type_name, FloatArray, Knobs,
 };
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid, warn_notes};
@@ -371,7 +370,7 @@ pub(super) fn read_parameter_map_py<'py>(
         wavelength_placement = None,
         working_space = "Linear Rec.709", table_resolution = None, table_cache = true, blender = None,
         engine = "cycles", progress = None, boundaries = "paper", transport = "adding_doubling", streams = None,
-        surface = "paper"
+        surface = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -401,7 +400,7 @@ pub(super) fn maps_py<'py>(
     boundaries: &str,
     transport: &str,
     streams: Option<&Bound<'py, PyAny>>,
-    surface: &str,
+    surface: Option<&str>,
 ) -> PyResult<MapsPy> {
     let start = Instant::now();
     if let Some(callback) = progress.as_ref().filter(|c| !c.is_callable()) {
@@ -426,10 +425,7 @@ pub(super) fn maps_py<'py>(
         clamp,
         table: self::table_resolution(table_resolution)?,
         table_cache: if table_cache { crate::maps::lut::default_cache_dir() } else { None },
-        request: Request {
-            surface: by_name("surface", surface, &ALL_SURFACE_MODELS)?,
-            ..knobs.request(map_outputs(outputs)?)?
-        },
+        request: Request { surface: surface_arg(surface)?, ..knobs.request(map_outputs(outputs)?)? },
         ..MapSettings::default()
     };
 

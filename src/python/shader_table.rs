@@ -31,7 +31,7 @@ use super::maps::{interleave, result_planes, rgb_image, table_resolution};
 ///     output = exp(mix(image(x(j), y), image(x(j + 1), y), t))
 ///
 /// which is the table's trilinear lookup; its error against direct evaluation is in docs/shader-table.md (below 1 %
-/// for the default). The Specular IOR Level needs no table: 0.5 * clamp(oiliness, 0, 1).
+/// for the default). The surface's inputs need no table: :func:`surface_input_nodes`.
 ///
 /// Arguments:
 ///     method: the subsurface method, as for :func:`maps`.

@@ -16,7 +16,7 @@ use crate::fit::principled_specular::surface_input_nodes;
 use crate::maps::io::check_texel_count;
 use crate::surface_lobes::{SurfaceModel, SurfaceReflection, ALL_SURFACE_MODELS};
 
-use super::convert::{by_name, real_arg, shape_text, target_from};
+use super::convert::{by_name, real_arg, shape_text, surface_arg, target_from};
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
 
@@ -201,14 +201,14 @@ pub(super) fn surface_albedo_py<'py>(
 /// Raises:
 ///     SpectralSkinError: an unknown surface, engine or Blender version.
 #[pyfunction]
-#[pyo3(name = "surface_input_nodes", signature = (surface = "paper", *, blender = None, engine = "cycles"))]
+#[pyo3(name = "surface_input_nodes", signature = (surface = None, *, blender = None, engine = "cycles"))]
 pub(super) fn surface_input_nodes_py<'py>(
     py: Python<'py>,
-    surface: &str,
+    surface: Option<&str>,
     blender: Option<&Bound<'py, PyAny>>,
     engine: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let model: SurfaceModel = by_name("surface", surface, &ALL_SURFACE_MODELS)?;
+    let model = surface_arg(surface)?;
     let target = target_from(blender, engine)?;
     let nodes = surface_input_nodes(model, target.engine);
     let dict = PyDict::new(py);

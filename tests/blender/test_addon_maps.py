@@ -263,7 +263,7 @@ def test_remove_restores_the_previous_shader(addon):
 def test_worker_reports_progress_and_cancels_with_nothing_written(addon, tmp_path):
     params = face(64, 48)
     maps = {p: ParameterMap(np.ascontiguousarray(params[:, :, c]), normalized=False) for c, p in enumerate(PARAMETERS)}
-    settings = SkinSettings(maps=maps, output_dir=str(tmp_path / "maps"), file_prefix="Skin")
+    settings = SkinSettings(maps=maps, output_dir=str(tmp_path / "maps"), file_prefix="Skin", surface="PAPER")
     work = _Work(Job(settings, None, {}))
     work.thread.start()
     work.thread.join(120)

@@ -74,14 +74,18 @@ def test_live_mode_links_the_groups_surface_outputs(addon):
     """Live mode with the measured surface: the group (named for the surface) feeds the Principled BSDF's Specular IOR
     Level, Coat Weight and Coat Roughness; the group's values are checked by tests/blender/test_live_group.py."""
     bpy.context.scene.render.engine = "CYCLES"
-    material = bpy.data.materials.new("Live skin")
-    props = material.spectral_skin
-    props.mode = "LIVE"
-    props.surface = "MEASURED"
-    assert bpy.ops.spectral_skin.apply(material=material.name) == {"FINISHED"}
-    (principled,) = addon_nodes.tagged_nodes(material.node_tree, "principled")
-    (group,) = addon_nodes.tagged_nodes(material.node_tree, "live")
-    assert group.node_tree.name.endswith("measured"), group.node_tree.name
+    groups = {}
+    for surface in ("PAPER", "MEASURED"):
+        material = bpy.data.materials.new(f"Live skin {surface}")
+        props = material.spectral_skin
+        props.mode = "LIVE"
+        props.surface = surface
+        assert bpy.ops.spectral_skin.apply(material=material.name) == {"FINISHED"}
+        (principled,) = addon_nodes.tagged_nodes(material.node_tree, "principled")
+        (group,) = addon_nodes.tagged_nodes(material.node_tree, "live")
+        groups[surface] = group.node_tree.name
+    # One group per surface (the default's name has no surface in it, the other's does).
+    assert groups["PAPER"].endswith("paper") and groups["MEASURED"] != groups["PAPER"], groups
     for name in ("Specular IOR Level", "Coat Weight", "Coat Roughness"):
         links = principled.inputs[name].links
         assert len(links) == 1 and links[0].from_node == group and links[0].from_socket.name == name, name

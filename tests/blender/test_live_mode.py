@@ -55,6 +55,7 @@ def _skin(name: str, mode: str, **values: float):
     material = bpy.data.materials.new(name)
     props = material.spectral_skin
     props.mode = mode
+    props.surface = "PAPER"  # oiliness 0: no surface reflection, the slab shows its albedo alone
     props.override_subsurface = "ON"  # Baked and Live alike: the slab's albedo with subsurface
     for key, value in {"melanin": 0.01, "melanin_blend": 0.7, "hemoglobin": 0.005, "oiliness": 0.0, **values}.items():
         setattr(props, key, value)

@@ -104,7 +104,8 @@ def test_zero_oiliness_writes_no_specular_texture(addon, tmp_path):
     material = bpy.data.materials.new("Skin")
     hemoglobin = np.linspace(0.001, 0.05, 12, dtype=np.float32).reshape(3, 4)
     maps = {"hemoglobin": ParameterMap(hemoglobin, False)}
-    settings = SkinSettings.from_preset("caucasian", output_dir=str(tmp_path), file_prefix="Skin")
+    # The paper's oil layer: its lobe is dropped where the oiliness is zero (the measured surface always reflects).
+    settings = SkinSettings.from_preset("caucasian", output_dir=str(tmp_path), file_prefix="Skin", surface="PAPER")
     # Varying oiliness: a specular texture (the check below could fail).
     oily = np.linspace(0.1, 0.9, 12, dtype=np.float32).reshape(3, 4)
     apply_skin(material, settings.replace(maps={**maps, "oiliness": ParameterMap(oily, False)}))
@@ -126,6 +127,7 @@ def test_dropped_effects_are_not_computed(addon, tmp_path):
     materials = _scene_with_far_and_close()
     materials["Far"].spectral_skin.oiliness = 0.0
     for name in materials:
+        materials[name].spectral_skin.surface = "PAPER"  # the oil layer: nothing reflects at zero oiliness
         assert bpy.ops.spectral_skin.apply(material=name) == {"FINISHED"}
     far, close = stored_work(materials["Far"]), stored_work(materials["Close"])
     assert (far["radius_fits"], far["radial_profiles"], far["specular_evaluations"]) == (0, 0, 0), far
@@ -136,7 +138,7 @@ def test_dropped_effects_are_not_computed(addon, tmp_path):
     # Far with parameter maps and zero oiliness: only the albedo texture.
     hemoglobin = np.linspace(0.001, 0.05, 12, dtype=np.float32).reshape(3, 4)
     settings = SkinSettings.from_preset("caucasian", oiliness=0.0, output_dir=str(tmp_path), file_prefix="Far",
-                                        maps={"hemoglobin": ParameterMap(hemoglobin, False)})
+                                        maps={"hemoglobin": ParameterMap(hemoglobin, False)}, surface="PAPER")
     plan = apply_skin(materials["Far"], settings)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["Far_albedo.exr"]
     assert plan.work["texels"] == 12 and stored_work(materials["Far"]) == plan.as_json()["work"]
@@ -369,6 +371,7 @@ def test_keyframed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon, tmp
     assign(slab, material)
     props = material.spectral_skin
     props.oiliness = 0.0  # no specular lobe (Specular IOR Level 0), as the flat-slab tests set it
+    props.surface = "PAPER"  # (the oil layer's: the measured surface reflects at zero oiliness too)
     hemoglobin = {1: 0.005, 2: 0.05}
     for frame, value in hemoglobin.items():
         props.hemoglobin = value

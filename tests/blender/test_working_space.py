@@ -74,9 +74,13 @@ def _slab_mean(scene, material, size_px: int = 64, region_px: int = 32) -> np.nd
 
 
 def _no_specular(material) -> None:
-    """Specular IOR Level 0: no specular closure, so the slab renders exactly its subsurface albedo."""
+    """Specular IOR Level 0 and Coat Weight 0 (their textures unlinked): no surface reflection, so the slab renders
+    exactly its subsurface albedo."""
     principled = addon_nodes.tagged_nodes(material.node_tree, "principled")[0]
-    principled.inputs["Specular IOR Level"].default_value = 0.0
+    for name in ("Specular IOR Level", "Coat Weight"):
+        for link in list(principled.inputs[name].links):
+            material.node_tree.links.remove(link)
+        principled.inputs[name].default_value = 0.0
 
 
 def test_blender_lists_the_known_spaces():
@@ -134,9 +138,6 @@ def test_albedo_texture_tagged_with_working_space(addon, space, tmp_path):
 
     # The texture path renders the core's albedo in the scene's space too (a Rec.709 tag in a Rec.2020 or ACEScg
     # scene would be converted by Blender and miss by several per cent).
-    principled = addon_nodes.tagged_nodes(material.node_tree, "principled")[0]
-    specular_link = principled.inputs["Specular IOR Level"].links[0]
-    material.node_tree.links.remove(specular_link)
     _no_specular(material)
     mean = _slab_mean(scene, material)
     albedo = np.asarray(spectral_skin.evaluate(preset=PRESET, working_space=space)["diffuse_reflectance_rgb"])

@@ -14,6 +14,7 @@ use spectral_skin::maps::shader_table::{measure_shader_error, ShaderTable};
 use spectral_skin::maps::thickness_tables::THICKNESS_NODES_MM;
 use spectral_skin::maps::{compute_maps, MapSettings, StrategyChoice};
 use spectral_skin::skin::params::EXTENDED_DEFAULTS;
+use spectral_skin::surface_lobes::SurfaceModel;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
 /// The bound on the thickness stack's radius (docs/maps-performance.md, "A varying epidermis thickness": measured
@@ -67,11 +68,13 @@ fn defaults_change_nothing() {
 }
 
 /// The paper's model keeps the cache key it had before the extended physiology existed (FNV-1a of the same text,
-/// computed here independently), so cached tables stay valid; any other value has its own key.
+/// computed here independently), so cached tables stay valid; any other value has its own key. The surface model,
+/// which no table holds, does not change it: the default (measured) request has the paper's key.
 #[test]
 fn cache_key_is_unchanged_for_the_paper_and_differs_otherwise() {
-    let request = Request::new(Outputs::material());
+    let request = Request { surface: SurfaceModel::Paper, ..Request::new(Outputs::material()) };
     let prepared = Prepared::new(&request).unwrap();
+    let measured = Prepared::new(&Request::new(Outputs::material())).unwrap();
     let resolution = TableResolution::default();
     let method = SubsurfaceMethod::Burley;
     let text = format!(
@@ -84,6 +87,7 @@ fn cache_key_is_unchanged_for_the_paper_and_differs_otherwise() {
     // FNV-1a, 64 bit (offset basis and prime of Fowler, Noll & Vo).
     let fnv = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));
     assert_eq!(cache_key(&prepared, method, resolution, true, EXTENDED_DEFAULTS), fnv);
+    assert_eq!(cache_key(&measured, method, resolution, true, EXTENDED_DEFAULTS), fnv);
     let mut keys = vec![fnv];
     for k in 0..3 {
         let mut e = EXTENDED_DEFAULTS;

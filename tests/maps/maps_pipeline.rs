@@ -11,7 +11,9 @@ use spectral_skin::maps::io::{
     read_exr_channels, write_channels_exr, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, Precision,
 };
 use spectral_skin::maps::lut::{measure_error, MaterialTable, TableResolution};
-use spectral_skin::maps::pipeline::{check_planes, Strategy, ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE};
+use spectral_skin::maps::pipeline::{
+    check_planes, Strategy, ALBEDO_FILE, COAT_ROUGHNESS_MAP, COAT_WEIGHT_MAP, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE,
+};
 use spectral_skin::maps::{compute_maps, run_maps, MapSettings, StrategyChoice};
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
@@ -157,10 +159,19 @@ fn writes_the_documented_files() {
         None,
     )
     .unwrap();
-    assert_eq!(files_in(&out), vec![ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE]);
-    for (f, expected) in
-        [(ALBEDO_FILE, vec!["B", "G", "R"]), (RADIUS_FILE, vec!["B", "G", "R"]), (SPECULAR_FILE, vec!["Y"])]
-    {
+    // The default (measured) surface with a varying oiliness: the level and the Coat's two maps.
+    let (coat_weight, coat_roughness) = (COAT_WEIGHT_MAP.file, COAT_ROUGHNESS_MAP.file);
+    assert_eq!(
+        files_in(&out),
+        vec![ALBEDO_FILE, coat_roughness, coat_weight, RADIUS_FILE, SIDECAR_FILE, SPECULAR_FILE]
+    );
+    for (f, expected) in [
+        (ALBEDO_FILE, vec!["B", "G", "R"]),
+        (RADIUS_FILE, vec!["B", "G", "R"]),
+        (SPECULAR_FILE, vec!["Y"]),
+        (coat_weight, vec!["Y"]),
+        (coat_roughness, vec!["Y"]),
+    ] {
         let (w, h, channels) = read_exr_channels(&out.join(f)).unwrap();
         assert_eq!((w, h), (48, 48), "{f}");
         let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
@@ -179,7 +190,8 @@ fn writes_the_documented_files() {
     assert_eq!(sidecar["report"]["strategy"]["name"], "table");
     assert!(report.seconds.total > 0.0, "{:?}", report.seconds);
 
-    // Constant zero oiliness: no specular map, its constants in the sidecar.
+    // Constant zero oiliness: no specular map, its constants in the sidecar (the measured surface reflects dry skin:
+    // its level is above zero, and its Coat has the dry weight 0.15).
     let out2 = dir.path().join("out2");
     let inputs = ParamInputs::Multi { path: dir.path().join("face.exr"), constants: [None; 4] };
     let mut img = face_params(8);
@@ -204,7 +216,9 @@ fn writes_the_documented_files() {
     .unwrap();
     assert_eq!(files_in(&out2), vec![ALBEDO_FILE, RADIUS_FILE, SIDECAR_FILE]);
     let sidecar: serde_json::Value = serde_json::from_slice(&std::fs::read(out2.join(SIDECAR_FILE)).unwrap()).unwrap();
-    assert_eq!(sidecar["outputs"]["specular_constants"]["specular_ior_level"], 0.0);
+    let constants = &sidecar["outputs"]["specular_constants"];
+    assert!(constants["specular_ior_level"].as_f64().unwrap() > 0.4, "{constants}");
+    assert!((constants["coat_weight"].as_f64().unwrap() - 0.15).abs() < 1e-12, "{constants}");
     let _ = inputs;
 }
 

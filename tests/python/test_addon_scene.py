@@ -138,13 +138,14 @@ def test_scene_plan_far_is_plain_diffuse_with_the_cores_albedo():
 
 
 def test_zero_oiliness_means_no_specular(tmp_path):
-    plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", oiliness=0.0), None)
+    """The paper's oil layer (the measured surface reflects dry skin too: test_addon_surface.py)."""
+    plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", surface="PAPER", oiliness=0.0), None)
     entry = next(e for e in plan.effects if e["effect"] == "specular")
     assert not entry["enabled"] and "oil" in entry["reason"] and plan.specular_ior_level == 0.0
     # A map of zero oiliness beside a varying haemoglobin map: no specular texture, the albedo is a texture.
     hemoglobin = np.linspace(0.001, 0.05, 16, dtype=np.float32).reshape(4, 4)
     maps = {"hemoglobin": core.ParameterMap(hemoglobin, False), "oiliness": core.ParameterMap(np.zeros((4, 4), np.float32), False)}
-    settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
+    settings = core.SkinSettings.from_preset("caucasian", surface="PAPER", maps=maps, output_dir=str(tmp_path))
     plan = scene.scene_plan(settings, None)
     assert "specular" not in plan.textures and plan.specular_ior_level == 0.0
     assert "albedo" in plan.textures
@@ -257,7 +258,7 @@ def test_animated_constant_material_gets_the_cores_values_per_frame():
 
 
 def test_animated_decisions_hold_over_every_frame():
-    settings = core.SkinSettings.from_preset("caucasian")
+    settings = core.SkinSettings.from_preset("caucasian", surface="PAPER")
     radius = {v: max(spectral_skin.evaluate(settings.melanin, settings.melanin_blend, v, 0.3)["methods"]["burley"][
         "subsurface_radius_mm"]) for v in (0.001, 0.1)}
     big, small = max(radius, key=radius.get), min(radius, key=radius.get)
@@ -299,10 +300,10 @@ def test_plan_textures_written_by_the_core_and_specular_constants_from_maps(tmp_
     melanin = np.linspace(0.01, 0.4, 16, dtype=np.float32).reshape(4, 4)
     oiliness = np.linspace(0.1, 0.9, 16, dtype=np.float32).reshape(4, 4)
     maps = {"melanin": core.ParameterMap(melanin, False), "oiliness": core.ParameterMap(oiliness, False)}
-    settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path), file_prefix="Skin")
+    settings = core.SkinSettings.from_preset("caucasian", surface="PAPER", maps=maps, output_dir=str(tmp_path), file_prefix="Skin")
     plan = scene.scene_plan(settings, None)
     assert sorted(plan.textures) == ["albedo", "radius", "specular"] and plan.specular_ior_level is None
-    expected = spectral_skin.evaluate(preset="caucasian", outputs=("specular",))["specular"]
+    expected = spectral_skin.evaluate(preset="caucasian", outputs=("specular",), surface="paper")["specular"]
     assert plan.roughness == pytest.approx(expected["roughness"], rel=1e-12)
     assert plan.ior == pytest.approx(expected["ior"], rel=1e-12)
     core.write_textures(plan)
@@ -348,7 +349,7 @@ def test_bound_grid_bounds_the_radius(extended: dict[str, float]):
 def test_dropped_effects_are_not_computed():
     """A far object with zero oiliness: the core's work for the material has no radius fit, no profile and no
     specular evaluation (the decisions were taken before computing); close and oily, it has them."""
-    settings = core.SkinSettings.from_preset("caucasian", oiliness=0.0, method="RANDOM_WALK")
+    settings = core.SkinSettings.from_preset("caucasian", surface="PAPER", oiliness=0.0, method="RANDOM_WALK")
     plan = scene.scene_plan(settings, _facts(1e4))
     work = plan.work
     assert (work["radius_fits"], work["radial_profiles"], work["specular_evaluations"]) == (0, 0, 0), work
@@ -378,7 +379,7 @@ def test_dropped_effects_with_maps_are_not_kept(tmp_path, method):
     texture, and its Base Color texture is the albedo whatever the method (evaluate()'s, texel by texel)."""
     levels = np.linspace(0.001, 0.05, 16, dtype=np.float32).reshape(4, 4)
     hemoglobin = core.ParameterMap(levels, False)
-    settings = core.SkinSettings.from_preset("caucasian", maps={"hemoglobin": hemoglobin}, oiliness=0.0,
+    settings = core.SkinSettings.from_preset("caucasian", surface="PAPER", maps={"hemoglobin": hemoglobin}, oiliness=0.0,
                                              output_dir=str(tmp_path), method=method)
     plan = scene.scene_plan(settings, _facts(1e4))
     assert set(plan.textures) == {"albedo"} and plan.radius is None

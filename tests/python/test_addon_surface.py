@@ -102,7 +102,7 @@ def test_live_plan_carries_the_surfaces_nodes():
     nodes = plan.live["surface_nodes"]
     assert nodes["surface"] == "measured" and nodes["oiliness"][0] == 0.0 and nodes["oiliness"][-1] == 1.0
     names = {live.table_name(settings.replace(surface=s), {}) for s in core.SURFACES}
-    assert len(names) == len(core.SURFACES) and live.table_name(settings, {}).endswith("measured")
+    assert len(names) == len(core.SURFACES) and live.table_name(settings.replace(surface=PAPER), {}).endswith("paper")
     for oiliness in np.linspace(0.0, 1.0, 41):
         expected = _specular(float(oiliness))
         for key, atol in (("specular_ior_level", 1e-12), ("coat_weight", 1e-12), ("coat_roughness", 6e-5)):

@@ -43,14 +43,16 @@ def maps_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_outputs_open_in_openimageio(maps_dir: Path) -> None:
     sidecar = json.loads((maps_dir / "skin_maps.json").read_text())
-    for name, expected in (("albedo.exr", ("R", "G", "B")), ("radius.exr", ("R", "G", "B")), ("specular.exr", ("Y",))):
+    for name, expected in (("albedo.exr", ("R", "G", "B")), ("radius.exr", ("R", "G", "B")), ("specular.exr", ("Y",)),
+                           ("coat_weight.exr", ("Y",)), ("coat_roughness.exr", ("Y",))):
         channels, pixels = read(maps_dir / name)
         assert channels == expected, name
         assert pixels.shape == (96, 96, len(expected))
         assert np.isfinite(pixels).all() and (pixels >= 0).all()
         assert sidecar["outputs"][name]["channels"] == list(expected)
-    _, level = read(maps_dir / "specular.exr")
-    assert 0.0 < level.min() and level.max() <= 0.5  # Specular IOR Level = oiliness / 2
+    # The default (measured) surface: Coat Weight 0.15 + 0.70 oiliness, in [0.15, 0.85] (docs/model.md).
+    _, weight = read(maps_dir / "coat_weight.exr")
+    assert 0.15 - 1e-3 <= weight.min() < weight.max() <= 0.85 + 1e-3
     assert sidecar["outputs"]["radius.exr"]["units"] == "mm"
     assert sidecar["outputs"]["albedo.exr"]["color_space"] == "Linear Rec.709"
 
@@ -92,14 +94,13 @@ def test_write_maps_writes_what_it_was_given(tmp_path: Path) -> None:
     result = _result()
     written = spectral_skin.write_maps(result, tmp_path / "out", "scene_Skin")
     out = tmp_path / "out"
-    assert {k: str(v) for k, v in written.items()} == {
-        "albedo": str(out / "scene_Skin_albedo.exr"), "radius": str(out / "scene_Skin_radius.exr"),
-        "specular": str(out / "scene_Skin_specular.exr")}
-    # Exactly the three maps: no sidecar, no temporaries left.
-    assert sorted(p.name for p in out.iterdir()) == ["scene_Skin_albedo.exr", "scene_Skin_radius.exr",
-                                                     "scene_Skin_specular.exr"]
+    names = ("albedo", "radius", "specular", "coat_weight", "coat_roughness")  # the default, measured surface's
+    assert {k: str(v) for k, v in written.items()} == {name: str(out / f"scene_Skin_{name}.exr") for name in names}
+    # Exactly the maps: no sidecar, no temporaries left.
+    assert sorted(p.name for p in out.iterdir()) == sorted(f"scene_Skin_{name}.exr" for name in names)
     # Each map's one name: the output, the result's key, the file.
-    for name, channels in (("albedo", ("R", "G", "B")), ("radius", ("R", "G", "B")), ("specular", ("Y",))):
+    for name in names:
+        channels = ("R", "G", "B") if name in ("albedo", "radius") else ("Y",)
         names, pixels = read(out / f"scene_Skin_{name}.exr")
         assert names == channels, name
         # Half floats by default: what maps() returned rounded to nearest half (as numpy rounds), row 0 at the top.
@@ -123,7 +124,8 @@ def test_write_maps_removes_outputs_it_no_longer_writes(tmp_path: Path) -> None:
     written = spectral_skin.write_maps({"albedo": constant["albedo"], "radius": None}, tmp_path, "Skin")
     assert sorted(written) == ["albedo"]
     # This prefix's radius and specular maps are gone; another prefix's files are untouched.
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["Other_albedo.exr", "Other_radius.exr",
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["Other_albedo.exr", "Other_coat_roughness.exr",
+                                                          "Other_coat_weight.exr", "Other_radius.exr",
                                                           "Other_specular.exr", "Skin_albedo.exr"]
 
 

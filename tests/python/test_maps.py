@@ -71,12 +71,14 @@ def test_specular_map_follows_oiliness():
     params = random_params(5, 4, seed=2)
     params[0, 0, 3] = 0.0
     params[4, 3, 3] = 1.0
-    result = spectral_skin.maps(params)
+    # The paper's oil layer (the measured surface's maps: test_maps_surface.py): level 0 where there is no oil.
+    result = spectral_skin.maps(params, surface="paper")
     specular = result["specular"]
     assert_image(specular, 5, 4, channels=1)
     oil = params[..., 3]
     for y, x in [(0, 0), (4, 3), (2, 1)]:
-        expected = spectral_skin.evaluate(0.1, 0.5, 0.01, float(oil[y, x]), outputs=("specular",))["specular"]
+        expected = spectral_skin.evaluate(0.1, 0.5, 0.01, float(oil[y, x]), outputs=("specular",),
+                                          surface="paper")["specular"]
         assert specular[y, x] == pytest.approx(expected["specular_ior_level"], rel=1e-6, abs=0)
         # The constants beside the map: those of every texel (they do not depend on the oiliness).
         assert set(result["specular_constants"]) == {"surface", "roughness", "ior", "coat_ior", "beckmann_m",
@@ -145,7 +147,9 @@ def test_few_distinct_values():
     assert result["report"]["strategy"] == {"name": "distinct_tuples", "tuples": 3}
     # Oiliness is 0.3 everywhere: an array holding one value counts as a constant.
     assert result["report"]["constant_parameters"] == ["oiliness", *EXTENDED]
-    assert result["specular_constants"]["specular_ior_level"] == pytest.approx(0.15, rel=1e-6)
+    expected = spectral_skin.evaluate(preset="caucasian", outputs=("specular",))["specular"]  # oiliness 0.3
+    assert result["specular_constants"]["specular_ior_level"] == pytest.approx(expected["specular_ior_level"],
+                                                                               rel=1e-6)
     for region in range(3):
         color, radius = evaluate_texel(values[region], "random_walk")
         inside = mask == region
@@ -164,8 +168,11 @@ def test_constant_oiliness_gives_specular_constants():
         want = value if isinstance(value, str) else pytest.approx(value, rel=1e-6)  # "surface": the model's name
         assert specular[key] == want, (key, specular[key], value)
     assert "oiliness" in result["report"]["constant_parameters"]
-    zero = spectral_skin.maps(params, oiliness=0.0)["specular_constants"]
+    # Zero oiliness: the paper's oil layer is off (level 0); the measured surface, the default, still reflects.
+    zero = spectral_skin.maps(params, oiliness=0.0, surface="paper")["specular_constants"]
     assert zero["specular_ior_level"] == 0.0 and zero["oiliness"] == 0.0
+    dry = spectral_skin.maps(params, oiliness=0.0)["specular_constants"]
+    assert dry["specular_ior_level"] > 0.4 and dry["coat_weight"] == pytest.approx(0.15), dry
 
 
 def test_keywords_override_params_and_accept_float64_and_any_layout():

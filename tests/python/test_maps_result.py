@@ -16,7 +16,9 @@ from spectral_skin import SpectralSkinError
 TILES = [(1001, 2), (1002, 3), (1011, 4)]
 HEIGHT, WIDTH = sum(rows for _, rows in TILES), 5
 # Each map's one name (the output, the result's key and attribute, the file) and its file's channels.
-FILES = {"albedo": ("R", "G", "B"), "radius": ("R", "G", "B"), "specular": ("Y",)}
+# The default surface (measured) with a varying oiliness: the level and the Coat's two maps.
+FILES = {"albedo": ("R", "G", "B"), "radius": ("R", "G", "B"), "specular": ("Y",), "coat_weight": ("Y",),
+         "coat_roughness": ("Y",)}
 
 
 def params(seed: int = 3, oiliness: float | None = None) -> np.ndarray:
@@ -50,24 +52,24 @@ def as_half(a: np.ndarray) -> np.ndarray:
 def test_attributes_and_shapes(result: spectral_skin.Maps) -> None:
     assert isinstance(result, spectral_skin.Maps) and result.shape == (HEIGHT, WIDTH)
     for name, shape in (("albedo", (HEIGHT, WIDTH, 3)), ("radius", (HEIGHT, WIDTH, 3)),
-                        ("specular", (HEIGHT, WIDTH))):
+                        ("specular", (HEIGHT, WIDTH)), ("coat_weight", (HEIGHT, WIDTH)),
+                        ("coat_roughness", (HEIGHT, WIDTH))):
         a = getattr(result, name)
         assert isinstance(a, np.ndarray) and a.dtype == np.float32 and a.shape == shape, name
         assert a.flags["C_CONTIGUOUS"] and np.isfinite(a).all(), name
-    # The oiliness varies: the per-texel level is the "specular" map, "specular_constants" holds the inputs that do
-    # not depend on it.
-    # (the paper's surface has no Coat: its weight 0 is one value too).
-    assert set(result.specular_constants or {}) == {"surface", "roughness", "ior", "coat_ior", "beckmann_m",
-                                                    "coat_weight", "coat_roughness"}
-    assert result.coat_weight is None and result.coat_roughness is None and "coat_weight" not in result
+    # The oiliness varies: the per-texel level and Coat are maps, "specular_constants" holds the inputs that do not
+    # depend on it.
+    assert set(result.specular_constants or {}) == {"surface", "roughness", "ior", "coat_ior", "beckmann_m"}
     assert (result.report["width"], result.report["height"]) == (WIDTH, HEIGHT)
     assert result.report["strategy"]["name"] == "exact"
-    assert repr(result).startswith(f"Maps({WIDTH} x {HEIGHT}, albedo, radius, specular, specular_constants")
+    assert repr(result).startswith(f"Maps({WIDTH} x {HEIGHT}, albedo, radius, specular, coat_weight, "
+                                   "coat_roughness, specular_constants")
     # An output not asked for is None (and absent from the mapping); one oiliness everywhere: no level map.
     albedo = spectral_skin.maps(params(oiliness=0.3), outputs=["albedo", "specular"], exact=True)
     assert albedo.radius is None and albedo.specular is None and albedo.albedo is not None
     constants = albedo.specular_constants
-    assert constants is not None and constants["specular_ior_level"] == pytest.approx(0.15)
+    expected = spectral_skin.evaluate(preset="caucasian", oiliness=0.3, outputs=["specular"])["specular"]
+    assert constants is not None and constants["specular_ior_level"] == pytest.approx(expected["specular_ior_level"])
     assert list(albedo.keys()) == ["albedo", "specular_constants", "report"]
     assert "radius" not in albedo and albedo.get("radius") is None
     with pytest.raises(KeyError, match="radius"):
@@ -80,7 +82,7 @@ def test_attributes_and_shapes(result: spectral_skin.Maps) -> None:
 def test_arrays_are_read_only(result: spectral_skin.Maps) -> None:
     """numpy refuses writes into the arrays, and refuses to make them (or a view of them) writeable again; the
     attributes cannot be assigned; the dicts are new on each access, so changing one changes nothing held."""
-    for name in ("albedo", "radius", "specular"):
+    for name in FILES:
         a = getattr(result, name)
         assert not a.flags["WRITEABLE"], name
         with pytest.raises(ValueError, match="read-only"):
@@ -100,8 +102,8 @@ def test_arrays_are_read_only(result: spectral_skin.Maps) -> None:
 
 
 def test_mapping_access_equals_the_attributes(result: spectral_skin.Maps) -> None:
-    keys = ["albedo", "radius", "specular", "specular_constants", "report"]
-    assert list(result.keys()) == list(result) == keys and len(result) == 5
+    keys = [*FILES, "specular_constants", "report"]
+    assert list(result.keys()) == list(result) == keys and len(result) == 7
     assert result.keys() == set(keys)  # a KeysView, as a dict's
     assert isinstance(result, Mapping)
     for key in keys:
@@ -112,7 +114,7 @@ def test_mapping_access_equals_the_attributes(result: spectral_skin.Maps) -> Non
         else:
             assert value == attribute == result.get(key)
     assert dict(result).keys() == dict(result.items()).keys() == set(keys)
-    assert [k for k, _ in result.items()] == keys and len(result.values()) == 5
+    assert [k for k, _ in result.items()] == keys and len(result.values()) == 7
     assert "nothing" not in result and 3 not in result
     assert result.get("nothing") is None and result.get("nothing", 1) == 1
     for missing in ("nothing", 3):

@@ -59,7 +59,7 @@ def test_constant_oiliness_gives_constants_only() -> None:
 
 
 def test_paper_maps_have_no_coat() -> None:
-    result = spectral_skin.maps(oily_params(), outputs=["specular"])
+    result = spectral_skin.maps(oily_params(), outputs=["specular"], surface="paper")
     assert list(result.keys()) == ["specular", "specular_constants", "report"]
     specular = result.specular
     assert specular is not None
@@ -84,7 +84,7 @@ def test_coat_files_are_written_and_removed_when_stale(tmp_path: Path) -> None:
     again = spectral_skin.write_maps(dict(measured), tmp_path / "dict", "Skin", precision="float")
     assert sorted(again) == sorted(SURFACE_MAPS)
     # The paper's maps of the same prefix: the Coat files of the earlier write are gone.
-    spectral_skin.maps(oily_params(), outputs=["specular"]).write(tmp_path, "Skin")
+    spectral_skin.maps(oily_params(), outputs=["specular"], surface="paper").write(tmp_path, "Skin")
     assert sorted(p.name for p in tmp_path.iterdir() if p.is_file()) == ["Skin_specular.exr"]
 
 

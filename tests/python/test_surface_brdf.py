@@ -252,11 +252,14 @@ def test_evaluate_surface_choice_gives_the_two_lobes_as_base_and_coat(engine: st
         assert 0.0 < spec["specular_ior_level"] < 1.0, spec
 
 
-def test_evaluate_paper_surface_is_the_default_and_has_no_coat() -> None:
+def test_measured_surface_is_the_default_and_paper_has_no_coat() -> None:
+    assert [m["name"] for m in spectral_skin.surface_models() if m["default"]] == ["measured"]
     for oiliness in OILINESS:
         default = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",))
+        measured = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",),
+                                          surface="measured")
+        assert default["specular"] == measured["specular"], (default["specular"], measured["specular"])
         paper = spectral_skin.evaluate(preset="caucasian", oiliness=oiliness, outputs=("specular",), surface="paper")
-        assert default["specular"] == paper["specular"], (default["specular"], paper["specular"])
         # DJ2006's oil layer as Principled: level 0.5 rho_s, Roughness sqrt(0.35), no coat.
         spec = paper["specular"]
         got = (spec["specular_ior_level"], spec["roughness"], spec["coat_weight"])
