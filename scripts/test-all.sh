@@ -27,6 +27,8 @@ stage reports
 .venv/bin/python scripts/reports/maps_report.py --quick --out "$run_tmp/maps-performance.md"
 # The Live-mode cost report, reduced (the full one: .venv-blender/5.0/bin/python scripts/reports/live_mode_report.py).
 .venv-blender/5.0/bin/python scripts/reports/live_mode_report.py --quick --out "$run_tmp/live-mode.md"
+# The look-dev sheet, reduced (the full one: .venv/bin/python scripts/reports/lookdev_sheet.py).
+.venv-blender/5.0/bin/python scripts/reports/lookdev_sheet.py --out "$run_tmp/lookdev" --width 240 --samples 2
 # The accuracy-vs-time report, reduced (the full one: bash scripts/accuracy_report.sh).
 bash scripts/accuracy_report.sh --quick
 stage done
