@@ -25,7 +25,7 @@ SURFACES = ("paper", "measured")
 VIEW_TRANSFORMS = ("Standard", "AgX")
 RADIUS_M = 0.09  # a head's half-width
 SPACING_M = 0.24
-TIMING_REPEATS = 3
+TIMING_REPEATS = 5
 
 
 def _presets_light_to_dark() -> list[str]:
@@ -55,7 +55,7 @@ def _scene(width: int, height: int, samples: int):
     bpy.ops.object.light_add(type="AREA", location=(-0.9, -1.1, 0.9))
     key = bpy.context.object
     key.data.size = 0.6
-    key.data.energy = 300.0
+    key.data.energy = 120.0
     key.rotation_euler = (mathutils.Vector((0.0, 0.0, 0.0)) - key.location).to_track_quat("-Z", "Y").to_euler()
     bpy.ops.object.camera_add(location=(0.0, -2.6, 0.0), rotation=(1.5707963, 0.0, 0.0))
     camera = bpy.context.object
@@ -99,8 +99,8 @@ def _render_seconds(scene) -> float:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=DOCS, help="folder for lookdev.md (images in its images/)")
-    parser.add_argument("--samples", type=int, default=128)
-    parser.add_argument("--width", type=int, default=1200)
+    parser.add_argument("--samples", type=int, default=64)
+    parser.add_argument("--width", type=int, default=900)
     args = parser.parse_args(argv)
 
     import bpy

@@ -95,9 +95,9 @@ def test_reapply_replaces_the_keys_and_remove_clears_them(addon):
     ours = [c for c in anim.fcurves(tree) if c.data_path == path]
     assert sorted(c.array_index for c in ours) == [0, 1, 2]
     assert all(len(c.keyframe_points) == 2 for c in ours)
-    # An artist's own key on another input stays through Apply.
-    principled.inputs["Coat Weight"].keyframe_insert("default_value", frame=1)
-    coat = principled.inputs["Coat Weight"].path_from_id("default_value")
+    # An artist's own key on another input (one Apply does not set) stays through Apply.
+    principled.inputs["Sheen Weight"].keyframe_insert("default_value", frame=1)
+    coat = principled.inputs["Sheen Weight"].path_from_id("default_value")
     # Without the animation, re-applying removes the per-frame curves (stale keys would override the constant).
     material.animation_data_clear()
     _apply(scene, material)
