@@ -399,6 +399,19 @@ def render_in_plane_slices(surfaces: Sequence[dict], engine: str, incidences_deg
     return slices
 
 
+def slice_error(rendered: dict, oiliness: float, surface: str) -> tuple[float, float]:
+    """One rendered slice (``render_in_plane_slices``) against the surface model's (``spectral_skin.surface_brdf`` times
+    cos theta_in, the radiance under a sun of irradiance 1): (RMS difference over the slice / the model's peak, the
+    rendered peak / the model's)."""
+    import spectral_skin
+
+    model = spectral_skin.surface_brdf(rendered["theta_in_deg"], rendered["theta_out_deg"], rendered["phi_deg"],
+                                       oiliness=oiliness, surface=surface)
+    model = model * np.cos(np.radians(rendered["theta_in_deg"]))
+    peak = float(model.max())
+    return float(np.sqrt(np.mean((rendered["radiance"] - model) ** 2)) / peak), float(rendered["radiance"].max() / peak)
+
+
 def pixel_centres_x(ortho_scale: float, width: int, center_x: float = 0.0) -> np.ndarray:
     """World x (m) of each image column's pixel centre for add_top_camera's camera."""
     return center_x + ((np.arange(width) + 0.5) / width - 0.5) * ortho_scale

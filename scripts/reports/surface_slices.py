@@ -34,7 +34,6 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
 
     import bpy
-    import numpy as np
     import spectral_skin
 
     sys.path.insert(0, str(LIB))
@@ -52,13 +51,8 @@ def main(argv: list[str] | None = None) -> None:
             surfaces.append(helpers.principled_surface_inputs(specular))
         rendered = helpers.render_in_plane_slices(surfaces, engine, INCIDENCES_DEG, SAMPLES[engine])
         for (surface, oiliness), slices in zip(cases, rendered, strict=True):
-            rms, peaks = [], []
-            for s in slices:
-                model = spectral_skin.surface_brdf(s["theta_in_deg"], s["theta_out_deg"], s["phi_deg"],
-                                                   oiliness=oiliness, surface=surface)
-                model = model * np.cos(np.radians(s["theta_in_deg"]))
-                rms.append(float(np.sqrt(np.mean((s["radiance"] - model) ** 2)) / model.max()))
-                peaks.append(float(s["radiance"].max() / model.max()))
+            errors = [helpers.slice_error(s, oiliness, surface) for s in slices]
+            rms, peaks = [e[0] for e in errors], [e[1] for e in errors]
             rows.append((engine, surface, oiliness, rms, peaks))
             print(f"[{bpy.app.version_string} {engine}] {surface} oiliness {oiliness}: RMS/peak "
                   + " ".join(f"{r:.3f}" for r in rms), flush=True)
