@@ -12,6 +12,7 @@ use exr::meta::attribute::SampleType;
 use exr::meta::header::Header;
 use exr::meta::{BlockDescription, MetaData};
 use exr::prelude::f16;
+use rayon::prelude::*;
 
 use super::{
     guard, ParamImage, ParamInputs, ParamSource, Plane, ALBEDO_IMAGE_FORMS, ALL_CHANNELS, ALL_RANGES,
@@ -725,7 +726,7 @@ fn read_integer_image(
 }
 
 /// Read the channels at `indices` (indices into the file's sorted channel list) of a probed EXR into f32 planes,
-/// decompressing blocks in parallel and writing samples straight into the planes.
+/// decompressing blocks in parallel (panics included: see below) and writing samples straight into the planes.
 fn read_exr_planes(
     src: Source<'_>,
     what: &str,
@@ -766,38 +767,58 @@ fn read_exr_planes(
         let chunks = reader
             .filter_chunks(false, |_, tile, block| block.layer == 0 && tile.is_largest_resolution_level())
             .map_err(ReadFailure::Exr)?;
-        chunks
-            .decompress_parallel(false, |meta, block| {
-                let channels = &meta.headers[block.index.layer].channels;
-                for line in block.lines(channels) {
-                    let Some(slot) = slot_of_channel.get(line.location.channel).copied().flatten() else {
-                        continue;
-                    };
-                    let (x, y, n) = (line.location.position.0, line.location.position.1, line.location.sample_count);
-                    if y >= height || x.checked_add(n).map_or(true, |end| end > width) {
-                        return Err(exr::error::Error::Invalid("pixel block outside the data window".into()));
-                    }
-                    let start = y * width + x;
-                    let dst = &mut planes[slot][start..start + n];
-                    match types[line.location.channel] {
-                        SampleType::F32 => line.read_samples_into_slice(dst)?,
-                        SampleType::F16 => {
-                            use half::slice::HalfFloatSliceExt;
-                            halves.resize(n, f16::ZERO);
-                            line.read_samples_into_slice(&mut halves)?;
-                            halves.convert_to_f32_slice(dst);
-                        }
-                        SampleType::U32 => {
-                            for (d, s) in dst.iter_mut().zip(line.read_samples::<u32>()) {
-                                *d = s? as f32;
-                            }
-                        }
-                    }
-                    counted[slot] += n;
+        // Decompressed here, in parallel batches on rayon's pool, not by exr's own pool: a decoder that panics on a
+        // damaged block (exr 1.74's B44 subtracts with overflow where overflow checks are on: found by fuzzing) would
+        // abort the process from exr's spawned job, while a panic in a parallel iterator reaches this thread, where
+        // `guard` turns it into an error. Batches bound the decompressed blocks held at once.
+        let meta = chunks.meta_data().clone();
+        let mut insert = |block: exr::block::UncompressedBlock| -> exr::error::UnitResult {
+            let channels = &meta.headers[block.index.layer].channels;
+            for line in block.lines(channels) {
+                let Some(slot) = slot_of_channel.get(line.location.channel).copied().flatten() else {
+                    continue;
+                };
+                let (x, y, n) = (line.location.position.0, line.location.position.1, line.location.sample_count);
+                if y >= height || x.checked_add(n).map_or(true, |end| end > width) {
+                    return Err(exr::error::Error::Invalid("pixel block outside the data window".into()));
                 }
-                Ok(())
-            })
-            .map_err(ReadFailure::Exr)?;
+                let start = y * width + x;
+                let dst = &mut planes[slot][start..start + n];
+                match types[line.location.channel] {
+                    SampleType::F32 => line.read_samples_into_slice(dst)?,
+                    SampleType::F16 => {
+                        use half::slice::HalfFloatSliceExt;
+                        halves.resize(n, f16::ZERO);
+                        line.read_samples_into_slice(&mut halves)?;
+                        halves.convert_to_f32_slice(dst);
+                    }
+                    SampleType::U32 => {
+                        for (d, s) in dst.iter_mut().zip(line.read_samples::<u32>()) {
+                            *d = s? as f32;
+                        }
+                    }
+                }
+                counted[slot] += n;
+            }
+            Ok(())
+        };
+        const BATCH_CHUNKS: usize = 64;
+        let mut chunks = chunks;
+        loop {
+            let batch: Vec<exr::block::chunk::Chunk> =
+                chunks.by_ref().take(BATCH_CHUNKS).collect::<exr::error::Result<_>>().map_err(ReadFailure::Exr)?;
+            if batch.is_empty() {
+                break;
+            }
+            let blocks: Vec<exr::block::UncompressedBlock> = batch
+                .into_par_iter()
+                .map(|chunk| exr::block::UncompressedBlock::decompress_chunk(chunk, &meta, false))
+                .collect::<exr::error::Result<_>>()
+                .map_err(ReadFailure::Exr)?;
+            for block in blocks {
+                insert(block).map_err(ReadFailure::Exr)?;
+            }
+        }
         for (slot, &c) in indices.iter().enumerate() {
             if counted[slot] != texels {
                 return Err(ReadFailure::Message(format!(
