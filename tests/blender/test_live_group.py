@@ -43,19 +43,12 @@ def _emulated(table: dict, key: str, c_m: float, beta: float, c_h: float) -> np.
     return np.exp((1 - t) * _bilinear(table[key], xs[0], y) + t * _bilinear(table[key], xs[1], y))
 
 
-def test_live_group_in_cycles_matches_the_core(scene) -> None:
-    spectral_skin = pytest.importorskip("spectral_skin")
-    if not hasattr(spectral_skin, "shader_table"):
-        pytest.skip("the installed spectral_skin predates shader_table")
-    if REPO not in sys.path:
-        sys.path.insert(0, REPO)
-    from blender_addon import live
-
+def _emission_probe(scene, group, width: int):
+    """A plane filling a ``width`` x ``width`` top view in a black world, whose material shows one output of a node of
+    ``group`` through an Emission shader of strength 1 (radiance = the output): (node tree, emission, group node)."""
     bpy = _bpy()
-    table = spectral_skin.shader_table(method="random_walk", blender="5.0")
-    group = live.build_group(table)
     set_world(scene, 0.0)
-    add_top_camera(scene, ortho_scale=0.5, width=4, height=4)
+    add_top_camera(scene, ortho_scale=0.5, width=width, height=width)
     plane = add_plane("Plane", -1.0, 1.0, -1.0, 1.0, 0.0)
     mat = bpy.data.materials.new("Live")
     if mat.node_tree is None:
@@ -69,6 +62,19 @@ def test_live_group_in_cycles_matches_the_core(scene) -> None:
     node = nt.nodes.new("ShaderNodeGroup")
     node.node_tree = group
     assign(plane, mat)
+    return nt, emission, node
+
+
+def test_live_group_in_cycles_matches_the_core(scene) -> None:
+    spectral_skin = pytest.importorskip("spectral_skin")
+    if not hasattr(spectral_skin, "shader_table"):
+        pytest.skip("the installed spectral_skin predates shader_table")
+    if REPO not in sys.path:
+        sys.path.insert(0, REPO)
+    from blender_addon import live
+
+    table = spectral_skin.shader_table(method="random_walk", blender="5.0")
+    nt, emission, node = _emission_probe(scene, live.build_group(table), width=4)
     points = [
         (0.1, 0.5, 0.02),
         (0.0, 0.0, 0.0),
@@ -114,25 +120,10 @@ def test_live_group_computes_the_measured_surface(scene) -> None:
         sys.path.insert(0, REPO)
     from blender_addon import live
 
-    bpy = _bpy()
     table = spectral_skin.shader_table(method="burley", blender="5.0")
     nodes = spectral_skin.surface_input_nodes("measured", engine="cycles")
     group = live.build_group(table, "Measured", surface_nodes=dict(nodes))
-    set_world(scene, 0.0)
-    add_top_camera(scene, ortho_scale=0.5, width=2, height=2)
-    plane = add_plane("Plane", -1.0, 1.0, -1.0, 1.0, 0.0)
-    mat = bpy.data.materials.new("LiveSurface")
-    if mat.node_tree is None:
-        mat.use_nodes = True
-    nt = mat.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    emission = nt.nodes.new("ShaderNodeEmission")
-    emission.inputs["Strength"].default_value = 1.0
-    nt.links.new(emission.outputs["Emission"], out.inputs["Surface"])
-    node = nt.nodes.new("ShaderNodeGroup")
-    node.node_tree = group
-    assign(plane, mat)
+    nt, emission, node = _emission_probe(scene, group, width=2)
     for oiliness in (0.0, 0.05, 0.3, 0.77, 1.0, 1.5, -0.2):
         node.inputs["Oiliness"].default_value = oiliness
         expected = spectral_skin.evaluate(preset="caucasian", oiliness=min(max(oiliness, 0.0), 1.0),
