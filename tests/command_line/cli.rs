@@ -2,6 +2,14 @@
 
 use std::process::Command;
 
+/// `spectral-skin example` (the 8 x 8 face) written into `dir` as face.exr; its path.
+fn example_params(dir: &std::path::Path) -> std::path::PathBuf {
+    let params = dir.join("face.exr");
+    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]);
+    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
+    params
+}
+
 fn run(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_spectral-skin")).args(args).output().expect("run spectral-skin")
 }
@@ -247,9 +255,7 @@ fn negative_values_reach_the_range_check() {
         assert!(err.contains("melanin must be in [0, 0.5]") && err.contains(shown), "{argv:?}: {err}");
     }
     let dir = tempfile::tempdir().unwrap();
-    let params = dir.path().join("face.exr");
-    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]);
-    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
+    let params = example_params(dir.path());
     let out_dir = dir.path().join("maps");
     let out = run(&[
         "maps",
@@ -445,9 +451,7 @@ fn profile_rgb_mapping() {
 #[test]
 fn maps_outputs_choose_the_maps() {
     let dir = tempfile::tempdir().unwrap();
-    let params = dir.path().join("face.exr");
-    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]);
-    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
+    let params = example_params(dir.path());
     let out_dir = dir.path().join("maps");
     let (params, out) = (params.to_str().unwrap(), out_dir.to_str().unwrap());
     let out = run(&["maps", "--params", params, "--out", out, "--outputs", "albedo,specular"]);
@@ -758,9 +762,7 @@ fn eval_takes_a_surface() {
 #[test]
 fn maps_take_a_surface() {
     let dir = tempfile::tempdir().unwrap();
-    let params = dir.path().join("face.exr");
-    let example = run(&["example", "--out", params.to_str().unwrap(), "--size", "8"]);
-    assert!(example.status.success(), "{}", String::from_utf8_lossy(&example.stderr));
+    let params = example_params(dir.path());
     let out_dir = dir.path().join("maps");
     let (params, out) = (params.to_str().unwrap(), out_dir.to_str().unwrap());
     let files = || {
