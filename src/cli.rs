@@ -722,9 +722,9 @@ fn print_summary(ev: &Evaluation, only: Option<SubsurfaceMethod>) {
     let t = ev.target;
     let tested = t.untested_reason().unwrap_or_else(|| "tested".into());
     println!("target: Blender {} {} ({tested})", t.blender, t.engine.name());
-    let streams = match ev.transport {
-        Transport::AddingDoubling => format!(", {} streams", ev.accuracy.streams),
-        Transport::Diffusion => String::new(),
+    let streams = match ev.transport.exact_total() {
+        true => format!(", {} streams", ev.accuracy.streams),
+        false => String::new(),
     };
     println!("transport: {}{streams}", ev.transport.name());
     if let Some(a) = ev.diffuse_reflectance_rgb {

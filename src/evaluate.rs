@@ -20,6 +20,7 @@ pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
 use crate::surface_lobes::SurfaceModel;
+use crate::transport::profile_table::{exact_shape, Shape};
 use crate::transport::{total_diffuse_reflectance, Transport};
 
 /// Which outputs to compute. Each costs only what it needs: albedo is one transform value per wavelength, the radius
@@ -239,6 +240,10 @@ pub struct Evaluation {
     /// Total diffuse reflectance per wavelength.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub spectral_reflectance: Option<Vec<f64>>,
+    /// Where the radius fit's and the profile's shape came from, when either was asked: "exact" (the transport's table,
+    /// `transport::profile_table`) or "multipole" (diffusion's, scaled to the totals).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub profile_shape: Option<&'static str>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub profile: Option<RadialProfile>,
     pub work: Work,
@@ -306,18 +311,22 @@ impl Prepared {
         totals_of(optics, &self.request, parallel)
     }
 
-    /// Burley fits per channel from the RGB transfer function on the fit frequencies (each wavelength's transform
-    /// scaled to its total, [`Totals::scale`]).
-    fn fits(&self, stacks: &[LayerStack], scale: &[f64], albedo: [f64; 3], parallel: bool) -> [BurleyFit; 3] {
+    /// Burley fits per channel from the RGB transfer function on the fit frequencies: each wavelength's exact shape
+    /// times its total where the table holds the stack, else the multipole's transform scaled to the total
+    /// ([`Totals::scale`]).
+    fn fits(&self, optics: &Optics, totals: &Totals, albedo: [f64; 3], parallel: bool) -> [BurleyFit; 3] {
         let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
         let s = &self.fit_s;
-        let transform = |(st, &k): (&LayerStack, &f64)| -> Vec<f64> {
-            s.iter().map(|&x| st.reflectance_hat(x, comb, terms) * k).collect()
+        let transform = |w: usize| -> Vec<f64> {
+            match &totals.shapes {
+                Some(shapes) => s.iter().map(|&x| shapes[w].normalized_transform(x) * totals.total[w]).collect(),
+                None => s.iter().map(|&x| optics.stacks[w].reflectance_hat(x, comb, terms) * totals.scale[w]).collect(),
+            }
         };
         let transforms: Vec<Vec<f64>> = if parallel {
-            stacks.par_iter().zip(scale).map(transform).collect()
+            (0..optics.stacks.len()).into_par_iter().map(transform).collect()
         } else {
-            stacks.iter().zip(scale).map(transform).collect()
+            (0..optics.stacks.len()).map(transform).collect()
         };
         // RGB transfer function per frequency, normalised by the albedo.
         let rgb: Vec<[f64; 3]> = (0..s.len())
@@ -344,9 +353,9 @@ impl Prepared {
     /// that evaluate many parameter sets parallelise across them).
     pub fn material(&self, params: &SkinParams) -> Result<Material, SkinError> {
         let optics = self.optics(params)?;
-        let totals = self.totals(&optics, false)?;
+        let totals = self.totals(&optics, false)?.with_shapes(&optics, &self.request);
         let albedo = albedo_rgb(&totals.total, &self.weights);
-        let fits = self.fits(&optics.stacks, &totals.scale, albedo, false);
+        let fits = self.fits(&optics, &totals, albedo, false);
         Ok(Material { albedo, fits, methods: methods_from(&self.request.target, albedo, &fits)? })
     }
 }
@@ -374,14 +383,17 @@ pub fn evaluate_cancellable(
     let stacks = &optics.stacks;
     let mut work = Work { wavelengths: stacks.len(), ..Work::default() };
 
-    let Totals { total: totals, scale, solves } = prepared.totals(&optics, true)?;
+    let needs_shape = out.radius || out.profile_rgb || out.profile_spectral;
+    let all_totals = prepared.totals(&optics, true)?;
+    let all_totals = if needs_shape { all_totals.with_shapes(&optics, request) } else { all_totals };
     work.transform_samples += stacks.len();
-    work.transport_solves += solves;
-    let albedo = albedo_rgb(&totals, &prepared.weights);
+    work.transport_solves += all_totals.solves;
+    let albedo = albedo_rgb(&all_totals.total, &prepared.weights);
     let needs_albedo = out.albedo || out.radius;
+    let profile_shape = needs_shape.then(|| all_totals.shape_name());
 
     let (methods, radius_fit) = if out.radius {
-        let fits = prepared.fits(stacks, &scale, albedo, true);
+        let fits = prepared.fits(&optics, &all_totals, albedo, true);
         work.transform_samples += stacks.len() * prepared.fit_s.len();
         work.radius_fits += fits.len();
         (Some(methods_from(&request.target, albedo, &fits)?), Some(fits))
@@ -391,28 +403,34 @@ pub fn evaluate_cancellable(
 
     let profile = if out.profile_rgb || out.profile_spectral {
         let radii = acc.profile_grid.radii_mm();
-        let clamped = clamped_reflectance_profiles_cancellable(
-            stacks,
-            &radii,
-            request.combination,
-            acc.multipole_terms,
-            &acc.hankel,
-            cancel,
-        )?;
-        let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
-            wavelength_nm: prepared.grid.wavelengths_nm[l.profile],
-            boundaries: l.boundaries,
-            radius_mm: l.radius_mm,
-            relative_to_peak: l.relative_to_peak,
-        });
-        // Each wavelength's profile keeps the multipole's shape, scaled to its total (x 1 with diffusion). The clamp
-        // and the lobe's depth relative to the peak do not change under a positive scale.
-        let spectral: Vec<Vec<f64>> = clamped
-            .per_mm2
-            .into_iter()
-            .zip(&scale)
-            .map(|(p, &k)| if k == 1.0 { p } else { p.into_iter().map(|v| v * k).collect() })
-            .collect();
+        let (spectral, negative_lobe) = match &all_totals.shapes {
+            Some(shapes) => (exact_profiles(shapes, &all_totals.total, &radii, cancel)?, None),
+            None => {
+                let clamped = clamped_reflectance_profiles_cancellable(
+                    stacks,
+                    &radii,
+                    request.combination,
+                    acc.multipole_terms,
+                    &acc.hankel,
+                    cancel,
+                )?;
+                let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
+                    wavelength_nm: prepared.grid.wavelengths_nm[l.profile],
+                    boundaries: l.boundaries,
+                    radius_mm: l.radius_mm,
+                    relative_to_peak: l.relative_to_peak,
+                });
+                // Each wavelength's profile keeps the multipole's shape, scaled to its total (x 1 with diffusion). The
+                // clamp and the lobe's depth relative to the peak do not change under a positive scale.
+                let spectral: Vec<Vec<f64>> = clamped
+                    .per_mm2
+                    .into_iter()
+                    .zip(&all_totals.scale)
+                    .map(|(p, &k)| if k == 1.0 { p } else { p.into_iter().map(|v| v * k).collect() })
+                    .collect();
+                (spectral, negative_lobe)
+            }
+        };
         work.radial_profiles = spectral.len();
         let rgb = out.profile_rgb.then(|| {
             (0..radii.len())
@@ -453,7 +471,8 @@ pub fn evaluate_cancellable(
         specular,
         surface: SurfaceConstants::of(request.surface),
         wavelengths_nm: (out.spectrum || out.profile_spectral).then(|| prepared.grid.wavelengths_nm.clone()),
-        spectral_reflectance: out.spectrum.then_some(totals),
+        spectral_reflectance: out.spectrum.then_some(all_totals.total),
+        profile_shape,
         profile,
         work,
         seconds: start.elapsed().as_secs_f64(),
@@ -483,6 +502,45 @@ struct Totals {
     scale: Vec<f64>,
     /// Exact solves done.
     solves: usize,
+    /// Each wavelength's exact shape, when the transport asks for it and the table holds every wavelength's stack
+    /// ([`Totals::with_shapes`]); None: the multipole's shape, scaled.
+    shapes: Option<Vec<Shape>>,
+}
+
+impl Totals {
+    /// These totals with the exact shape of every wavelength's stack, where the request's transport takes exact shapes
+    /// and the table holds them all (a finite dermis is not held: the multipole's shape then serves every wavelength).
+    fn with_shapes(mut self, optics: &Optics, request: &Request) -> Totals {
+        if request.transport.exact_shape() {
+            self.shapes = optics.layers.iter().map(|l| exact_shape(l)).collect();
+        }
+        self
+    }
+
+    fn shape_name(&self) -> &'static str {
+        match self.shapes {
+            Some(_) => crate::diffusion::ProfileShape::Exact.name(),
+            None => crate::diffusion::ProfileShape::Multipole.name(),
+        }
+    }
+}
+
+/// Each wavelength's exact profile at `radii`: its total times its shape's normalised profile; stops once `cancel` is
+/// set.
+fn exact_profiles(
+    shapes: &[Shape],
+    totals: &[f64],
+    radii: &[f64],
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<Vec<Vec<f64>>, SkinError> {
+    shapes
+        .iter()
+        .zip(totals)
+        .map(|(shape, &total)| {
+            SkinError::check_cancel(cancel, "reflectance profile")?;
+            Ok(radii.iter().map(|&r| total * shape.normalized_profile_per_mm2(r)).collect())
+        })
+        .collect()
 }
 
 /// How far above 1 a total or an albedo channel may come from round-off alone (measured: 4e-16 for a multipole total
@@ -513,9 +571,9 @@ fn totals_of(optics: &Optics, request: &Request, parallel: bool) -> Result<Total
         Transport::Diffusion => {
             let scale = vec![1.0; multipole.len()];
             // A skin that absorbs nothing reflects exactly everything; the multipole's sum reaches 1 + 4e-16.
-            Ok(Totals { total: multipole.into_iter().map(one_at_round_off).collect(), scale, solves: 0 })
+            Ok(Totals { total: multipole.into_iter().map(one_at_round_off).collect(), scale, solves: 0, shapes: None })
         }
-        Transport::AddingDoubling => {
+        Transport::AddingDoubling | Transport::AddingDoublingDiffusionShape => {
             let streams = request.accuracy.streams;
             let solve = |layers: &[Layer; 2]| total_diffuse_reflectance(layers, streams);
             let total: Vec<f64> = if parallel {
@@ -524,7 +582,7 @@ fn totals_of(optics: &Optics, request: &Request, parallel: bool) -> Result<Total
                 optics.layers.iter().map(solve).collect::<Result<_, _>>()?
             };
             let scale = total.iter().zip(&multipole).map(|(&t, &m)| crate::numeric::safe_div(t, m, 1.0)).collect();
-            Ok(Totals { solves: total.len(), total, scale })
+            Ok(Totals { solves: total.len(), total, scale, shapes: None })
         }
     }
 }

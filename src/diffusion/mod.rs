@@ -20,12 +20,13 @@ pub use multipole::{MultipoleTerms, Slab};
 
 use crate::error::SkinError;
 use crate::numeric::safe_div;
+use crate::transport::profile_table::exact_shape;
 use crate::transport::{total_diffuse_reflectance, Transport, DEFAULT_STREAMS};
 
 /// Total diffuse reflectance and the radial profile (mm^-2) at `radii_mm` of a stack of layers under air, top to bottom,
-/// with the default [`LayeredOptions`]: the exact total (adding-doubling, [`crate::transport`]) and the multipole's
-/// profile (the paper's boundaries, the default combination, the whole series and the default quadrature) scaled to
-/// it. This exposes the solver alone, for checks against other solvers. [`multipole_reflectance`] is the multipole
+/// with the default [`LayeredOptions`]: the exact total (adding-doubling, [`crate::transport`]) and the exact profile
+/// shape where the table holds the stack, else the multipole's profile (the paper's boundaries, the default
+/// combination, the whole series and the default quadrature) scaled to it. This exposes the solver alone, for checks against other solvers. [`multipole_reflectance`] is the multipole
 /// alone; [`layered_reflectance_with`] chooses the transport and the boundaries and reports a negative lobe the clamp
 /// removed.
 pub fn layered_reflectance(layers: &[Layer], radii_mm: &[f64]) -> Result<(f64, Vec<f64>), SkinError> {
@@ -64,11 +65,32 @@ impl Default for LayeredOptions {
 pub struct LayeredReflectance {
     /// Total diffuse reflectance.
     pub total: f64,
-    /// R(r) at the radii asked for, mm^-2, clamped to zero: the multipole's, scaled to `total` with
-    /// `Transport::AddingDoubling`.
+    /// R(r) at the radii asked for, mm^-2: with `Transport::AddingDoubling` the exact shape where the table holds the
+    /// stack (one semi-infinite layer, or two with the skin's scattering ratio, index 1.4), else the multipole's
+    /// clamped to zero and scaled to `total` (unscaled with `Transport::Diffusion`).
     pub profile_per_mm2: Vec<f64>,
-    /// The negative lobe the clamp removed beyond round-off (only with `Boundaries::Paper`).
+    /// The negative lobe the clamp removed beyond round-off (only with `Boundaries::Paper` and the multipole's shape).
     pub negative_lobe: Option<NegativeLobe>,
+    /// Where the profile's shape came from.
+    pub shape: ProfileShape,
+}
+
+/// Where a profile's shape comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProfileShape {
+    /// The exact transport's (`transport::profile_table`).
+    Exact,
+    /// The layered multipole's (scaled to the exact total unless the transport is diffusion).
+    Multipole,
+}
+
+impl ProfileShape {
+    pub fn name(self) -> &'static str {
+        match self {
+            ProfileShape::Exact => "exact",
+            ProfileShape::Multipole => "multipole",
+        }
+    }
 }
 
 /// [`layered_reflectance`] with the transport and boundaries chosen, and the negative lobe the clamp removed.
@@ -92,10 +114,18 @@ pub fn layered_reflectance_cancellable(
     crate::transport::adding_doubling::validate_streams(options.streams)?;
     let stack = LayerStack::with_boundaries(layers, options.boundaries)?;
     let multipole_total = stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
-    let total = match options.transport {
-        Transport::Diffusion => multipole_total,
-        Transport::AddingDoubling => total_diffuse_reflectance(layers, options.streams)?,
+    let total = match options.transport.exact_total() {
+        false => multipole_total,
+        true => total_diffuse_reflectance(layers, options.streams)?,
     };
+    if let Some(shape) = options.transport.exact_shape().then(|| exact_shape(layers)).flatten() {
+        let mut profile_per_mm2 = Vec::with_capacity(radii_mm.len());
+        for chunk in radii_mm.chunks(4096) {
+            SkinError::check_cancel(cancel, "reflectance profile")?;
+            profile_per_mm2.extend(chunk.iter().map(|&r| total * shape.normalized_profile_per_mm2(r)));
+        }
+        return Ok(LayeredReflectance { total, profile_per_mm2, negative_lobe: None, shape: ProfileShape::Exact });
+    }
     let mut profiles = clamped_reflectance_profiles_cancellable(
         std::slice::from_ref(&stack),
         radii_mm,
@@ -105,11 +135,16 @@ pub fn layered_reflectance_cancellable(
         cancel,
     )?;
     let mut profile_per_mm2 = profiles.per_mm2.pop().unwrap_or_default();
-    if options.transport != Transport::Diffusion {
+    if options.transport.exact_total() {
         let scale = safe_div(total, multipole_total, 1.0);
         profile_per_mm2.iter_mut().for_each(|v| *v *= scale);
     }
-    Ok(LayeredReflectance { total, profile_per_mm2, negative_lobe: profiles.negative_lobe })
+    Ok(LayeredReflectance {
+        total,
+        profile_per_mm2,
+        negative_lobe: profiles.negative_lobe,
+        shape: ProfileShape::Multipole,
+    })
 }
 
 /// Radii must be in [0, `MAX_RADIUS_MM`], at most [`crate::accuracy::MAX_PROFILE_RADII`] of them.

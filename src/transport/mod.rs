@@ -1,10 +1,11 @@
 //! Radiative transfer beyond diffusion: the exact layered-slab solver that gives the model's totals
-//! ([`adding_doubling`]), and exact solutions for simple geometries that the Blender mappings in `fit` compare a
+//! ([`adding_doubling`]), the exact shape of its radial profile, tabulated ([`profile_table`]), and exact solutions for simple geometries that the Blender mappings in `fit` compare a
 //! renderer's walk against ([`half_space`]).
 
 pub mod adding_doubling;
 pub mod half_space;
 mod matrix;
+pub mod profile_table;
 
 use serde::{Deserialize, Serialize};
 
@@ -17,21 +18,28 @@ pub use adding_doubling::{total_diffuse_reflectance, DEFAULT_STREAMS, STREAMS_RA
 #[serde(rename_all = "snake_case")]
 pub enum Transport {
     /// The default: the exact solution of the radiative transfer equation for the layered slab (adding-doubling,
-    /// Prahl 1995) gives each wavelength's total; the radial profile keeps the multipole's shape, scaled to it.
+    /// Prahl 1995) gives each wavelength's total, and the profile (and the radius fit's transform) has the exact shape
+    /// of the skin's stack ([`profile_table`]); a stack the table does not hold keeps the multipole's shape, scaled
+    /// to the exact total, and says so.
     #[default]
     AddingDoubling,
+    /// Exact totals with the multipole's profile shape scaled to them: the default before the exact shapes, kept for
+    /// comparison (docs/accuracy-vs-time.md).
+    AddingDoublingDiffusionShape,
     /// The paper's: the layered multipole's own total (diffusion), 9-40 % too bright wherever skin absorbs.
     Diffusion,
 }
 
 /// Every transport, the default first.
-pub const ALL_TRANSPORTS: [Transport; 2] = [Transport::AddingDoubling, Transport::Diffusion];
+pub const ALL_TRANSPORTS: [Transport; 3] =
+    [Transport::AddingDoubling, Transport::AddingDoublingDiffusionShape, Transport::Diffusion];
 
 impl Transport {
-    /// The serde name ("adding_doubling", "diffusion").
+    /// The serde name ("adding_doubling", "adding_doubling_diffusion_shape", "diffusion").
     pub fn name(self) -> &'static str {
         match self {
             Transport::AddingDoubling => "adding_doubling",
+            Transport::AddingDoublingDiffusionShape => "adding_doubling_diffusion_shape",
             Transport::Diffusion => "diffusion",
         }
     }
@@ -40,12 +48,26 @@ impl Transport {
     pub fn description(self) -> &'static str {
         match self {
             Transport::AddingDoubling => {
-                "exact totals (adding-doubling radiative transfer) with the multipole's profile shape: right for every \
-                 skin tone (default)"
+                "exact radiative transfer: adding-doubling totals and the tabulated exact profile shape, right for \
+                 every skin tone (default)"
+            }
+            Transport::AddingDoublingDiffusionShape => {
+                "exact totals with the multipole's profile shape: the colour right, the blur diffusion's (too wide for \
+                 dark skin)"
             }
             Transport::Diffusion => {
                 "the paper's layered multipole diffusion: reproduces DJ2006, too bright for dark skin"
             }
         }
+    }
+
+    /// Whether the totals are exact (adding-doubling).
+    pub fn exact_total(self) -> bool {
+        self != Transport::Diffusion
+    }
+
+    /// Whether the profile's shape is the exact one (where the table holds the stack).
+    pub fn exact_shape(self) -> bool {
+        self == Transport::AddingDoubling
     }
 }

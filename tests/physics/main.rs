@@ -7,6 +7,7 @@ mod support;
 
 mod accuracy;
 mod diffusion_references;
+mod exact_profile;
 mod exact_transport;
 mod fft_route;
 mod monte_carlo;
