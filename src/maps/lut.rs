@@ -89,13 +89,14 @@ pub struct TableResolution {
 
 impl Default for TableResolution {
     /// Chosen by measurement (docs/maps-performance.md): the smallest grid whose worst error over the domain is below
-    /// 0.5 % in albedo and 1 % in radius.
+    /// 0.5 % in albedo and 1 % in radius. The exact profile shapes bend the radius more along the melanin blend
+    /// than the multipole did: 7 blend nodes gave 1.13 % (Burley, C_m 0.39, beta_m 0.08), 9 give 0.74 %.
     fn default() -> Self {
-        TableResolution { melanin: 33, melanin_blend: 7, hemoglobin: 17 }
+        TableResolution { melanin: 33, melanin_blend: 9, hemoglobin: 17 }
     }
 }
 
-/// Most nodes a table may have: 10^6 (48 MB, minutes to build on a few cores; the default has 3927). Past it a build
+/// Most nodes a table may have: 10^6 (48 MB, minutes to build on a few cores; the default has 5049). Past it a build
 /// would run for hours: refused before any allocation.
 pub const MAX_TABLE_NODES: usize = 1_000_000;
 /// Most points `measure_error` evaluates (each is one direct evaluation, about a millisecond).
@@ -706,6 +707,10 @@ pub fn cache_key_text(
         // The exact bits: a table for 0.1 is not reused for the next double.
         let bits: Vec<String> = extended.iter().map(|v| format!("{:016x}", v.to_bits())).collect();
         text.push_str(&format!("|extended {}", bits.join(" ")));
+    }
+    if radius && prepared.request().transport.exact_shape() {
+        // The radius comes from the exact shapes' table: a new table is a new key (an older cache held the multipole's).
+        text.push_str(&format!("|shapes {}", crate::transport::profile_table::ProfileTable::shipped().id()));
     }
     text
 }

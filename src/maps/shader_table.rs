@@ -62,7 +62,7 @@ pub const SHADER_TABLE_GUTTER: usize = 1;
 /// radius for Burley and Random Walk, in 98 KiB of float32 texels; more melanin-blend slices buy nothing, finer
 /// concentration axes halve the error for three times the build; and the map pipeline's cached table is reused.
 pub const DEFAULT_SHADER_TABLE_RESOLUTION: TableResolution =
-    TableResolution { melanin: 33, melanin_blend: 7, hemoglobin: 17 };
+    TableResolution { melanin: 33, melanin_blend: 9, hemoglobin: 17 };
 
 /// One parameter axis of a shader table.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -36,7 +36,7 @@ use super::maps::{interleave, result_planes, rgb_image, table_resolution};
 /// Arguments:
 ///     method: the subsurface method, as for :func:`maps`.
 ///     blender, engine: the target, as for :func:`evaluate`.
-///     resolution: nodes per axis (melanin, melanin_blend, hemoglobin), each >= 2; None: the default, 33 x 7 x 17
+///     resolution: nodes per axis (melanin, melanin_blend, hemoglobin), each >= 2; None: the default, 33 x 9 x 17
 ///         (chosen on the error/size/time front of docs/shader-table.md).
 ///     accuracy, working_space, boundaries: as for :func:`maps`.
 ///     table_cache: reuse (and store) the table in the per-user cache folder that :func:`maps` uses.

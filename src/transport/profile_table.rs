@@ -76,7 +76,8 @@ pub fn fine_edge(f: usize) -> f64 {
 
 /// The fine bin of an exit radius `r` (mean free paths): 0 below the first edge, FINE_BINS - 1 beyond the last.
 pub fn fine_bin(r: f64) -> usize {
-    if !(r >= fine_edge(0)) {
+    // NaN and radii below the first edge go to bin 0.
+    if r.is_nan() || r < fine_edge(0) {
         return 0;
     }
     let f = ((r.log10() - R_LOG10_MIN) * NODES_PER_DECADE * FINE_PER_COARSE as f64).floor();
@@ -181,6 +182,7 @@ pub struct ProfileTable {
     pub provenance: TableProvenance,
     /// SLICES x ABSORPTION_NODES^2 x ENTRY_LEN values.
     values: Vec<f32>,
+    id: String,
 }
 
 /// Serialise a table: header, then for each slice, each (a_top, a_bottom) pair, the total as f32 and the rest as f16.
@@ -246,7 +248,20 @@ impl ProfileTable {
             values.push(f32::from_le_bytes(e[..4].try_into().expect("4 bytes")));
             values.extend(e[4..].chunks_exact(2).map(|h| f16::from_le_bytes([h[0], h[1]]).to_f32()));
         }
-        Ok(ProfileTable { provenance, values })
+        let mut hasher = fnv::FnvHasher::default();
+        std::hash::Hasher::write(&mut hasher, bytes);
+        let id = format!(
+            "{} photons seed {} fnv1a {:016x}",
+            provenance.photons,
+            provenance.seed,
+            std::hash::Hasher::finish(&hasher)
+        );
+        Ok(ProfileTable { provenance, values, id })
+    }
+
+    /// The table's identity for cache keys: its provenance and the FNV-1a hash of its bytes.
+    pub fn id(&self) -> &str {
+        &self.id
     }
 
     fn entry(&self, slice: usize, i: usize, j: usize) -> &[f32] {
@@ -271,7 +286,10 @@ impl ProfileTable {
         let p = &self.provenance;
         let top = layers.first()?;
         let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
-        if !layers.iter().all(|l| same(l.ior, p.ior)) || !(top.sigma_s_reduced_per_mm > 0.0) {
+        if !layers.iter().all(|l| same(l.ior, p.ior))
+            || top.sigma_s_reduced_per_mm.is_nan()
+            || top.sigma_s_reduced_per_mm <= 0.0
+        {
             return None;
         }
         let mfp_mm = 1.0 / top.sigma_s_reduced_per_mm;
@@ -296,7 +314,7 @@ impl ProfileTable {
 
     /// The interpolated entry of a stack (Catmull-Rom in the logarithms of thickness and absorptions, clamped to
     /// the grid).
-    pub fn shape(&self, stack: &TableStack) -> Shape {
+    pub fn shape(&'static self, stack: &TableStack) -> Shape {
         let a_axis =
             |a: f64| axis_weights(log_position(a, ABSORPTION_MIN, ABSORPTION_MAX, ABSORPTION_NODES), ABSORPTION_NODES);
         let wi = a_axis(stack.a_top);
@@ -308,22 +326,18 @@ impl ProfileTable {
             Some(t) => axis_weights(log_position(t, TAU_MIN, TAU_MAX, TAU_NODES), TAU_NODES),
             None => [(TAU_NODES, 1.0), (TAU_NODES, 0.0), (TAU_NODES, 0.0), (TAU_NODES, 0.0)],
         };
-        let mut acc = vec![0.0f64; ENTRY_LEN];
-        for &(s, a) in &ws {
+        let mut weights = Vec::with_capacity(64);
+        for &(sl, a) in &ws {
             for &(i, b) in &wi {
                 for &(j, c) in &wj {
                     let w = a * b * c;
                     if w != 0.0 {
-                        acc.iter_mut().zip(self.entry(s, i, j)).for_each(|(o, &v)| *o += w * v as f64);
+                        weights.push((((sl * ABSORPTION_NODES + i) * ABSORPTION_NODES + j) * ENTRY_LEN, w));
                     }
                 }
             }
         }
-        Shape {
-            mfp_mm: stack.mfp_mm,
-            transform: acc[1..1 + K_NODES].iter().map(|v| v.clamp(0.0, 1.0)).collect(),
-            energy_per_ln_r: acc[1 + K_NODES..].iter().map(|v| v.max(0.0)).collect(),
-        }
+        Shape { mfp_mm: stack.mfp_mm, values: &self.values, weights }
     }
 }
 
@@ -337,58 +351,71 @@ pub struct TableStack {
     pub mfp_mm: f64,
 }
 
-/// One stack's interpolated shape, read at any frequency or radius in mm.
+/// One stack's interpolated shape, read at any frequency or radius in mm: the table's entries around the stack and
+/// their interpolation weights, combined only at the nodes a value needs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Shape {
     mfp_mm: f64,
-    transform: Vec<f64>,
-    energy_per_ln_r: Vec<f64>,
+    values: &'static [f32],
+    /// (offset of an entry in `values`, its weight).
+    weights: Vec<(usize, f64)>,
 }
 
 impl Shape {
+    /// Value `v` of the interpolated entry (0: total, then the transform, then the encircled energy).
+    fn value(&self, v: usize) -> f64 {
+        self.weights.iter().map(|&(at, w)| w * self.values[at + v] as f64).sum()
+    }
+
+    /// N at transform node `m`, in [0, 1].
+    fn n(&self, m: usize) -> f64 {
+        self.value(1 + m).clamp(0.0, 1.0)
+    }
+
+    /// The encircled energy per ln r of bin `c`, >= 0.
+    fn q(&self, c: usize) -> f64 {
+        self.value(1 + K_NODES + c).max(0.0)
+    }
+
     /// N(s) = R~(s) / R~(0) at `s_per_mm` (radians per mm): linear in log k between the nodes; below the first node
     /// 1 - c k^2 (the second moment's term), above the last N ~ 1/k (the single scattering's 1/r near field).
     pub fn normalized_transform(&self, s_per_mm: f64) -> f64 {
         let k = s_per_mm * self.mfp_mm;
         let x = (k.log10() - K_LOG10_MIN) * NODES_PER_DECADE;
         let last = (K_NODES - 1) as f64;
-        let n = &self.transform;
-        if !(x > 0.0) {
+        if x.is_nan() || x <= 0.0 {
             let k0 = 10f64.powf(K_LOG10_MIN);
-            return 1.0 - (1.0 - n[0]) * (k / k0).powi(2);
+            return 1.0 - (1.0 - self.n(0)) * (k / k0).powi(2);
         }
         if x >= last {
-            return n[K_NODES - 1] * 10f64.powf(x / NODES_PER_DECADE - last / NODES_PER_DECADE).recip();
+            return self.n(K_NODES - 1) * 10f64.powf(x / NODES_PER_DECADE - last / NODES_PER_DECADE).recip();
         }
         let (i, t) = (x.floor() as usize, x - x.floor());
-        n[i] + t * (n[i + 1] - n[i])
+        let (a, b) = (self.n(i), self.n(i + 1));
+        a + t * (b - a)
     }
 
     /// The profile normalised to a unit total, per mm^2, at `r_mm`: the encircled energy per ln r over 2 pi r^2,
     /// interpolated log-linearly between bin centres; below the first centre it follows 1/r (single scattering),
     /// and r = 0 gets the mean over the first centre's disc; beyond the last bin it is 0.
     pub fn normalized_profile_per_mm2(&self, r_mm: f64) -> f64 {
-        let q = &self.energy_per_ln_r;
         let centre = |c: f64| 10f64.powf(R_LOG10_MIN + (c + 0.5) / NODES_PER_DECADE);
         let r = (r_mm / self.mfp_mm).max(0.0);
         let x = (r.log10() - R_LOG10_MIN) * NODES_PER_DECADE - 0.5;
-        let per_mfp2 = if !(x > 0.0) {
+        let per_mfp2 = if x.is_nan() || x <= 0.0 {
             // q ~ r below the first centre: p = q0 / (2 pi r0 r); the disc r < r0 holds q0 of energy.
-            let r0 = centre(0.0);
+            let (r0, q0) = (centre(0.0), self.q(0));
             if r > 0.0 {
-                q[0] / (2.0 * PI * r0 * r)
+                q0 / (2.0 * PI * r0 * r)
             } else {
-                q[0] / (PI * r0 * r0)
+                q0 / (PI * r0 * r0)
             }
         } else if x >= (R_BINS - 1) as f64 {
             0.0
         } else {
             let (i, t) = (x.floor() as usize, x - x.floor());
-            let value = if q[i] > 0.0 && q[i + 1] > 0.0 {
-                (q[i].ln() + t * (q[i + 1].ln() - q[i].ln())).exp()
-            } else {
-                q[i] + t * (q[i + 1] - q[i])
-            };
+            let (a, b) = (self.q(i), self.q(i + 1));
+            let value = if a > 0.0 && b > 0.0 { (a.ln() + t * (b.ln() - a.ln())).exp() } else { a + t * (b - a) };
             value / (2.0 * PI * r * r)
         };
         per_mfp2 / (self.mfp_mm * self.mfp_mm)

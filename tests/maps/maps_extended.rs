@@ -15,6 +15,7 @@ use spectral_skin::maps::thickness_tables::THICKNESS_NODES_MM;
 use spectral_skin::maps::{compute_maps, MapSettings, StrategyChoice};
 use spectral_skin::skin::params::EXTENDED_DEFAULTS;
 use spectral_skin::surface_lobes::SurfaceModel;
+use spectral_skin::transport::profile_table::ProfileTable;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
 /// The bound on the thickness stack's radius (docs/maps-performance.md, "A varying epidermis thickness": measured
@@ -67,9 +68,10 @@ fn defaults_change_nothing() {
     }
 }
 
-/// The paper's model keeps the cache key it had before the extended physiology existed (FNV-1a of the same text,
-/// computed here independently), so cached tables stay valid; any other value has its own key. The surface model,
-/// which no table holds, does not change it: the default (measured) request has the paper's key.
+/// The paper's model keeps the cache key text it had before the extended physiology existed (FNV-1a of the same
+/// text, computed here independently), followed by the shipped profile table's id, since the radius comes from its
+/// exact shapes; any other value has its own key. The surface model, which no table holds, does not change it: the
+/// default (measured) request has the paper's key.
 #[test]
 fn cache_key_is_unchanged_for_the_paper_and_differs_otherwise() {
     let request = Request { surface: SurfaceModel::Paper, ..Request::new(Outputs::material()) };
@@ -78,11 +80,12 @@ fn cache_key_is_unchanged_for_the_paper_and_differs_otherwise() {
     let resolution = TableResolution::default();
     let method = SubsurfaceMethod::Burley;
     let text = format!(
-        "{}|{}|{}|{:?}",
+        "{}|{}|{}|{:?}|shapes {}",
         env!("CARGO_PKG_VERSION"),
         serde_json::to_string(&request).unwrap(),
         method.name(),
-        resolution
+        resolution,
+        ProfileTable::shipped().id()
     );
     // FNV-1a, 64 bit (offset basis and prime of Fowler, Noll & Vo).
     let fnv = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));

@@ -31,7 +31,7 @@ def test_choices_are_the_cores():
 
 
 def test_a_bad_transport_is_refused():
-    with pytest.raises(spectral_skin.SpectralSkinError, match="transport must be one of ADDING_DOUBLING, DIFFUSION"):
+    with pytest.raises(spectral_skin.SpectralSkinError, match="transport must be one of ADDING_DOUBLING, ADDING_DOUBLING_DIFFUSION_SHAPE, DIFFUSION"):
         core.make_plan(_settings(transport="MONTE_CARLO"))
 
 

@@ -19,8 +19,8 @@ FRONTS = ("evaluate", "profile", "maps", "shader_table", "layered_reflectance", 
 
 def test_catalog():
     catalog = spectral_skin.transports()
-    assert TRANSPORTS == ["adding_doubling", "diffusion"]
-    assert [t["default"] for t in catalog] == [True, False], "exactly one default, listed first"
+    assert TRANSPORTS == ["adding_doubling", "adding_doubling_diffusion_shape", "diffusion"]
+    assert [t["default"] for t in catalog] == [True, False, False], "exactly one default, listed first"
     assert all(isinstance(t["description"], str) and t["description"] for t in catalog)
 
 
@@ -46,14 +46,18 @@ def test_evaluate_reports_the_transport_and_streams():
     assert levels["draft"] < levels["default"] < levels["reference"]
 
 
-def test_profile_is_the_multipole_scaled_to_the_total():
-    """Per wavelength: the default profile is the diffusion profile times (exact total / diffusion total)."""
+def test_diffusion_shape_is_the_multipole_scaled_to_the_total():
+    """Per wavelength: the diffusion-shape transport's profile is the diffusion profile times (exact total / diffusion
+    total); the default's has the exact shape (tests/physics/exact_profile.rs) and the same total."""
     kwargs = {"preset": "african", "profile_count": 9}
     spectra = {t: spectral_skin.evaluate(outputs=["spectrum"], transport=t, preset="african")["spectral_reflectance"]
                for t in TRANSPORTS}
     profiles = {t: spectral_skin.profile(spectral=True, transport=t, **kwargs)["spectral_per_mm2"] for t in TRANSPORTS}
-    scale = spectra["adding_doubling"] / spectra["diffusion"]
-    np.testing.assert_allclose(profiles["adding_doubling"], profiles["diffusion"] * scale[:, None], rtol=1e-14, atol=0)
+    scale = spectra["adding_doubling_diffusion_shape"] / spectra["diffusion"]
+    np.testing.assert_allclose(profiles["adding_doubling_diffusion_shape"], profiles["diffusion"] * scale[:, None],
+                               rtol=1e-14, atol=0)
+    np.testing.assert_array_equal(spectra["adding_doubling"], spectra["adding_doubling_diffusion_shape"])
+    assert not np.allclose(profiles["adding_doubling"], profiles["adding_doubling_diffusion_shape"], rtol=0.05)
     rgb = {t: spectral_skin.profile(transport=t, **kwargs)["rgb_per_mm2"] for t in TRANSPORTS}
     assert rgb["adding_doubling"].shape == rgb["diffusion"].shape == (9, 3)
 
@@ -64,7 +68,9 @@ def test_layered_reflectance_takes_the_transport():
     assert (exact, list(exact_profile)) == (lambda r: (r[0], list(r[1])))(
         spectral_skin.layered_reflectance(LAYERS, radii, transport="adding_doubling"))
     multipole, multipole_profile = spectral_skin.layered_reflectance(LAYERS, radii, transport="diffusion")
-    np.testing.assert_allclose(exact_profile, multipole_profile * (exact / multipole), rtol=1e-14, atol=0)
+    scaled, scaled_profile = spectral_skin.layered_reflectance(LAYERS, radii, transport="adding_doubling_diffusion_shape")
+    assert scaled == exact
+    np.testing.assert_allclose(scaled_profile, multipole_profile * (exact / multipole), rtol=1e-14, atol=0)
     assert 0 < exact < 1 and 0 < multipole < 1
     assert spectral_skin.layered_reflectance(LAYERS, radii, streams=16)[0] > 0
     # The exact transport needs one index for every layer; an index step is refused, pointing at diffusion.
@@ -124,7 +130,7 @@ def test_fits_report_their_transport():
     lambda **k: spectral_skin.fit_albedo_map(np.full((1, 1, 3), 0.2, np.float32), **k),
 ])
 def test_bad_transport_and_streams_are_clear_errors(call):
-    with pytest.raises(SpectralSkinError, match=r'transport.*"adding_doubling", "diffusion"'):
+    with pytest.raises(SpectralSkinError, match=r'transport.*"adding_doubling", "adding_doubling_diffusion_shape", "diffusion"'):
         call(transport="monte_carlo")
     for bad in (0, 1, 7, 65, -1, 2**40):
         with pytest.raises(SpectralSkinError, match=r"streams.*\[2, 64\]"):
