@@ -125,7 +125,7 @@ pub(super) fn check_array_size(name: &str, obj: &Bound<'_, PyAny>, expected: &st
     };
     let shape = untyped.shape();
     let count = shape.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
-    if count.is_none_or(|n| n > most) {
+    if count.map_or(true, |n| n > most) {
         return Err(too_many(name, expected, most, &format!("shape {}", shape_text(shape))));
     }
     Ok(())
