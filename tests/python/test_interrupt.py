@@ -63,6 +63,18 @@ def test_ctrl_c_stops_a_long_maps_call():
     assert elapsed < 5.0, f"the call took {elapsed:.1f} s to stop after SIGINT"
 
 
+# 2 x 128 distinct texels at the reference level, exact (issue 38 item 2): each evaluation is a few tenths of a second,
+# and the flag was read only between rows (the distinct tuples: not at all), so SIGINT was heard 52 s late.
+REFERENCE_CHILD = child_script(128, "spectral_skin.maps(params[:2], exact=True, accuracy='reference', table_cache=False)")
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+def test_ctrl_c_stops_an_exact_reference_map_between_evaluations():
+    returncode, out, elapsed = interrupt_child(REFERENCE_CHILD)
+    assert returncode == 3, (returncode, out)
+    assert elapsed < 5.0, f"the call took {elapsed:.1f} s to stop after SIGINT"
+
+
 def test_table_resolution_is_bounded_before_allocation():
     import numpy as np
     import spectral_skin
