@@ -100,7 +100,7 @@ def test_texture_size_is_bounded_before_any_copy() -> None:
     huge = np.broadcast_to(np.full(3, 0.3, dtype=np.float32), (100_000, 100_000, 3))
     with pytest.raises(spectral_skin.SpectralSkinError, match=r"albedo.*268435456 texels.*100000 wide x 100000 high"):
         spectral_skin.fit_albedo_map(huge)
-    with pytest.raises(spectral_skin.SpectralSkinError, match=r"shapes.*268435456 texels"):
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"params.*268435456 texels"):
         spectral_skin.maps(np.broadcast_to(np.full(4, 0.1, dtype=np.float32), (100_000, 100_000, 4)))
 
 
