@@ -300,10 +300,21 @@ struct TransportArgs {
     /// reproduces DJ2006).
     #[arg(long, value_enum, default_value_t = Transport::default())]
     transport: Transport,
-    /// Streams (directions per hemisphere) of the adding-doubling solver, even, 2..64 [default: the level's, 8 at the
-    /// default level].
-    #[arg(long)]
+    /// Streams (directions per hemisphere) of the adding-doubling solver (the range and the levels' values from
+    /// `transport::STREAMS_RANGE` and `accuracy`'s levels).
+    #[arg(long, help = streams_help())]
     streams: Option<usize>,
+}
+
+/// `--streams`' help, from the constants it states.
+fn streams_help() -> String {
+    use crate::accuracy::{DRAFT_STREAMS, REFERENCE_STREAMS};
+    let (lo, hi) = crate::transport::STREAMS_RANGE;
+    format!(
+        "Streams (directions per hemisphere) of the adding-doubling solver, even, {lo}..{hi} [default: the level's: \
+         {DRAFT_STREAMS} draft, {} default, {REFERENCE_STREAMS} reference]",
+        crate::transport::DEFAULT_STREAMS
+    )
 }
 
 impl TransportArgs {
@@ -406,7 +417,10 @@ pub fn main(args: impl IntoIterator<Item = OsString>) -> u8 {
 fn joined_negative_numbers(args: impl Iterator<Item = OsString>) -> Vec<OsString> {
     let mut out: Vec<OsString> = Vec::new();
     for arg in args {
-        let negative_number = arg.to_str().is_some_and(|s| s.starts_with('-') && s.parse::<f64>().is_ok());
+        // A number, or a comma-separated list of numbers (`--rgb-gains -1,1,1`).
+        let negative_number = arg
+            .to_str()
+            .is_some_and(|s| s.starts_with('-') && s.split(',').all(|part| part.trim().parse::<f64>().is_ok()));
         match out.last_mut() {
             Some(option)
                 if negative_number

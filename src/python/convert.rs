@@ -79,9 +79,15 @@ pub(super) fn real_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Real> {
 
 pub(super) fn count_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Count> {
     number_type_check(name, obj, AN_INTEGER)?;
-    obj.extract::<i64>()
-        .map(Count)
-        .map_err(|_| PyTypeError::new_err(format!("{name} must be {AN_INTEGER}; got {}", type_name(obj))))
+    obj.extract::<i64>().map(Count).map_err(|_| {
+        // An int too large for 64 bits is a value out of range, not a wrong type.
+        if obj.is_instance_of::<pyo3::types::PyInt>() {
+            let repr = obj.repr().map(|r| r.to_string()).unwrap_or_default();
+            invalid(name, format!("must be an integer in [{}, {}]; got {repr}", i64::MIN, i64::MAX))
+        } else {
+            PyTypeError::new_err(format!("{name} must be {AN_INTEGER}; got {}", type_name(obj)))
+        }
+    })
 }
 
 /// An optional numeric keyword argument (None is absent).

@@ -36,7 +36,7 @@ use super::errors::invalid;
 ///         specular component excluded).
 ///     objective: what is minimised: "reflectance" (the squared reflectance differences; the default) or
 ///         "cielab" (the squared CIELAB difference of the colours, the reflectance differences only breaking ties).
-///     starts: how many of the start table's best entries are refined (the best fit is kept), >= 1; None: 4
+///     starts: how many of the start table's best entries are refined (the best fit is kept), 1..64; None: 4
 ///         (docs/measured-skin.md, the restart check).
 ///     transport: the model fitted, "adding_doubling" (exact totals; the default) or "diffusion" (the paper's), as
 ///         for :func:`evaluate`.

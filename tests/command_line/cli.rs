@@ -790,3 +790,21 @@ fn maps_take_a_surface() {
     assert!(paper.status.success(), "{}", String::from_utf8_lossy(&paper.stderr));
     assert_eq!(files(), ["skin_maps.json", "specular.exr"]);
 }
+
+/// `--streams`' help states the levels' streams from the constants (issue 38 item 5: it said 8 at the default level,
+/// which uses 10).
+#[test]
+fn streams_help_states_the_levels_streams() {
+    use spectral_skin::accuracy::{DRAFT_STREAMS, REFERENCE_STREAMS};
+    use spectral_skin::transport::{DEFAULT_STREAMS, STREAMS_RANGE};
+    for command in ["eval", "maps", "fit"] {
+        let out = run(&[command, "--help"]);
+        let help = String::from_utf8_lossy(&out.stdout).split_whitespace().collect::<Vec<_>>().join(" ");
+        let expected = format!(
+            "even, {}..{} [default: the level's: {DRAFT_STREAMS} draft, {DEFAULT_STREAMS} default, {REFERENCE_STREAMS} \
+             reference]",
+            STREAMS_RANGE.0, STREAMS_RANGE.1
+        );
+        assert!(help.contains(&expected), "{command} --help lacks {expected:?}: {help}");
+    }
+}

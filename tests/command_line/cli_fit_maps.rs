@@ -318,6 +318,11 @@ fn fit_maps_diagnoses_a_lit_texture_and_applies_gains() {
     let o = cli(&["fit-maps", "--albedo", &s("missing.exr"), "--rgb-gains", "0.5,1"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("--rgb-gains takes three gains") && !err.contains("missing"), "{err}");
+    // A negative first gain is a value for the range check, not a flag (issue 38 item 5: clap took `-1,1,1` for
+    // one).
+    let o = cli(&["fit-maps", "--albedo", &s("lit.exr"), "--out", &s("r.exr"), "--rgb-gains", "-1,1,1"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("rgb_gains[0]") && !err.contains("unexpected argument"), "{err}");
 }
 
 /// `fit-maps --mask`: skin over a green background; unmasked the background makes it warn, with a black-and-white
