@@ -474,6 +474,8 @@ pub fn fit_spectrum_cancellable(
     options: &FitOptions,
     cancel: &AtomicBool,
 ) -> Result<SpectrumFit, SkinError> {
+    // The wavelengths first: with none, the reflectance's checks would speak of a flat spectrum from inf to -inf.
+    check_wavelengths(wavelengths_nm)?;
     check_reflectance(reflectance, wavelengths_nm.len())?;
     SpectrumFitter::new_cancellable(wavelengths_nm, options, cancel)?.fit_cancellable(reflectance, cancel)
 }

@@ -411,14 +411,14 @@ fn interrupt(argv: &[&str]) {
     assert_eq!(status.code(), Some(130), "{argv:?}: exit code 130 after Ctrl-C, got {status:?}");
 }
 
-/// Ctrl-C during `fit` (2000 starts: minutes of refinement after a start table of 4000 spectra) stops it within
-/// seconds with exit code 130 (it ran on for 13.8 s after Ctrl-C).
+/// Ctrl-C during `fit` (64 starts, the most, at 64 streams: minutes of a start table of 4000 spectra and the starts'
+/// refinement) stops it within seconds with exit code 130 (with 2000 starts it ran on for 13.8 s after Ctrl-C).
 #[cfg(unix)]
 #[test]
 fn ctrl_c_stops_fit() {
     let dir = tempfile::tempdir().unwrap();
     let csv = spectrum_csv(dir.path(), (0..31).map(|i| (400.0 + 10.0 * i as f64, 0.15 + 0.01 * i as f64)));
-    interrupt(&["fit", "--spectrum", csv.to_str().unwrap(), "--starts", "2000"]);
+    interrupt(&["fit", "--spectrum", csv.to_str().unwrap(), "--starts", "64", "--streams", "64"]);
 }
 
 /// `profile --rgb-mapping`: the help says the linear RGB profile can be negative; the default (linear) has negative
@@ -807,4 +807,15 @@ fn streams_help_states_the_levels_streams() {
         );
         assert!(help.contains(&expected), "{command} --help lacks {expected:?}: {help}");
     }
+}
+
+/// A CSV with a header and no data rows names the wavelengths and how many are needed (issue 38 item 5: it said the
+/// reflectance "is flat (inf to -inf)").
+#[test]
+fn a_header_only_spectrum_names_the_wavelengths_needed() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = spectrum_csv(dir.path(), std::iter::empty());
+    let out = run(&["fit", "--spectrum", csv.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("at least 3 wavelengths, got 0") && !err.contains("flat"), "{err}");
 }

@@ -122,10 +122,10 @@ def test_progress_callback_cancels_a_table_build(tmp_path, monkeypatch):
 
 # Calls that ignored Ctrl-C (issue 23), each a child that runs far longer than the 1.5 s before the signal.
 LONG_CALLS = {
-    # 2000 starts of the default fit (a 4000-spectrum start table, then each start's refinement): minutes; it ran on
-    # for 13.8 s after SIGINT.
+    # 64 starts (the most, inverse::spectrum::MAX_STARTS) at 64 streams (a 4000-spectrum start table, then each
+    # start's refinement): minutes; with 2000 starts it ran on for 13.8 s after SIGINT.
     "fit_spectrum": (1, "spectral_skin.fit_spectrum(np.arange(400.0, 701.0, 10.0), np.linspace(0.15, 0.45, 31), "
-                        "starts=2000)"),
+                        "starts=64, streams=64)"),
     # The thickness choice builds six albedo tables (about 20 s each on a small machine) before the texels' fit; the
     # table build ran on for 19 s.
     "fit_albedo_map": (64, "spectral_skin.fit_albedo_map(params[..., :3] * 0.5)"),

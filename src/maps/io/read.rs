@@ -449,6 +449,15 @@ fn open_file(path: &Path, what: &str) -> Result<File, SkinError> {
     if path.is_dir() {
         return Err(SkinError::io(path, format!("cannot read {what}: expected a file, found a directory")));
     }
+    // A FIFO, socket or device is refused before it is opened: opening a FIFO waits for a writer, forever.
+    if let Ok(meta) = std::fs::metadata(path) {
+        if !meta.is_file() {
+            return Err(SkinError::io(
+                path,
+                format!("cannot read {what}: expected a regular file, found a FIFO, socket or device"),
+            ));
+        }
+    }
     File::open(path).map_err(|e| {
         SkinError::io_caused(path, format!("cannot read {what}: {e} (expected an existing, readable file)"), e)
     })
