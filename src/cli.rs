@@ -946,6 +946,7 @@ mod fit_maps {
             return Err(format!("--residual {} must name a tile set with {UDIM_TOKEN}", residual_path.display()).into());
         }
         for file in [&args.out, &residual_path] {
+            crate::inverse::albedo_maps::check_output_name(file, tiles.is_some())?;
             check_output_dir(output_folder_of(file))?;
         }
         let mut textures = Vec::new();

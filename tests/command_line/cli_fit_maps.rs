@@ -352,3 +352,23 @@ fn fit_maps_takes_a_skin_mask() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("must have one size"), "{err}");
 }
+
+/// `fit-maps` writes OpenEXR only: `--out params.png` (it wrote EXR bytes under that name) and `--residual r.png`
+/// are refused before anything is read or written (issue 38 item 5).
+#[test]
+fn fit_maps_refuses_output_names_it_would_not_honour() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    for outputs in [["--out", "params.png"], ["--residual", "r.png"]] {
+        let o = cli(&["fit-maps", "--albedo", &s("missing.exr"), outputs[0], &s(outputs[1])]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success()
+                && err.contains(outputs[1])
+                && err.contains("ending in .exr")
+                && !err.contains("missing"),
+            "{outputs:?}: {err}"
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written");
+}

@@ -148,3 +148,16 @@ def test_a_skin_mask_keeps_the_background_out_of_the_choice_and_the_figures() ->
         spectral_skin.fit_albedo_map(texture, mask=np.full((2, 6), np.nan))
     with pytest.raises(spectral_skin.SpectralSkinError, match="marks no texel as skin"):
         spectral_skin.fit_albedo_map(texture, mask=np.zeros((2, 6), bool))
+
+
+def test_write_refuses_names_it_would_not_honour(tmp_path: Path) -> None:
+    """issue 38 item 5: ``write('p.<UDIM>.exr')`` without tiles wrote a file literally so named, and a .png name got
+    EXR bytes; both are errors naming the path, and nothing is written."""
+    texture = np.array([[albedo(*TRUTH[0], epidermis_thickness_mm=0.25)]], dtype=np.float32)
+    fit = spectral_skin.fit_albedo_map(texture, epidermis_thickness_mm=0.25)
+    for name, expected in [("p.<UDIM>.exr", "names a tile set"), ("p.png", "ending in .exr")]:
+        with pytest.raises(spectral_skin.SpectralSkinError, match=expected):
+            fit.write(tmp_path / name)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="ending in .exr"):
+        fit.write(tmp_path / "p.exr", tmp_path / "residual.tif")
+    assert list(tmp_path.iterdir()) == []
