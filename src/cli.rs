@@ -333,6 +333,17 @@ impl SkinArgs {
             Some(name) => Some(SkinParams::preset(name)?),
             None => None,
         };
+        // A value given is checked before a missing one is asked for (`--melanin -0.1` alone is about the melanin).
+        for (value, spec) in [
+            (self.melanin, &MELANIN),
+            (self.melanin_blend, &MELANIN_BLEND),
+            (self.hemoglobin, &HEMOGLOBIN),
+            (self.oiliness, &OILINESS),
+        ] {
+            if let Some(v) = value {
+                spec.check(v)?;
+            }
+        }
         let pick = |explicit: Option<f64>, from_preset: Option<f64>, spec: &ParamSpec| {
             let flag = flag(spec);
             explicit.or(from_preset).ok_or_else(|| SkinError::Invalid {
