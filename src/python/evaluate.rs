@@ -387,7 +387,7 @@ pub(super) fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<L
 ///     (total diffuse reflectance, R(r) at radii_mm in mm^-2 as a float64 array of the same length).
 ///
 /// Raises:
-///     SpectralSkinError: no layers or more than 64, a layer that is not 4 values, more than 100000 radii, a thickness outside 1e-11..1e6 mm (inf only for
+///     SpectralSkinError: no layers or more than 16, a layer that is not 4 values, more than 100000 radii, a thickness outside 1e-11..1e6 mm (inf only for
 ///         the last layer), a coefficient other than 0 or 1e-12..1e6 per mm, an ior outside 1..2 (where the diffuse
 ///         Fresnel fits hold), a radius outside 0..1e6 mm, an unknown boundaries or transport, streams out of range.
 ///     TypeError: layers or radii_mm not sequences of numbers.

@@ -106,3 +106,16 @@ def test_endless_iterables_are_refused(name, tmp_path):
     [[_, kind, message]] = results
     assert kind == "SpectralSkinError", (kind, message)
     assert name in message and "at most" in message, message
+
+
+def test_layers_beyond_the_limit_are_refused_before_any_work():
+    """issue 38 item 2: 10^6 layers took 80 s to stop after Ctrl-C; a stack has at most 16 layers
+    (``accuracy::MAX_LAYERS``), and 17 is an error naming the layers and the limit, 16 is computed."""
+    import spectral_skin
+
+    layer = (1.0, 0.01, 1.0, 1.4)
+
+    total, _ = spectral_skin.layered_reflectance([layer] * 15 + [(float("inf"), 0.01, 1.0, 1.4)], [1.0])
+    assert 0.0 < total < 1.0
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"layers.*at most 16 layers"):
+        spectral_skin.layered_reflectance([layer] * 16 + [(float("inf"), 0.01, 1.0, 1.4)], [1.0])
