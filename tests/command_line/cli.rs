@@ -254,6 +254,13 @@ fn negative_values_reach_the_range_check() {
         assert_eq!(out.status.code(), Some(2), "{argv:?}: {err}");
         assert!(err.contains("melanin must be in [0, 0.5]") && err.contains(shown), "{argv:?}: {err}");
     }
+    // Extreme values are written in scientific notation (issue 38 item 5: -1e-300 and 1e308 came out with hundreds of
+    // digits).
+    for (value, shown) in [("-1e-300", "got -1e-300"), ("1e308", "got 1e308")] {
+        let out = run(&["eval", "--preset", "asian", "--melanin", value]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(shown) && err.len() < 200, "{value}: {err}");
+    }
     // Alone: the value given is checked before the missing ones are asked for (issue 38 item 5: it asked for
     // --melanin-blend first).
     let out = run(&["eval", "--melanin", "-0.1"]);
