@@ -979,7 +979,7 @@ mod fit_maps {
             let mask = match &args.mask {
                 Some(pattern) => {
                     let file = tile.map_or(pattern.clone(), |t| tile_path(pattern, t));
-                    let m = read_albedo_texture(&file)?;
+                    let m = crate::maps::io::read_rgb_image(&file, "skin mask (--mask)")?;
                     if (m.width, m.height) != (albedo.width, albedo.height) {
                         return Err(format!(
                             "--mask {} is {}x{}; the albedo {} is {}x{}: they must have one size",

@@ -351,6 +351,11 @@ fn fit_maps_takes_a_skin_mask() {
     let o = cli(&["fit-maps", "--albedo", &s("albedo.png"), "--out", &s("p.exr"), "--mask", &s("small.png")]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("must have one size"), "{err}");
+    // A mask that is no image is named as the mask (issue 38 item 5: an empty CSV was blamed on the albedo texture).
+    std::fs::write(d.join("empty.csv"), "").unwrap();
+    let o = cli(&["fit-maps", "--albedo", &s("albedo.png"), "--out", &s("p.exr"), "--mask", &s("empty.csv")]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("skin mask") && !err.contains("albedo texture"), "{err}");
 }
 
 /// `fit-maps` writes OpenEXR only: `--out params.png` (it wrote EXR bytes under that name) and `--residual r.png`

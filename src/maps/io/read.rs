@@ -1137,7 +1137,11 @@ fn srgb_to_linear(encoded: f64) -> f64 {
 /// (greyscale or RGB) decoded from sRGB to linear with the sRGB formula, computed in f64. An alpha channel and an
 /// EXR's other channels are ignored with a note. Values are not range-checked here (the fit checks them).
 pub fn read_albedo_texture(path: &Path) -> Result<AlbedoTexture, SkinError> {
-    let what = "albedo texture";
+    read_rgb_image(path, "albedo texture")
+}
+
+/// [`read_albedo_texture`]'s reading for another RGB image (a skin mask), with `what` naming it in messages.
+pub fn read_rgb_image(path: &Path, what: &str) -> Result<AlbedoTexture, SkinError> {
     let src = Source::Path(path);
     let mut notes = Vec::new();
     if is_exr(src, what)? {
