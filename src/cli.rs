@@ -408,7 +408,17 @@ impl AccuracyArgs {
 /// status: 0, 2 for an error (printed to stderr), 130 when stopped by Ctrl-C. Help, `--version` and argument errors
 /// are clap's: printed, and the process exits.
 pub fn main(args: impl IntoIterator<Item = OsString>) -> u8 {
-    match run(Cli::parse_from(joined_negative_numbers(args.into_iter()))) {
+    let args = joined_negative_numbers(args.into_iter());
+    let cli = match Cli::try_parse_from(&args) {
+        Ok(cli) => cli,
+        // clap says only that "one or more arguments" are not UTF-8: name them.
+        Err(e) if e.kind() == clap::error::ErrorKind::InvalidUtf8 => {
+            eprintln!("error: {}", non_utf8_arguments(&args));
+            return 2;
+        }
+        Err(e) => e.exit(),
+    };
+    match run(cli) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");
@@ -420,6 +430,25 @@ pub fn main(args: impl IntoIterator<Item = OsString>) -> u8 {
             }
         }
     }
+}
+
+/// The arguments that are not UTF-8, each named by the option it is the value of (or its position), for the error
+/// clap gives without naming them: names, numbers and choices must be text (a path may be any bytes).
+fn non_utf8_arguments(args: &[OsString]) -> String {
+    let named: Vec<String> = args
+        .iter()
+        .enumerate()
+        .skip(1)
+        .filter(|(_, arg)| arg.to_str().is_none())
+        .map(|(i, arg)| match args[i - 1].to_str().filter(|o| o.starts_with("--")) {
+            Some(option) => format!("the value of {option}, {arg:?}"),
+            None => format!("argument {i}, {arg:?}"),
+        })
+        .collect();
+    format!(
+        "{} not valid UTF-8 (names, numbers and choices must be text; only a path may be other bytes)",
+        if named.is_empty() { "an argument is".to_string() } else { format!("{} is", named.join("; ")) }
+    )
 }
 
 /// `--option -1e-3` as `--option=-1e-3`: clap's `allow_negative_numbers` knows `-0.1` and `-1e3` but not a negative

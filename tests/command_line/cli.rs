@@ -841,3 +841,15 @@ fn maps_help_calls_no_method_untested() {
         String::from_utf8_lossy(&run(&["maps", "--help"]).stdout).split_whitespace().collect::<Vec<_>>().join(" ");
     assert!(help.contains("random_walk_skin") && !help.contains("not tested"), "{help}");
 }
+
+/// A non-UTF-8 argument is named by its option (issue 38 item 5: clap said only "invalid UTF-8 was detected in one or
+/// more arguments").
+#[cfg(unix)]
+#[test]
+fn a_non_utf8_argument_is_named() {
+    use std::os::unix::ffi::OsStringExt;
+    let bad = std::ffi::OsString::from_vec(vec![b'a', 0xff]);
+    let out = Command::new(env!("CARGO_BIN_EXE_spectral-skin")).arg("eval").arg("--preset").arg(&bad).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.code() == Some(2) && err.contains("the value of --preset") && err.contains("UTF-8"), "{err}");
+}
