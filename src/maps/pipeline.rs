@@ -940,7 +940,15 @@ pub fn run_maps_cancellable(
         drop(staged);
         return Err(cancelled());
     }
-    commit_map_files(out_dir, None, &tiles, staged)?;
+    // The run is the folder's whole content: a tile-set run removes a plain run's files, and a plain run every
+    // tile's (`udim::TILE_RANGE`), as well as the files of its own tiles it did not write.
+    let mut removed = tiles.clone();
+    if tiles.iter().any(Option::is_some) {
+        removed.push(None);
+    } else {
+        removed.extend(crate::maps::udim::TILE_RANGE.map(Some));
+    }
+    commit_map_files(out_dir, None, &removed, staged)?;
     Ok(report)
 }
 

@@ -363,6 +363,38 @@ fn a_new_run_leaves_no_stale_outputs() {
     let texels = work["texels"].as_u64().unwrap();
     assert_eq!((work["specular_evaluations"].as_u64(), work["outputs"]["specular"].as_u64()), (Some(1), Some(0)));
     assert_eq!(work["outputs"]["albedo"].as_u64(), Some(texels));
+
+    // A tile-set run over the plain run's folder, and a plain run over the tile set's: each leaves exactly its own
+    // files (issue 38 item 5: the tile-set run left the plain albedo.exr and radius.exr, unlisted).
+    for tile in ["1001", "1002"] {
+        std::fs::copy(&face, dir.path().join(format!("face.{tile}.exr"))).unwrap();
+    }
+    let exactly_the_sidecars = |what: &str| {
+        let sidecar: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+        let mut listed: Vec<String> = sidecar["outputs"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .filter(|k| k.ends_with(".exr"))
+            .flat_map(|k| match k.contains("<UDIM>") {
+                true => vec![k.replace("<UDIM>", "1001"), k.replace("<UDIM>", "1002")],
+                false => vec![k.clone()],
+            })
+            .collect();
+        listed.push("skin_maps.json".into());
+        listed.sort();
+        let mut present: Vec<String> = std::fs::read_dir(&out_dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        present.sort();
+        assert_eq!(present, listed, "{what}: the folder holds exactly the sidecar's files");
+    };
+    maps(&["--params", dir.path().join("face.<UDIM>.exr").to_str().unwrap()]);
+    exactly_the_sidecars("a tile set after a plain run");
+    maps(&["--params", face.to_str().unwrap()]);
+    exactly_the_sidecars("a plain run after a tile set");
 }
 
 /// Ctrl-C during `maps` stops it within seconds with exit code 130 and leaves the output folder as it was: no new
