@@ -300,10 +300,21 @@ struct TransportArgs {
     /// reproduces DJ2006).
     #[arg(long, value_enum, default_value_t = Transport::default())]
     transport: Transport,
-    /// Streams (directions per hemisphere) of the adding-doubling solver, even, 2..64 [default: the level's, 8 at the
-    /// default level].
-    #[arg(long)]
+    /// Streams (directions per hemisphere) of the adding-doubling solver (the range and the levels' values from
+    /// `transport::STREAMS_RANGE` and `accuracy`'s levels).
+    #[arg(long, help = streams_help())]
     streams: Option<usize>,
+}
+
+/// `--streams`' help, from the constants it states.
+fn streams_help() -> String {
+    use crate::accuracy::{DRAFT_STREAMS, REFERENCE_STREAMS};
+    let (lo, hi) = crate::transport::STREAMS_RANGE;
+    format!(
+        "Streams (directions per hemisphere) of the adding-doubling solver, even, {lo}..{hi} [default: the level's: \
+         {DRAFT_STREAMS} draft, {} default, {REFERENCE_STREAMS} reference]",
+        crate::transport::DEFAULT_STREAMS
+    )
 }
 
 impl TransportArgs {
@@ -322,6 +333,17 @@ impl SkinArgs {
             Some(name) => Some(SkinParams::preset(name)?),
             None => None,
         };
+        // A value given is checked before a missing one is asked for (`--melanin -0.1` alone is about the melanin).
+        for (value, spec) in [
+            (self.melanin, &MELANIN),
+            (self.melanin_blend, &MELANIN_BLEND),
+            (self.hemoglobin, &HEMOGLOBIN),
+            (self.oiliness, &OILINESS),
+        ] {
+            if let Some(v) = value {
+                spec.check(v)?;
+            }
+        }
         let pick = |explicit: Option<f64>, from_preset: Option<f64>, spec: &ParamSpec| {
             let flag = flag(spec);
             explicit.or(from_preset).ok_or_else(|| SkinError::Invalid {
@@ -386,7 +408,17 @@ impl AccuracyArgs {
 /// status: 0, 2 for an error (printed to stderr), 130 when stopped by Ctrl-C. Help, `--version` and argument errors
 /// are clap's: printed, and the process exits.
 pub fn main(args: impl IntoIterator<Item = OsString>) -> u8 {
-    match run(Cli::parse_from(joined_negative_numbers(args.into_iter()))) {
+    let args = joined_negative_numbers(args.into_iter());
+    let cli = match Cli::try_parse_from(&args) {
+        Ok(cli) => cli,
+        // clap says only that "one or more arguments" are not UTF-8: name them.
+        Err(e) if e.kind() == clap::error::ErrorKind::InvalidUtf8 => {
+            eprintln!("error: {}", non_utf8_arguments(&args));
+            return 2;
+        }
+        Err(e) => e.exit(),
+    };
+    match run(cli) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");
@@ -400,13 +432,35 @@ pub fn main(args: impl IntoIterator<Item = OsString>) -> u8 {
     }
 }
 
+/// The arguments that are not UTF-8, each named by the option it is the value of (or its position), for the error
+/// clap gives without naming them: names, numbers and choices must be text (a path may be any bytes).
+fn non_utf8_arguments(args: &[OsString]) -> String {
+    let named: Vec<String> = args
+        .iter()
+        .enumerate()
+        .skip(1)
+        .filter(|(_, arg)| arg.to_str().is_none())
+        .map(|(i, arg)| match args[i - 1].to_str().filter(|o| o.starts_with("--")) {
+            Some(option) => format!("the value of {option}, {arg:?}"),
+            None => format!("argument {i}, {arg:?}"),
+        })
+        .collect();
+    format!(
+        "{} not valid UTF-8 (names, numbers and choices must be text; only a path may be other bytes)",
+        if named.is_empty() { "an argument is".to_string() } else { format!("{} is", named.join("; ")) }
+    )
+}
+
 /// `--option -1e-3` as `--option=-1e-3`: clap's `allow_negative_numbers` knows `-0.1` and `-1e3` but not a negative
 /// exponent, and would take `-1e-3` for the short flags `-1`, `-e`, ... A token that parses as a number and follows a
 /// long option without `=` is joined to it; every other token passes unchanged.
 fn joined_negative_numbers(args: impl Iterator<Item = OsString>) -> Vec<OsString> {
     let mut out: Vec<OsString> = Vec::new();
     for arg in args {
-        let negative_number = arg.to_str().is_some_and(|s| s.starts_with('-') && s.parse::<f64>().is_ok());
+        // A number, or a comma-separated list of numbers (`--rgb-gains -1,1,1`).
+        let negative_number = arg
+            .to_str()
+            .is_some_and(|s| s.starts_with('-') && s.split(',').all(|part| part.trim().parse::<f64>().is_ok()));
         match out.last_mut() {
             Some(option)
                 if negative_number
@@ -932,6 +986,7 @@ mod fit_maps {
             return Err(format!("--residual {} must name a tile set with {UDIM_TOKEN}", residual_path.display()).into());
         }
         for file in [&args.out, &residual_path] {
+            crate::inverse::albedo_maps::check_output_name(file, tiles.is_some())?;
             check_output_dir(output_folder_of(file))?;
         }
         let mut textures = Vec::new();
@@ -953,7 +1008,7 @@ mod fit_maps {
             let mask = match &args.mask {
                 Some(pattern) => {
                     let file = tile.map_or(pattern.clone(), |t| tile_path(pattern, t));
-                    let m = read_albedo_texture(&file)?;
+                    let m = crate::maps::io::read_rgb_image(&file, "skin mask (--mask)")?;
                     if (m.width, m.height) != (albedo.width, albedo.height) {
                         return Err(format!(
                             "--mask {} is {}x{}; the albedo {} is {}x{}: they must have one size",

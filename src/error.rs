@@ -7,7 +7,7 @@ use thiserror::Error;
 #[non_exhaustive]
 pub enum SkinError {
     /// A scalar parameter is outside its allowed range or not finite.
-    #[error("{name} must be in [{min}, {max}] ({meaning}); got {value}")]
+    #[error("{name} must be in [{}, {}] ({meaning}); got {}", Number(*.min), Number(*.max), Number(*.value))]
     OutOfRange { name: &'static str, meaning: &'static str, min: f64, max: f64, value: f64 },
     /// An input that is not a single range (a layer list, a radius grid, a preset name) is invalid.
     #[error("invalid {name}: {reason}")]
@@ -127,6 +127,21 @@ impl SkinError {
                 bad_texels_message(parameter, *min, *max, [*nan, *infinite, *out_of_range], first, enable)
             }
             other => other.to_string(),
+        }
+    }
+}
+
+/// A number in a message: as Rust writes it (`0.5`, `-0.1`) where that is short, else in scientific notation
+/// (`1e308`, `-1e-300` were written out with hundreds of digits).
+pub struct Number(pub f64);
+
+impl std::fmt::Display for Number {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let plain = self.0.to_string();
+        if plain.len() <= 24 {
+            f.write_str(&plain)
+        } else {
+            write!(f, "{:e}", self.0)
         }
     }
 }

@@ -22,7 +22,8 @@ pub enum SubsurfaceMethod {
     RandomWalk,
     /// Random Walk (Legacy), Blender 5.2 and later: the walk `RANDOM_WALK` was up to 5.1.
     RandomWalkLegacy,
-    /// Random Walk (Skin): radius rescaled through a dipole with the Subsurface IOR (best effort, not tested).
+    /// Random Walk (Skin): radius rescaled through a dipole with the Subsurface IOR (measured flat response and
+    /// width; tested per Blender version as blender_targets() lists).
     RandomWalkSkin,
 }
 

@@ -81,6 +81,9 @@ impl AlbedoMapFit {
     /// of a UDIM set) with [`crate::maps::io::commit_all`].
     pub fn stage(&self, params_path: &Path, residual_path: Option<&Path>) -> Result<Vec<Staged>, SkinError> {
         for file in std::iter::once(params_path).chain(residual_path) {
+            check_output_name(file, false)?;
+        }
+        for file in std::iter::once(params_path).chain(residual_path) {
             create_output_dir(output_folder_of(file))?;
         }
         let planes = self.parameter_planes();
@@ -97,6 +100,31 @@ impl AlbedoMapFit {
         }
         Ok(staged)
     }
+}
+
+/// A fit's files are OpenEXR: a name must end in `.exr` (a `.png` name got EXR bytes), and, unless it names a
+/// `tile_set`, must not hold [`crate::maps::udim::UDIM_TOKEN`] (a tile's file is named by its tile; the token was
+/// written literally). Checked by [`AlbedoMapFit::stage`], and by `fit-maps` before the fit.
+pub fn check_output_name(path: &Path, tile_set: bool) -> Result<(), SkinError> {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let what = format!("output {}", path.display());
+    if !name.to_ascii_lowercase().ends_with(".exr") || name.len() <= ".exr".len() {
+        return Err(SkinError::invalid(
+            what,
+            "the parameter and residual maps are OpenEXR: give a name ending in .exr",
+        ));
+    }
+    if !tile_set && crate::maps::udim::is_tile_set(path) {
+        return Err(SkinError::invalid(
+            what,
+            format!(
+                "holds {}, which names a tile set: fit a tile set (CLI: an --albedo with {0}; Python: write(..., \
+                 tiles=...)) or give one file's name",
+                crate::maps::udim::UDIM_TOKEN
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Figures of a map fit.

@@ -34,6 +34,9 @@ pub const DEFAULT_FREE: [&str; 5] =
 /// The number of start-table entries [`fit_spectrum`] refines by default: one start alone misses the best fit of
 /// the default set on about 15 % of measured spectra, by up to 0.008 RMS (docs/measured-skin.md, the restart check).
 pub const DEFAULT_STARTS: usize = 4;
+/// The most table starts refined: beyond a few the restarts find nothing new (docs/measured-skin.md), and each is a
+/// local fit of up to hundreds of forward spectra, minutes at 64 streams on a fine spectrum.
+pub const MAX_STARTS: usize = 64;
 
 /// The oiliness a fit reports when none is given: the value of all three DJ2006 presets (it does not change the
 /// diffuse reflectance, so a spectrum cannot tell it).
@@ -259,8 +262,14 @@ impl SpectrumFitter {
             let (lo, hi) = SPECULAR_OFFSET_RANGE;
             crate::error::check_range("specular", "surface reflection added to the diffuse reflectance", v, lo, hi)?;
         }
-        if options.starts == 0 {
-            return Err(SkinError::invalid("starts", "at least one start must be refined"));
+        if !(1..=MAX_STARTS).contains(&options.starts) {
+            return Err(SkinError::invalid(
+                "starts",
+                format!(
+                    "must be 1 to {MAX_STARTS} (table starts refined, each a local fit of many forward spectra); got {}",
+                    options.starts
+                ),
+            ));
         }
         crate::transport::adding_doubling::validate_streams(options.request.accuracy.streams)?;
         let grid = WavelengthGrid { wavelengths_nm: wavelengths_nm.to_vec() };
@@ -465,6 +474,8 @@ pub fn fit_spectrum_cancellable(
     options: &FitOptions,
     cancel: &AtomicBool,
 ) -> Result<SpectrumFit, SkinError> {
+    // The wavelengths first: with none, the reflectance's checks would speak of a flat spectrum from inf to -inf.
+    check_wavelengths(wavelengths_nm)?;
     check_reflectance(reflectance, wavelengths_nm.len())?;
     SpectrumFitter::new_cancellable(wavelengths_nm, options, cancel)?.fit_cancellable(reflectance, cancel)
 }

@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -431,11 +431,25 @@ pub fn compute_maps_cancellable(
         Strategy::Constant
     } else if let Some(tuples) = distinct_tuples(image, MAX_DISTINCT_TUPLES) {
         let keys: Vec<[u32; 6]> = tuples.keys().cloned().collect();
+        // The flag is read before each evaluation (one is up to a few tenths of a second at the reference level), and
+        // each evaluation is a progress tick `(0, texels)`, as a table node is: an evaluation not started when the
+        // flag is set is skipped (its placeholder is never written: `fill_rows` skips every row then).
+        let evaluated = AtomicUsize::new(0);
         let values = keys
             .par_iter()
-            .map(|k| evaluate_one(k.map(f32::from_bits)).map(|t| select(&t)))
+            .map(|k| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Ok(([0.0; 3], [0.0; 3]));
+                }
+                let value = evaluate_one(k.map(f32::from_bits)).map(|t| select(&t));
+                evaluated.fetch_add(1, Ordering::Relaxed);
+                if let Some(p) = progress {
+                    p(0, n);
+                }
+                value
+            })
             .collect::<Result<Vec<_>, SkinError>>()?;
-        work.evaluations = keys.len();
+        work.evaluations = evaluated.into_inner();
         let index: HashMap<[u32; 6], usize> = keys.iter().enumerate().map(|(i, k)| (*k, i)).collect();
         fill_rows(w, &mut base_color, &mut radius, progress, cancel, |i| values[index[&tuple(i).map(f32::to_bits)]]);
         if settings.strategy == StrategyChoice::Exact {
@@ -522,18 +536,28 @@ pub fn compute_maps_cancellable(
     } else {
         // Direct evaluation of every texel, row by row in parallel: on request, or when an extended parameter other
         // than the thickness varies over more tuples than `MAX_DISTINCT_TUPLES`.
+        // The flag is read before each texel's evaluation (a row of a wide map is minutes at the reference level),
+        // each evaluation is a progress tick `(0, texels)` and each finished row a progress of its texels.
         type Row = Result<Vec<([f32; 3], [f32; 3])>, SkinError>;
+        let evaluated = AtomicUsize::new(0);
         let rows: Vec<Row> = (0..h)
             .into_par_iter()
             .map(|y| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Ok(Vec::new());
+                let mut row = Vec::with_capacity(w);
+                for x in 0..w {
+                    if cancel.load(Ordering::Relaxed) {
+                        return Ok(Vec::new());
+                    }
+                    row.push(evaluate_one(tuple(y * w + x)).map(|t| select(&t))?);
+                    evaluated.fetch_add(1, Ordering::Relaxed);
+                    if let Some(p) = progress {
+                        p(0, n);
+                    }
                 }
-                let row = (0..w).map(|x| evaluate_one(tuple(y * w + x)).map(|t| select(&t))).collect();
                 if let Some(p) = progress {
                     p(w, n);
                 }
-                row
+                Ok(row)
             })
             .collect();
         for (y, row) in rows.into_iter().enumerate() {
@@ -546,7 +570,7 @@ pub fn compute_maps_cancellable(
                 }
             }
         }
-        work.evaluations = n;
+        work.evaluations = evaluated.into_inner();
         Strategy::Exact { evaluations: n }
     };
 
@@ -916,7 +940,15 @@ pub fn run_maps_cancellable(
         drop(staged);
         return Err(cancelled());
     }
-    commit_map_files(out_dir, None, &tiles, staged)?;
+    // The run is the folder's whole content: a tile-set run removes a plain run's files, and a plain run every
+    // tile's (`udim::TILE_RANGE`), as well as the files of its own tiles it did not write.
+    let mut removed = tiles.clone();
+    if tiles.iter().any(Option::is_some) {
+        removed.push(None);
+    } else {
+        removed.extend(crate::maps::udim::TILE_RANGE.map(Some));
+    }
+    commit_map_files(out_dir, None, &removed, staged)?;
     Ok(report)
 }
 

@@ -8,9 +8,9 @@ use pyo3::prelude::*;
 
 use crate::color::difference::{ciede2000, LabConverter};
 use crate::color::rgb::{WorkingSpace, ALL_WORKING_SPACES};
-use crate::maps::io::check_texel_count;
+use crate::maps::io::{check_texel_count, MAX_TEXELS};
 
-use super::convert::{by_name, shape_text};
+use super::convert::{by_name, check_array_size, shape_text};
 use super::detach::detached;
 use super::errors::invalid;
 
@@ -19,6 +19,8 @@ const RGB_EXPECTED: &str = "an array of linear RGB colours, shape (..., 3)";
 /// `obj` as float64 colours of shape (..., 3), with every value finite; at most as many colours as a texture has
 /// texels.
 fn colours(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<[f64; 3]>)> {
+    // An array's size from its shape, before it is converted to float64 (a copy for any other dtype).
+    check_array_size(name, obj, RGB_EXPECTED, 3 * MAX_TEXELS)?;
     let array = obj
         .extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>()
         .map_err(|e| PyTypeError::new_err(format!("{name} must be {RGB_EXPECTED}: {e}")))?;

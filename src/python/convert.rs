@@ -79,9 +79,15 @@ pub(super) fn real_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Real> {
 
 pub(super) fn count_of(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Count> {
     number_type_check(name, obj, AN_INTEGER)?;
-    obj.extract::<i64>()
-        .map(Count)
-        .map_err(|_| PyTypeError::new_err(format!("{name} must be {AN_INTEGER}; got {}", type_name(obj))))
+    obj.extract::<i64>().map(Count).map_err(|_| {
+        // An int too large for 64 bits is a value out of range, not a wrong type.
+        if obj.is_instance_of::<pyo3::types::PyInt>() {
+            let repr = obj.repr().map(|r| r.to_string()).unwrap_or_default();
+            invalid(name, format!("must be an integer in [{}, {}]; got {repr}", i64::MIN, i64::MAX))
+        } else {
+            PyTypeError::new_err(format!("{name} must be {AN_INTEGER}; got {}", type_name(obj)))
+        }
+    })
 }
 
 /// An optional numeric keyword argument (None is absent).
@@ -93,22 +99,60 @@ pub(super) fn count_arg(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<
     obj.filter(|o| !o.is_none()).map(|o| count_of(name, o)).transpose()
 }
 
-/// `obj` as a sequence of numbers under the rule of [`Real`]; a wrong element is a TypeError naming `name[i]`.
-pub(super) fn real_sequence(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<f64>> {
+/// `obj` as a sequence of at most `most` numbers under the rule of [`Real`]; a wrong element is a TypeError naming
+/// `name[i]`. The iteration stops at element `most + 1` (an endless iterator is refused, not followed).
+pub(super) fn real_sequence(name: &str, obj: &Bound<'_, PyAny>, expected: &str, most: usize) -> PyResult<Vec<f64>> {
     reject_string(obj, &format!("{name} must be {expected}"))?;
     let iter = obj
         .try_iter()
         .map_err(|_| PyTypeError::new_err(format!("{name} must be {expected}; got {}", type_name(obj))))?;
-    iter.enumerate().map(|(i, item)| Ok(real_of(&format!("{name}[{i}]"), &item?)?.0)).collect()
+    let values: Vec<f64> = iter
+        .take(most.saturating_add(1))
+        .enumerate()
+        .map(|(i, item)| Ok(real_of(&format!("{name}[{i}]"), &item?)?.0))
+        .collect::<PyResult<_>>()?;
+    if values.len() > most {
+        return Err(too_many(name, expected, most, "more"));
+    }
+    Ok(values)
 }
 
-/// `obj` as a sequence of integers under the rule of [`Count`]; a wrong element is a TypeError naming `name[i]`.
-pub(super) fn count_sequence(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<i64>> {
+/// The error of an argument with more than `most` elements (`got`: how many, or "more" for an iterable).
+fn too_many(name: &str, expected: &str, most: usize, got: &str) -> PyErr {
+    invalid(name, format!("must be {expected} with at most {most} values; got {got}"))
+}
+
+/// The one size check of an array argument, read from its shape before anything is copied or converted (a broadcast
+/// or strided view of any shape costs nothing): the product of the dimensions must be at most `most`. Not an array:
+/// nothing to check here (a sequence is bounded while it is read, [`real_sequence`]).
+pub(super) fn check_array_size(name: &str, obj: &Bound<'_, PyAny>, expected: &str, most: usize) -> PyResult<()> {
+    let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
+        return Ok(());
+    };
+    let shape = untyped.shape();
+    let count = shape.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+    if count.map_or(true, |n| n > most) {
+        return Err(too_many(name, expected, most, &format!("shape {}", shape_text(shape))));
+    }
+    Ok(())
+}
+
+/// `obj` as a sequence of at most `most` integers under the rule of [`Count`]; a wrong element is a TypeError naming
+/// `name[i]`; the iteration stops at element `most + 1`.
+pub(super) fn count_sequence(name: &str, obj: &Bound<'_, PyAny>, expected: &str, most: usize) -> PyResult<Vec<i64>> {
     reject_string(obj, &format!("{name} must be {expected}"))?;
     let iter = obj
         .try_iter()
         .map_err(|_| PyTypeError::new_err(format!("{name} must be {expected}; got {}", type_name(obj))))?;
-    iter.enumerate().map(|(i, item)| Ok(count_of(&format!("{name}[{i}]"), &item?)?.0)).collect()
+    let values: Vec<i64> = iter
+        .take(most.saturating_add(1))
+        .enumerate()
+        .map(|(i, item)| Ok(count_of(&format!("{name}[{i}]"), &item?)?.0))
+        .collect::<PyResult<_>>()?;
+    if values.len() > most {
+        return Err(too_many(name, expected, most, "more"));
+    }
+    Ok(values)
 }
 
 /// The serde name of a core enum value (e.g. "directional", "Linear Rec.709").
@@ -215,7 +259,7 @@ pub(super) fn target_from(blender: Option<&Bound<'_, PyAny>>, engine: &str) -> P
             if obj.is_instance_of::<PyBytes>() || is_boolean(obj) {
                 return Err(PyTypeError::new_err(EXPECTED));
             }
-            let parts = count_sequence("blender", obj, EXPECTED.trim_start_matches("blender must be "))?;
+            let parts = count_sequence("blender", obj, EXPECTED.trim_start_matches("blender must be "), 3)?;
             BlenderVersion::from_parts(&parts)?
         }
     };
@@ -403,12 +447,13 @@ pub(super) fn nested_rows<'py>(py: Python<'py>, rows: &[Vec<f64>]) -> PyResult<B
 }
 
 /// A 1-D numpy array of ints or floats (any strides, read-only too) or a sequence of numbers under the rule of
-/// [`Real`]. A bool, str or other dtype is a TypeError, another number of dimensions a SpectralSkinError; both name
-/// `name`.
-pub(super) fn real_vector(name: &str, obj: &Bound<'_, PyAny>, expected: &str) -> PyResult<Vec<f64>> {
+/// [`Real`], of at most `most` values (checked from the shape before any copy, [`check_array_size`]). A bool, str or
+/// other dtype is a TypeError, another number of dimensions or too many values a SpectralSkinError; both name `name`.
+pub(super) fn real_vector(name: &str, obj: &Bound<'_, PyAny>, expected: &str, most: usize) -> PyResult<Vec<f64>> {
     let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
-        return real_sequence(name, obj, expected);
+        return real_sequence(name, obj, expected, most);
     };
+    check_array_size(name, obj, expected, most)?;
     let kind = untyped.dtype().kind();
     if !matches!(kind, b'f' | b'i' | b'u') {
         return Err(PyTypeError::new_err(format!(
@@ -501,6 +546,10 @@ pub(super) fn float_array<'py>(
     }
     if untyped.ndim() != ndim {
         return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(untyped.shape()))));
+    }
+    // The texel bound, from the shape, before any plane is copied (a broadcast view of any shape costs nothing).
+    if let [height, width, ..] = *untyped.shape() {
+        crate::maps::io::check_texel_count(name, width, height)?;
     }
     Ok(Some(array))
 }

@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use serde_json::Value;
 
+use crate::accuracy::{MAX_LAYERS, MAX_PROFILE_RADII};
 use crate::diffusion::{Layer, LayeredOptions, ALL_BOUNDARIES};
 use crate::evaluate::{Evaluation, MethodParams, Request};
 use crate::fit::blender_target::Target;
@@ -353,7 +354,7 @@ pub(super) fn profile_py<'py>(
 /// One layer from a 4-sequence of numbers.
 pub(super) fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<Layer> {
     reject_string(item, &format!("layers[{index}] must be a tuple {LAYER_FIELDS}"))?;
-    let values = real_sequence(&format!("layers[{index}]"), item, &format!("a tuple of 4 numbers {LAYER_FIELDS}"))?;
+    let values = real_sequence(&format!("layers[{index}]"), item, &format!("a tuple of 4 numbers {LAYER_FIELDS}"), 4)?;
     match values[..] {
         [thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior] => {
             Ok(Layer { thickness_mm, sigma_a_per_mm, sigma_s_reduced_per_mm, ior })
@@ -386,7 +387,7 @@ pub(super) fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<L
 ///     (total diffuse reflectance, R(r) at radii_mm in mm^-2 as a float64 array of the same length).
 ///
 /// Raises:
-///     SpectralSkinError: no layers, a layer that is not 4 values, a thickness outside 1e-11..1e6 mm (inf only for
+///     SpectralSkinError: no layers or more than 16, a layer that is not 4 values, more than 100000 radii, a thickness outside 1e-11..1e6 mm (inf only for
 ///         the last layer), a coefficient other than 0 or 1e-12..1e6 per mm, an ior outside 1..2 (where the diffuse
 ///         Fresnel fits hold), a radius outside 0..1e6 mm, an unknown boundaries or transport, streams out of range.
 ///     TypeError: layers or radii_mm not sequences of numbers.
@@ -404,9 +405,16 @@ pub(super) fn layered_reflectance_py<'py>(
     streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(f64, Bound<'py, PyArray1<f64>>)> {
     reject_string(layers, &format!("layers must be a list of tuples {LAYER_FIELDS}"))?;
-    let layers: Vec<Layer> =
-        layers.try_iter()?.enumerate().map(|(i, item)| extract_layer(i, &item?)).collect::<PyResult<_>>()?;
-    let radii = real_vector("radii_mm", radii_mm, "a 1-D array-like of radii in mm")?;
+    let layers: Vec<Layer> = layers
+        .try_iter()?
+        .take(MAX_LAYERS + 1)
+        .enumerate()
+        .map(|(i, item)| extract_layer(i, &item?))
+        .collect::<PyResult<_>>()?;
+    if layers.len() > MAX_LAYERS {
+        return Err(invalid("layers", format!("at most {MAX_LAYERS} layers; got more")));
+    }
+    let radii = real_vector("radii_mm", radii_mm, "a 1-D array-like of radii in mm", MAX_PROFILE_RADII)?;
     let defaults = LayeredOptions::default();
     let options = LayeredOptions {
         boundaries: by_name("boundaries", boundaries, &ALL_BOUNDARIES)?,

@@ -4,7 +4,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
-use crate::inverse::spectrum::{FitOptions, Objective, Specular, ALL_OBJECTIVES};
+use crate::inverse::spectrum::{FitOptions, Objective, Specular, ALL_OBJECTIVES, MAX_SPECTRUM_WAVELENGTHS};
 use crate::skin::params::{PARAMS, PARAM_COUNT};
 
 use super::convert::{
@@ -36,7 +36,7 @@ use super::errors::invalid;
 ///         specular component excluded).
 ///     objective: what is minimised: "reflectance" (the squared reflectance differences; the default) or
 ///         "cielab" (the squared CIELAB difference of the colours, the reflectance differences only breaking ties).
-///     starts: how many of the start table's best entries are refined (the best fit is kept), >= 1; None: 4
+///     starts: how many of the start table's best entries are refined (the best fit is kept), 1..64; None: 4
 ///         (docs/measured-skin.md, the restart check).
 ///     transport: the model fitted, "adding_doubling" (exact totals; the default) or "diffusion" (the paper's), as
 ///         for :func:`evaluate`.
@@ -77,8 +77,8 @@ pub(super) fn fit_spectrum_py<'py>(
     streams: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     const NUMBERS: &str = "a 1-D sequence or array of numbers";
-    let wavelengths = real_vector("wavelengths_nm", wavelengths_nm, NUMBERS)?;
-    let measured = real_vector("reflectance", reflectance, NUMBERS)?;
+    let wavelengths = real_vector("wavelengths_nm", wavelengths_nm, NUMBERS, MAX_SPECTRUM_WAVELENGTHS)?;
+    let measured = real_vector("reflectance", reflectance, NUMBERS, MAX_SPECTRUM_WAVELENGTHS)?;
     let mut options = FitOptions::default();
     if let Some(free) = free.filter(|f| !f.is_none()) {
         reject_string(free, "free must be a sequence of parameter names")?;

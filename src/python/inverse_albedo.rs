@@ -1,7 +1,7 @@
 //! `fit_albedo` and `fit_albedo_map`: the parameters that reproduce an albedo colour or texture
 //! (src/inverse/albedo.rs).
 
-use numpy::{PyArray1, PyArrayMethods};
+use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
@@ -65,6 +65,15 @@ fn mask_arg(obj: Option<&Bound<'_, PyAny>>, height: usize, width: usize) -> PyRe
     let Some(obj) = obj.filter(|o| !o.is_none()) else {
         return Ok(None);
     };
+    // The shape first, before anything is copied: a broadcast view of any size costs nothing.
+    if let Ok(untyped) = obj.cast::<numpy::PyUntypedArray>() {
+        if untyped.shape() != [height, width] {
+            return Err(invalid(
+                "mask",
+                format!("must be {EXPECTED} ({height}, {width}); got shape {}", shape_text(untyped.shape())),
+            ));
+        }
+    }
     let (shape, values): (Vec<usize>, Vec<bool>) = if let Ok(a) = obj.cast::<numpy::PyArrayDyn<bool>>() {
         let readonly = a.try_readonly().map_err(|e| pyo3::exceptions::PyTypeError::new_err(e.to_string()))?;
         (readonly.as_array().shape().to_vec(), readonly.as_array().iter().copied().collect())
@@ -99,7 +108,7 @@ fn gains_arg(obj: Option<&Bound<'_, PyAny>>, auto: bool) -> PyResult<(Option<[f6
         }
         return Err(invalid("rgb_gains", format!("must be {expected}; got {text:?}")));
     }
-    let values = real_vector("rgb_gains", obj, expected)?;
+    let values = real_vector("rgb_gains", obj, expected, 3)?;
     let gains: [f64; 3] = values
         .as_slice()
         .try_into()
@@ -163,7 +172,7 @@ pub(super) fn fit_albedo_py<'py>(
     streams: Option<&Bound<'py, PyAny>>,
     rgb_gains: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let values = real_vector("rgb", rgb, "3 numbers (linear RGB)")?;
+    let values = real_vector("rgb", rgb, "3 numbers (linear RGB)", 3)?;
     let (gains, _) = gains_arg(rgb_gains, false)?;
     let target: [f64; 3] = values
         .as_slice()

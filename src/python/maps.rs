@@ -73,7 +73,7 @@ pub(super) fn table_resolution(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Table
     let Some(obj) = obj else {
         return Ok(TableResolution::default());
     };
-    let counts = count_sequence("table_resolution", obj, EXPECTED)?;
+    let counts = count_sequence("table_resolution", obj, EXPECTED, 3)?;
     let [m, b, h] = counts[..] else {
         return Err(invalid("table_resolution", format!("expected {EXPECTED}; got {} values", counts.len())));
     };

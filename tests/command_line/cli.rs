@@ -254,6 +254,18 @@ fn negative_values_reach_the_range_check() {
         assert_eq!(out.status.code(), Some(2), "{argv:?}: {err}");
         assert!(err.contains("melanin must be in [0, 0.5]") && err.contains(shown), "{argv:?}: {err}");
     }
+    // Extreme values are written in scientific notation (issue 38 item 5: -1e-300 and 1e308 came out with hundreds of
+    // digits).
+    for (value, shown) in [("-1e-300", "got -1e-300"), ("1e308", "got 1e308")] {
+        let out = run(&["eval", "--preset", "asian", "--melanin", value]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(shown) && err.len() < 200, "{value}: {err}");
+    }
+    // Alone: the value given is checked before the missing ones are asked for (issue 38 item 5: it asked for
+    // --melanin-blend first).
+    let out = run(&["eval", "--melanin", "-0.1"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("melanin must be in [0, 0.5]") && !err.contains("melanin-blend"), "{err}");
     let dir = tempfile::tempdir().unwrap();
     let params = example_params(dir.path());
     let out_dir = dir.path().join("maps");
@@ -351,6 +363,38 @@ fn a_new_run_leaves_no_stale_outputs() {
     let texels = work["texels"].as_u64().unwrap();
     assert_eq!((work["specular_evaluations"].as_u64(), work["outputs"]["specular"].as_u64()), (Some(1), Some(0)));
     assert_eq!(work["outputs"]["albedo"].as_u64(), Some(texels));
+
+    // A tile-set run over the plain run's folder, and a plain run over the tile set's: each leaves exactly its own
+    // files (issue 38 item 5: the tile-set run left the plain albedo.exr and radius.exr, unlisted).
+    for tile in ["1001", "1002"] {
+        std::fs::copy(&face, dir.path().join(format!("face.{tile}.exr"))).unwrap();
+    }
+    let exactly_the_sidecars = |what: &str| {
+        let sidecar: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+        let mut listed: Vec<String> = sidecar["outputs"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .filter(|k| k.ends_with(".exr"))
+            .flat_map(|k| match k.contains("<UDIM>") {
+                true => vec![k.replace("<UDIM>", "1001"), k.replace("<UDIM>", "1002")],
+                false => vec![k.clone()],
+            })
+            .collect();
+        listed.push("skin_maps.json".into());
+        listed.sort();
+        let mut present: Vec<String> = std::fs::read_dir(&out_dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        present.sort();
+        assert_eq!(present, listed, "{what}: the folder holds exactly the sidecar's files");
+    };
+    maps(&["--params", dir.path().join("face.<UDIM>.exr").to_str().unwrap()]);
+    exactly_the_sidecars("a tile set after a plain run");
+    maps(&["--params", face.to_str().unwrap()]);
+    exactly_the_sidecars("a plain run after a tile set");
 }
 
 /// Ctrl-C during `maps` stops it within seconds with exit code 130 and leaves the output folder as it was: no new
@@ -411,14 +455,14 @@ fn interrupt(argv: &[&str]) {
     assert_eq!(status.code(), Some(130), "{argv:?}: exit code 130 after Ctrl-C, got {status:?}");
 }
 
-/// Ctrl-C during `fit` (2000 starts: minutes of refinement after a start table of 4000 spectra) stops it within
-/// seconds with exit code 130 (it ran on for 13.8 s after Ctrl-C).
+/// Ctrl-C during `fit` (64 starts, the most, at 64 streams: minutes of a start table of 4000 spectra and the starts'
+/// refinement) stops it within seconds with exit code 130 (with 2000 starts it ran on for 13.8 s after Ctrl-C).
 #[cfg(unix)]
 #[test]
 fn ctrl_c_stops_fit() {
     let dir = tempfile::tempdir().unwrap();
     let csv = spectrum_csv(dir.path(), (0..31).map(|i| (400.0 + 10.0 * i as f64, 0.15 + 0.01 * i as f64)));
-    interrupt(&["fit", "--spectrum", csv.to_str().unwrap(), "--starts", "2000"]);
+    interrupt(&["fit", "--spectrum", csv.to_str().unwrap(), "--starts", "64", "--streams", "64"]);
 }
 
 /// `profile --rgb-mapping`: the help says the linear RGB profile can be negative; the default (linear) has negative
@@ -789,4 +833,55 @@ fn maps_take_a_surface() {
     let paper = run(&["maps", "--params", params, "--out", out, "--outputs", "specular", "--surface", "paper"]);
     assert!(paper.status.success(), "{}", String::from_utf8_lossy(&paper.stderr));
     assert_eq!(files(), ["skin_maps.json", "specular.exr"]);
+}
+
+/// `--streams`' help states the levels' streams from the constants (issue 38 item 5: it said 8 at the default level,
+/// which uses 10).
+#[test]
+fn streams_help_states_the_levels_streams() {
+    use spectral_skin::accuracy::{DRAFT_STREAMS, REFERENCE_STREAMS};
+    use spectral_skin::transport::{DEFAULT_STREAMS, STREAMS_RANGE};
+    for command in ["eval", "maps", "fit"] {
+        let out = run(&[command, "--help"]);
+        let help = String::from_utf8_lossy(&out.stdout).split_whitespace().collect::<Vec<_>>().join(" ");
+        let expected = format!(
+            "even, {}..{} [default: the level's: {DRAFT_STREAMS} draft, {DEFAULT_STREAMS} default, {REFERENCE_STREAMS} \
+             reference]",
+            STREAMS_RANGE.0, STREAMS_RANGE.1
+        );
+        assert!(help.contains(&expected), "{command} --help lacks {expected:?}: {help}");
+    }
+}
+
+/// A CSV with a header and no data rows names the wavelengths and how many are needed (issue 38 item 5: it said the
+/// reflectance "is flat (inf to -inf)").
+#[test]
+fn a_header_only_spectrum_names_the_wavelengths_needed() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = spectrum_csv(dir.path(), std::iter::empty());
+    let out = run(&["fit", "--spectrum", csv.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("at least 3 wavelengths, got 0") && !err.contains("flat"), "{err}");
+}
+
+/// `maps --help` says of no method that it is untested: whether a method was tested is the target table's fact
+/// (`blender_targets`), and every method of every listed version is (issue 38 item 5: the help called
+/// random_walk_skin "not tested" while the table marked it tested).
+#[test]
+fn maps_help_calls_no_method_untested() {
+    let help =
+        String::from_utf8_lossy(&run(&["maps", "--help"]).stdout).split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(help.contains("random_walk_skin") && !help.contains("not tested"), "{help}");
+}
+
+/// A non-UTF-8 argument is named by its option (issue 38 item 5: clap said only "invalid UTF-8 was detected in one or
+/// more arguments").
+#[cfg(unix)]
+#[test]
+fn a_non_utf8_argument_is_named() {
+    use std::os::unix::ffi::OsStringExt;
+    let bad = std::ffi::OsString::from_vec(vec![b'a', 0xff]);
+    let out = Command::new(env!("CARGO_BIN_EXE_spectral-skin")).arg("eval").arg("--preset").arg(&bad).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.code() == Some(2) && err.contains("the value of --preset") && err.contains("UTF-8"), "{err}");
 }

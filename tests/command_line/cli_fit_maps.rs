@@ -318,6 +318,11 @@ fn fit_maps_diagnoses_a_lit_texture_and_applies_gains() {
     let o = cli(&["fit-maps", "--albedo", &s("missing.exr"), "--rgb-gains", "0.5,1"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("--rgb-gains takes three gains") && !err.contains("missing"), "{err}");
+    // A negative first gain is a value for the range check, not a flag (issue 38 item 5: clap took `-1,1,1` for
+    // one).
+    let o = cli(&["fit-maps", "--albedo", &s("lit.exr"), "--out", &s("r.exr"), "--rgb-gains", "-1,1,1"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("rgb_gains[0]") && !err.contains("unexpected argument"), "{err}");
 }
 
 /// `fit-maps --mask`: skin over a green background; unmasked the background makes it warn, with a black-and-white
@@ -346,4 +351,29 @@ fn fit_maps_takes_a_skin_mask() {
     let o = cli(&["fit-maps", "--albedo", &s("albedo.png"), "--out", &s("p.exr"), "--mask", &s("small.png")]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("must have one size"), "{err}");
+    // A mask that is no image is named as the mask (issue 38 item 5: an empty CSV was blamed on the albedo texture).
+    std::fs::write(d.join("empty.csv"), "").unwrap();
+    let o = cli(&["fit-maps", "--albedo", &s("albedo.png"), "--out", &s("p.exr"), "--mask", &s("empty.csv")]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("skin mask") && !err.contains("albedo texture"), "{err}");
+}
+
+/// `fit-maps` writes OpenEXR only: `--out params.png` (it wrote EXR bytes under that name) and `--residual r.png`
+/// are refused before anything is read or written (issue 38 item 5).
+#[test]
+fn fit_maps_refuses_output_names_it_would_not_honour() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    for outputs in [["--out", "params.png"], ["--residual", "r.png"]] {
+        let o = cli(&["fit-maps", "--albedo", &s("missing.exr"), outputs[0], &s(outputs[1])]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success()
+                && err.contains(outputs[1])
+                && err.contains("ending in .exr")
+                && !err.contains("missing"),
+            "{outputs:?}: {err}"
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written");
 }

@@ -252,3 +252,20 @@ fn exr_albedos_bare_or_layered_and_refusals_name_the_channels() {
     let e = read_albedo_texture(&two).unwrap_err().to_string();
     assert!(e.contains("two.exr") && e.contains("several layers") && e.contains("a, b"), "{e}");
 }
+
+/// A FIFO given as a map is refused at once, naming it (issue 38 item 5: opening it waited for a writer forever).
+/// The read runs on a thread and must answer within a generous 30 s.
+#[cfg(unix)]
+#[test]
+fn a_fifo_given_as_a_map_is_refused_not_waited_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = temp(&dir, "melanin.fifo");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success(), "mkfifo: {made:?}");
+    let (send, receive) = std::sync::mpsc::channel();
+    let path = fifo.clone();
+    std::thread::spawn(move || send.send(melanin_map(&path).map(|_| ()).map_err(|e| e.to_string())));
+    let answer = receive.recv_timeout(std::time::Duration::from_secs(30)).expect("the read blocked on the FIFO");
+    let e = answer.expect_err("a FIFO is no map");
+    assert!(e.contains("melanin.fifo") && e.contains("regular file"), "{e}");
+}

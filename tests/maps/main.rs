@@ -11,3 +11,4 @@ mod maps_lookup_rows;
 mod maps_outputs;
 mod maps_pipeline;
 mod shader_table;
+mod truncated_images;

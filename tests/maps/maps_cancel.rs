@@ -5,9 +5,10 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use spectral_skin::maps::example::face_params;
-use spectral_skin::maps::io::{ParamImage, Plane};
-use spectral_skin::maps::pipeline::{check_planes, compute_maps_cancellable};
+use spectral_skin::maps::io::{default_extended, ParamImage, Plane};
+use spectral_skin::maps::pipeline::{check_planes, compute_maps_cancellable, MAX_DISTINCT_TUPLES};
 use spectral_skin::maps::{compute_maps, MapSettings, StrategyChoice};
+use spectral_skin::{Accuracy, Outputs, Request};
 
 #[test]
 fn cancel_skips_the_rows_not_started() {
@@ -25,8 +26,9 @@ fn cancel_skips_the_rows_not_started() {
     // Cancel once a quarter of the rows are done.
     let cancel = AtomicBool::new(false);
     let rows = AtomicUsize::new(0);
-    let progress = |_: usize, _: usize| {
-        if rows.fetch_add(1, Ordering::SeqCst) + 1 >= 12 {
+    // Rows are the calls with texels done; a call with 0 is a tick between evaluations.
+    let progress = |done: usize, _: usize| {
+        if done > 0 && rows.fetch_add(1, Ordering::SeqCst) + 1 >= 12 {
             cancel.store(true, Ordering::SeqCst);
         }
     };
@@ -106,4 +108,36 @@ fn cancel_stops_a_table_build() {
     assert!(e.contains("interrupted"), "{e}");
     let (called, threads) = (calls.load(Ordering::SeqCst), rayon::current_num_threads());
     assert!(called <= 1 + threads, "progress called {called} times with {threads} threads");
+}
+
+/// The flag is read before every evaluation, not once per row (issue 38 item 2: one row of an exact map at the
+/// reference level is minutes of work; a 2 x 128 map stopped 52 s after Ctrl-C). One row of distinct texels, as the
+/// distinct-tuple path takes it (64 tuples) and as the per-texel path does (more than `MAX_DISTINCT_TUPLES`): the
+/// progress callback cancels at its first call, and the evaluations done (the report's count) are the one that
+/// called plus at most one in flight per worker thread, where the whole row used to be evaluated.
+#[test]
+fn cancel_is_read_before_each_evaluation() {
+    let threads = rayon::current_num_threads();
+    for width in [64, MAX_DISTINCT_TUPLES + 1] {
+        let melanin: Vec<f32> = (0..width).map(|x| 0.01 + 0.4 * x as f32 / width as f32).collect();
+        let image = ParamImage {
+            width,
+            height: 1,
+            planes: [Plane::Texels(melanin), Plane::Constant(0.5), Plane::Constant(0.02), Plane::Constant(0.3)],
+            extended: default_extended(),
+            notes: Vec::new(),
+        };
+        let request =
+            Request { accuracy: Accuracy::draft(), ..Request::new(Outputs { albedo: true, ..Outputs::default() }) };
+        let settings = MapSettings { strategy: StrategyChoice::Exact, request, ..MapSettings::default() };
+        let cancel = AtomicBool::new(false);
+        let progress = |_: usize, _: usize| cancel.store(true, Ordering::SeqCst);
+        let part = compute_maps_cancellable(&image, &settings, Some(&progress), &cancel).expect("maps");
+        let done = part.report.work.evaluations;
+        assert!(
+            (1..=1 + threads).contains(&done),
+            "{width} texels: {done} evaluations after a cancel at the first (at most {} expected)",
+            1 + threads
+        );
+    }
 }

@@ -729,3 +729,17 @@ fn io_errors_keep_the_operating_systems_error_as_their_source() {
     assert!(err.to_string().contains("expected an existing directory"), "{err}");
     assert!(std::error::Error::source(&err).is_none(), "{err}");
 }
+
+/// A dangling symbolic link as the output folder (or one of its parents) is named as such before anything is written
+/// (issue 38 item 5: creating it failed with the operating system's "File exists").
+#[cfg(unix)]
+#[test]
+fn a_dangling_symlink_as_the_output_folder_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("out");
+    std::os::unix::fs::symlink(dir.path().join("gone"), &link).unwrap();
+    for folder in [link.clone(), link.join("maps")] {
+        let e = spectral_skin::maps::io::create_output_dir(&folder).expect_err("a dangling link").to_string();
+        assert!(e.contains("symbolic link") && e.contains("gone") && !e.contains("File exists"), "{e}");
+    }
+}

@@ -53,3 +53,14 @@ def test_bad_input_names_the_argument() -> None:
         spectral_skin.fit_spectrum(wavelengths, measured, specular="glossy")
     with pytest.raises(TypeError, match="free"):
         spectral_skin.fit_spectrum(wavelengths, measured, free="melanin")
+
+
+def test_starts_beyond_its_bound_or_64_bits_name_the_range() -> None:
+    """issue 38 item 5: ``starts=10**12`` was accepted (no answer in minutes at 64 streams) and ``starts=2**64`` said
+    "starts must be an integer; got int"."""
+    wavelengths = np.linspace(400.0, 700.0, 31)
+    measured = np.linspace(0.2, 0.5, 31)
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"starts.*1 to 64.*got 1000000000000"):
+        spectral_skin.fit_spectrum(wavelengths, measured, starts=10**12)
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"starts.*integer in \[.*got 18446744073709551616"):
+        spectral_skin.fit_spectrum(wavelengths, measured, starts=2**64)

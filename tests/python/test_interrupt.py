@@ -63,6 +63,18 @@ def test_ctrl_c_stops_a_long_maps_call():
     assert elapsed < 5.0, f"the call took {elapsed:.1f} s to stop after SIGINT"
 
 
+# 2 x 128 distinct texels at the reference level, exact (issue 38 item 2): each evaluation is a few tenths of a second,
+# and the flag was read only between rows (the distinct tuples: not at all), so SIGINT was heard 52 s late.
+REFERENCE_CHILD = child_script(128, "spectral_skin.maps(params[:2], exact=True, accuracy='reference', table_cache=False)")
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+def test_ctrl_c_stops_an_exact_reference_map_between_evaluations():
+    returncode, out, elapsed = interrupt_child(REFERENCE_CHILD)
+    assert returncode == 3, (returncode, out)
+    assert elapsed < 5.0, f"the call took {elapsed:.1f} s to stop after SIGINT"
+
+
 def test_table_resolution_is_bounded_before_allocation():
     import numpy as np
     import spectral_skin
@@ -110,10 +122,10 @@ def test_progress_callback_cancels_a_table_build(tmp_path, monkeypatch):
 
 # Calls that ignored Ctrl-C (issue 23), each a child that runs far longer than the 1.5 s before the signal.
 LONG_CALLS = {
-    # 2000 starts of the default fit (a 4000-spectrum start table, then each start's refinement): minutes; it ran on
-    # for 13.8 s after SIGINT.
+    # 64 starts (the most, inverse::spectrum::MAX_STARTS) at 64 streams (a 4000-spectrum start table, then each
+    # start's refinement): minutes; with 2000 starts it ran on for 13.8 s after SIGINT.
     "fit_spectrum": (1, "spectral_skin.fit_spectrum(np.arange(400.0, 701.0, 10.0), np.linspace(0.15, 0.45, 31), "
-                        "starts=2000)"),
+                        "starts=64, streams=64)"),
     # The thickness choice builds six albedo tables (about 20 s each on a small machine) before the texels' fit; the
     # table build ran on for 19 s.
     "fit_albedo_map": (64, "spectral_skin.fit_albedo_map(params[..., :3] * 0.5)"),

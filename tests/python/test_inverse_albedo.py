@@ -100,7 +100,7 @@ def test_texture_size_is_bounded_before_any_copy() -> None:
     huge = np.broadcast_to(np.full(3, 0.3, dtype=np.float32), (100_000, 100_000, 3))
     with pytest.raises(spectral_skin.SpectralSkinError, match=r"albedo.*268435456 texels.*100000 wide x 100000 high"):
         spectral_skin.fit_albedo_map(huge)
-    with pytest.raises(spectral_skin.SpectralSkinError, match=r"shapes.*268435456 texels"):
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"params.*268435456 texels"):
         spectral_skin.maps(np.broadcast_to(np.full(4, 0.1, dtype=np.float32), (100_000, 100_000, 4)))
 
 
@@ -148,3 +148,16 @@ def test_a_skin_mask_keeps_the_background_out_of_the_choice_and_the_figures() ->
         spectral_skin.fit_albedo_map(texture, mask=np.full((2, 6), np.nan))
     with pytest.raises(spectral_skin.SpectralSkinError, match="marks no texel as skin"):
         spectral_skin.fit_albedo_map(texture, mask=np.zeros((2, 6), bool))
+
+
+def test_write_refuses_names_it_would_not_honour(tmp_path: Path) -> None:
+    """issue 38 item 5: ``write('p.<UDIM>.exr')`` without tiles wrote a file literally so named, and a .png name got
+    EXR bytes; both are errors naming the path, and nothing is written."""
+    texture = np.array([[albedo(*TRUTH[0], epidermis_thickness_mm=0.25)]], dtype=np.float32)
+    fit = spectral_skin.fit_albedo_map(texture, epidermis_thickness_mm=0.25)
+    for name, expected in [("p.<UDIM>.exr", "names a tile set"), ("p.png", "ending in .exr")]:
+        with pytest.raises(spectral_skin.SpectralSkinError, match=expected):
+            fit.write(tmp_path / name)
+    with pytest.raises(spectral_skin.SpectralSkinError, match="ending in .exr"):
+        fit.write(tmp_path / "p.exr", tmp_path / "residual.tif")
+    assert list(tmp_path.iterdir()) == []

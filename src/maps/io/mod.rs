@@ -25,7 +25,9 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 pub use encode::{resolve_compression, stage_channels_exr, stage_rgb_exr, write_channels_exr, write_rgb_exr};
-pub use read::{read_albedo_texture, read_exr_channels, read_params, read_params_from_bytes, AlbedoTexture};
+pub use read::{
+    read_albedo_texture, read_exr_channels, read_params, read_params_from_bytes, read_rgb_image, AlbedoTexture,
+};
 pub use staging::{
     check_output_dir, commit_all, create_output_dir, output_folder_of, stage_bytes, write_atomic, Staged,
 };

@@ -449,6 +449,15 @@ fn open_file(path: &Path, what: &str) -> Result<File, SkinError> {
     if path.is_dir() {
         return Err(SkinError::io(path, format!("cannot read {what}: expected a file, found a directory")));
     }
+    // A FIFO, socket or device is refused before it is opened: opening a FIFO waits for a writer, forever.
+    if let Ok(meta) = std::fs::metadata(path) {
+        if !meta.is_file() {
+            return Err(SkinError::io(
+                path,
+                format!("cannot read {what}: expected a regular file, found a FIFO, socket or device"),
+            ));
+        }
+    }
     File::open(path).map_err(|e| {
         SkinError::io_caused(path, format!("cannot read {what}: {e} (expected an existing, readable file)"), e)
     })
@@ -624,6 +633,170 @@ fn image_reader<'a>(src: Source<'a>, what: &str) -> Result<image::ImageReader<So
     }
 }
 
+/// Decode a PNG, TIFF or JPEG whole, after [`check_complete`]: the one decoding step of both readers.
+fn decode_complete(src: Source<'_>, what: &str) -> Result<image::DynamicImage, SkinError> {
+    let path = src.label();
+    let reader = image_reader(src, what)?;
+    if let Some(format) = reader.format() {
+        check_complete(src, what, format)?;
+    }
+    guard(|| reader.decode())
+        .and_then(|r| r.map_err(|e| e.to_string()))
+        .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image ({e})")))
+}
+
+/// An error naming the file unless it holds everything its format says must be there. Decoders differ in what they
+/// do at a missing end: JPEG decoders fill it with grey (a JPEG cut at 60 % of its bytes decoded with 42 % of its
+/// texels wrong) and PNG's never reads its IEND chunk, so the structure is walked here, for every format the same
+/// rule: a PNG's chunks, each inside the file, up to IEND; a JPEG's segments and entropy-coded scans up to the EOI
+/// marker. A TIFF's decoder reads every strip or tile at its offset and fails at the file's end, and an EXR's chunks
+/// are checked against the file's length ([`check_chunks`]), so for those the decoder's own error is the refusal
+/// (`tests/maps/truncated_images.rs` cuts every format at every 1/40 of its bytes and at its last four). Bytes after
+/// the end (padding) are no damage.
+fn check_complete(src: Source<'_>, what: &str, format: image::ImageFormat) -> Result<(), SkinError> {
+    let path = src.label();
+    let mut reader = src.open(what)?;
+    let (name, result) = match format {
+        image::ImageFormat::Png => ("PNG", png_complete(&mut reader)),
+        image::ImageFormat::Jpeg => ("JPEG", jpeg_complete(&mut reader)),
+        _ => return Ok(()),
+    };
+    match result {
+        Ok(None) => Ok(()),
+        Ok(Some(missing)) => Err(SkinError::io(
+            path,
+            format!(
+                "cannot read {what}: the {name} file is truncated or damaged ({missing}); nothing was read from it"
+            ),
+        )),
+        Err(e) => Err(SkinError::io_caused(path, format!("cannot read {what}: {e}"), e)),
+    }
+}
+
+/// The next byte, or None at the end of the file.
+fn next_byte(r: &mut impl BufRead) -> std::io::Result<Option<u8>> {
+    let byte = r.fill_buf()?.first().copied();
+    if byte.is_some() {
+        r.consume(1);
+    }
+    Ok(byte)
+}
+
+/// Skip `n` bytes; false if the file ends first.
+fn skip_bytes(r: &mut impl BufRead, mut n: u64) -> std::io::Result<bool> {
+    while n > 0 {
+        let available = r.fill_buf()?.len() as u64;
+        if available == 0 {
+            return Ok(false);
+        }
+        let step = available.min(n);
+        r.consume(step as usize);
+        n -= step;
+    }
+    Ok(true)
+}
+
+fn read_array<const N: usize>(r: &mut impl BufRead) -> std::io::Result<Option<[u8; N]>> {
+    let mut buf = [0u8; N];
+    for b in &mut buf {
+        match next_byte(r)? {
+            Some(v) => *b = v,
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(buf))
+}
+
+/// None if a PNG's chunks, from the signature on, each fit in the file up to and including IEND; else what is
+/// missing.
+fn png_complete(r: &mut impl BufRead) -> std::io::Result<Option<String>> {
+    if !skip_bytes(r, 8)? {
+        return Ok(Some("no signature".to_string()));
+    }
+    let mut chunks = 0usize;
+    loop {
+        let Some(head) = read_array::<8>(r)? else {
+            return Ok(Some(format!("the file ends after {chunks} chunks, before the IEND chunk")));
+        };
+        let length = u64::from(u32::from_be_bytes([head[0], head[1], head[2], head[3]]));
+        let kind = String::from_utf8_lossy(&head[4..8]).into_owned();
+        if !skip_bytes(r, length + 4)? {
+            return Ok(Some(format!("chunk {chunks} ({kind}) is cut short")));
+        }
+        if kind == "IEND" {
+            return Ok(None);
+        }
+        chunks += 1;
+    }
+}
+
+/// None if a JPEG's segments and scans reach its end-of-image marker (EOI) after at least one scan; else what is
+/// missing. Markers are found as the standard frames them: a segment's length skips its body; inside a scan's
+/// entropy-coded data 0xFF 0x00 is a stuffed byte, 0xFF 0xD0..0xD7 a restart marker, any other marker ends the scan.
+fn jpeg_complete(r: &mut impl BufRead) -> std::io::Result<Option<String>> {
+    const SOI: u8 = 0xD8;
+    const EOI: u8 = 0xD9;
+    const SOS: u8 = 0xDA;
+    let ends = |at: &str| Ok(Some(format!("the file ends {at}, before the end-of-image marker")));
+    if read_array::<2>(r)? != Some([0xFF, SOI]) {
+        return Ok(Some("no start-of-image marker".to_string()));
+    }
+    let mut scans = 0usize;
+    // The marker to handle next (read after a scan's data), or None: read one.
+    let mut pending: Option<u8> = None;
+    loop {
+        let marker = match pending.take() {
+            Some(m) => m,
+            None => {
+                if next_byte(r)? != Some(0xFF) {
+                    return Ok(Some(format!("no marker where one must be, after {scans} scans")));
+                }
+                let mut m = 0xFF;
+                while m == 0xFF {
+                    match next_byte(r)? {
+                        Some(v) => m = v,
+                        None => return ends("inside a marker"),
+                    }
+                }
+                m
+            }
+        };
+        match marker {
+            EOI if scans > 0 => return Ok(None),
+            EOI => return Ok(Some("an end-of-image marker before any scan".to_string())),
+            0x01 | 0xD0..=0xD7 => continue,
+            _ => {}
+        }
+        let Some(length) = read_array::<2>(r)? else { return ends("inside a segment's length") };
+        let length = u64::from(u16::from_be_bytes(length));
+        if length < 2 || !skip_bytes(r, length - 2)? {
+            return ends(&format!("inside a segment (marker 0x{marker:02X})"));
+        }
+        if marker != SOS {
+            continue;
+        }
+        scans += 1;
+        // The scan's entropy-coded data, up to the next marker.
+        loop {
+            let Some(byte) = next_byte(r)? else { return ends(&format!("inside scan {scans}")) };
+            if byte != 0xFF {
+                continue;
+            }
+            let mut next = 0xFF;
+            while next == 0xFF {
+                match next_byte(r)? {
+                    Some(v) => next = v,
+                    None => return ends(&format!("inside scan {scans}")),
+                }
+            }
+            if next != 0x00 && !(0xD0..=0xD7).contains(&next) {
+                pending = Some(next);
+                break;
+            }
+        }
+    }
+}
+
 /// An error (naming the file, what it is and `accepted`) unless `color` is 8- or 16-bit greyscale or RGB, with or
 /// without alpha.
 fn check_color(path: &Path, what: &str, color: image::ColorType, accepted: &str) -> Result<(), SkinError> {
@@ -665,10 +838,7 @@ fn read_integer_image(
     height: usize,
 ) -> Result<Vec<f32>, SkinError> {
     let path = src.label();
-    let reader = image_reader(src, what)?;
-    let img = guard(|| reader.decode())
-        .and_then(|r| r.map_err(|e| e.to_string()))
-        .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image ({e})")))?;
+    let img = decode_complete(src, what)?;
     if img.width() as usize != width || img.height() as usize != height {
         return Err(SkinError::invalid(
             what,
@@ -967,7 +1137,11 @@ fn srgb_to_linear(encoded: f64) -> f64 {
 /// (greyscale or RGB) decoded from sRGB to linear with the sRGB formula, computed in f64. An alpha channel and an
 /// EXR's other channels are ignored with a note. Values are not range-checked here (the fit checks them).
 pub fn read_albedo_texture(path: &Path) -> Result<AlbedoTexture, SkinError> {
-    let what = "albedo texture";
+    read_rgb_image(path, "albedo texture")
+}
+
+/// [`read_albedo_texture`]'s reading for another RGB image (a skin mask), with `what` naming it in messages.
+pub fn read_rgb_image(path: &Path, what: &str) -> Result<AlbedoTexture, SkinError> {
     let src = Source::Path(path);
     let mut notes = Vec::new();
     if is_exr(src, what)? {
@@ -1010,10 +1184,7 @@ pub fn read_albedo_texture(path: &Path) -> Result<AlbedoTexture, SkinError> {
     check_color(path, what, color, ALBEDO_IMAGE_FORMS)?;
     let (width, height) = (w as usize, h as usize);
     check_size(path, what, width, height)?;
-    let reader = image_reader(src, what)?;
-    let img = guard(|| reader.decode())
-        .and_then(|r| r.map_err(|e| e.to_string()))
-        .map_err(|e| SkinError::io(path, format!("cannot read {what}: cannot decode the image ({e})")))?;
+    let img = decode_complete(src, what)?;
     if (img.width() as usize, img.height() as usize, img.color()) != (width, height, color) {
         return Err(SkinError::invalid(
             what,

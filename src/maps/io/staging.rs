@@ -171,6 +171,17 @@ pub fn check_output_dir(dir: &Path) -> Result<(), SkinError> {
                 return Err(SkinError::io(dir, reason));
             }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                // A symbolic link whose target is missing cannot be created as a folder ("File exists").
+                if let Ok(target) = std::fs::read_link(existing) {
+                    return Err(SkinError::io(
+                        dir,
+                        format!(
+                            "cannot create the output folder: {} is a symbolic link to {}, which does not exist                              (create its target, or give another folder)",
+                            existing.display(),
+                            target.display()
+                        ),
+                    ));
+                }
                 existing = match existing.parent() {
                     Some(p) if !p.as_os_str().is_empty() => p,
                     _ => Path::new("."),
