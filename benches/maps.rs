@@ -1,4 +1,4 @@
-//! Map pipeline costs (criterion): table build, per-texel table lookup, and the whole pipeline on a 256² example
+//! Map pipeline costs (criterion): table build (and the build before exact profile shapes, for the ratio), per-texel table lookup, and the whole pipeline on a 256² example
 //! (table strategy) and a 256² mask with 16 tuples (distinct-tuple strategy). The full size sweep with peak memory
 //! is `scripts/reports/maps_report.py` (writes docs/maps-performance.md).
 
@@ -8,6 +8,7 @@ use spectral_skin::maps::example::face_params;
 use spectral_skin::maps::io::{default_extended, ParamImage, Plane};
 use spectral_skin::maps::lut::{MaterialTable, TableResolution};
 use spectral_skin::maps::{compute_maps, MapSettings};
+use spectral_skin::transport::Transport;
 use spectral_skin::{Outputs, Request};
 
 fn bench_maps(c: &mut Criterion) {
@@ -18,6 +19,17 @@ fn bench_maps(c: &mut Criterion) {
         b.iter(|| {
             MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, TableResolution::default()).unwrap()
         })
+    });
+    // The cold table before exact profile shapes (33 x 7 x 17 nodes, the multipole's shape): the baseline of the
+    // exact shapes' cost bound (a cold table at most 2x this), measured in the same run.
+    let before = Prepared::new(&Request {
+        transport: Transport::AddingDoublingDiffusionShape,
+        ..Request::new(Outputs::material())
+    })
+    .unwrap();
+    let before_resolution = TableResolution { melanin_blend: 7, ..TableResolution::default() };
+    group.bench_function("table_build_diffusion_shape_33x7x17", |b| {
+        b.iter(|| MaterialTable::build(&before, spectral_skin::fit::DEFAULT_METHOD, before_resolution).unwrap())
     });
     let table =
         MaterialTable::build(&prepared, spectral_skin::fit::DEFAULT_METHOD, TableResolution::default()).unwrap();

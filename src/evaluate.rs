@@ -315,14 +315,8 @@ impl Prepared {
     /// times its total where the table holds the stack, else the multipole's transform scaled to the total
     /// ([`Totals::scale`]).
     fn fits(&self, optics: &Optics, totals: &Totals, albedo: [f64; 3], parallel: bool) -> [BurleyFit; 3] {
-        let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
         let s = &self.fit_s;
-        let transform = |w: usize| -> Vec<f64> {
-            match &totals.shapes {
-                Some(shapes) => s.iter().map(|&x| shapes[w].normalized_transform(x) * totals.total[w]).collect(),
-                None => s.iter().map(|&x| optics.stacks[w].reflectance_hat(x, comb, terms) * totals.scale[w]).collect(),
-            }
-        };
+        let transform = |w: usize| self.transform(optics, totals, w, s);
         let transforms: Vec<Vec<f64>> = if parallel {
             (0..optics.stacks.len()).into_par_iter().map(transform).collect()
         } else {
@@ -339,6 +333,26 @@ impl Prepared {
                 RadiusFit::SecondMoment => fit_burley_second_moment(normalized[0]),
             }
         })
+    }
+
+    /// Wavelength `w`'s transform R~(s) at `s_per_mm` (radians per mm) as the radius fit sees it: its exact shape
+    /// times its total where the table holds the stack, else the multipole's transform scaled to the total.
+    fn transform(&self, optics: &Optics, totals: &Totals, w: usize, s_per_mm: &[f64]) -> Vec<f64> {
+        let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
+        match &totals.shapes {
+            Some(shapes) => s_per_mm.iter().map(|&x| shapes[w].normalized_transform(x) * totals.total[w]).collect(),
+            None => {
+                s_per_mm.iter().map(|&x| optics.stacks[w].reflectance_hat(x, comb, terms) * totals.scale[w]).collect()
+            }
+        }
+    }
+
+    /// Every wavelength's transform R~(s) at `s_per_mm` for one parameter set, as the radius fit sees it (the accuracy
+    /// report's reference reads it on a denser frequency grid than the fit's).
+    pub fn transforms(&self, params: &SkinParams, s_per_mm: &[f64]) -> Result<Vec<Vec<f64>>, SkinError> {
+        let optics = self.optics(params)?;
+        let totals = self.totals(&optics, false)?.with_shapes(&optics, &self.request);
+        Ok((0..optics.stacks.len()).map(|w| self.transform(&optics, &totals, w, s_per_mm)).collect())
     }
 
     /// The RGB albedo (total diffuse reflectance) of one parameter set, alone: one transform value per wavelength and

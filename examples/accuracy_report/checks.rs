@@ -2,13 +2,15 @@
 //! adding-doubling at several stream counts) against the project's Monte Carlo photon walk.
 
 use serde::Serialize;
-use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
+use spectral_skin::diffusion::{Combination, LayerStack, LayeredOptions, MultipoleTerms};
 use spectral_skin::skin::skin_layers;
-use spectral_skin::transport::total_diffuse_reflectance;
+use spectral_skin::transport::{total_diffuse_reflectance, Transport};
 use spectral_skin::{evaluate, Accuracy, SkinModel};
 
 #[path = "../../tests/support/mc.rs"]
 mod mc;
+#[path = "../../tests/support/profile_figures.rs"]
+mod profile_figures;
 
 use crate::metrics::{max_relative, profile_log_error};
 use crate::reference::{request, PresetReference, Task, PROFILE_GRID};
@@ -105,6 +107,49 @@ pub fn diffusion_vs_monte_carlo(refs: &[PresetReference], photons: u64) -> Vec<M
                 relative_difference: diffusion / result.reflectance - 1.0,
                 photons,
                 seconds: start.elapsed().as_secs_f64(),
+            });
+        }
+    }
+    rows
+}
+
+/// One stack's radial profile against the Monte Carlo: its figures, and each shape's relative errors [r50, r90, d].
+#[derive(Debug, Clone, Serialize)]
+pub struct ShapeRow {
+    pub preset: &'static str,
+    pub wavelength_nm: f64,
+    pub mc_r50_mm: f64,
+    pub mc_r90_mm: f64,
+    pub mc_d_mm: f64,
+    /// The default: the exact shapes' table.
+    pub exact: [f64; 3],
+    /// The multipole's shape scaled to the exact total (`adding_doubling_diffusion_shape`).
+    pub diffusion_shape: [f64; 3],
+    pub photons: u64,
+}
+
+/// The profile's shape (r50, r90 and the fitted Burley d) of each preset's stack at [`MC_WAVELENGTHS_NM`], exact and
+/// diffusion-shaped, against the analog Monte Carlo (tests/support/profile_figures.rs, as tests/physics/exact_profile.rs
+/// uses it).
+pub fn shapes_vs_monte_carlo(refs: &[PresetReference], photons: u64) -> Vec<ShapeRow> {
+    let mut rows = Vec::new();
+    for (k, r) in refs.iter().enumerate() {
+        for (j, &wavelength_nm) in MC_WAVELENGTHS_NM.iter().enumerate() {
+            let layers = skin_layers(&r.params, &SkinModel::default(), wavelength_nm);
+            let mc = profile_figures::monte_carlo(&layers, photons, 2000 + 10 * k as u64 + j as u64);
+            let exact = profile_figures::model(&layers, &mc.edges_mm, &LayeredOptions::default());
+            let before =
+                LayeredOptions { transport: Transport::AddingDoublingDiffusionShape, ..LayeredOptions::default() };
+            let diffusion_shape = profile_figures::model(&layers, &mc.edges_mm, &before);
+            rows.push(ShapeRow {
+                preset: r.name,
+                wavelength_nm,
+                mc_r50_mm: mc.figures.r50_mm,
+                mc_r90_mm: mc.figures.r90_mm,
+                mc_d_mm: mc.figures.d_mm,
+                exact: exact.figures.relative_to(&mc.figures),
+                diffusion_shape: diffusion_shape.figures.relative_to(&mc.figures),
+                photons,
             });
         }
     }

@@ -31,7 +31,7 @@ struct Args {
     /// Folder that receives accuracy-vs-time.md, images/accuracy/*.png and data/accuracy.json.
     #[arg(long, default_value = "docs")]
     out_dir: PathBuf,
-    /// Run only these sweeps (comma-separated keys: streams, wavelengths, multipole, hankel, radius_fit, fft, table, levels),
+    /// Run only these sweeps (comma-separated keys: streams, transport, wavelengths, multipole, hankel, radius_fit, fft, table, levels),
     /// skipping the references' checks: for working on one knob. The report then lacks the other sections.
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
@@ -94,10 +94,17 @@ fn run(args: &Args) -> Result<bool, Box<dyn std::error::Error>> {
         .all(|d| d.material["albedo_rel"] < DEFAULT_ALBEDO_BOUND && d.material["radius_rel"] < DEFAULT_RADIUS_BOUND);
     let monte_carlo = if args.only.is_empty() { checks::diffusion_vs_monte_carlo(&refs, photons) } else { Vec::new() };
     step("transport vs Monte Carlo", start);
+    let shapes = if args.only.is_empty() {
+        checks::shapes_vs_monte_carlo(&refs, if args.quick { 20_000 } else { 300_000 })
+    } else {
+        Vec::new()
+    };
+    step("profile shapes vs Monte Carlo", start);
 
     let mut all = Vec::new();
     for (name, f) in [
         ("streams", sweeps::streams as fn(&[reference::PresetReference], &sweeps::Settings) -> sweeps::Sweep),
+        ("transport", sweeps::transport),
         ("wavelengths", sweeps::wavelengths),
         ("multipole", sweeps::multipole),
         ("hankel", sweeps::hankel),
@@ -130,6 +137,7 @@ fn run(args: &Args) -> Result<bool, Box<dyn std::error::Error>> {
         convergence,
         default_rows,
         monte_carlo,
+        shapes,
         sweeps: all,
         cycles,
         peak_rss_mib: metrics::peak_rss_mib(),

@@ -4,9 +4,9 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 use spectral_skin::color::spectrum_to_rgb;
-use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::{Prepared, ProfileGrid};
 use spectral_skin::fit::burley::{edge_misfit, fit_frequencies};
+use spectral_skin::transport::Transport;
 use spectral_skin::{evaluate, Accuracy, Evaluation, Outputs, Request, SkinParams, PRESETS};
 
 use crate::metrics::{delta_e_2000, max_relative, median_seconds, profile_log_error};
@@ -100,29 +100,12 @@ impl PresetReference {
 
 /// The RGB transfer function, normalised by the albedo, on the dense reference frequency grid.
 fn transfer_function(params: &SkinParams, accuracy: Accuracy, albedo: [f64; 3]) -> (Vec<f64>, [Vec<f64>; 3]) {
-    let request = request(accuracy, Task::Material);
-    let prepared = Prepared::new(&request).expect("prepared");
-    let stacks = prepared.stacks(params).expect("skin layers");
-    // Each wavelength's transform scaled to its total, as the core's radius fit sees it (the exact totals over the
-    // multipole's; 1 with the diffusion transport).
-    let totals =
-        spectral_skin::evaluate::diffuse_reflectance_at(params, &request, prepared.wavelengths_nm()).expect("totals");
-    let scale: Vec<f64> = stacks
-        .iter()
-        .zip(&totals)
-        .map(|(st, t)| t / st.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All))
-        .collect();
+    let prepared = Prepared::new(&request(accuracy, Task::Material)).expect("prepared");
     let s = fit_frequencies(REFERENCE_FIT_PER_DECADE);
-    let rgb: Vec<[f64; 3]> = s
-        .iter()
-        .map(|&x| {
-            let spectrum: Vec<f64> = stacks
-                .iter()
-                .zip(&scale)
-                .map(|(st, k)| k * st.reflectance_hat(x, Combination::Directional, MultipoleTerms::All))
-                .collect();
-            spectrum_to_rgb(&spectrum, prepared.rgb_weights())
-        })
+    // Each wavelength's transform as the core's radius fit sees it (the exact shape times the exact total).
+    let transforms = prepared.transforms(params, &s).expect("transforms");
+    let rgb: Vec<[f64; 3]> = (0..s.len())
+        .map(|i| spectrum_to_rgb(&transforms.iter().map(|t| t[i]).collect::<Vec<_>>(), prepared.rgb_weights()))
         .collect();
     let normalized = [0, 1, 2].map(|c| rgb.iter().map(|v| v[c] / albedo[c]).collect());
     (s, normalized)
@@ -195,7 +178,17 @@ pub fn measure(
     task: Task,
     budget: Budget,
 ) -> (f64, BTreeMap<&'static str, f64>) {
-    let req = request(accuracy, task);
+    measure_request(refs, &request(accuracy, task), task, budget)
+}
+
+/// [`measure`] of a whole request (one whose transport is not the default's, say).
+pub fn measure_request(
+    refs: &[PresetReference],
+    req: &Request,
+    task: Task,
+    budget: Budget,
+) -> (f64, BTreeMap<&'static str, f64>) {
+    let req = *req;
     let metrics = worst(refs.iter().map(|r| errors_of(&evaluate(&r.params, &req).expect("evaluation"), r)));
     let timed = &refs[0].params;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("one-thread pool");
@@ -225,4 +218,18 @@ pub fn row(
     let (time_s, metrics) = measure(refs, accuracy, task, budget);
     let is_default = accuracy == Accuracy::default();
     Row { series: series.to_string(), label, time_s, metrics, is_default, accuracy: Some(accuracy) }
+}
+
+/// A measured row of the default accuracy with another transport (the profile's shape and the totals' solver).
+pub fn transport_row(refs: &[PresetReference], transport: Transport, budget: Budget) -> Row {
+    let req = Request { transport, ..request(Accuracy::default(), Task::Material) };
+    let (time_s, metrics) = measure_request(refs, &req, Task::Material, budget);
+    Row {
+        series: "transport".to_string(),
+        label: transport.name().to_string(),
+        time_s,
+        metrics,
+        is_default: transport == Transport::default(),
+        accuracy: Some(Accuracy::default()),
+    }
 }

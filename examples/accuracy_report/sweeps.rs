@@ -14,10 +14,11 @@ use spectral_skin::maps::example::face_params;
 use spectral_skin::maps::lut::{measure_error, MaterialTable, TableResolution};
 use spectral_skin::maps::pipeline::Strategy;
 use spectral_skin::maps::{compute_maps, MapSettings};
+use spectral_skin::transport::ALL_TRANSPORTS;
 use spectral_skin::{Accuracy, AccuracyLevel, Outputs, Request};
 
 use crate::metrics::{delta_e_2000, max_relative, median_seconds, profile_log_error};
-use crate::reference::{request, row, worst, Budget, PresetReference, Row, Task, PROFILE_GRID};
+use crate::reference::{request, row, transport_row, worst, Budget, PresetReference, Row, Task, PROFILE_GRID};
 
 /// A knob's measurements.
 #[derive(Debug, Clone, Serialize)]
@@ -253,12 +254,25 @@ pub fn radius_fit(refs: &[PresetReference], s: &Settings) -> Sweep {
     Sweep { key: "radius_fit", title: "Radius fit", timed: "albedo + radius", plot_metric: "radius_knob", rows }
 }
 
+/// The transport (the totals' solver and the profile's shape): the exact shapes of the table (default), the
+/// multipole's shape scaled to the exact totals, and the paper's diffusion; error against the reference, time.
+pub fn transport(refs: &[PresetReference], s: &Settings) -> Sweep {
+    let rows = ALL_TRANSPORTS.iter().map(|&t| transport_row(refs, t, s.budget)).collect();
+    Sweep {
+        key: "transport",
+        title: "Transport and profile shape",
+        timed: "albedo + radius",
+        plot_metric: "radius_rel",
+        rows,
+    }
+}
+
 /// Lookup-table resolution of the map pipeline: error against direct evaluation, build time, map time.
 pub fn table(s: &Settings, map_size: usize) -> Sweep {
     let resolutions: &[(usize, usize, usize)] = if s.quick {
         &[(9, 3, 5), (17, 4, 9)]
     } else {
-        &[(9, 3, 5), (17, 4, 9), (25, 5, 13), (33, 7, 17), (49, 10, 25), (65, 13, 33)]
+        &[(9, 3, 5), (17, 4, 9), (25, 5, 13), (33, 7, 17), (33, 9, 17), (49, 10, 25), (65, 13, 33)]
     };
     let prepared = Prepared::new(&Request::new(Outputs::material())).expect("prepared");
     let face = face_params(map_size);

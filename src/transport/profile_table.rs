@@ -337,7 +337,7 @@ impl ProfileTable {
                 }
             }
         }
-        Shape { mfp_mm: stack.mfp_mm, values: &self.values, weights }
+        Shape { mfp_mm: stack.mfp_mm, values: &self.values, weights, profile_integral: OnceLock::new() }
     }
 }
 
@@ -359,6 +359,9 @@ pub struct Shape {
     values: &'static [f32],
     /// (offset of an entry in `values`, its weight).
     weights: Vec<(usize, f64)>,
+    /// The integral of the interpolated encircled energy per ln r over ln r, computed on first use
+    /// ([`Shape::profile_integral`]).
+    profile_integral: OnceLock<f64>,
 }
 
 impl Shape {
@@ -395,9 +398,29 @@ impl Shape {
         a + t * (b - a)
     }
 
+    /// The integral over ln r of the encircled energy per ln r as [`Shape::normalized_profile_per_mm2`]
+    /// interpolates it: q0 for the disc below the first centre, then each log-linear piece exactly. The bins hold a
+    /// unit total, but a log-linear piece under a peak falls below its chord, so the interpolant holds about 0.3 %
+    /// less (measured 0.25-0.37 % on the presets' stacks): dividing by this makes the profile integrate to the total.
+    fn profile_integral(&self) -> f64 {
+        *self.profile_integral.get_or_init(|| {
+            let step = LN_10 / NODES_PER_DECADE;
+            let piece = |a: f64, b: f64| {
+                if a > 0.0 && b > 0.0 && (a - b).abs() > 1e-12 * a.max(b) {
+                    (b - a) / (b / a).ln()
+                } else {
+                    0.5 * (a + b)
+                }
+            };
+            let q: Vec<f64> = (0..R_BINS).map(|c| self.q(c)).collect();
+            q[0] + q.windows(2).map(|w| step * piece(w[0], w[1])).sum::<f64>()
+        })
+    }
+
     /// The profile normalised to a unit total, per mm^2, at `r_mm`: the encircled energy per ln r over 2 pi r^2,
     /// interpolated log-linearly between bin centres; below the first centre it follows 1/r (single scattering),
-    /// and r = 0 gets the mean over the first centre's disc; beyond the last bin it is 0.
+    /// and r = 0 gets the mean over the first centre's disc; beyond the last bin it is 0. Divided by the
+    /// interpolant's own integral ([`Shape::profile_integral`]), so it integrates (2 pi r dr) to exactly 1.
     pub fn normalized_profile_per_mm2(&self, r_mm: f64) -> f64 {
         let centre = |c: f64| 10f64.powf(R_LOG10_MIN + (c + 0.5) / NODES_PER_DECADE);
         let r = (r_mm / self.mfp_mm).max(0.0);
@@ -418,7 +441,12 @@ impl Shape {
             let value = if a > 0.0 && b > 0.0 { (a.ln() + t * (b.ln() - a.ln())).exp() } else { a + t * (b - a) };
             value / (2.0 * PI * r * r)
         };
-        per_mfp2 / (self.mfp_mm * self.mfp_mm)
+        let integral = self.profile_integral();
+        if integral > 0.0 {
+            per_mfp2 / (self.mfp_mm * self.mfp_mm) / integral
+        } else {
+            0.0
+        }
     }
 }
 

@@ -11,39 +11,12 @@
 
 use crate::support::mc::{annulus_area, fresnel_unpolarized, log_edges, simulate, McConfig, McLayer, McResult};
 
+use crate::support::profile_figures::{gauss_legendre_01, radius_at};
 use spectral_skin::diffusion::{multipole_reflectance, Layer};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 
 fn semi_infinite(sigma_a: f64, sigma_s: f64, ior: f64) -> Vec<McLayer> {
     vec![McLayer { thickness_mm: f64::INFINITY, sigma_a_per_mm: sigma_a, sigma_s_per_mm: sigma_s, ior }]
-}
-
-/// Gauss-Legendre nodes and weights on [0, 1] (Newton iteration on P_n).
-fn gauss_legendre_01(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut x = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    for i in 0..n {
-        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 0.0;
-        for _ in 0..100 {
-            // P_n(z) and P_n'(z) by the three-term recurrence.
-            let (mut p0, mut p1) = (1.0, z);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-            let dz = p1 / dp;
-            z -= dz;
-            if dz.abs() < 1e-15 {
-                break;
-            }
-        }
-        x[i] = 0.5 * (1.0 - z);
-        w[i] = 1.0 / ((1.0 - z * z) * dp * dp); // 2/((1-z^2)P'^2) halved for [0,1]
-    }
-    (x, w)
 }
 
 /// Chandrasekhar's H(mu) for isotropic scattering with single-scattering albedo `a`, from
@@ -344,24 +317,6 @@ struct Comparison {
 
 /// Gauss-Legendre nodes per bin, for averaging the diffusion profile over annuli.
 const NODES_PER_BIN: usize = 6;
-
-/// Radius where a cumulative curve given at `edges` reaches `level` (log-linear interpolation in r).
-fn radius_at(edges: &[f64], cdf: &[f64], level: f64) -> f64 {
-    let k = cdf.partition_point(|&c| c < level);
-    assert!(
-        k >= 1 && k < cdf.len(),
-        "level {level} outside the tabulated CDF: index {k} of {}, from {:?} to {:?}",
-        cdf.len(),
-        cdf.first(),
-        cdf.last()
-    );
-    let (c0, c1) = (cdf[k - 1], cdf[k]);
-    let f = (level - c0) / (c1 - c0);
-    if edges[k - 1] == 0.0 {
-        return edges[k] * f; // linear in the central disc
-    }
-    (edges[k - 1].ln() + f * (edges[k] / edges[k - 1]).ln()).exp()
-}
 
 /// Least-squares slope of ln(values) against radius over the bins whose centres lie in [lo, hi].
 fn log_slope(centres: &[f64], values: &[f64], lo: f64, hi: f64) -> f64 {

@@ -1,10 +1,12 @@
 //! Issue 20, item 2: the transport is a choice of every Rust front (`Request`, `Accuracy::streams`,
 //! `layered_reflectance_with`, the fits' options, the cache keys), reported in every result; `Transport::Diffusion`
 //! reproduces the multipole's values bit for bit; `Transport::AddingDoubling` (the default) takes each wavelength's
-//! total from the exact solver and scales the multipole's profile to it.
+//! total from the exact solver and its profile's shape from the exact shapes' table, and
+//! `Transport::AddingDoublingDiffusionShape` scales the multipole's profile to the exact total.
 
 use spectral_skin::diffusion::{
     clamped_reflectance_profiles, layered_reflectance_with, Combination, LayerStack, LayeredOptions, MultipoleTerms,
+    ProfileShape,
 };
 use spectral_skin::evaluate::{Accuracy, AccuracyLevel, Prepared};
 use spectral_skin::fit::SubsurfaceMethod;
@@ -13,6 +15,7 @@ use spectral_skin::inverse::{fit_spectrum, FitOptions};
 use spectral_skin::maps::lut::{cache_key, TableResolution};
 use spectral_skin::skin::params::EXTENDED_DEFAULTS;
 use spectral_skin::skin::skin_layers;
+use spectral_skin::transport::profile_table::exact_shape;
 use spectral_skin::transport::{total_diffuse_reflectance, Transport, ALL_TRANSPORTS, DEFAULT_STREAMS, STREAMS_RANGE};
 use spectral_skin::{evaluate, Outputs, Request, SkinParams, PRESETS};
 
@@ -55,31 +58,41 @@ fn diffusion_reproduces_the_multipole_bit_for_bit() {
     }
 }
 
-/// `Transport::AddingDoubling`: each total is the exact solver's at the request's streams, the profile the multipole's
-/// scaled by total / multipole total, and the work counts one solve per wavelength.
+/// The exact-total transports: each total is the exact solver's at the request's streams and the work counts one
+/// solve per wavelength; the profile is the total times the exact shape of the stack (`AddingDoubling`, which
+/// reports `profile_shape` "exact") or the multipole's profile scaled by total / multipole total
+/// (`AddingDoublingDiffusionShape`, "multipole").
 #[test]
-fn adding_doubling_scales_the_multipole_to_the_exact_total() {
+fn exact_totals_carry_their_profile_shape() {
     let params = SkinParams::preset("african").unwrap();
-    for streams in [4, DEFAULT_STREAMS, 16] {
-        let mut r = request(Transport::AddingDoubling, everything());
-        r.accuracy.streams = streams;
-        let ev = evaluate(&params, &r).unwrap();
-        assert_eq!(ev.transport, Transport::AddingDoubling, "{streams} streams");
-        assert_eq!(ev.accuracy.streams, streams);
-        let wavelengths = ev.wavelengths_nm.as_ref().unwrap();
-        assert_eq!(ev.work.transport_solves, wavelengths.len(), "{streams} streams");
-        let (multipole_totals, multipole_profiles) = multipole(&params, &r);
-        let spectral = ev.profile.as_ref().unwrap().spectral_per_mm2.as_ref().unwrap();
-        for (k, &w) in wavelengths.iter().enumerate() {
-            let exact = total_diffuse_reflectance(&skin_layers(&params, &r.model, w), streams).unwrap();
-            assert_eq!(ev.spectral_reflectance.as_ref().unwrap()[k].to_bits(), exact.to_bits(), "{w} nm");
-            let scale = exact / multipole_totals[k];
-            for (got, want) in spectral[k].iter().zip(&multipole_profiles[k]) {
-                assert!(
-                    (got - want * scale).abs() <= 1e-15 * (want * scale).abs(),
-                    "{w} nm: {got} vs {}",
-                    want * scale
-                );
+    for transport in [Transport::AddingDoubling, Transport::AddingDoublingDiffusionShape] {
+        for streams in [4, DEFAULT_STREAMS, 16] {
+            let mut r = request(transport, everything());
+            r.accuracy.streams = streams;
+            let ev = evaluate(&params, &r).unwrap();
+            assert_eq!(ev.transport, transport, "{streams} streams");
+            assert_eq!(ev.accuracy.streams, streams);
+            let wavelengths = ev.wavelengths_nm.as_ref().unwrap();
+            assert_eq!(ev.work.transport_solves, wavelengths.len(), "{streams} streams");
+            let profile = ev.profile.as_ref().unwrap();
+            let expected_shape = if transport.exact_shape() { "exact" } else { "multipole" };
+            assert_eq!(ev.profile_shape, Some(expected_shape), "{transport:?}");
+            let (multipole_totals, multipole_profiles) = multipole(&params, &r);
+            let spectral = profile.spectral_per_mm2.as_ref().unwrap();
+            for (k, &w) in wavelengths.iter().enumerate() {
+                let layers = skin_layers(&params, &r.model, w);
+                let exact = total_diffuse_reflectance(&layers, streams).unwrap();
+                assert_eq!(ev.spectral_reflectance.as_ref().unwrap()[k].to_bits(), exact.to_bits(), "{w} nm");
+                let want: Vec<f64> = if transport.exact_shape() {
+                    let shape = exact_shape(&layers).expect("the table holds the skin's stacks");
+                    profile.radii_mm.iter().map(|&r| exact * shape.normalized_profile_per_mm2(r)).collect()
+                } else {
+                    let scale = exact / multipole_totals[k];
+                    multipole_profiles[k].iter().map(|p| p * scale).collect()
+                };
+                for (got, want) in spectral[k].iter().zip(&want) {
+                    assert!((got - want).abs() <= 1e-15 * want.abs(), "{transport:?} {w} nm: {got} vs {want}");
+                }
             }
         }
     }
@@ -201,21 +214,33 @@ fn fits_use_their_transport() {
     }
 }
 
-/// `layered_reflectance_with`: diffusion is the multipole stack's own total and profile; adding-doubling the exact
-/// total with the multipole profile scaled to it.
+/// `layered_reflectance_with`: diffusion is the multipole stack's own total and profile; the exact-total transports
+/// the exact total with the multipole profile scaled to it (`AddingDoublingDiffusionShape`) or the exact shape (the
+/// default), each naming its shape.
 #[test]
 fn layered_reflectance_takes_the_transport() {
     let params = SkinParams::preset("african").unwrap();
     let layers = skin_layers(&params, &Default::default(), 450.0);
     let radii = [0.0, 0.1, 1.0];
-    let diffusion = LayeredOptions { transport: Transport::Diffusion, ..LayeredOptions::default() };
-    let d = layered_reflectance_with(&layers, &radii, &diffusion).unwrap();
+    let with = |transport| LayeredOptions { transport, ..LayeredOptions::default() };
+    let d = layered_reflectance_with(&layers, &radii, &with(Transport::Diffusion)).unwrap();
     let stack = LayerStack::new(&layers).unwrap();
     assert_eq!(d.total.to_bits(), stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All).to_bits());
-    let a = layered_reflectance_with(&layers, &radii, &LayeredOptions::default()).unwrap();
-    assert_eq!(a.total.to_bits(), total_diffuse_reflectance(&layers, DEFAULT_STREAMS).unwrap().to_bits());
-    for (x, y) in a.profile_per_mm2.iter().zip(&d.profile_per_mm2) {
-        let want = y * (a.total / d.total);
+    assert_eq!(d.shape, ProfileShape::Multipole);
+    let exact_total = total_diffuse_reflectance(&layers, DEFAULT_STREAMS).unwrap();
+    let scaled = layered_reflectance_with(&layers, &radii, &with(Transport::AddingDoublingDiffusionShape)).unwrap();
+    assert_eq!(scaled.total.to_bits(), exact_total.to_bits());
+    assert_eq!(scaled.shape, ProfileShape::Multipole);
+    for (x, y) in scaled.profile_per_mm2.iter().zip(&d.profile_per_mm2) {
+        let want = y * (scaled.total / d.total);
         assert!((x - want).abs() <= 1e-15 * want, "{x} vs {want}");
+    }
+    let a = layered_reflectance_with(&layers, &radii, &LayeredOptions::default()).unwrap();
+    assert_eq!(a.total.to_bits(), exact_total.to_bits());
+    assert_eq!(a.shape, ProfileShape::Exact);
+    let shape = exact_shape(&layers).unwrap();
+    for (x, &r) in a.profile_per_mm2.iter().zip(&radii) {
+        let want = exact_total * shape.normalized_profile_per_mm2(r);
+        assert!((x - want).abs() <= 1e-15 * want, "{x} vs {want} at {r} mm");
     }
 }

@@ -3,3 +3,4 @@
 
 pub mod mc;
 pub mod measured;
+pub mod profile_figures;
