@@ -4,8 +4,8 @@ both applied by the add-on (ops.apply_skins) in test_eevee_edge.py's scene: a ha
 x < 0 of a thick slab, seen by an orthographic top camera, in a world unit of U mm (the scene's unit scale, so the
 add-on's Subsurface Scale converts its millimetres into it).
 
-They agree within the shader table's errors (docs/shader-table.md, Burley 33 x 7 x 17: Base Color 0.406 %, radius
-0.625 %) plus one step of EEVEE's surface colour (1/1024: 0.28 % of the bluest albedo here, 0.353). The group built
+They agree within the shader table's errors (docs/shader-table.md, Burley 33 x 9 x 17: Base Color 0.450 %, radius
+0.740 %) plus one step of EEVEE's surface colour (1/1024: 0.28 % of the bluest albedo here, 0.353). The group built
 for EEVEE computes its bilinear weights itself (live.build_group, ``exact``): with the GPU's Linear filtering the
 Live edge came out 0.25-0.5 % brighter and 0.4-0.9 % wider than Baked (Mesa llvmpipe misses by up to 0.03 texel).
 Measured (docs/blender-render-tests.md, "Live mode"): identical in R and G, one colour step apart in B.
@@ -47,9 +47,9 @@ WIDTH_PX = 156  # 0.36 d_disk per pixel: caucasian 0.12 mm (its bluest Burley d 
 SAMPLES = 8
 # Bounds (see the module's docstring): the table's Base Color (radius) error plus one EEVEE colour step.
 EEVEE_STEP = 1.0 / 1024 / 0.35
-RMS_BOUND = 0.00406 + EEVEE_STEP
-LEVEL_RTOL = 0.00406 + EEVEE_STEP
-WIDTH_RTOL = 0.00625 + EEVEE_STEP
+RMS_BOUND = 0.00450 + EEVEE_STEP
+LEVEL_RTOL = 0.00450 + EEVEE_STEP
+WIDTH_RTOL = 0.00740 + EEVEE_STEP
 
 
 def _edge_profiles() -> tuple[Layout, np.ndarray, dict[str, np.ndarray]]:

@@ -8,7 +8,7 @@ white world, Specular IOR Level 0 from oiliness 0: tests/blender/test_renders.py
     four-channel parameter EXR (the core's reading, packed) and a painted (generated) haemoglobin image, which the
     group reads itself.
 
-Bound: the shader table's Base Color error (docs/shader-table.md: 0.406 % for the default 33 x 7 x 17 Burley table)
+Bound: the shader table's Base Color error (docs/shader-table.md: 0.450 % for the default 33 x 9 x 17 Burley table)
 plus 0.2 % for the render (test_renders.py's Burley tolerance). Run: python -m pytest tests/blender/test_live_mode.py -s
 """
 
@@ -35,7 +35,7 @@ from blender_addon import nodes as addon_nodes  # noqa: E402
 from blender_addon.ops import apply_skins  # noqa: E402
 from blender_addon.props import settings_from_material  # noqa: E402
 
-TABLE_ERROR = 0.00406  # docs/shader-table.md, burley, 33x7x17, Base Color
+TABLE_ERROR = 0.00450  # docs/shader-table.md, burley, 33x9x17, Base Color
 BOUND = TABLE_ERROR + 0.002
 BURLEY_SPP = 512  # test_renders.py: the 64 x 64 flat slab
 TEXEL_SPP = 1024  # test_renders.py: the 4-texel image
