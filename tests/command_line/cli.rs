@@ -644,8 +644,8 @@ fn transport_on_every_front() {
 
     for (args, needles) in [
         (vec!["eval", "--preset", "asian", "--transport", "monte_carlo"], vec!["adding_doubling", "diffusion"]),
-        (vec!["eval", "--preset", "asian", "--streams", "1"], vec!["streams", "[2, 64]"]),
-        (vec!["profile", "--preset", "asian", "--streams", "65"], vec!["streams", "[2, 64]"]),
+        (vec!["eval", "--preset", "asian", "--streams", "1"], vec!["streams", "[4, 64]"]),
+        (vec!["profile", "--preset", "asian", "--streams", "65"], vec!["streams", "[4, 64]"]),
         (vec!["eval", "--preset", "asian", "--streams", "-3"], vec!["--streams"]),
     ] {
         let out = run(&args);
