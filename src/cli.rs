@@ -369,8 +369,9 @@ impl SkinArgs {
 /// The Blender target of the mapping.
 #[derive(Args)]
 struct TargetArgs {
-    /// Blender version the inputs are for, MAJOR.MINOR (4.2 or newer; a version newer than the tested ones uses the
-    /// newest known behaviour and is reported as untested).
+    /// Blender version the inputs are for, MAJOR.MINOR or MAJOR.MINOR.PATCH (4.2 or newer; a patch release means its
+    /// minor release, e.g. 5.3.1 is 5.3: patches do not change subsurface behaviour; a version newer than the tested
+    /// ones uses the newest known behaviour and is reported as untested).
     #[arg(long, default_value_t = CURRENT_RELEASE)]
     blender: BlenderVersion,
     /// Render engine the inputs are for (EEVEE renders every subsurface method as Burley with its own radius).

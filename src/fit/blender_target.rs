@@ -39,7 +39,8 @@ impl BlenderVersion {
             SkinError::invalid(
                 "blender version",
                 format!(
-                    "expected MAJOR.MINOR (e.g. \"5.3\") or (major, minor[, patch]); got {shown:?}. {}",
+                    "expected MAJOR.MINOR or MAJOR.MINOR.PATCH (e.g. \"5.3\"; a patch release means its minor \
+                     release) or (major, minor[, patch]); got {shown:?}. {}",
                     supported_range()
                 ),
             )
@@ -83,14 +84,18 @@ impl fmt::Display for BlenderVersion {
 
 impl FromStr for BlenderVersion {
     type Err = SkinError;
-    /// `"5.2"` or `"5.2.3"`.
+    /// `"5.2"` or `"5.2.3"`: a patch release means its minor release (5.2.3 is 5.2), said so in every front's help.
     fn from_str(text: &str) -> Result<BlenderVersion, SkinError> {
         let parts: Option<Vec<i64>> = text.trim().split('.').map(|p| p.parse::<u16>().ok().map(i64::from)).collect();
         match parts {
             Some(p) => BlenderVersion::from_parts(&p),
             None => Err(SkinError::invalid(
                 "blender version",
-                format!("expected MAJOR.MINOR (e.g. \"5.3\"); got {text:?}. {}", supported_range()),
+                format!(
+                    "expected MAJOR.MINOR or MAJOR.MINOR.PATCH (e.g. \"5.3\"; a patch release means its minor \
+                     release); got {text:?}. {}",
+                    supported_range()
+                ),
             )),
         }
     }

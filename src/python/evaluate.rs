@@ -117,8 +117,8 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///     working_space: linear RGB space of every RGB output, named as Blender 5.0's working spaces:
 ///         "Linear Rec.709", "Linear Rec.2020" (both D65) or "ACEScg" (AP1 primaries, ACES white; the D65 XYZ is
 ///         Bradford-adapted to it, as Blender's OCIO config does). A perfect white reflector is (1, 1, 1) in each.
-///     blender: the Blender version the Principled inputs are for: "MAJOR.MINOR" (e.g. "5.2"; a patch level is
-///         ignored) or a tuple such as ``bpy.app.version``; 4.2 or newer. A version newer than the tested ones uses
+///     blender: the Blender version the Principled inputs are for: "MAJOR.MINOR" or "MAJOR.MINOR.PATCH" (e.g. "5.2";
+///         a patch release means its minor release: "5.3.1" is 5.3) or a tuple such as ``bpy.app.version``; 4.2 or newer. A version newer than the tested ones uses
 ///         the newest known behaviour (``result["target"]["tested"]`` is False). None: the current release (5.3,
 ///         ``blender_targets()["current_release"]``).
 ///     engine: the render engine, "cycles" or "eevee" (EEVEE renders every subsurface method as Burley, with a

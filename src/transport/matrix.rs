@@ -1,4 +1,4 @@
-//! Small dense square matrices for the adding-doubling operators (n = 2-64 streams): products, sums and linear solves
+//! Small dense square matrices for the adding-doubling operators (n = 4-64 streams): products, sums and linear solves
 //! by Gaussian elimination with partial pivoting (Golub & Van Loan, "Matrix Computations", algorithm 3.4.1).
 //!
 //! Hand-written rather than a linear-algebra crate: the operators are at most 64 x 64, the solver needs four

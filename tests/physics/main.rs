@@ -17,4 +17,5 @@ mod reference_numbers;
 mod robustness;
 mod robustness_properties;
 mod transport_fronts;
+mod transport_limits;
 mod transport_properties;
