@@ -89,16 +89,19 @@ pub struct ModelProfile {
 /// the transform of the same shape (the exact table's, or the multipole's).
 pub fn model(layers: &[Layer], edges_mm: &[f64], options: &LayeredOptions) -> ModelProfile {
     let (x, w) = gauss_legendre_01(POINTS_PER_ANNULUS);
+    // Every annulus' Gauss-Legendre radii in one call: one total and one shape for the stack.
+    let radii: Vec<f64> =
+        edges_mm.windows(2).flat_map(|pair| x.iter().map(move |xi| pair[0] + (pair[1] - pair[0]) * xi)).collect();
+    let r = layered_reflectance_with(layers, &radii, options).expect("layered reflectance");
+    let (total, shape) = (r.total, r.shape);
     let mut annulus_mean_per_mm2 = Vec::new();
     let mut cdf = vec![0.0];
-    let (mut acc, mut total, mut shape) = (0.0, 0.0, ProfileShape::Multipole);
-    for pair in edges_mm.windows(2) {
+    let mut acc = 0.0;
+    for (pair, (radii, values)) in
+        edges_mm.windows(2).zip(radii.chunks(POINTS_PER_ANNULUS).zip(r.profile_per_mm2.chunks(POINTS_PER_ANNULUS)))
+    {
         let (a, bb) = (pair[0], pair[1]);
-        let radii: Vec<f64> = x.iter().map(|xi| a + (bb - a) * xi).collect();
-        let r = layered_reflectance_with(layers, &radii, options).expect("layered reflectance");
-        (total, shape) = (r.total, r.shape);
-        let inside: f64 =
-            radii.iter().zip(&r.profile_per_mm2).zip(&w).map(|((r, p), wi)| 2.0 * PI * r * p * (bb - a) * wi).sum();
+        let inside: f64 = radii.iter().zip(values).zip(&w).map(|((r, p), wi)| 2.0 * PI * r * p * (bb - a) * wi).sum();
         annulus_mean_per_mm2.push(inside / (PI * (bb * bb - a * a)));
         acc += inside;
         cdf.push(acc);
