@@ -23,6 +23,19 @@ import numpy as np
 
 MM = 0.001  # metres per millimetre: Subsurface Scale for radii given in mm
 
+# Blender 4.2 renders a subsurface channel whose Radius x Scale is below about a quarter of a pixel as plain diffuse
+# with its Base Color, and then biases the other channels' estimate (measured in 4.2.23: docs/blender-render-tests.md;
+# 4.5 and later do not). A render compared with the core is seen close enough that every channel's radius spans at
+# least this many pixels (span_resolving):
+RESOLVED_RADIUS_PX = 1.0
+
+
+def span_resolving(radius_mm, width_px: int, widest_m: float) -> float:
+    """The image width in metres, at most widest_m, at which the smallest of radius_mm (any shape, mm at Subsurface
+    Scale MM) spans RESOLVED_RADIUS_PX pixels of a width_px-wide image."""
+    smallest_m = float(np.min(np.asarray(radius_mm, dtype=np.float64))) * MM
+    return min(widest_m, smallest_m * width_px / RESOLVED_RADIUS_PX)
+
 # numpy >= 2 renamed trapz (bpy 5.0 ships numpy 1.26)
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
 

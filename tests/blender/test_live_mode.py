@@ -14,6 +14,7 @@ plus 0.2 % for the render (test_renders.py's Burley tolerance). Run: python -m p
 
 from __future__ import annotations
 
+import functools
 import pathlib
 import sys
 
@@ -39,7 +40,7 @@ TABLE_ERROR = 0.00450  # docs/shader-table.md, burley, 33x9x17, Base Color
 BOUND = TABLE_ERROR + 0.002
 BURLEY_SPP = 512  # test_renders.py: the 64 x 64 flat slab
 TEXEL_SPP = 1024  # test_renders.py: the 4-texel image
-TEXEL_SPAN_M = 0.0256  # test_renders.py: 0.4 mm per pixel, every radius above a quarter pixel in 4.2
+TEXEL_SPAN_M = 0.0256  # test_renders.py: the texels' widest span, narrower where a radius would cover < 1 pixel
 
 
 EEVEE_STEP = 1.0 / 1024  # EEVEE's colour step in these renders (test_live_in_eevee_renders_as_baked)
@@ -67,11 +68,17 @@ def _apply(scene, *materials) -> list[dict]:
 
 
 def _slab_scene(material):
+    """The flat slab under a white world, seen at most 0.1 m wide, narrower where one of the material's Burley radii
+    would cover less than a pixel (blender_scenes.span_resolving)."""
     scene = bpy.context.scene
     set_world(scene, strength=1.0)
     slab = add_slab()
     assign(slab, material)
-    add_top_camera(scene, ortho_scale=0.1, width=64, height=64)
+    props = material.spectral_skin
+    radius_mm = spectral_skin.evaluate(props.melanin, props.melanin_blend, props.hemoglobin, 0.0,
+                                       outputs=("albedo", "radius"), blender=tuple(bpy.app.version),
+                                       engine="cycles")["methods"]["burley"]["subsurface_radius_mm"]
+    add_top_camera(scene, ortho_scale=blender_scenes.span_resolving(radius_mm, 64, 0.1), width=64, height=64)
     return scene
 
 
@@ -156,23 +163,32 @@ def _painted(hemoglobin: np.ndarray, image=None):
     return image
 
 
+@functools.cache
+def _texel_span_m() -> float:
+    """How wide the 4 texels of _params() lie on the slab: TEXEL_SPAN_M, or less so that each texel's smallest Burley
+    radius covers a pixel of the 64-pixel image (blender_scenes.span_resolving)."""
+    radius_mm = spectral_skin.maps(_params(), method="burley", blender=tuple(bpy.app.version))["radius"]
+    return blender_scenes.span_resolving(radius_mm, 64, TEXEL_SPAN_M)
+
+
 def _uv_slab():
-    """The slab with a UV map putting the 4 texels across TEXEL_SPAN_M of its top (u = x / span + 1/2)."""
+    """The slab with a UV map putting the 4 texels across _texel_span_m() of its top (u = x / span + 1/2)."""
     slab = add_slab()
     mesh = slab.data
     uv = mesh.uv_layers.new(name="UVMap")
+    span_m = _texel_span_m()
     for loop in mesh.loops:
         x, y, _ = mesh.vertices[loop.vertex_index].co
-        uv.data[loop.index].uv = (x / TEXEL_SPAN_M + 0.5, y / TEXEL_SPAN_M + 0.5)
+        uv.data[loop.index].uv = (x / span_m + 0.5, y / span_m + 0.5)
     return slab
 
 
 def _two_tile_slab():
-    """The slab (1 m wide, 0.2 m thick, top at z = 0) with its top split so that the middle TEXEL_SPAN_M square is two
+    """The slab (1 m wide, 0.2 m thick, top at z = 0) with its top split so that the middle _texel_span_m() square is two
     faces, one per UDIM tile: u = 2 (x / span + 1/2) from 0 to 1 (tile 1001) and from 1 to 2 (tile 1002), v = y / span
     + 1/2 from 0 to 1, two texels of a 2-texel-wide tile each. (Cycles loads only the tiles the mesh's faces lie in, in
     a background render: one face spanning both tiles, with its corners far outside, would load neither.)"""
-    h, s, depth = 0.5, TEXEL_SPAN_M, 0.2
+    h, s, depth = 0.5, _texel_span_m(), 0.2
     xs, ys = (-h, -s / 2, 0.0, s / 2, h), (-h, -s / 2, s / 2, h)
 
     def top(i: int, j: int) -> int:
@@ -222,7 +238,7 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
     scene = blender_scenes.reset_scene()
     set_world(scene, strength=1.0)
     _uv_slab()
-    add_top_camera(scene, ortho_scale=TEXEL_SPAN_M, width=64, height=16)
+    add_top_camera(scene, ortho_scale=_texel_span_m(), width=64, height=16)
     params = _params()
     if source == "parameter exr":
         path = tmp_path / "params.exr"
@@ -302,7 +318,7 @@ def test_live_reads_a_udim_tile_set_as_baked_and_the_core_per_texel(addon, tmp_p
     scene = blender_scenes.reset_scene()
     set_world(scene, strength=1.0)
     _two_tile_slab()
-    add_top_camera(scene, ortho_scale=TEXEL_SPAN_M, width=64, height=16)
+    add_top_camera(scene, ortho_scale=_texel_span_m(), width=64, height=16)
     params = _params()
     if source == "parameter exr tile set":
         for k, tile in enumerate((1001, 1002)):

@@ -38,6 +38,7 @@ from blender_scenes import (  # noqa: E402
     render,
     render_edge,
     set_world,
+    span_resolving,
     write_exr,
 )
 
@@ -53,13 +54,13 @@ def _evaluate(preset: str) -> dict:
 
 def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, size_px: int = 64, region_px: int = 32,
                     ortho_m: float = 0.1):
-    """Render the white-world flat slab (an image ortho_m wide); return the mean RGB over the central region_px x
-    region_px pixels."""
+    """Render the white-world flat slab (an image ortho_m wide, or narrower so that every channel's radius spans a
+    pixel: blender_scenes.span_resolving); return the mean RGB over the central region_px x region_px pixels."""
     set_world(scene, strength=1.0)
     slab = add_slab()
     mat, _ = principled_sss("Skin", method, base_color, radius_mm)
     assign(slab, mat)
-    add_top_camera(scene, ortho_scale=ortho_m, width=size_px, height=size_px)
+    add_top_camera(scene, ortho_scale=span_resolving(radius_mm, size_px, ortho_m), width=size_px, height=size_px)
     img = render(scene, samples=samples)
     lo = (size_px - region_px) // 2
     region = img[lo : lo + region_px, lo : lo + region_px]
@@ -78,10 +79,11 @@ def _flat_slab_mean(scene, method: str, base_color, radius_mm, samples: int, siz
 # renders take about a second.
 BURLEY_SPP = 512
 BURLEY_TEXEL_SPP = 1024
-# The 4 texels span 25.6 mm of the slab (0.4 mm per pixel): Blender 4.2 renders a subsurface channel whose radius is
-# below about a quarter of a pixel as diffuse, and with some channels diffuse and some not, the others' Burley estimate
-# is biased (measured in 4.2.23: red +0.56 % with 15.6 mm pixels, the texels spanning 1 m); at 0.4 mm per pixel every
-# channel's radius (>= 0.115 mm) is above a quarter pixel.
+# The 4 texels span at most 25.6 mm of the slab, less where a texel's smallest radius would cover less than a pixel
+# (blender_scenes.span_resolving): Blender 4.2 renders a subsurface channel whose radius is below about a quarter of a
+# pixel as diffuse, and with some channels diffuse and some not, the others' Burley estimate is biased (measured in
+# 4.2.23: red +0.56 % with 15.6 mm pixels, the texels spanning 1 m; with exact profile shapes the darkest texel's
+# blue radius is 0.040 mm, and at 0.4 mm per pixel its red came out +0.22 %, the Live test's +0.67 %).
 TEXEL_SPAN_M = 0.0256
 
 @pytest.mark.parametrize("preset", PRESETS)
@@ -124,7 +126,10 @@ def test_burley_per_texel_maps(scene, tmp_path):
     mapping.vector_type = "POINT"
     # object x, y in [-span/2, span/2] -> u, v in [0, 1] (u = x / span + 0.5)
     mapping.inputs["Location"].default_value = (0.5, 0.5, 0.0)
-    mapping.inputs["Scale"].default_value = (1.0 / TEXEL_SPAN_M, 1.0 / TEXEL_SPAN_M, 1.0)
+    px_per_texel = 16
+    width, height = n * px_per_texel, 16
+    span_m = span_resolving(radius, width, TEXEL_SPAN_M)
+    mapping.inputs["Scale"].default_value = (1.0 / span_m, 1.0 / span_m, 1.0)
     nt.links.new(coords.outputs["Object"], mapping.inputs["Vector"])
     for path, colorspace, socket in (
         (albedo_path, "Linear Rec.709", "Base Color"),
@@ -140,9 +145,7 @@ def test_burley_per_texel_maps(scene, tmp_path):
         nt.links.new(tex.outputs["Color"], bsdf.inputs[socket])
     assign(slab, mat)
 
-    px_per_texel = 16
-    width, height = n * px_per_texel, 16
-    add_top_camera(scene, ortho_scale=TEXEL_SPAN_M, width=width, height=height)  # the image spans the 4 texels
+    add_top_camera(scene, ortho_scale=span_m, width=width, height=height)  # the image spans the 4 texels
     img = render(scene, samples=BURLEY_TEXEL_SPP)
     worst = 0.0
     for k in range(n):
@@ -249,10 +252,12 @@ def test_burley_edge_profile(scene):
 # allowance plus > 4 standard errors in every channel. The measured errors per version: docs/blender-render-tests.md.
 RW_RTOL = 1.0e-2
 RW_SPP = 1024
-# The random-walk slab is seen close up, 2.5 mm over 64 px (0.04 mm per pixel): Blender 4.2 renders a random-walk
-# channel whose radius is below about a quarter of a pixel as plain diffuse with its Base Color (measured: the
-# african blue channel, Radius*Scale 0.34 mm, came out 21.6 % bright at 1.56 mm per pixel; Random Walk (Skin)'s
-# african green, Radius*Scale 0.038 mm, 4.5 % bright at 0.16 mm per pixel); 4.5 and later do not.
+# The random-walk slab is seen close up, at most 2.5 mm over 64 px (0.04 mm per pixel), less where a channel's radius
+# would cover less than a pixel (blender_scenes.span_resolving): Blender 4.2 renders a random-walk channel whose
+# radius is below about a quarter of a pixel as plain diffuse with its Base Color (measured: the african blue channel,
+# Radius*Scale 0.34 mm, came out 21.6 % bright at 1.56 mm per pixel; Random Walk (Skin)'s african green,
+# Radius*Scale 0.038 mm, 4.5 % bright at 0.16 mm per pixel, and with exact profile shapes its blue, 0.0055 mm, +1.4 %
+# at 0.04 mm per pixel); 4.5 and later do not.
 RW_ORTHO_M = 0.0025
 
 
