@@ -1,5 +1,6 @@
 //! The request-driven entry point: parameters and a [`Request`] in, only the requested outputs computed.
 
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -21,7 +22,7 @@ use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::skin::{skin_layers, SkinModel, SkinParams};
 use crate::surface_lobes::SurfaceModel;
 use crate::transport::profile_table::{exact_shape, Shape};
-use crate::transport::{total_diffuse_reflectance, Transport};
+use crate::transport::{total_diffuse_reflectance_cancellable, Transport};
 
 /// Which outputs to compute. Each costs only what it needs: albedo is one transform value per wavelength, the radius
 /// a few dozen, a radial profile an inverse transform per wavelength.
@@ -307,8 +308,8 @@ impl Prepared {
         optics_of(params, &self.request, &self.grid.wavelengths_nm)
     }
 
-    fn totals(&self, optics: &Optics, parallel: bool) -> Result<Totals, SkinError> {
-        totals_of(optics, &self.request, parallel)
+    fn totals(&self, optics: &Optics, parallel: bool, cancel: &AtomicBool) -> Result<Totals, SkinError> {
+        totals_of(optics, &self.request, parallel, cancel)
     }
 
     /// Burley fits per channel from the RGB transfer function on the fit frequencies: each wavelength's exact shape
@@ -351,7 +352,7 @@ impl Prepared {
     /// report's reference reads it on a denser frequency grid than the fit's).
     pub fn transforms(&self, params: &SkinParams, s_per_mm: &[f64]) -> Result<Vec<Vec<f64>>, SkinError> {
         let optics = self.optics(params)?;
-        let totals = self.totals(&optics, false)?.with_shapes(&optics, &self.request);
+        let totals = self.totals(&optics, false, &AtomicBool::new(false))?.with_shapes(&optics, &self.request);
         Ok((0..optics.stacks.len()).map(|w| self.transform(&optics, &totals, w, s_per_mm)).collect())
     }
 
@@ -359,15 +360,27 @@ impl Prepared {
     /// no radius fit. It is [`Material::albedo`] to the last bit (the same sums), and the Base Color of a material
     /// without subsurface, whatever the method.
     pub fn albedo(&self, params: &SkinParams) -> Result<[f64; 3], SkinError> {
+        self.albedo_cancellable(params, &AtomicBool::new(false))
+    }
+
+    /// [`Prepared::albedo`] that stops once `cancel` is set (read before each wavelength's transport solve), with
+    /// [`SkinError::interrupted`].
+    pub fn albedo_cancellable(&self, params: &SkinParams, cancel: &AtomicBool) -> Result<[f64; 3], SkinError> {
         let optics = self.optics(params)?;
-        Ok(albedo_rgb(&self.totals(&optics, false)?.total, &self.weights))
+        Ok(albedo_rgb(&self.totals(&optics, false, cancel)?.total, &self.weights))
     }
 
     /// Albedo and both methods' Base Color and radius for one parameter set, computed on the calling thread (callers
     /// that evaluate many parameter sets parallelise across them).
     pub fn material(&self, params: &SkinParams) -> Result<Material, SkinError> {
+        self.material_cancellable(params, &AtomicBool::new(false))
+    }
+
+    /// [`Prepared::material`] that stops once `cancel` is set (read before each wavelength's transport solve), with
+    /// [`SkinError::interrupted`].
+    pub fn material_cancellable(&self, params: &SkinParams, cancel: &AtomicBool) -> Result<Material, SkinError> {
         let optics = self.optics(params)?;
-        let totals = self.totals(&optics, false)?.with_shapes(&optics, &self.request);
+        let totals = self.totals(&optics, false, cancel)?.with_shapes(&optics, &self.request);
         let albedo = albedo_rgb(&totals.total, &self.weights);
         let fits = self.fits(&optics, &totals, albedo, false);
         Ok(Material { albedo, fits, methods: methods_from(&self.request.target, albedo, &fits)? })
@@ -376,15 +389,16 @@ impl Prepared {
 
 /// Compute what `request.outputs` asks for, and nothing else.
 pub fn evaluate(params: &SkinParams, request: &Request) -> Result<Evaluation, SkinError> {
-    evaluate_cancellable(params, request, &std::sync::atomic::AtomicBool::new(false))
+    evaluate_cancellable(params, request, &AtomicBool::new(false))
 }
 
-/// [`evaluate`] whose radial profile (the one output that can take long: up to 10^5 radii) stops once `cancel` is
-/// set, with [`SkinError::interrupted`].
+/// [`evaluate`] that stops once `cancel` is set, with [`SkinError::interrupted`]: it is read before each
+/// wavelength's transport solve (at 64 streams tens of milliseconds each, and a 0.5 nm grid has 601 of them) and
+/// each wavelength's radial profile (up to 10^5 radii).
 pub fn evaluate_cancellable(
     params: &SkinParams,
     request: &Request,
-    cancel: &std::sync::atomic::AtomicBool,
+    cancel: &AtomicBool,
 ) -> Result<Evaluation, SkinError> {
     let start = Instant::now();
     let prepared = Prepared::new(request)?;
@@ -398,7 +412,7 @@ pub fn evaluate_cancellable(
     let mut work = Work { wavelengths: stacks.len(), ..Work::default() };
 
     let needs_shape = out.radius || out.profile_rgb || out.profile_spectral;
-    let all_totals = prepared.totals(&optics, true)?;
+    let all_totals = prepared.totals(&optics, true, cancel)?;
     let all_totals = if needs_shape { all_totals.with_shapes(&optics, request) } else { all_totals };
     work.transform_samples += stacks.len();
     work.transport_solves += all_totals.solves;
@@ -545,7 +559,7 @@ fn exact_profiles(
     shapes: &[Shape],
     totals: &[f64],
     radii: &[f64],
-    cancel: &std::sync::atomic::AtomicBool,
+    cancel: &AtomicBool,
 ) -> Result<Vec<Vec<f64>>, SkinError> {
     shapes
         .iter()
@@ -578,7 +592,7 @@ fn albedo_rgb(totals: &[f64], weights: &[[f64; 3]]) -> [f64; 3] {
 
 /// The total diffuse reflectance of each wavelength: the multipole's `R~(0)` (the request's combination and multipole
 /// terms), or with `Transport::AddingDoubling` the exact one at the request's streams. The one place totals come from.
-fn totals_of(optics: &Optics, request: &Request, parallel: bool) -> Result<Totals, SkinError> {
+fn totals_of(optics: &Optics, request: &Request, parallel: bool, cancel: &AtomicBool) -> Result<Totals, SkinError> {
     let (comb, terms) = (request.combination, request.accuracy.multipole_terms);
     let multipole: Vec<f64> = optics.stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect();
     match request.transport {
@@ -589,7 +603,7 @@ fn totals_of(optics: &Optics, request: &Request, parallel: bool) -> Result<Total
         }
         Transport::AddingDoubling | Transport::AddingDoublingDiffusionShape => {
             let streams = request.accuracy.streams;
-            let solve = |layers: &[Layer; 2]| total_diffuse_reflectance(layers, streams);
+            let solve = |layers: &[Layer; 2]| total_diffuse_reflectance_cancellable(layers, streams, cancel);
             let total: Vec<f64> = if parallel {
                 optics.layers.par_iter().map(solve).collect::<Result<_, _>>()?
             } else {
@@ -609,8 +623,9 @@ pub fn diffuse_reflectance_at(
     params: &SkinParams,
     request: &Request,
     wavelengths_nm: &[f64],
+    cancel: &AtomicBool,
 ) -> Result<Vec<f64>, SkinError> {
-    Ok(totals_of(&optics_of(params, request, wavelengths_nm)?, request, false)?.total)
+    Ok(totals_of(&optics_of(params, request, wavelengths_nm)?, request, false, cancel)?.total)
 }
 
 /// Every method's inputs on `target` from the albedo and the Burley fit (`fit::blender_target`).

@@ -21,7 +21,7 @@ pub use multipole::{MultipoleTerms, Slab};
 use crate::error::SkinError;
 use crate::numeric::safe_div;
 use crate::transport::profile_table::exact_shape;
-use crate::transport::{total_diffuse_reflectance, Transport, DEFAULT_STREAMS};
+use crate::transport::{total_diffuse_reflectance_cancellable, Transport, DEFAULT_STREAMS};
 
 /// Total diffuse reflectance and the radial profile (mm^-2) at `radii_mm` of a stack of layers under air, top to bottom,
 /// with the default [`LayeredOptions`]: the exact total (adding-doubling, [`crate::transport`]) and the exact profile
@@ -116,7 +116,7 @@ pub fn layered_reflectance_cancellable(
     let multipole_total = stack.reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
     let total = match options.transport.exact_total() {
         false => multipole_total,
-        true => total_diffuse_reflectance(layers, options.streams)?,
+        true => total_diffuse_reflectance_cancellable(layers, options.streams, cancel)?,
     };
     if let Some(shape) = options.transport.exact_shape().then(|| exact_shape(layers)).flatten() {
         let mut profile_per_mm2 = Vec::with_capacity(radii_mm.len());

@@ -401,7 +401,8 @@ pub fn fit_albedo(target_rgb: [f64; 3], options: &AlbedoFitOptions) -> Result<Al
     fit_albedo_cancellable(target_rgb, options, &AtomicBool::new(false))
 }
 
-/// [`fit_albedo`] whose table build (the first call for its options: seconds) stops once `cancel` is set.
+/// [`fit_albedo`] that stops once `cancel` is set: in its table build (the first call for its options: seconds) and
+/// in every direct evaluation of the polish and the ambiguity (each reads it before every wavelength's transport).
 pub fn fit_albedo_cancellable(
     target_rgb: [f64; 3],
     options: &AlbedoFitOptions,
@@ -414,7 +415,8 @@ pub fn fit_albedo_cancellable(
     let prepared = options.prepared()?;
     let conv = *table.converter();
     let target_lab = conv.lab(target_rgb);
-    let direct = |u: [f64; 3]| prepared.albedo(&options.params_at(u)).unwrap_or([f64::NAN; 3]);
+    // Cancelled: NaN ends the polish at once (the solver takes no step to it), and the flag is read again after.
+    let direct = |u: [f64; 3]| prepared.albedo_cancellable(&options.params_at(u), cancel).unwrap_or([f64::NAN; 3]);
     let (u_table, _) = fit_on_table(&table, target_rgb, &options);
     let polish = Problem {
         forward: direct,
@@ -425,8 +427,9 @@ pub fn fit_albedo_cancellable(
         free: [true; 3],
     };
     let (u, _) = polish.solve(u_table, 20);
+    SkinError::check_cancel(cancel, "fit_albedo")?;
     let params = options.params_at(u);
-    let albedo_rgb = prepared.albedo(&params)?;
+    let albedo_rgb = prepared.albedo_cancellable(&params, cancel)?;
     let delta_e00 = ciede2000(target_lab, conv.lab(albedo_rgb));
     // The ambiguity: at each melanin blend, the best (C_m, C_h) on the table, checked by direct evaluation.
     let mut members = vec![[params.melanin, params.melanin_blend, params.hemoglobin, delta_e00]];
@@ -442,7 +445,7 @@ pub fn fit_albedo_cancellable(
         };
         let (v, _) = fixed.solve([u[0], b, u[2]], 30);
         let p = options.params_at(v);
-        let de = ciede2000(target_lab, conv.lab(prepared.albedo(&p)?));
+        let de = ciede2000(target_lab, conv.lab(prepared.albedo_cancellable(&p, cancel)?));
         if de <= options.ambiguity_delta_e {
             members.push([p.melanin, p.melanin_blend, p.hemoglobin, de]);
         }

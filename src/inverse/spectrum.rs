@@ -285,20 +285,23 @@ impl SpectrumFitter {
             table: Vec::new(),
         };
         fitter.table = fitter.build_table(cancel)?;
+        // A forward spectrum cut short by the flag is missing from the table, not an error: read the flag once more.
+        SkinError::check_cancel(cancel, "fit_spectrum's start table")?;
         if fitter.table.is_empty() {
             return Err(SkinError::invalid("fixed", "the fixed values leave no valid forward spectrum"));
         }
         Ok(fitter)
     }
 
-    /// The model's diffuse reflectance with the free parameters at `x` (None if the model rejects them).
-    fn forward(&self, x: &[f64]) -> Option<Vec<f64>> {
+    /// The model's diffuse reflectance with the free parameters at `x` (None if the model rejects them, or once
+    /// `cancel` is set: the callers read it again after).
+    fn forward(&self, x: &[f64], cancel: &AtomicBool) -> Option<Vec<f64>> {
         let mut v = self.base;
         for (&k, &value) in self.free.iter().zip(x) {
             v[k] = value;
         }
         let params = SkinParams::from_values(v).ok()?;
-        diffuse_reflectance_at(&params, &self.options.request, &self.wavelengths_nm).ok()
+        diffuse_reflectance_at(&params, &self.options.request, &self.wavelengths_nm, cancel).ok()
     }
 
     fn build_table(&self, cancel: &AtomicBool) -> Result<Vec<StartSpectrum>, SkinError> {
@@ -316,7 +319,7 @@ impl SpectrumFitter {
                         v
                     })
                     .collect();
-                Ok(self.forward(&x).map(|r| (x, r)))
+                Ok(self.forward(&x, cancel).map(|r| (x, r)))
             })
             .collect::<Result<_, SkinError>>()?;
         Ok(spectra.into_iter().flatten().collect())
@@ -388,7 +391,7 @@ impl SpectrumFitter {
             if cancel.load(Ordering::Relaxed) {
                 return vec![f64::NAN; reflectance.len()];
             }
-            let Some(diffuse) = self.forward(&x[..n_free]) else {
+            let Some(diffuse) = self.forward(&x[..n_free], cancel) else {
                 return vec![f64::NAN; reflectance.len()];
             };
             let off = if fit_offset { x[n_free] } else { self.offset_for(&diffuse, reflectance) };
@@ -420,9 +423,13 @@ impl SpectrumFitter {
         }
         SkinError::check_cancel(cancel, "fit_spectrum")?;
         let best = best.expect("at least one start");
-        let diffuse = self.forward(&best.x[..n_free]).ok_or_else(|| {
-            SkinError::invalid("reflectance", "the fit ended on parameters the model rejects (please report this)")
-        })?;
+        let Some(diffuse) = self.forward(&best.x[..n_free], cancel) else {
+            SkinError::check_cancel(cancel, "fit_spectrum")?;
+            return Err(SkinError::invalid(
+                "reflectance",
+                "the fit ended on parameters the model rejects (please report this)",
+            ));
+        };
         let specular_offset = if fit_offset { best.x[n_free] } else { self.offset_for(&diffuse, reflectance) };
         let fitted: Vec<f64> = diffuse.iter().map(|d| d + specular_offset).collect();
         let rms =

@@ -257,7 +257,7 @@ impl MaterialTable {
                     tick();
                 }
                 let p = with_extended(node_params(r, n), extended);
-                Ok(texel_material(prepared, &p, method, radius)?.to_array().map(stored_log))
+                Ok(texel_material(prepared, &p, method, radius, cancel)?.to_array().map(stored_log))
             })
             .collect::<Result<Vec<_>, SkinError>>()?;
         Ok(MaterialTable::new(resolution, method, radius, extended, log_values))
@@ -725,17 +725,19 @@ pub(crate) fn with_extended(p: SkinParams, extended: [f64; 3]) -> SkinParams {
     }
 }
 
-/// The material at `p` for a table of `method`: the full material (`radius`), or the albedo alone.
+/// The material at `p` for a table of `method`: the full material (`radius`), or the albedo alone; stops once
+/// `cancel` is set.
 fn texel_material(
     prepared: &Prepared,
     p: &SkinParams,
     method: SubsurfaceMethod,
     radius: bool,
+    cancel: &AtomicBool,
 ) -> Result<TexelMaterial, SkinError> {
     if radius {
-        TexelMaterial::of(&prepared.material(p)?, method)
+        TexelMaterial::of(&prepared.material_cancellable(p, cancel)?, method)
     } else {
-        Ok(TexelMaterial::albedo_only(prepared.albedo(p)?))
+        Ok(TexelMaterial::albedo_only(prepared.albedo_cancellable(p, cancel)?))
     }
 }
 
@@ -854,7 +856,7 @@ pub fn measure_error_cancellable(
         .map(|u| {
             SkinError::check_cancel(cancel, "table check")?;
             let p = with_extended(check_point_params(*u), table.extended);
-            let exact = texel_material(prepared, &p, table.method, table.radius)?;
+            let exact = texel_material(prepared, &p, table.method, table.radius, cancel)?;
             let approx = table.lookup(p.melanin as f32, p.melanin_blend as f32, p.hemoglobin as f32);
             let rel =
                 |a: [f32; 3], b: [f32; 3]| (0..3).map(|c| ((a[c] - b[c]) / b[c]).abs() as f64).fold(0.0, f64::max);

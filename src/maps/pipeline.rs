@@ -336,12 +336,24 @@ pub fn compute_maps(
     compute_maps_cancellable(image, settings, progress, &AtomicBool::new(false))
 }
 
-/// [`compute_maps`] that skips the rows not yet started once `cancel` is set (it is read before each row, so a
-/// front's progress callback can set it). The result is then incomplete: whoever set the flag must discard it. A
-/// lookup table being built (and its check) stops too, within a node's evaluation, and returns an error: the
-/// progress callback is told `(0, texels)` about once per percent of the table's nodes, so it can set the flag
-/// during the build.
+/// [`compute_maps`] that stops once `cancel` is set, with [`SkinError::interrupted`]: the rows and evaluations not
+/// started are skipped (the flag is read before each), an evaluation under way stops before its next wavelength's
+/// transport, and a lookup table being built (and its check) stops within a node's evaluation. The progress
+/// callback is told `(0, texels)` after each evaluation and about once per percent of a table's nodes, so a front's
+/// callback can set the flag at any stage. A cancelled call never returns a (partial) result.
 pub fn compute_maps_cancellable(
+    image: &ParamImage,
+    settings: &MapSettings,
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    cancel: &AtomicBool,
+) -> Result<MapResult, SkinError> {
+    let result = compute_maps_until_cancelled(image, settings, progress, cancel)?;
+    SkinError::check_cancel(cancel, "maps")?;
+    Ok(result)
+}
+
+/// The work of [`compute_maps_cancellable`], whose result is incomplete when `cancel` was set during it.
+fn compute_maps_until_cancelled(
     image: &ParamImage,
     settings: &MapSettings,
     progress: Option<&(dyn Fn(usize, usize) + Sync)>,
@@ -368,9 +380,9 @@ pub fn compute_maps_cancellable(
             None => 0.0, // OILINESS: the surface's, not the material's
         })?;
         if fit_radius {
-            TexelMaterial::of(&prepared.material(&p)?, method)
+            TexelMaterial::of(&prepared.material_cancellable(&p, cancel)?, method)
         } else {
-            Ok(TexelMaterial::albedo_only(prepared.albedo(&p)?))
+            Ok(TexelMaterial::albedo_only(prepared.albedo_cancellable(&p, cancel)?))
         }
     };
     let tuple = |i: usize| material_planes.map(|plane| plane.value(i));
@@ -863,9 +875,9 @@ fn read_checked(
     Ok((image, clamped, Some(rows)))
 }
 
-/// [`run_maps`] that stops once `cancel` is set (the CLI's Ctrl-C): the computation skips the rows not started, and
-/// a run cancelled before its files are renamed into place writes nothing (the staged temporaries are deleted), so
-/// the output folder keeps the previous run's files (a table build stops too: see [`compute_maps_cancellable`]).
+/// [`run_maps`] that stops once `cancel` is set (the CLI's Ctrl-C): the computation stops (see
+/// [`compute_maps_cancellable`]), and a run cancelled before its files are renamed into place writes nothing (the
+/// staged temporaries are deleted), so the output folder keeps the previous run's files.
 pub fn run_maps_cancellable(
     inputs: &ParamInputs,
     out_dir: &Path,

@@ -11,6 +11,7 @@
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::rc::Rc;
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use super::matrix::Matrix;
@@ -63,6 +64,16 @@ impl OpticalSlab {
 /// same directions in every layer; internal index steps would need refraction between stream sets): a stack with
 /// index steps is refused, naming the layers (`transport="diffusion"` takes it).
 pub fn total_diffuse_reflectance(layers: &[Layer], streams: usize) -> Result<f64, SkinError> {
+    total_diffuse_reflectance_cancellable(layers, streams, &AtomicBool::new(false))
+}
+
+/// [`total_diffuse_reflectance`] that stops once `cancel` is set (read before each layer's operators: at 64 streams a
+/// layer is a few tens of milliseconds), with [`SkinError::interrupted`].
+pub fn total_diffuse_reflectance_cancellable(
+    layers: &[Layer],
+    streams: usize,
+    cancel: &AtomicBool,
+) -> Result<f64, SkinError> {
     crate::diffusion::layered::validate_layers(layers)?;
     let ior = layers[0].ior;
     if let Some((i, l)) = layers.iter().enumerate().find(|(_, l)| l.ior != ior) {
@@ -76,19 +87,30 @@ pub fn total_diffuse_reflectance(layers: &[Layer], streams: usize) -> Result<f64
         ));
     }
     let slabs: Vec<OpticalSlab> = layers.iter().map(OpticalSlab::of_layer).collect();
-    slab_reflectance(&slabs, ior, streams)
+    slab_reflectance_cancellable(&slabs, ior, streams, cancel)
 }
 
 /// The total reflectance of a stack of optical slabs of index `ior` under air (a finite last slab over a medium of
 /// the same index), normal incidence, per unit refracted power; `streams` quadrature directions per hemisphere.
 pub fn slab_reflectance(slabs: &[OpticalSlab], ior: f64, streams: usize) -> Result<f64, SkinError> {
+    slab_reflectance_cancellable(slabs, ior, streams, &AtomicBool::new(false))
+}
+
+/// [`slab_reflectance`] that stops once `cancel` is set (read before each slab's operators).
+pub fn slab_reflectance_cancellable(
+    slabs: &[OpticalSlab],
+    ior: f64,
+    streams: usize,
+    cancel: &AtomicBool,
+) -> Result<f64, SkinError> {
     validate_streams(streams)?;
     if slabs.is_empty() {
         return Err(SkinError::invalid("layers", "need at least one layer"));
     }
     let (upper, last) = slabs.split_at(slabs.len() - 1);
     with_quadrature(streams, ior, |q| {
-        let above = UpperSystem::cached(q, upper, ior);
+        let above = UpperSystem::cached(q, upper, ior, cancel)?;
+        SkinError::check_cancel(cancel, "adding-doubling transport")?;
         Ok(above.total_over(&Operators::of_slab(q, &last[0]).r_down))
     })
 }
@@ -118,17 +140,27 @@ impl UpperSystem {
     /// from below, `R = R_E' + T_E (I - F R_E)^-1 F T_E'` and the escaping share is
     /// `(1 - F)^T (I - R_E F)^-1 T_E'` (primes: the operators for light from below). No upper layers: `d = e_N`,
     /// `R = F`, share `1 - F`.
-    fn of(q: &Quadrature, upper: &[OpticalSlab]) -> UpperSystem {
+    /// Stops once `cancel` is set (read before each layer's operators).
+    fn of(q: &Quadrature, upper: &[OpticalSlab], cancel: &AtomicBool) -> Result<UpperSystem, SkinError> {
         let n = q.n();
         let normal: Vec<f64> = (0..n).map(|i| if i == n - 1 { 1.0 } else { 0.0 }).collect();
         let not_reflected: Vec<f64> = q.fresnel.iter().map(|f| 1.0 - f).collect();
-        let Some(e) = upper.iter().map(|s| Operators::of_slab(q, s)).reduce(|above, below| above.add(&below)) else {
-            return UpperSystem {
+        let mut combined: Option<Operators> = None;
+        for slab in upper {
+            SkinError::check_cancel(cancel, "adding-doubling transport")?;
+            let below = Operators::of_slab(q, slab);
+            combined = Some(match combined {
+                Some(above) => above.add(&below),
+                None => below,
+            });
+        }
+        let Some(e) = combined else {
+            return Ok(UpperSystem {
                 escaped: 0.0,
                 down: normal,
                 r_from_below: Matrix::diagonal(&q.fresnel),
                 escape_from_below: not_reflected,
-            };
+            });
         };
         let i_minus_f_r = Matrix::identity(n).minus(&e.r_down.scale_rows(&q.fresnel));
         let d = i_minus_f_r.solve_vector(&normal);
@@ -138,11 +170,16 @@ impl UpperSystem {
         // (1 - F)^T (I - R_E F)^-1 T_E' = ((I - R_E F)^-T (1 - F))^T T_E', and (I - R_E F)^T = I - F R_E^T.
         let y = Matrix::identity(n).minus(&e.r_down.transpose().scale_rows(&q.fresnel)).solve_vector(&not_reflected);
         let escape_from_below = e.t_up.transpose().mul_vector(&y);
-        UpperSystem { escaped, down, r_from_below, escape_from_below }
+        Ok(UpperSystem { escaped, down, r_from_below, escape_from_below })
     }
 
     /// [`UpperSystem::of`], from this thread's cache when the same layers were seen before.
-    fn cached(q: &Quadrature, upper: &[OpticalSlab], ior: f64) -> Rc<UpperSystem> {
+    fn cached(
+        q: &Quadrature,
+        upper: &[OpticalSlab],
+        ior: f64,
+        cancel: &AtomicBool,
+    ) -> Result<Rc<UpperSystem>, SkinError> {
         thread_local! {
             static CACHE: RefCell<HashMap<Vec<u64>, Rc<UpperSystem>>> = RefCell::new(HashMap::new());
         }
@@ -150,15 +187,15 @@ impl UpperSystem {
         key.extend(upper.iter().flat_map(|s| [s.albedo.to_bits(), s.optical_thickness.to_bits(), s.g.to_bits()]));
         CACHE.with(|cache| {
             if let Some(hit) = cache.borrow().get(&key) {
-                return Rc::clone(hit);
+                return Ok(Rc::clone(hit));
             }
-            let fresh = Rc::new(UpperSystem::of(q, upper));
+            let fresh = Rc::new(UpperSystem::of(q, upper, cancel)?);
             let mut cache = cache.borrow_mut();
             if cache.len() >= UPPER_CACHE_ENTRIES {
                 cache.clear();
             }
             cache.insert(key, Rc::clone(&fresh));
-            fresh
+            Ok(fresh)
         })
     }
 

@@ -9,7 +9,9 @@ pub mod profile_table;
 
 use serde::{Deserialize, Serialize};
 
-pub use adding_doubling::{total_diffuse_reflectance, DEFAULT_STREAMS, STREAMS_RANGE};
+pub use adding_doubling::{
+    total_diffuse_reflectance, total_diffuse_reflectance_cancellable, DEFAULT_STREAMS, STREAMS_RANGE,
+};
 
 /// How the total diffuse reflectance of a layer stack (the albedo, and the scale of its radial profile) is computed.
 /// Python's `transport=`, the CLI's `--transport`, JSON and the add-on take the serde names.

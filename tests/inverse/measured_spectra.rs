@@ -32,8 +32,11 @@ fn synthetic_round_trip() {
     let wl = wavelengths();
     let truth = SkinParams::from_values([0.04, 0.4, 0.02, 0.3, 0.08, 2.0, 0.75]).unwrap();
     let offset = 0.03;
-    let measured: Vec<f64> =
-        diffuse_reflectance_at(&truth, &Request::default(), &wl).unwrap().iter().map(|r| r + offset).collect();
+    let measured: Vec<f64> = diffuse_reflectance_at(&truth, &Request::default(), &wl, &Default::default())
+        .unwrap()
+        .iter()
+        .map(|r| r + offset)
+        .collect();
     let fit = fit_spectrum(&wl, &measured, &FitOptions::default()).unwrap();
     assert!(fit.rms < 2e-5, "rms {}", fit.rms);
     assert!(fit.delta_e00 < 0.01, "{}", fit.delta_e00);

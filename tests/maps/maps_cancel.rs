@@ -1,6 +1,6 @@
-//! `compute_maps_cancellable`: a cancel flag set from the progress callback stops the work at the next row, and a
-//! flag never set changes nothing. The reference is `compute_maps` itself on the same image (the uncancelled result)
-//! and the count of rows the callback saw.
+//! `compute_maps_cancellable`: a cancel flag set from the progress callback stops the work (the call returns the
+//! interruption, never a partial result), and a flag never set changes nothing. The reference is `compute_maps`
+//! itself on the same image (the uncancelled result) and the count of rows and evaluations the callback saw.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -23,7 +23,8 @@ fn cancel_skips_the_rows_not_started() {
     assert_eq!(same.base_color, full.base_color);
     assert_eq!(same.radius_mm, full.radius_mm);
 
-    // Cancel once a quarter of the rows are done.
+    // Cancel once a quarter of the rows are done: the rows not started are skipped, the one under way stops within
+    // an evaluation, and the call is the interruption.
     let cancel = AtomicBool::new(false);
     let rows = AtomicUsize::new(0);
     // Rows are the calls with texels done; a call with 0 is a tick between evaluations.
@@ -32,24 +33,10 @@ fn cancel_skips_the_rows_not_started() {
             cancel.store(true, Ordering::SeqCst);
         }
     };
-    let part = compute_maps_cancellable(&image, &settings, Some(&progress), &cancel).expect("maps");
+    let e = compute_maps_cancellable(&image, &settings, Some(&progress), &cancel).expect_err("cancelled").to_string();
+    assert!(e.contains("interrupted"), "{e}");
     let done = rows.load(Ordering::SeqCst);
-    assert!((12..48).contains(&done), "{done} rows done of 48");
-    let width = image.width;
-    let written_rows = (0..image.height)
-        .filter(|y| part.base_color.as_ref().unwrap()[0][y * width..(y + 1) * width].iter().any(|&v| v != 0.0))
-        .count();
-    assert_eq!(written_rows, done, "rows written = rows reported");
-    for y in 0..image.height {
-        let row = y * width..(y + 1) * width;
-        if part.base_color.as_ref().unwrap()[0][row.clone()].iter().any(|&v| v != 0.0) {
-            assert_eq!(
-                part.base_color.as_ref().unwrap()[0][row.clone()],
-                full.base_color.as_ref().unwrap()[0][row],
-                "a finished row is complete"
-            );
-        }
-    }
+    assert!((12..12 + rayon::current_num_threads()).contains(&done), "{done} rows done of 48 after the 12th");
 }
 
 /// A table build stops once the flag is set: set from the build's own tick (about once per percent of the nodes),
@@ -113,7 +100,7 @@ fn cancel_stops_a_table_build() {
 /// The flag is read before every evaluation, not once per row (issue 38 item 2: one row of an exact map at the
 /// reference level is minutes of work; a 2 x 128 map stopped 52 s after Ctrl-C). One row of distinct texels, as the
 /// distinct-tuple path takes it (64 tuples) and as the per-texel path does (more than `MAX_DISTINCT_TUPLES`): the
-/// progress callback cancels at its first call, and the evaluations done (the report's count) are the one that
+/// progress callback cancels at its first call, and the evaluations done (one progress call each) are the one that
 /// called plus at most one in flight per worker thread, where the whole row used to be evaluated.
 #[test]
 fn cancel_is_read_before_each_evaluation() {
@@ -131,9 +118,15 @@ fn cancel_is_read_before_each_evaluation() {
             Request { accuracy: Accuracy::draft(), ..Request::new(Outputs { albedo: true, ..Outputs::default() }) };
         let settings = MapSettings { strategy: StrategyChoice::Exact, request, ..MapSettings::default() };
         let cancel = AtomicBool::new(false);
-        let progress = |_: usize, _: usize| cancel.store(true, Ordering::SeqCst);
-        let part = compute_maps_cancellable(&image, &settings, Some(&progress), &cancel).expect("maps");
-        let done = part.report.work.evaluations;
+        // The progress calls after the first are the evaluations finished (each ticks once, `(0, texels)`).
+        let calls = AtomicUsize::new(0);
+        let progress = |_: usize, _: usize| {
+            calls.fetch_add(1, Ordering::SeqCst);
+            cancel.store(true, Ordering::SeqCst);
+        };
+        let e = compute_maps_cancellable(&image, &settings, Some(&progress), &cancel).expect_err("cancelled");
+        assert!(e.to_string().contains("interrupted"), "{e}");
+        let done = calls.load(Ordering::SeqCst);
         assert!(
             (1..=1 + threads).contains(&done),
             "{width} texels: {done} evaluations after a cancel at the first (at most {} expected)",

@@ -6,6 +6,7 @@
 mod support;
 
 mod accuracy;
+mod cancel_latency;
 mod diffusion_references;
 mod exact_profile;
 mod exact_transport;

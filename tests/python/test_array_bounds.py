@@ -119,3 +119,21 @@ def test_layers_beyond_the_limit_are_refused_before_any_work():
     assert 0.0 < total < 1.0
     with pytest.raises(spectral_skin.SpectralSkinError, match=r"layers.*at most 16 layers"):
         spectral_skin.layered_reflectance([layer] * 16 + [(float("inf"), 0.01, 1.0, 1.4)], [1.0])
+
+
+# The conversions that take an array argument in the module's source (src/python): each literal name given to one
+# of them is an argument above, so a new array argument cannot arrive untested. Names built at run time (a map's
+# parameter, a result's entry, a colour argument) are each tested above by one instance.
+ARRAY_CONVERSIONS = ("real_vector", "real_sequence", "float_array", "check_array_size")
+
+
+def test_every_array_argument_in_the_source_is_tried():
+    import pathlib
+    import re
+
+    source = pathlib.Path(__file__).resolve().parents[2] / "src" / "python"
+    call = re.compile(r"\b(?:" + "|".join(ARRAY_CONVERSIONS) + r")\(\s*\"([^\"]+)\"")
+    names = {m.group(1) for path in source.glob("*.rs") for m in call.finditer(path.read_text(encoding="utf-8"))}
+    assert len(names) >= 6, names  # the scan finds the conversions it is meant to
+    tried = {name.strip() for name in ARGUMENTS} | set(ENDLESS)
+    assert names <= tried, f"array arguments not tried with huge views: {sorted(names - tried)}"
