@@ -4,7 +4,7 @@
 //! is memoised per oiliness: this is its steady-state cost, the first call at an oiliness takes tens of ms).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use spectral_skin::surface_lobes::ALL_SURFACE_MODELS;
+use spectral_skin::surface::lobes::ALL_SURFACE_MODELS;
 use spectral_skin::transport::ALL_TRANSPORTS;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 

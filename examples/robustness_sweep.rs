@@ -7,9 +7,10 @@
 
 use spectral_skin::color::spectrum_to_rgb;
 use spectral_skin::diffusion::{
-    raw_reflectance_profiles, Boundaries, Combination, HankelQuadrature, Layer, LayerStack, MultipoleTerms,
+    raw_reflectance_profiles, Boundaries, Combination, HankelQuadrature, LayerStack, MultipoleTerms,
 };
 use spectral_skin::evaluate::Prepared;
+use spectral_skin::layer::Layer;
 use spectral_skin::skin::skin_layers;
 use spectral_skin::{Outputs, Request, SkinParams};
 

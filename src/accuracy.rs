@@ -66,11 +66,10 @@ fn default_streams() -> usize {
     DEFAULT_STREAMS
 }
 
-/// The most radii of a profile (`profile_count`) or of a `layered_reflectance` call.
-pub const MAX_PROFILE_RADII: usize = 100_000;
-/// The most layers of a `layered_reflectance` call: skin models have 2 to 7; each layer is work that reads no cancel
-/// flag (its slab, the multipole's sums and the adding-doubling totals), so the count bounds the time to stop: 16
-/// layers at 64 streams are about 0.23 s (64 were 0.9 s, measured on the shared 2-core machine; 10 streams: 0.03 s).
+pub use crate::diffusion::MAX_PROFILE_RADII;
+/// The most layers of a `layered_reflectance` call: skin models have 2 to 7; the adding-doubling reads the cancel
+/// flag before each layer, the multipole's sums do not, so the count bounds their time: 16 layers at 64 streams are
+/// about 0.23 s in all (64 were 0.9 s, measured on the shared 2-core machine; 10 streams: 0.03 s).
 pub const MAX_LAYERS: usize = 16;
 
 /// Streams of the draft level (half the default's; not yet on the fronts of docs/accuracy-vs-time.md).

@@ -7,9 +7,12 @@ use std::ffi::OsString;
 
 use std::path::PathBuf;
 
+use crate::accuracy::AccuracyLevel;
 use crate::color::{RgbMapping, WavelengthPlacement};
 use crate::diffusion::{Boundaries, Combination, MultipoleTerms};
+use crate::error::SkinError;
 use crate::evaluate::ProfileGrid;
+use crate::evaluate::{evaluate, Evaluation, MaterialOutput, Outputs, Request};
 use crate::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::fit::{SubsurfaceMethod, DEFAULT_METHOD};
 use crate::maps::example::{write_example_params_encoded, ExampleKind, EXAMPLE_EXR};
@@ -19,9 +22,9 @@ use crate::skin::params::{
     ParamSpec, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN,
     MELANIN_BLEND, OILINESS, PARAMS,
 };
-use crate::surface_lobes::SurfaceModel;
+use crate::skin::{SkinParams, PRESETS};
+use crate::surface::lobes::SurfaceModel;
 use crate::transport::Transport;
-use crate::{evaluate, AccuracyLevel, Evaluation, MaterialOutput, Outputs, Request, SkinError, SkinParams, PRESETS};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -556,8 +559,10 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
     use crate::inverse::{FitOptions, Specular};
     let path = args.spectrum.display().to_string();
     let text = std::fs::read_to_string(&args.spectrum).map_err(|e| format!("{path}: {e}"))?;
-    let mut rows =
-        crate::strip_utf8_bom(&text).lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+    let mut rows = crate::table::strip_utf8_bom(&text)
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
     let header = rows.next().map(|(_, l)| l.trim()).unwrap_or("");
     if header.replace(' ', "") != "wavelength_nm,reflectance" {
         return Err(

@@ -10,17 +10,18 @@ pub use crate::accuracy::{Accuracy, AccuracyLevel, ProfileGrid};
 use crate::color::{
     placement_rgb_weights, rgb_luminance_weights, spectrum_to_rgb, RgbMapping, WavelengthGrid, WorkingSpace,
 };
-use crate::diffusion::{clamped_reflectance_profiles_cancellable, Boundaries, Combination, Layer, LayerStack};
+use crate::diffusion::{clamped_reflectance_profiles_cancellable, Boundaries, Combination, LayerStack};
 use crate::error::{check_range, SkinError};
 use crate::fit::blender_target::{Target, TargetInfo};
 use crate::fit::burley::{
     fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM,
 };
-use crate::fit::principled_specular::{specular_for, SpecularParams, SurfaceConstants};
 pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
+use crate::layer::Layer;
 use crate::skin::{skin_layers, SkinModel, SkinParams};
-use crate::surface_lobes::SurfaceModel;
+use crate::surface::lobes::SurfaceModel;
+use crate::surface::principled::{specular_for, SpecularParams, SurfaceConstants};
 use crate::transport::profile_table::{exact_shape, Shape};
 use crate::transport::{total_diffuse_reflectance_cancellable, Transport};
 
@@ -112,7 +113,7 @@ pub struct Request {
     /// ([`Transport`]). Always in JSON, so every result, sidecar and cache key names it.
     #[serde(default)]
     pub transport: Transport,
-    /// The surface reflection the specular inputs stand in for (`surface_lobes::SurfaceModel`): the measured two-lobe
+    /// The surface reflection the specular inputs stand in for (`surface::lobes::SurfaceModel`): the measured two-lobe
     /// surface (base lobe plus Coat; the default) or DJ2006's oil layer. Absent from JSON when the paper's, so a JSON
     /// without it (also one written before the field existed) reads as the paper's.
     #[serde(default = "SurfaceModel::absent", skip_serializing_if = "SurfaceModel::is_paper")]
@@ -547,8 +548,8 @@ impl Totals {
 
     fn shape_name(&self) -> &'static str {
         match self.shapes {
-            Some(_) => crate::diffusion::ProfileShape::Exact.name(),
-            None => crate::diffusion::ProfileShape::Multipole.name(),
+            Some(_) => crate::reflectance::ProfileShape::Exact.name(),
+            None => crate::reflectance::ProfileShape::Multipole.name(),
         }
     }
 }

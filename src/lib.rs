@@ -1,10 +1,11 @@
 //! spectral-skin: Donner & Jensen 2006's spectral BSSRDF for human skin.
 //!
-//! Four physiological parameters per texel ([`SkinParams`]) give two layers' spectral optics ([`skin`]), whose
-//! multipole diffusion profiles are combined in the Hankel domain ([`diffusion`]), turned into colour ([`color`]) and
-//! into the inputs of Blender's Principled BSDF ([`fit`], with the oil layer's microfacet maths in [`surface`] and
-//! the half-space transport the random-walk fits rely on in [`transport`]). [`evaluate`] computes only what a
-//! [`Request`] asks for.
+//! Four physiological parameters per texel ([`SkinParams`]) give two layers' spectral optics ([`skin`], each a
+//! [`layer::Layer`]), whose reflectance comes from the exact transport ([`transport`]) or the multipole diffusion
+//! combined in the Hankel domain ([`diffusion`]), composed one floor up ([`reflectance`], and per wavelength in
+//! [`evaluate`]), turned into colour ([`color`]) and into the inputs of Blender's Principled BSDF: Base Color and
+//! Subsurface Radius ([`fit`]), the surface's reflection and its Principled inputs ([`surface`]). [`evaluate`]
+//! computes only what a [`Request`] asks for.
 
 pub mod accuracy;
 #[cfg(feature = "cli")]
@@ -15,11 +16,12 @@ pub mod error;
 pub mod evaluate;
 pub mod fit;
 pub mod inverse;
+pub mod layer;
 pub mod maps;
 mod numeric;
+pub mod reflectance;
 pub mod skin;
 pub mod surface;
-pub mod surface_lobes;
 mod table;
 pub mod transport;
 

@@ -2,7 +2,8 @@
 //! adding-doubling at several stream counts) against the project's Monte Carlo photon walk.
 
 use serde::Serialize;
-use spectral_skin::diffusion::{Combination, LayerStack, LayeredOptions, MultipoleTerms};
+use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
+use spectral_skin::reflectance::LayeredOptions;
 use spectral_skin::skin::skin_layers;
 use spectral_skin::transport::{total_diffuse_reflectance, Transport};
 use spectral_skin::{evaluate, Accuracy, SkinModel};

@@ -15,7 +15,7 @@ use spectral_skin::color::{RgbMapping, WavelengthPlacement, ALL_RGB_MAPPINGS, AL
 use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
 use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target};
-use spectral_skin::surface_lobes::ALL_SURFACE_MODELS;
+use spectral_skin::surface::lobes::ALL_SURFACE_MODELS;
 use spectral_skin::{evaluate, AccuracyLevel, Outputs, Request, SkinModel, SkinParams};
 
 fuzz_target!(|data: &[u8]| {

@@ -8,7 +8,8 @@ mod common;
 
 use common::Bytes;
 use libfuzzer_sys::fuzz_target;
-use spectral_skin::diffusion::{layered_reflectance, Layer};
+use spectral_skin::layer::Layer;
+use spectral_skin::reflectance::layered_reflectance;
 
 fuzz_target!(|data: &[u8]| {
     let mut b = Bytes::new(data);

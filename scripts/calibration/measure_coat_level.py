@@ -16,7 +16,7 @@ albedo at normal incidence.
     <venv>/bin/python scripts/calibration/measure_coat_level.py --engine cycles   # rewrites docs/data/coat_level_cycles.json
     <venv>/bin/python scripts/calibration/measure_coat_level.py --engine eevee    # rewrites docs/data/coat_level_eevee.json
 
-The JSON is compiled into the core (`fit::principled_specular`); written atomically.
+The JSON is compiled into the core (`surface::principled`); written atomically.
 """
 
 from __future__ import annotations

@@ -64,7 +64,7 @@ mod tests {
     /// polynomial fits hold: A within 0.5 % of the exact integral's. Just outside they fail (the reason for the range).
     #[test]
     fn fits_hold_on_the_accepted_range_only() {
-        let (lo, hi) = crate::diffusion::IOR_RANGE;
+        let (lo, hi) = crate::layer::IOR_RANGE;
         let a_exact = |eta: f64| {
             let f = fdr_exact(eta);
             (1.0 + f) / (1.0 - f)

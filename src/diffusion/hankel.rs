@@ -375,7 +375,7 @@ impl PanelGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diffusion::Layer;
+    use crate::layer::Layer;
 
     #[test]
     fn cutoff_finds_decay() {

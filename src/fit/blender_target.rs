@@ -13,7 +13,8 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use super::random_walk::{base_color_for, christensen_burley_s, width_factor, RandomWalkModel};
+use super::burley::christensen_burley_s;
+use super::random_walk::{base_color_for, width_factor, RandomWalkModel};
 use super::random_walk_skin::{skin_base_color, skin_radius_factor, skin_width_factor, SKIN_SUBSURFACE_IOR};
 use super::{MethodParams, SubsurfaceMethod};
 use crate::error::SkinError;

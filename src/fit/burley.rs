@@ -13,7 +13,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use crate::numeric::golden_section_min;
+use crate::numeric::{clamp_nan_to_low, golden_section_min};
 
 /// Hankel transform of the normalised Burley profile: B~(s; d) = (1/4) [1/sqrt(1+(s d)^2) + 3/sqrt(1+(3 s d)^2)]
 /// (from FT{e^(-r/a)/r} = 2 pi / sqrt(s^2 + 1/a^2)). The 16 d truncation of Cycles (0.4 % of the energy) is ignored.
@@ -92,6 +92,19 @@ pub fn fit_burley(s: &[f64], normalized: &[f64]) -> BurleyFit {
     BurleyFit { d_mm, radius_mm: 4.0 * PI * d_mm, edge_residual: edge_misfit(s, normalized, d_mm) }
 }
 
+/// Christensen-Burley 2015 eq. 6 fit `s(A) = 1.9 - A + 3.5 (A - 0.8)^2`: constant, linear and quadratic terms.
+const BURLEY_S_CONST: f64 = 1.9;
+const BURLEY_S_QUADRATIC: f64 = 3.5;
+const BURLEY_S_CENTRE: f64 = 0.8;
+
+/// `s(A) = 1.9 - A + 3.5 (A - 0.8)^2`, dimensionless: Christensen & Burley 2015, eq. 6 (`bssrdf_burley_fitting` in
+/// `src/kernel/closure/bssrdf.h`, `blender/cycles` 695bae346ba1: dead code in Cycles, used by EEVEE's
+/// `burley_setup`). A is clamped to [0, 1], NaN counts as 0.
+pub fn christensen_burley_s(albedo: f64) -> f64 {
+    let a = clamp_nan_to_low(albedo, 0.0, 1.0);
+    BURLEY_S_CONST - a + BURLEY_S_QUADRATIC * (a - BURLEY_S_CENTRE) * (a - BURLEY_S_CENTRE)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -133,6 +146,24 @@ mod tests {
         for d in [0.005, 0.2, 2.0] {
             let fit = fit_burley_second_moment(burley_transform(SECOND_MOMENT_FREQUENCY_PER_MM, d));
             assert!((fit.d_mm / d - 1.0).abs() < 2e-3, "{d}: {}", fit.d_mm);
+        }
+    }
+
+    /// Christensen-Burley s(A) and its inverse 1/s = 0.34 / 0.58 / 0.91 at A = 0.2 / 0.5 / 0.8
+    /// (docs/blender-principled.md, Edge and spot renders).
+    #[test]
+    fn christensen_burley_s_matches_its_inverse_values() {
+        for (a, inv_s) in [(0.2, 0.34), (0.5, 0.58), (0.8, 0.91)] {
+            let s = christensen_burley_s(a);
+            assert!((1.0 / s - inv_s).abs() < 0.006, "A = {a}: 1/s = {}", 1.0 / s);
+        }
+        assert!((christensen_burley_s(0.8) - 1.1).abs() < 1e-12, "{}", christensen_burley_s(0.8));
+    }
+
+    #[test]
+    fn christensen_burley_s_is_finite_everywhere() {
+        for x in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -1.0, 2.0] {
+            assert!(christensen_burley_s(x).is_finite(), "x = {x}: {}", christensen_burley_s(x));
         }
     }
 }

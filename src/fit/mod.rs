@@ -1,9 +1,8 @@
-//! Blender-facing fits: the Subsurface Radius and Base Color per Cycles subsurface method (docs/blender-targets.md),
-//! and the Principled specular inputs for the oil layer (`principled_specular`).
+//! Blender-facing fits: the Subsurface Radius and Base Color per Cycles subsurface method (docs/blender-targets.md).
+//! The surface's Principled inputs are [`crate::surface::principled`]'s.
 
 pub mod blender_target;
 pub mod burley;
-pub mod principled_specular;
 pub mod random_walk;
 pub mod random_walk_skin;
 pub mod walk_width;
@@ -72,10 +71,10 @@ impl SubsurfaceMethod {
     }
 
     /// The method named `name` (snake_case); the error lists the names.
-    pub fn from_name(name: &str) -> Result<SubsurfaceMethod, crate::SkinError> {
+    pub fn from_name(name: &str) -> Result<SubsurfaceMethod, crate::error::SkinError> {
         SubsurfaceMethod::ALL.into_iter().find(|m| m.name() == name).ok_or_else(|| {
             let names: Vec<&str> = SubsurfaceMethod::ALL.iter().map(|m| m.name()).collect();
-            crate::SkinError::invalid(
+            crate::error::SkinError::invalid(
                 "subsurface method",
                 format!("expected one of {}; got {name:?}", names.join(", ")),
             )

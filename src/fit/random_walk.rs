@@ -87,11 +87,6 @@ const VAN_DE_HULST_OFFSET: f64 = 4.09712;
 const VAN_DE_HULST_LINEAR: f64 = 4.20863;
 const VAN_DE_HULST_ROOT: [f64; 3] = [9.59217, 41.6808, 17.7126];
 
-/// Christensen-Burley 2015 eq. 6 fit `s(A) = 1.9 - A + 3.5 (A - 0.8)^2`: constant, linear and quadratic terms.
-const BURLEY_S_CONST: f64 = 1.9;
-const BURLEY_S_QUADRATIC: f64 = 3.5;
-const BURLEY_S_CENTRE: f64 = 0.8;
-
 /// Bisection steps on the Base Color (2^-60 of the bracket: below f64 resolution).
 const BISECTION_STEPS: usize = 60;
 
@@ -298,14 +293,6 @@ pub(crate) fn invert_response(
     RandomWalkColor { base_color, achieved_albedo: response(base_color), saturated: false }
 }
 
-/// `s(A) = 1.9 - A + 3.5 (A - 0.8)^2`, dimensionless: Christensen & Burley 2015, eq. 6 (`bssrdf_burley_fitting` in
-/// `src/kernel/closure/bssrdf.h`, `blender/cycles` 695bae346ba1: dead code in Cycles, used by EEVEE's
-/// `burley_setup`). A is clamped to [0, 1], NaN counts as 0.
-pub fn christensen_burley_s(albedo: f64) -> f64 {
-    let a = clamp_nan_to_low(albedo, 0.0, 1.0);
-    BURLEY_S_CONST - a + BURLEY_S_QUADRATIC * (a - BURLEY_S_CENTRE) * (a - BURLEY_S_CENTRE)
-}
-
 /// Width factor `w` of a walk under `model` at Base Color A, dimensionless: the walk's transport mean free path that
 /// renders an edge like a Burley profile of length d is `w d`. `w = 1/k(A)` with k the edge-render calibration of
 /// the model's walk (`walk_width`: bpy 5.0 `RANDOM_WALK` for the fit, bpy 5.3 `RANDOM_WALK` for Van de Hulst), its
@@ -443,20 +430,8 @@ mod tests {
             assert!(cycles_single_scatter_albedo(x, x).is_finite(), "x = {x}: {}", cycles_single_scatter_albedo(x, x));
             assert!(chandrasekhar_h(x, x).is_finite(), "x = {x}: {}", chandrasekhar_h(x, x));
             assert!(random_walk_flat_albedo(x).is_finite(), "x = {x}: {}", random_walk_flat_albedo(x));
-            assert!(christensen_burley_s(x).is_finite(), "x = {x}: {}", christensen_burley_s(x));
         }
         assert_eq!(cycles_single_scatter_albedo(f64::NAN, 0.0), 0.0);
         assert_eq!(cycles_single_scatter_albedo(2.0, 0.0), cycles_single_scatter_albedo(1.0, 0.0));
-    }
-
-    /// Christensen-Burley s(A) and its inverse 1/s = 0.34 / 0.58 / 0.91 at A = 0.2 / 0.5 / 0.8
-    /// (docs/blender-principled.md, Edge and spot renders).
-    #[test]
-    fn christensen_burley_s_matches_its_inverse_values() {
-        for (a, inv_s) in [(0.2, 0.34), (0.5, 0.58), (0.8, 0.91)] {
-            let s = christensen_burley_s(a);
-            assert!((1.0 / s - inv_s).abs() < 0.006, "A = {a}: 1/s = {}", 1.0 / s);
-        }
-        assert!((christensen_burley_s(0.8) - 1.1).abs() < 1e-12, "{}", christensen_burley_s(0.8));
     }
 }

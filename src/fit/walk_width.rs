@@ -14,7 +14,7 @@ use std::sync::OnceLock;
 
 use serde::Deserialize;
 
-use super::random_walk::christensen_burley_s;
+use super::burley::christensen_burley_s;
 
 /// The render measurements, compiled in.
 const CALIBRATION_JSON: &str = include_str!("../../docs/data/random_walk_width.json");

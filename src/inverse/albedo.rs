@@ -46,6 +46,9 @@ pub const DEFAULT_AMBIGUITY_DELTA_E: f64 = 0.5;
 /// Oiliness written into fitted parameter maps when none is given: 0.3, the DJ2006 presets' (albedo does not
 /// depend on it).
 pub const DEFAULT_OILINESS: f64 = 0.3;
+
+/// The range each RGB gain (`rgb_gains`, and `albedo_gains`' estimate) is kept in (a factor 64 either way: six stops).
+pub const GAIN_RANGE: (f64, f64) = (1.0 / 64.0, 64.0);
 /// The melanin blends scanned for the ambiguity set.
 const AMBIGUITY_BLEND_STEPS: usize = 21;
 
@@ -98,7 +101,7 @@ impl AlbedoFitOptions {
         check_range("prior_weight", "ΔE00 per unit of melanin blend", self.prior_weight, 0.0, 100.0)?;
         check_range("ambiguity_delta_e", "ΔE00 of the ambiguity set", self.ambiguity_delta_e, 1e-6, 100.0)?;
         crate::transport::adding_doubling::validate_streams(self.streams)?;
-        let (lo, hi) = super::albedo_gains::GAIN_RANGE;
+        let (lo, hi) = GAIN_RANGE;
         for (name, g) in ["rgb_gains[0] (R)", "rgb_gains[1] (G)", "rgb_gains[2] (B)"].iter().zip(self.rgb_gains) {
             if !(lo..=hi).contains(&g) {
                 return Err(SkinError::invalid(

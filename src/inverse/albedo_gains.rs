@@ -16,7 +16,7 @@ use std::sync::atomic::AtomicBool;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::albedo::{cached_albedo_table_cancellable, fit_on_table, AlbedoFitOptions, AlbedoTable};
+use super::albedo::{cached_albedo_table_cancellable, fit_on_table, AlbedoFitOptions, AlbedoTable, GAIN_RANGE};
 use crate::error::SkinError;
 
 /// A texel this far (ΔE00) from every colour skin can have is plainly not skin's albedo (the fit's own residual on
@@ -30,8 +30,6 @@ pub const NOT_ALBEDO_SHARE: f64 = 0.25;
 pub const GAIN_SAMPLE: usize = 2048;
 /// Rounds of fit-then-solve; the gains settle in 5 to 10 on the textures tried.
 const GAIN_ROUNDS: usize = 16;
-/// The range each gain is kept in (a factor 64 either way: six stops).
-pub const GAIN_RANGE: (f64, f64) = (1.0 / 64.0, 64.0);
 
 /// Gains found for a texture ([`estimate_gains`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -18,7 +18,7 @@ use crate::evaluate::{Material, Prepared, Request};
 use crate::fit::SubsurfaceMethod;
 use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN, MELANIN_BLEND};
 use crate::skin::SkinParams;
-use crate::surface_lobes::SurfaceModel;
+use crate::surface::lobes::SurfaceModel;
 
 /// Outputs per texel that depend on (C_m, beta_m, C_h), for one subsurface method on the request's target: the
 /// model's albedo, and the method's Base Color and Subsurface Radius there (for EEVEE the radius is compensated per

@@ -21,12 +21,12 @@ use super::udim::{find_tiles, stack_tiles, tile_file_name, tile_set_file_name, T
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared, Request};
 use crate::fit::blender_target::TargetInfo;
-use crate::fit::principled_specular::{specular_for, surface_inputs, SpecularParams, SurfaceInputs};
 use crate::fit::SubsurfaceMethod;
 use crate::skin::params::{
     ParamSpec, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MATERIAL_PARAMS, MELANIN, MELANIN_BLEND, OILINESS,
 };
 use crate::skin::SkinParams;
+use crate::surface::principled::{specular_for, surface_inputs, SpecularParams, SurfaceInputs};
 
 /// At most this many distinct (C_m, beta_m, C_h) tuples (with the extended physiology, when it varies) are evaluated
 /// one by one; more use the table (a stack of tables over thickness when the epidermis thickness varies, or direct
@@ -134,7 +134,7 @@ pub struct BadTexels {
 #[derive(Debug, Clone)]
 pub enum SpecularOutput {
     Constant(SpecularParams),
-    /// The surface inputs that depend on the oiliness, per texel (`fit::principled_specular::surface_inputs`):
+    /// The surface inputs that depend on the oiliness, per texel (`surface::principled::surface_inputs`):
     /// Specular IOR Level always, Coat Weight and Coat Roughness for a surface with a coat (`measured`). The others
     /// (Roughness, IOR, Coat IOR; Coat Weight 0 for `paper`) are one value: the fields of `constants` that are not
     /// maps.

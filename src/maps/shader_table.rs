@@ -25,7 +25,7 @@
 //!
 //! [`ShaderTable::sample`] does exactly that on the images (with the bilinear filter of Cycles' CPU image lookup), and
 //! [`measure_shader_error`] measures it against direct evaluation. The surface's inputs need no table: they are linear
-//! in the oiliness between `fit::principled_specular::surface_input_nodes`, a few Math nodes.
+//! in the oiliness between `surface::principled::surface_input_nodes`, a few Math nodes.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;

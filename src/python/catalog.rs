@@ -6,9 +6,9 @@ use pyo3::types::{PyDict, PyList};
 use crate::accuracy::ALL_ACCURACY_LEVELS;
 use crate::fit::blender_target::describe_targets;
 use crate::skin::PARAMS;
-use crate::surface_lobes::{SurfaceModel, ALL_SURFACE_MODELS};
+use crate::skin::PRESETS;
+use crate::surface::lobes::{SurfaceModel, ALL_SURFACE_MODELS};
 use crate::transport::{Transport, ALL_TRANSPORTS};
-use crate::PRESETS;
 
 use super::convert::to_py;
 

@@ -11,23 +11,25 @@ use pyo3::types::{PyBool, PyBytes, PyString};
 use serde::Serialize;
 use serde_json::Value;
 
+use crate::accuracy::{Accuracy, AccuracyLevel};
 use crate::color::{ALL_RGB_MAPPINGS, ALL_WAVELENGTH_PLACEMENTS, ALL_WORKING_SPACES};
 use crate::diffusion::{MultipoleTerms, ALL_BOUNDARIES, ALL_COMBINATIONS};
 use crate::error::SkinError;
 use crate::evaluate::ProfileGrid;
+use crate::evaluate::{Outputs, Request};
 use crate::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::maps::io::PARAM_CHANNELS;
 use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS};
-use crate::surface_lobes::{SurfaceModel, ALL_SURFACE_MODELS};
+use crate::skin::{SkinParams, PRESETS};
+use crate::surface::lobes::{SurfaceModel, ALL_SURFACE_MODELS};
 use crate::transport::{Transport, ALL_TRANSPORTS, STREAMS_RANGE};
-use crate::{Accuracy, AccuracyLevel, Outputs, Request, SkinParams, PRESETS};
 
 use super::errors::{internal, invalid};
 
 /// The Outputs the material path needs: the default of `evaluate(outputs=...)`.
-/// The outputs `maps` computes, by their names (the core's [`crate::MaterialOutput`]).
+/// The outputs `maps` computes, by their names (the core's [`crate::evaluate::MaterialOutput`]).
 pub(super) fn material_outputs() -> Vec<String> {
-    crate::ALL_MATERIAL_OUTPUTS.iter().map(serde_name).collect()
+    crate::evaluate::ALL_MATERIAL_OUTPUTS.iter().map(serde_name).collect()
 }
 
 /// A TypeError if `obj` is a str or bytes where a sequence is expected (strings are iterable, so they would

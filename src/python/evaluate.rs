@@ -8,10 +8,12 @@ use pyo3::types::PyDict;
 use serde_json::Value;
 
 use crate::accuracy::{MAX_LAYERS, MAX_PROFILE_RADII};
-use crate::diffusion::{Layer, LayeredOptions, ALL_BOUNDARIES};
+use crate::diffusion::ALL_BOUNDARIES;
+use crate::evaluate::Outputs;
 use crate::evaluate::{Evaluation, MethodParams, Request};
 use crate::fit::blender_target::Target;
-use crate::Outputs;
+use crate::layer::Layer;
+use crate::reflectance::LayeredOptions;
 
 use super::convert::{
     by_name, json_to_py, nested_rows, params_arg, parse_outputs, real_sequence, real_vector, reject_string, rgb_rows,
@@ -423,7 +425,7 @@ pub(super) fn layered_reflectance_py<'py>(
     };
     let cancel = AtomicBool::new(false);
     let r = detached_interruptible(py, &cancel, || {
-        crate::diffusion::layered_reflectance_cancellable(&layers, &radii, &options, &cancel)
+        crate::reflectance::layered_reflectance_cancellable(&layers, &radii, &options, &cancel)
     })?;
     warn_lobe(py, r.negative_lobe)?;
     Ok((r.total, PyArray1::from_vec(py, r.profile_per_mm2)))

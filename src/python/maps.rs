@@ -12,8 +12,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyIterator, PyList, PyString};
 use rayon::prelude::*;
 
+use crate::evaluate::Outputs;
 use crate::evaluate::Request;
-use crate::fit::principled_specular::SpecularParams;
 use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{
     default_extended, read_params, ExrOptions, ParamImage, ParamInputs, ParamSource, Plane, ALL_CHANNELS,
@@ -26,7 +26,7 @@ use crate::maps::pipeline::{
     RADIUS_MAP, SURFACE_MAP_KINDS,
 };
 use crate::maps::udim::{check_tile, stacked_tile_rows, tile_set_file_name, TileRows};
-use crate::Outputs;
+use crate::surface::principled::SpecularParams;
 
 use super::convert::{
     by_name, count_sequence, float_array, is_boolean, material_outputs, parse_outputs, real_arg, shape_text,
@@ -693,7 +693,7 @@ impl MapsPy {
         if self.surface.is_empty() {
             return Ok(Some(all));
         }
-        // Only the constants that do not depend on the oiliness (fit::principled_specular::surface_inputs).
+        // Only the constants that do not depend on the oiliness (surface::principled::surface_inputs).
         let kept = PyDict::new(py);
         let paper_coat: &[&str] = if constants.surface.is_paper() { &PAPER_COAT_CONSTANTS } else { &[] };
         for key in SPECULAR_CONSTANTS.iter().chain(paper_coat) {

@@ -5,9 +5,9 @@ use std::sync::atomic::AtomicBool;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::evaluate::Outputs;
 use crate::fit::SubsurfaceMethod;
 use crate::maps::shader_table::{ShaderTable, ShaderTableMeta, DEFAULT_SHADER_TABLE_RESOLUTION, SHADER_TABLE_EXR};
-use crate::Outputs;
 
 use super::convert::{json_to_py, real_arg, streams_arg, target_from, type_name, Knobs};
 use super::detach::{detached, detached_interruptible};

@@ -1,4 +1,4 @@
-//! The skin surface's reflection (`surface_lobes`) for Python: its BRDF over arrays of angles and its directional
+//! The skin surface's reflection (`surface::lobes`) for Python: its BRDF over arrays of angles and its directional
 //! albedo.
 
 use std::sync::atomic::AtomicBool;
@@ -12,9 +12,9 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::fit::principled_specular::surface_input_nodes;
 use crate::maps::io::check_texel_count;
-use crate::surface_lobes::{SurfaceModel, SurfaceReflection, ALL_SURFACE_MODELS};
+use crate::surface::lobes::{SurfaceModel, SurfaceReflection, ALL_SURFACE_MODELS};
+use crate::surface::principled::surface_input_nodes;
 
 use super::convert::{by_name, real_arg, shape_text, surface_arg, target_from};
 use super::detach::{detached, detached_interruptible};

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::chromophores::*;
 use super::params::SkinParams;
 use super::scattering::{sigma_s_reduced_dermis_per_mm, sigma_s_reduced_epidermis_per_mm};
-use crate::diffusion::Layer;
+use crate::layer::Layer;
 
 /// Index of refraction of all skin, "a constant index of refraction of 1.4 throughout the skin" (DJ2006; docs/model.md,
 /// section Parameters).

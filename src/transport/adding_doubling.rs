@@ -15,9 +15,9 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use super::matrix::Matrix;
-use crate::diffusion::Layer;
 use crate::error::SkinError;
-use crate::surface::fresnel_dielectric;
+use crate::layer::Layer;
+use crate::surface::oil_layer::fresnel_dielectric;
 
 /// Streams (quadrature directions per hemisphere) of the default accuracy level. docs/accuracy-vs-time.md: 8
 /// streams put every Monte Carlo check within 0.6 %, always above it; 16 within 0.14 %.
@@ -74,7 +74,7 @@ pub fn total_diffuse_reflectance_cancellable(
     streams: usize,
     cancel: &AtomicBool,
 ) -> Result<f64, SkinError> {
-    crate::diffusion::layered::validate_layers(layers)?;
+    crate::layer::validate_layers(layers)?;
     let ior = layers[0].ior;
     if let Some((i, l)) = layers.iter().enumerate().find(|(_, l)| l.ior != ior) {
         return Err(SkinError::invalid(

@@ -19,8 +19,8 @@ use std::sync::OnceLock;
 
 use half::f16;
 
-use crate::diffusion::Layer;
 use crate::error::SkinError;
+use crate::layer::Layer;
 
 /// Absorption nodes per layer: log-spaced from [`ABSORPTION_MIN`] to [`ABSORPTION_MAX`] per mean free path.
 pub const ABSORPTION_NODES: usize = 24;

@@ -14,7 +14,7 @@ use spectral_skin::maps::shader_table::{measure_shader_error, ShaderTable};
 use spectral_skin::maps::thickness_tables::THICKNESS_NODES_MM;
 use spectral_skin::maps::{compute_maps, MapSettings, StrategyChoice};
 use spectral_skin::skin::params::EXTENDED_DEFAULTS;
-use spectral_skin::surface_lobes::SurfaceModel;
+use spectral_skin::surface::lobes::SurfaceModel;
 use spectral_skin::transport::profile_table::ProfileTable;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 

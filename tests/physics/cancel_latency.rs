@@ -12,15 +12,16 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use spectral_skin::diffusion::{layered_reflectance_cancellable, Layer, LayeredOptions};
 use spectral_skin::evaluate::{evaluate_cancellable, Prepared};
 use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::inverse::albedo::{fit_albedo_cancellable, AlbedoFitOptions};
 use spectral_skin::inverse::spectrum::{fit_spectrum_cancellable, FitOptions};
+use spectral_skin::layer::Layer;
 use spectral_skin::maps::io::{ParamImage, Plane};
 use spectral_skin::maps::lut::{MaterialTable, TableResolution};
 use spectral_skin::maps::pipeline::compute_maps_cancellable;
 use spectral_skin::maps::{MapSettings, StrategyChoice};
+use spectral_skin::reflectance::{layered_reflectance_cancellable, LayeredOptions};
 use spectral_skin::transport::Transport;
 use spectral_skin::{Accuracy, Outputs, Request, SkinError, SkinParams};
 
@@ -39,17 +40,20 @@ fn heaviest_request() -> Request {
     }
 }
 
-/// Runs `work` on its own thread, sets its flag `after` the start, and returns how long after the flag the call
-/// returned; panics unless it returned the interruption (a call that ends before the flag is too light a case).
-fn stop_delay<T>(
+/// Runs `work` on its own thread and thread pool, sets its flag `after` the start, and returns how long after the
+/// flag the call returned; panics unless it returned the interruption (a call that ends before the flag is too light
+/// a case).
+fn stop_delay<T: Send>(
     what: &str,
     after: Duration,
     work: impl FnOnce(&AtomicBool) -> Result<T, SkinError> + Send,
 ) -> Duration {
     let cancel = AtomicBool::new(false);
+    // A pool of its own: in the global one the call's parallel work would queue behind other tests' long tasks.
+    let pool = rayon::ThreadPoolBuilder::new().build().expect("thread pool");
     let (set_at, (ended_at, outcome)) = std::thread::scope(|scope| {
         let worker = scope.spawn(|| {
-            let outcome = work(&cancel).map(|_| ());
+            let outcome = pool.install(|| work(&cancel)).map(|_| ());
             (Instant::now(), outcome)
         });
         std::thread::sleep(after);

@@ -3,7 +3,9 @@
 
 use std::f64::consts::PI;
 
-use spectral_skin::diffusion::{multipole_reflectance, Layer, LayerStack, MultipoleTerms, Slab};
+use spectral_skin::diffusion::{LayerStack, MultipoleTerms, Slab};
+use spectral_skin::layer::Layer;
+use spectral_skin::reflectance::multipole_reflectance;
 
 /// 2 pi int_0^inf f(r) J0(s r) r dr by the trapezoid rule in ln r (1000 points per decade, 1e-7 to 1e3 mm).
 fn forward_hankel(f: impl Fn(f64) -> f64, s: f64) -> f64 {

@@ -12,7 +12,8 @@
 mod walk;
 
 use crate::support::profile_figures::{model, monte_carlo, worst_profile_error};
-use spectral_skin::diffusion::{Layer, LayeredOptions};
+use spectral_skin::layer::Layer;
+use spectral_skin::reflectance::LayeredOptions;
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 use spectral_skin::transport::profile_table::exact_shape;
 use spectral_skin::transport::profile_table::{

@@ -9,7 +9,8 @@
 //! Run with `cargo test --release --test physics exact_transport:: -- --nocapture` to see the figures.
 
 use crate::support::mc::{simulate, McConfig, McLayer};
-use spectral_skin::diffusion::{Combination, Layer, LayerStack, MultipoleTerms};
+use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
+use spectral_skin::layer::Layer;
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 use spectral_skin::transport::{total_diffuse_reflectance, DEFAULT_STREAMS};
 

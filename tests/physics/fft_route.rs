@@ -6,8 +6,9 @@ use std::f64::consts::PI;
 
 use spectral_skin::diffusion::{
     fft_reflectance_profiles, fft_reflectance_profiles_with, reflectance_profiles, Combination, FftGrid,
-    HankelQuadrature, Layer, LayerStack, MultipoleTerms, PixelSampling,
+    HankelQuadrature, LayerStack, MultipoleTerms, PixelSampling,
 };
+use spectral_skin::layer::Layer;
 use spectral_skin::skin::skin_layers;
 use spectral_skin::{SkinModel, SkinParams};
 

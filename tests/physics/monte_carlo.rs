@@ -12,7 +12,8 @@
 use crate::support::mc::{annulus_area, fresnel_unpolarized, log_edges, simulate, McConfig, McLayer, McResult};
 
 use crate::support::profile_figures::{gauss_legendre_01, radius_at};
-use spectral_skin::diffusion::{multipole_reflectance, Layer};
+use spectral_skin::layer::Layer;
+use spectral_skin::reflectance::multipole_reflectance;
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 
 fn semi_infinite(sigma_a: f64, sigma_s: f64, ior: f64) -> Vec<McLayer> {

@@ -2,7 +2,8 @@
 //! numbers; not data from the paper): spectra, colours and radial profiles of the three presets. The script solved the
 //! paper's diffusion model, so the front values are checked with `Transport::Diffusion`.
 
-use spectral_skin::diffusion::{multipole_reflectance, Combination, LayerStack, MultipoleTerms};
+use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
+use spectral_skin::reflectance::multipole_reflectance;
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 use spectral_skin::transport::Transport;
 use spectral_skin::{evaluate, Outputs, Request};

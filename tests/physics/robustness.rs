@@ -7,12 +7,15 @@ use std::f64::consts::PI;
 use crate::support::mc::{simulate, McConfig, McLayer};
 use spectral_skin::accuracy::ProfileGrid;
 use spectral_skin::diffusion::{
-    layered_reflectance, layered_reflectance_with, multipole_reflectance, raw_reflectance_profiles,
-    reflectance_profiles, Boundaries, ClampedProfiles, Combination, HankelQuadrature, Layer, LayerStack,
-    LayeredOptions, MultipoleTerms, PEAK_PROBE_MM, ROUND_OFF_OF_PEAK,
+    raw_reflectance_profiles, reflectance_profiles, Boundaries, ClampedProfiles, Combination, HankelQuadrature,
+    LayerStack, MultipoleTerms, PEAK_PROBE_MM, ROUND_OFF_OF_PEAK,
 };
 use spectral_skin::evaluate::Prepared;
 use spectral_skin::fit::SubsurfaceMethod;
+use spectral_skin::layer::Layer;
+use spectral_skin::reflectance::{
+    layered_reflectance, layered_reflectance_with, multipole_reflectance, LayeredOptions,
+};
 use spectral_skin::skin::{skin_layers, SkinModel};
 use spectral_skin::transport::Transport;
 use spectral_skin::{Outputs, Request, SkinParams};

@@ -10,9 +10,10 @@ use std::f64::consts::PI;
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use spectral_skin::diffusion::{
-    multipole_reflectance, raw_reflectance_profiles, Boundaries, Combination, HankelQuadrature, Layer, LayerStack,
-    MultipoleTerms, Slab, IOR_RANGE,
+    raw_reflectance_profiles, Boundaries, Combination, HankelQuadrature, LayerStack, MultipoleTerms, Slab,
 };
+use spectral_skin::layer::{Layer, IOR_RANGE};
+use spectral_skin::reflectance::multipole_reflectance;
 use spectral_skin::{evaluate, Outputs, Request, SkinParams};
 
 const INF: f64 = f64::INFINITY;

@@ -4,15 +4,13 @@
 //! total from the exact solver and its profile's shape from the exact shapes' table, and
 //! `Transport::AddingDoublingDiffusionShape` scales the multipole's profile to the exact total.
 
-use spectral_skin::diffusion::{
-    clamped_reflectance_profiles, layered_reflectance_with, Combination, LayerStack, LayeredOptions, MultipoleTerms,
-    ProfileShape,
-};
+use spectral_skin::diffusion::{clamped_reflectance_profiles, Combination, LayerStack, MultipoleTerms};
 use spectral_skin::evaluate::{Accuracy, AccuracyLevel, Prepared};
 use spectral_skin::fit::SubsurfaceMethod;
 use spectral_skin::inverse::albedo::{albedo_table_key, AlbedoFitOptions};
 use spectral_skin::inverse::{fit_spectrum, FitOptions};
 use spectral_skin::maps::lut::{cache_key, TableResolution};
+use spectral_skin::reflectance::{layered_reflectance_with, LayeredOptions, ProfileShape};
 use spectral_skin::skin::params::EXTENDED_DEFAULTS;
 use spectral_skin::skin::skin_layers;
 use spectral_skin::transport::profile_table::exact_shape;

@@ -7,7 +7,8 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
-use spectral_skin::diffusion::{layered_reflectance_with, Layer, LayeredOptions, IOR_RANGE};
+use spectral_skin::layer::{Layer, IOR_RANGE};
+use spectral_skin::reflectance::{layered_reflectance_with, LayeredOptions};
 use spectral_skin::transport::{Transport, DEFAULT_STREAMS};
 
 const INF: f64 = f64::INFINITY;

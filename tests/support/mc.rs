@@ -40,7 +40,7 @@ pub struct McLayer {
 impl McLayer {
     /// The Monte Carlo layers of the diffusion core's stack: the same thickness, absorption and index, with isotropic
     /// scattering at sigma_s = sigma_s' (the transport problem the diffusion model approximates).
-    pub fn isotropic_stack(layers: &[spectral_skin::diffusion::Layer]) -> Vec<McLayer> {
+    pub fn isotropic_stack(layers: &[spectral_skin::layer::Layer]) -> Vec<McLayer> {
         layers
             .iter()
             .map(|l| McLayer {

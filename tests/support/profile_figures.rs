@@ -6,10 +6,10 @@
 use std::f64::consts::PI;
 
 use super::mc::{log_edges, simulate, McConfig, McLayer, McResult};
-use spectral_skin::diffusion::{
-    layered_reflectance_with, Combination, Layer, LayerStack, LayeredOptions, MultipoleTerms, ProfileShape,
-};
+use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
 use spectral_skin::fit::burley::{fit_burley, fit_frequencies};
+use spectral_skin::layer::Layer;
+use spectral_skin::reflectance::{layered_reflectance_with, LayeredOptions, ProfileShape};
 use spectral_skin::transport::profile_table::exact_shape;
 
 /// Gauss-Legendre points per annulus.

@@ -157,7 +157,7 @@ impl Plane {
 
 /// The loaded parameters: row-major planes of width x height (row 0 at the top, as EXR stores it), in
 /// [`PARAM_CHANNELS`] order, each in the parameter's own unit (volume fraction / share, as in
-/// [`crate::SkinParams`]).
+/// [`crate::skin::SkinParams`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParamImage {
     pub width: usize,

@@ -1,5 +1,7 @@
-//! The oil layer in Blender: the Principled BSDF's specular inputs (Specular IOR Level, Roughness, IOR) that stand
-//! in for DJ2006's Torrance-Sparrow surface (`surface`), and the albedo Principled's own lobe then has.
+//! The surface in Blender: the Principled BSDF's inputs (Specular IOR Level, Roughness, IOR, and Coat for the
+//! measured surface) that stand in for the surface model ([`crate::surface::lobes`]: the measured two lobes, or
+//! DJ2006's Torrance-Sparrow oil layer of [`crate::surface::oil_layer`]), and the albedo Principled's own lobe then
+//! has.
 //!
 //! Principled BSDF (Cycles 5.0, `src/kernel/svm/closure.h`; docs/blender-principled.md) renders the specular layer as
 //! single-scatter GGX with `alpha = Roughness^2`, the height-correlated Smith `G2 = 1 / (1 + Lambda_i + Lambda_o)`
@@ -15,11 +17,11 @@ use serde::{Deserialize, Serialize};
 use crate::error::SkinError;
 use crate::fit::blender_target::Engine;
 use crate::numeric::clamp_nan_to_low;
-use crate::surface::{
+use crate::surface::lobes::{SurfaceModel, SurfaceReflection, TWO_LOBE_TABLE};
+use crate::surface::oil_layer::{
     clamp_unit_or_zero, f0_from_ior, fresnel_dielectric, hemispherical_average, microfacet_albedo,
     torrance_sparrow_unit_albedos, Lobe, ALBEDO_THETA_PANELS, BECKMANN_ROUGHNESS_M, SKIN_SURFACE_IOR,
 };
-use crate::surface_lobes::{SurfaceModel, SurfaceReflection, TWO_LOBE_TABLE};
 
 /// Principled BSDF's Specular IOR Level that leaves F0(IOR) unchanged (closure.h: `if (specular_ior_level != 0.5f)`).
 pub const PRINCIPLED_NEUTRAL_SPECULAR_IOR_LEVEL: f64 = 0.5;
@@ -82,7 +84,7 @@ pub fn principled_specular_eta(ior: f64, specular_ior_level: f64) -> f64 {
 /// model's own albedos.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SpecularParams {
-    /// The surface model these inputs stand in for (`surface_lobes::SurfaceModel`).
+    /// The surface model these inputs stand in for (`surface::lobes::SurfaceModel`).
     pub surface: SurfaceModel,
     /// rho_s (`paper`) or o (`measured`), clamped to [0, 1].
     pub oiliness: f64,
@@ -101,7 +103,7 @@ pub struct SpecularParams {
     pub coat_ior: f64,
     /// Beckmann m of the base lobe: DJ2006's 0.35 (`paper`), the broad lobe's 0.5 (`measured`).
     pub beckmann_m: f64,
-    /// The model's directional albedo at normal incidence, dimensionless (`surface_lobes`).
+    /// The model's directional albedo at normal incidence, dimensionless (`surface::lobes`).
     pub directional_albedo_normal: f64,
     /// The model's `2 int E(mu) mu dmu`: the fraction of diffuse light the surface reflects, dimensionless.
     pub hemispherical_albedo: f64,
@@ -130,7 +132,7 @@ impl SurfaceConstants {
     }
 
     /// `model`'s constants: `paper` m = 0.35 (DJ2006); `measured` the broad lobe's m = 0.5
-    /// (`surface_lobes::TWO_LOBE_TABLE`); eta = 1.4 for both.
+    /// (`surface::lobes::TWO_LOBE_TABLE`); eta = 1.4 for both.
     pub fn of(model: SurfaceModel) -> SurfaceConstants {
         let beckmann_m = match model {
             SurfaceModel::Paper => BECKMANN_ROUGHNESS_M,
@@ -338,7 +340,7 @@ pub fn measured_specular_ior_level(oiliness: f64, engine: Engine) -> Result<f64,
 /// `E_spec(theta_i)`: directional albedo of Principled BSDF's specular lobe for these inputs, dimensionless:
 /// single-scatter GGX, alpha = Roughness^2, Smith `G2 = 1 / (1 + Lambda_i + Lambda_o)`, dielectric Fresnel at
 /// [`principled_specular_eta`] (Cycles 5.0 `bsdf_microfacet.h`). Same quadrature as
-/// [`crate::surface::torrance_sparrow_directional_albedo`] (exact to rounding here: the lobe has no kinks). Cycles'
+/// [`crate::surface::oil_layer::torrance_sparrow_directional_albedo`] (exact to rounding here: the lobe has no kinks). Cycles'
 /// default Multiscatter GGX adds a Kulla-Conty compensation, `1 + F_ms (1 - E) / E`, which is under 1% here (estimated:
 /// E ~ 0.95 at alpha = 0.35 and F_ms ~ the lobe's average Fresnel, below 0.1). Level 0 gives 0 (no specular closure).
 pub fn principled_specular_directional_albedo(cos_theta_i: f64, specular: &SpecularParams) -> f64 {
@@ -376,7 +378,7 @@ pub fn principled_specular_hemispherical_albedo(specular: &SpecularParams) -> f6
 mod tests {
     use super::*;
     use crate::numeric::relative_error as rel;
-    use crate::surface::torrance_sparrow_f_r;
+    use crate::surface::oil_layer::torrance_sparrow_f_r;
 
     const OILINESS_STEPS: [f64; 7] = [0.0, 0.05, 0.3, 0.5, 0.75, 0.95, 1.0];
 

@@ -1,5 +1,5 @@
-//! DJ2006's oily surface layer (docs/model.md, Oil layer): its microfacet maths and albedos. The mapping to the
-//! Principled BSDF's specular inputs is `fit::principled_specular`.
+//! DJ2006's oily surface layer (docs/model.md, Oil layer): its microfacet maths and albedos, shared by the surface
+//! models ([`crate::surface::lobes`]). The mapping to the Principled BSDF's inputs is [`crate::surface::principled`].
 //!
 //! DJ2006's surface term is a Torrance-Sparrow lobe scaled by the oiliness rho_s:
 //! `f_r = rho_s D G F / (4 cos_i cos_o)`, Beckmann `D` with m = 0.35, the V-cavity `G`, and the exact unpolarised
@@ -257,7 +257,7 @@ fn torrance_sparrow_unit_albedo(cos_theta_i: f64, panels: usize) -> f64 {
 /// where the mirror direction is above the horizon, split where the V-cavity G switches branch. Accuracy: 5e-7
 /// relative at normal incidence (where a G kink falls across theta_h = 30 deg), ~2e-8 elsewhere (tests: a 4x finer
 /// rule, and a direct integration over omega_o). About 1 ms a call; the Principled mapping
-/// (`fit::principled_specular`) uses the rho_s = 1 values, cached (rho_dr is linear in rho_s). Oiliness is clamped
+/// (`surface::principled`) uses the rho_s = 1 values, cached (rho_dr is linear in rho_s). Oiliness is clamped
 /// to [0, 1] (NaN to 0); cos_theta_i to [1e-6, 1] (NaN and cos <= 0 to 1e-6: the grazing limit, 0.441 rho_s).
 pub fn torrance_sparrow_directional_albedo(cos_theta_i: f64, oiliness: f64) -> f64 {
     clamp_unit_or_zero(oiliness) * torrance_sparrow_unit_albedo(cos_theta_i, ALBEDO_THETA_PANELS)

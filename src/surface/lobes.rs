@@ -1,7 +1,7 @@
 //! The skin surface's reflection as a model of its own (docs/model.md, "Surface reflection: measured two-lobe
 //! model"): the BRDF, its directional albedo and its normal-incidence reflectance, under one of two models.
 //!
-//! - `paper`: DJ2006's oil layer exactly as [`crate::surface`] computes it, one Torrance-Sparrow lobe scaled by the
+//! - `paper`: DJ2006's oil layer exactly as [`crate::surface::oil_layer`] computes it, one Torrance-Sparrow lobe scaled by the
 //!   oiliness (rho_s = o): dry skin (o = 0) reflects nothing.
 //! - `measured`: two Torrance-Sparrow lobes, a broad one (the rough stratum corneum) and a sharp one (where sebum
 //!   smooths it), sharing one dielectric Fresnel term at the skin surface's eta = 1.4, with weights that sum to 1, so
@@ -10,8 +10,8 @@
 //!
 //! Angles are in degrees (names end in `_deg`): polar angles from the surface normal in [0, 90), and the outgoing
 //! direction's azimuth relative to the incident one (180: the plane of mirror reflection). BRDFs are in sr^-1,
-//! albedos and reflectances dimensionless. Later steps map the measured model onto Principled (base lobe + Coat);
-//! `fit::principled_specular` and its defaults are untouched by this module.
+//! albedos and reflectances dimensionless. Its Principled inputs (base lobe + Coat) are
+//! [`crate::surface::principled`]'s.
 
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::SkinError;
-use crate::surface::{
+use crate::surface::oil_layer::{
     beckmann_d, fresnel_dielectric, hemispherical_average_par, microfacet_albedo, torrance_sparrow_directional_albedo,
     torrance_sparrow_f_r, torrance_sparrow_unit_albedos, Lobe, ALBEDO_THETA_PANELS, SKIN_SURFACE_IOR,
 };
@@ -434,8 +434,8 @@ pub fn surface_normal_incidence_reflectance(model: SurfaceModel, oiliness: f64) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fit::principled_specular::specular_from_oiliness;
-    use crate::surface::BECKMANN_ROUGHNESS_M;
+    use crate::surface::oil_layer::BECKMANN_ROUGHNESS_M;
+    use crate::surface::principled::specular_from_oiliness;
 
     const OILINESS: [f64; 3] = [0.0, 0.3, 1.0];
 
