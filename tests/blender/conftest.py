@@ -1,6 +1,6 @@
-"""pytest fixtures of the Blender render tests. The scene helpers they use (blender_scenes.py) and the random-walk
-reference (walk_reference.py) live in scripts/lib/, shared with the measurement scripts: put on sys.path here, before
-any test module imports them."""
+"""pytest fixtures of the Blender render tests, and their import path. The scene helpers they use (blender_scenes.py)
+and the random-walk reference (walk_reference.py) live in scripts/lib/, shared with the measurement scripts: put on
+sys.path here, with the repository root and scripts/tools, before any test module imports them."""
 
 from __future__ import annotations
 
@@ -9,9 +9,13 @@ from pathlib import Path
 
 import pytest
 
-SCRIPTS_LIB = str(Path(__file__).resolve().parents[2] / "scripts" / "lib")
-if SCRIPTS_LIB not in sys.path:
-    sys.path.insert(0, SCRIPTS_LIB)
+REPO = Path(__file__).resolve().parents[2]
+# The one place the Blender tests' import path is set: the repository root (blender_addon), scripts/lib (the scene
+# helpers) and scripts/tools (render_blend); this folder's helper modules (live_scene, eevee_scene, farm_worker) are
+# on it as pytest puts it there.
+for _folder in (REPO / "scripts" / "tools", REPO, REPO / "scripts" / "lib"):
+    if str(_folder) not in sys.path:
+        sys.path.insert(0, str(_folder))
 
 from blender_scenes import _bpy, reset_scene  # noqa: E402
 
@@ -36,9 +40,6 @@ def isolated_table_cache(tmp_path_factory: pytest.TempPathFactory):
 @pytest.fixture
 def addon():
     """An empty factory scene with the add-on registered (and unregistered afterwards if this fixture did it)."""
-    repo = str(Path(__file__).resolve().parents[2])
-    if repo not in sys.path:
-        sys.path.insert(0, repo)
     import blender_addon
 
     bpy = _bpy()
@@ -50,3 +51,44 @@ def addon():
     yield blender_addon
     if registered_here and registered():
         blender_addon.unregister()
+
+
+class PanelLayout:
+    """A stand-in for a panel's layout (headless Blender has no window to draw in): checks that every property and
+    operator the panel names exists, and records the properties."""
+
+    def __init__(self, drawn: list[str]) -> None:
+        self.drawn = drawn
+        self.use_property_split = self.active = self.enabled = False
+
+    def prop(self, data, name, **_kw):
+        assert name in data.bl_rna.properties, name
+        self.drawn.append(name)
+
+    def operator(self, idname, **_kw):
+        category, name = idname.split(".")
+        assert hasattr(getattr(_bpy().ops, category), name), idname
+        return type("Properties", (), {})()
+
+    def row(self, **_kw):
+        return self
+
+    box = column = row
+
+    def label(self, **_kw):
+        pass
+
+    def template_ID(self, data, name, **_kw):  # noqa: N802 (Blender's name)
+        self.prop(data, name)
+
+
+@pytest.fixture
+def draw_panel():
+    """draw(panel, context): draws the panel class headless into a PanelLayout; returns the properties it drew."""
+
+    def draw(panel, context) -> list[str]:
+        drawn: list[str] = []
+        panel.draw(type("Panel", (), {"layout": PanelLayout(drawn)})(), context)
+        return drawn
+
+    return draw

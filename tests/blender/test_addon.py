@@ -21,8 +21,6 @@ import numpy as np  # noqa: E402
 import spectral_skin  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
 from blender_scenes import material_snapshot  # noqa: E402
 

@@ -20,8 +20,6 @@ import numpy as np  # noqa: E402
 import spectral_skin  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 
@@ -247,40 +245,11 @@ def test_from_albedo_texture_with_a_skin_mask(addon, tmp_path, monkeypatch):
     assert material.spectral_skin.params_map == before and before is not None and unmasked is not None
 
 
-class _Layout:
-    """A stand-in for a panel's layout (headless Blender has no window to draw in): checks that every property and
-    operator the panel names exists, and records the properties."""
-
-    def __init__(self, drawn: list[str]) -> None:
-        self.drawn = drawn
-        self.use_property_split = self.active = self.enabled = False
-
-    def prop(self, data, name, **_kw):
-        assert name in data.bl_rna.properties, name
-        self.drawn.append(name)
-
-    def operator(self, idname, **_kw):
-        category, name = idname.split(".")
-        assert hasattr(getattr(bpy.ops, category), name), idname
-        return type("Properties", (), {})()
-
-    def row(self, **_kw):
-        return self
-
-    box = column = row
-
-    def label(self, **_kw):
-        pass
-
-    def template_ID(self, data, name, **_kw):  # noqa: N802 (Blender's name)
-        self.prop(data, name)
-
-
-def test_panels_draw_the_swatch_and_the_advanced_sliders(addon):
+def test_panels_draw_the_swatch_and_the_advanced_sliders(addon, draw_panel):
     material = bpy.data.materials.new("Skin")
     context = type("Context", (), {"material": material})()
     drawn: list[str] = []
     for panel in (bpy.types.SPECTRAL_SKIN_PT_material, bpy.types.SPECTRAL_SKIN_PT_advanced):
         assert panel.poll(context)
-        panel.draw(type("Panel", (), {"layout": _Layout(drawn)})(), context)
+        drawn += draw_panel(panel, context)
     assert "swatch" in drawn and drawn[-3:] == EXTENDED

@@ -11,7 +11,6 @@ from __future__ import annotations
 import os
 import pathlib
 import subprocess
-import sys
 
 import pytest
 
@@ -22,9 +21,6 @@ import numpy as np  # noqa: E402
 import spectral_skin  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 from blender_scenes import material_snapshot, read_exr  # noqa: E402
 

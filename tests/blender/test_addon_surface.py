@@ -9,9 +9,6 @@ Run: .venv-blender/5.0/bin/python -m pytest tests/blender/test_addon_surface.py
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
 bpy = pytest.importorskip("bpy")
@@ -19,10 +16,6 @@ pytest.importorskip("OpenImageIO")
 
 import spectral_skin  # noqa: E402
 from blender_scenes import PRINCIPLED_SURFACE_INPUTS, render_normal_incidence_reflection  # noqa: E402
-
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 

@@ -7,9 +7,6 @@ Cycles radius. Run: .venv/bin/python -m pytest tests/blender/test_addon_targets.
 
 from __future__ import annotations
 
-import pathlib
-import sys
-
 import pytest
 
 bpy = pytest.importorskip("bpy")
@@ -17,12 +14,6 @@ pytest.importorskip("OpenImageIO")
 
 import numpy as np  # noqa: E402
 import spectral_skin  # noqa: E402
-
-REPO = pathlib.Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-
 from blender_scenes import eevee_engine_id, read_exr  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402

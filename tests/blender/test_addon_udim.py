@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import importlib.util
 import pathlib
-import sys
 
 import pytest
 
@@ -23,8 +22,6 @@ import numpy as np  # noqa: E402
 import spectral_skin  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 

@@ -29,10 +29,6 @@ pytest.importorskip("OpenImageIO")
 import numpy as np  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-sys.path.insert(0, str(REPO / "scripts" / "tools"))
 
 import render_blend  # noqa: E402  (scripts/tools/render_blend.py)
 from blender_scenes import (  # noqa: E402

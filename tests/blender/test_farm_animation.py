@@ -23,7 +23,7 @@ spectral_skin = pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
 from farm_worker import only_in_edge_versions, worker_render  # noqa: E402
-from test_live_mode import BURLEY_SPP, _apply, _centre, _core_albedo, _skin, _slab_scene  # noqa: E402
+from live_scene import BURLEY_SPP, apply_materials, centre, core_albedo, skin_material, slab_scene  # noqa: E402
 
 from blender_addon import anim  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
@@ -37,8 +37,8 @@ MELANIN, BLEND = 0.005, 0.7
 
 def _keyed_scene(mode: str):
     scene = blender_scenes.reset_scene()
-    material = _skin("Skin", mode, melanin=MELANIN, melanin_blend=BLEND)
-    _slab_scene(material)
+    material = skin_material("Skin", mode, melanin=MELANIN, melanin_blend=BLEND)
+    slab_scene(material)
     scene.frame_start, scene.frame_end = 1, 2
     scene.cycles.samples = BURLEY_SPP
     scene.cycles.filter_width = 1.5
@@ -52,7 +52,7 @@ def _keyed_scene(mode: str):
 @pytest.mark.parametrize("mode", ["BAKED", "LIVE"])
 def test_keyed_slider_renders_the_cores_albedo_in_the_session_and_on_a_worker(addon, tmp_path, mode):
     scene, material = _keyed_scene(mode)
-    _apply(scene, material)
+    apply_materials(scene, material)
     tree = material.node_tree
     if mode == "BAKED":
         principled = addon_nodes.tagged_nodes(tree, "principled")[0]
@@ -71,9 +71,9 @@ def test_keyed_slider_renders_the_cores_albedo_in_the_session_and_on_a_worker(ad
     worker = worker_render(blend, tmp_path / "worker", "1..2")
     assert sorted(worker) == [1, 2]
     for frame, hemoglobin in KEYS:
-        expected = _core_albedo(MELANIN, BLEND, hemoglobin)
+        expected = core_albedo(MELANIN, BLEND, hemoglobin)
         for where, image in (("session", session[frame]), ("worker", worker[frame])):
-            got = _centre(image)
+            got = centre(image)
             rel = got / expected - 1.0
             print(f"\n[farm/keys] {bpy.app.version_string} {mode} frame {frame} (C_h {hemoglobin}) {where}: "
                   f"{np.array2string(got, precision=5)} core {np.array2string(expected, precision=5)} "
@@ -83,12 +83,12 @@ def test_keyed_slider_renders_the_cores_albedo_in_the_session_and_on_a_worker(ad
         print(f"[farm/keys] {mode} frame {frame}: max |worker - session| = {diff:.3g}")
         assert diff <= 1e-5 * float(session[frame].max())
     # The two frames differ (the test can tell frame 1's colour at frame 2): more blood, less green.
-    assert _centre(worker[2])[1] < 0.9 * _centre(worker[1])[1]
+    assert centre(worker[2])[1] < 0.9 * centre(worker[1])[1]
 
 
 def test_reapply_replaces_the_keys_and_remove_clears_them(addon):
     scene, material = _keyed_scene("BAKED")
-    _apply(scene, material)
+    apply_materials(scene, material)
     tree = material.node_tree
     principled = addon_nodes.tagged_nodes(tree, "principled")[0]
     path = principled.inputs["Base Color"].path_from_id("default_value")
@@ -100,14 +100,14 @@ def test_reapply_replaces_the_keys_and_remove_clears_them(addon):
     coat = principled.inputs["Sheen Weight"].path_from_id("default_value")
     # Without the animation, re-applying removes the per-frame curves (stale keys would override the constant).
     material.animation_data_clear()
-    _apply(scene, material)
+    apply_materials(scene, material)
     paths = {c.data_path for c in anim.fcurves(tree)}
     assert path not in paths and coat in paths
     # Keys again, then Remove: no per-frame curve is left (Blender drops the removed node's curves too).
     for frame, value in KEYS:
         material.spectral_skin.hemoglobin = value
         material.keyframe_insert("spectral_skin.hemoglobin", frame=frame)
-    _apply(scene, material)
+    apply_materials(scene, material)
     assert path in {c.data_path for c in anim.fcurves(tree)}
     assert bpy.ops.spectral_skin.remove(material="Skin") == {"FINISHED"}
     assert path not in {c.data_path for c in anim.fcurves(tree)}
@@ -117,7 +117,7 @@ def test_live_reapply_keeps_the_slider_keys_and_the_sockets_own(addon):
     """Live: re-applying copies the slider's keys again (edited keys follow); a key the artist put on another input
     socket itself stays; Baked mode removes the group node and its keys."""
     scene, material = _keyed_scene("LIVE")
-    _apply(scene, material)
+    apply_materials(scene, material)
     tree = material.node_tree
     (group,) = addon_nodes.tagged_nodes(tree, "live")
     hemoglobin = group.inputs["Hemoglobin"].path_from_id("default_value")
@@ -128,7 +128,7 @@ def test_live_reapply_keeps_the_slider_keys_and_the_sockets_own(addon):
     [curve] = [c for c in anim.fcurves(material) if c.data_path == "spectral_skin.hemoglobin"]
     curve.keyframe_points[1].co = (2.0, 0.08)
     curve.modifiers.new("CYCLES")  # and loops them
-    _apply(scene, material)
+    apply_materials(scene, material)
     curves = {c.data_path: c for c in anim.fcurves(tree)}
     assert oiliness in curves and hemoglobin in curves
     assert [tuple(p.co) for p in curves[hemoglobin].keyframe_points] == [pytest.approx((1.0, 0.005)),
@@ -141,6 +141,6 @@ def test_live_reapply_keeps_the_slider_keys_and_the_sockets_own(addon):
         assert curves[hemoglobin].evaluate(frame) == pytest.approx(curve.evaluate(frame), abs=1e-9)
     assert curve.evaluate(3.5) < 0.07
     material.spectral_skin.mode = "BAKED"
-    _apply(scene, material)
+    apply_materials(scene, material)
     assert not addon_nodes.tagged_nodes(tree, "live")
     assert not [c for c in anim.fcurves(tree) if c.data_path in (hemoglobin, oiliness)]

@@ -27,7 +27,7 @@ spectral_skin = pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
 from farm_worker import REPO, only_in_edge_versions, worker_render  # noqa: E402
-from test_live_mode import _apply, _skin, _slab_scene  # noqa: E402
+from live_scene import apply_materials, skin_material, slab_scene  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
 
@@ -75,11 +75,11 @@ def _compile(job: dict) -> list[dict]:
 
 def test_reapply_task_applies_the_overrides_and_the_render_task_renders_them(addon, tmp_path):
     scene = blender_scenes.reset_scene()
-    material = _skin("Skin", "BAKED", melanin=0.005)
-    _slab_scene(material)
+    material = skin_material("Skin", "BAKED", melanin=0.005)
+    slab_scene(material)
     scene.render.resolution_x = scene.render.resolution_y = 16
     scene.cycles.samples = 16
-    _apply(scene, material)
+    apply_materials(scene, material)
     blend = tmp_path / "shot.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
     before = blend.read_bytes()

@@ -26,21 +26,23 @@ pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
 from blender_scenes import assign, eevee_engine_id, fit_burley_edge  # noqa: E402
-from test_eevee_edge import (  # noqa: E402
+from eevee_scene import (  # noqa: E402
     BLENDER,
     EEVEE_BAND_ROWS,
     EEVEE_PIXEL_ASPECT,
     EEVEE_ROWS,
     HALF_WIDTH_D,
+    REPEATABLE_EEVEE_ONLY,
     Layout,
     Material,
-    _build_scene,
-    _render_eevee,
-    pytestmark,  # noqa: F401  (skipped where test_eevee_edge.py is: bpy 4.2)
+    build_scene,
+    render_eevee,
 )
-from test_live_mode import _apply, _skin  # noqa: E402
+from live_scene import apply_materials, skin_material  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
+
+pytestmark = REPEATABLE_EEVEE_ONLY  # eevee_scene.py: bpy 4.2's EEVEE edge is not repeatable here
 
 PRESET = "caucasian"  # the widest radii: the edge spans the most pixels
 WIDTH_PX = 156  # 0.36 d_disk per pixel: caucasian 0.12 mm (its bluest Burley d is 0.6 px)
@@ -58,23 +60,23 @@ def _edge_profiles() -> tuple[Layout, np.ndarray, dict[str, np.ndarray]]:
     base = np.asarray(ev["methods"]["burley"]["base_color"], dtype=np.float64)
     layout = Layout(np.asarray(ev["methods"]["burley"]["subsurface_radius_mm"], dtype=np.float64), WIDTH_PX)
     # The scene with a placeholder material; then the two skins applied by the add-on for EEVEE in it.
-    scene = _build_scene(layout, Material([1.0, 1.0, 1.0], [1.0, 1.0, 1.0], subsurface=False), EEVEE_ROWS,
+    scene = build_scene(layout, Material([1.0, 1.0, 1.0], [1.0, 1.0, 1.0], subsurface=False), EEVEE_ROWS,
                          EEVEE_PIXEL_ASPECT)
     scene.render.engine = eevee_engine_id()
     scene.unit_settings.scale_length = layout.unit_mm / 1000.0  # metres per world unit
     preset = spectral_skin.presets()[PRESET]
     values = {p: float(preset[p]) for p in ("melanin", "melanin_blend", "hemoglobin")}
-    materials = {mode: _skin(mode.title(), mode, **values) for mode in ("LIVE", "BAKED")}
+    materials = {mode: skin_material(mode.title(), mode, **values) for mode in ("LIVE", "BAKED")}
     slab = bpy.data.objects["Slab"]
     assign(slab, materials["LIVE"])
-    plans = _apply(scene, *materials.values())
+    plans = apply_materials(scene, *materials.values())
     assert plans[0].live is not None and " eevee" in plans[0].live["group"]
     assert addon_nodes.tagged_nodes(materials["LIVE"].node_tree, "live")
     profiles = {}
     lo = (EEVEE_ROWS - EEVEE_BAND_ROWS) // 2
     for mode, material in materials.items():
         assign(slab, material)
-        img = _render_eevee(scene, SAMPLES)
+        img = render_eevee(scene, SAMPLES)
         profiles[mode] = math.pi * img[lo : lo + EEVEE_BAND_ROWS].mean(axis=0) / layout.irradiance()[:, None]
     return layout, base, profiles
 

@@ -5,14 +5,9 @@ precision (the layout, the coordinate maths and Cycles' Linear/Extend image look
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 from blender_scenes import _bpy, add_plane, add_top_camera, assign, render, set_world
-
-REPO = str(Path(__file__).resolve().parents[2])
 
 
 def _bilinear(image: np.ndarray, x: float, y: float) -> np.ndarray:
@@ -69,8 +64,6 @@ def test_live_group_in_cycles_matches_the_core(scene) -> None:
     spectral_skin = pytest.importorskip("spectral_skin")
     if not hasattr(spectral_skin, "shader_table"):
         pytest.skip("the installed spectral_skin predates shader_table")
-    if REPO not in sys.path:
-        sys.path.insert(0, REPO)
     from blender_addon import live
 
     table = spectral_skin.shader_table(method="random_walk", blender="5.0")
@@ -116,8 +109,6 @@ def test_live_group_computes_the_measured_surface(scene) -> None:
     equal ``evaluate(surface="measured")``: the level and the weight exactly (piecewise linear in the core too), the
     Coat Roughness within 6e-5 (linear between nodes of a square root)."""
     spectral_skin = pytest.importorskip("spectral_skin")
-    if REPO not in sys.path:
-        sys.path.insert(0, REPO)
     from blender_addon import live
 
     table = spectral_skin.shader_table(method="burley", blender="5.0")
@@ -143,9 +134,7 @@ def test_live_group_in_eevee_matches_the_emulated_lookup(scene) -> None:
     bpy = _bpy()
     if tuple(bpy.app.version[:2]) < (4, 5):
         pytest.skip("bpy 4.2's EEVEE is not tested here (docs/blender-render-tests.md, EEVEE edge)")
-    if REPO not in sys.path:
-        sys.path.insert(0, REPO)
-    from test_eevee_edge import _render_eevee
+    from eevee_scene import render_eevee
 
     from blender_addon import live
 
@@ -174,7 +163,7 @@ def test_live_group_in_eevee_matches_the_emulated_lookup(scene) -> None:
             node.inputs[socket].default_value = value
         for output, key in (("Base Color", "base_color_log"), ("Subsurface Radius", "radius_log")):
             nt.links.new(node.outputs[output], emission.inputs["Color"])
-            got = _render_eevee(scene, 1).reshape(-1, 3)[0]
+            got = render_eevee(scene, 1).reshape(-1, 3)[0]
             expected = _emulated(table, key, c_m, beta, c_h)
             print(f"\n[live-group/eevee] {output} at {(c_m, beta, c_h)}: rel. err "
                   f"{np.array2string((got / expected - 1) * 100, precision=3)} %")

@@ -20,7 +20,7 @@ spectral_skin = pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
 from blender_scenes import add_slab, add_top_camera, assign, render, set_world  # noqa: E402
-from test_live_mode import BURLEY_SPP, _apply, _check, _core_albedo, _skin  # noqa: E402
+from live_scene import BURLEY_SPP, apply_materials, check, core_albedo, skin_material  # noqa: E402
 
 from blender_addon import masks  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
@@ -41,7 +41,7 @@ def _clamped(parameter: str, value: float) -> float:
 def _scene(**values: float):
     """A fresh scene: the UV-mapped slab with a new Live material of these parameters, under a white world."""
     scene = blender_scenes.reset_scene()
-    material = _skin("Skin", values.pop("mode", "LIVE"), **values)
+    material = skin_material("Skin", values.pop("mode", "LIVE"), **values)
     set_world(scene, strength=1.0)
     slab = add_slab()
     mesh = slab.data
@@ -81,7 +81,7 @@ def _mask_image(mask_node):
 
 def test_blush_mask_renders_the_cores_albedo_where_painted_keyed_at_two_frames(addon):
     scene, material, _ = _scene(melanin=0.05, hemoglobin=0.02)
-    _apply(scene, material)
+    apply_materials(scene, material)
     assert bpy.ops.spectral_skin.add_blush_mask(material="Skin") == {"FINISHED"}
     (mask,) = masks.mask_nodes(material.node_tree, "hemoglobin")
     image = _mask_image(mask).image
@@ -90,9 +90,9 @@ def test_blush_mask_renders_the_cores_albedo_where_painted_keyed_at_two_frames(a
     _paint_left_half(image)
     # Apply again: the panel's constant goes to the head of the mask chain, the mask stays.
     material.spectral_skin.hemoglobin = 0.02
-    _apply(scene, material)
+    apply_materials(scene, material)
     assert masks.mask_nodes(material.node_tree, "hemoglobin") == [mask]
-    base = _core_albedo(0.05, 0.7, 0.02)
+    base = core_albedo(0.05, 0.7, 0.02)
     strength = mask.inputs["Strength"]
     # Frame 1: 0.02 + 0.03 inside the range; frame 10: 0.02 + 0.09 clamped to the range's end (0.1).
     keys = ((1, 0.03), (10, 0.09))
@@ -103,44 +103,44 @@ def test_blush_mask_renders_the_cores_albedo_where_painted_keyed_at_two_frames(a
         scene.frame_set(frame)
         painted, plain = _halves(scene)
         hemoglobin = _clamped("hemoglobin", 0.02 + value)
-        _check(f"blush strength {value} at frame {frame}, painted half (C_h {hemoglobin})", painted,
-               _core_albedo(0.05, 0.7, hemoglobin))
-        _check(f"blush strength {value} at frame {frame}, unpainted half", plain, base)
+        check(f"blush strength {value} at frame {frame}, painted half (C_h {hemoglobin})", painted,
+               core_albedo(0.05, 0.7, hemoglobin))
+        check(f"blush strength {value} at frame {frame}, unpainted half", plain, base)
     assert _clamped("hemoglobin", 0.11) < 0.11  # the second key does reach the clamp
 
 
 def test_vitiligo_mask_removes_melanin_down_to_the_range(addon):
     scene, material, _ = _scene(melanin=0.05, hemoglobin=0.01)
-    _apply(scene, material)
+    apply_materials(scene, material)
     assert bpy.ops.spectral_skin.add_tan_mask(material="Skin", strength=-0.08) == {"FINISHED"}
     (mask,) = masks.mask_nodes(material.node_tree, "melanin")
     _paint_left_half(_mask_image(mask).image)
     painted, plain = _halves(scene)
-    _check("vitiligo strength -0.08, painted half (C_m 0)", painted,
-           _core_albedo(_clamped("melanin", 0.05 - 0.08), 0.7, 0.01))
-    _check("vitiligo, unpainted half", plain, _core_albedo(0.05, 0.7, 0.01))
+    check("vitiligo strength -0.08, painted half (C_m 0)", painted,
+           core_albedo(_clamped("melanin", 0.05 - 0.08), 0.7, 0.01))
+    check("vitiligo, unpainted half", plain, core_albedo(0.05, 0.7, 0.01))
 
 
 def test_colour_attribute_mask(addon):
     scene, material, slab = _scene(melanin=0.05, hemoglobin=0.02)
-    _apply(scene, material)
+    apply_materials(scene, material)
     assert bpy.ops.spectral_skin.add_blush_mask(material="Skin", source="ATTRIBUTE", strength=0.03) == {"FINISHED"}
     (mask,) = masks.mask_nodes(material.node_tree, "hemoglobin")
     attribute = slab.data.color_attributes[_mask_image(mask).layer_name]
     assert attribute.data_type == "FLOAT_COLOR" and attribute.domain == "CORNER"
     painted, plain = _halves(scene)
-    _check("unpainted attribute, left", painted, _core_albedo(0.05, 0.7, 0.02))
+    check("unpainted attribute, left", painted, core_albedo(0.05, 0.7, 0.02))
     for corner in attribute.data:  # painted white everywhere
         corner.color = (1.0, 1.0, 1.0, 1.0)
     slab.data.update()
     painted, plain = _halves(scene)
     for what, got in (("left", painted), ("right", plain)):
-        _check(f"attribute painted white, strength 0.03, {what}", got, _core_albedo(0.05, 0.7, 0.05))
+        check(f"attribute painted white, strength 0.03, {what}", got, core_albedo(0.05, 0.7, 0.05))
 
 
 def test_mask_over_a_keyed_input_warns_and_a_failed_mask_changes_nothing(addon):
     scene, material, slab = _scene(melanin=0.05, hemoglobin=0.02)
-    _apply(scene, material)
+    apply_materials(scene, material)
     tree = material.node_tree
     (group_node,) = addon_nodes.tagged_nodes(tree, "live")
     group_node.inputs["Hemoglobin"].keyframe_insert("default_value", frame=1)
@@ -157,6 +157,6 @@ def test_mask_over_a_keyed_input_warns_and_a_failed_mask_changes_nothing(addon):
 
 def test_mask_needs_live_mode(addon):
     scene, material, _ = _scene(mode="BAKED")
-    _apply(scene, material)
+    apply_materials(scene, material)
     with pytest.raises(ValueError, match="apply it in Live mode first"):
         masks.add_mask(material, "BLUSH")

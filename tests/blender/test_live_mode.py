@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import functools
 import pathlib
-import sys
 
 import numpy as np
 import pytest
@@ -27,18 +26,10 @@ spectral_skin = pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
 from blender_scenes import add_slab, add_top_camera, assign, eevee_engine_id, render, set_world  # noqa: E402
-
-REPO = pathlib.Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
+from live_scene import BURLEY_SPP, apply_materials, centre, check, core_albedo, skin_material, slab_scene  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
-from blender_addon.ops import apply_skins  # noqa: E402
-from blender_addon.props import settings_from_material  # noqa: E402
 
-TABLE_ERROR = 0.00450  # docs/shader-table.md, burley, 33x9x17, Base Color
-BOUND = TABLE_ERROR + 0.002
-BURLEY_SPP = 512  # test_renders.py: the 64 x 64 flat slab
 TEXEL_SPP = 1024  # test_renders.py: the 4-texel image
 TEXEL_SPAN_M = 0.0256  # test_renders.py: the texels' widest span, narrower where a radius would cover < 1 pixel
 
@@ -46,59 +37,11 @@ TEXEL_SPAN_M = 0.0256  # test_renders.py: the texels' widest span, narrower wher
 EEVEE_STEP = 1.0 / 1024  # EEVEE's colour step in these renders (test_live_in_eevee_renders_as_baked)
 
 
-def _core_albedo(melanin: float, melanin_blend: float, hemoglobin: float) -> np.ndarray:
-    ev = spectral_skin.evaluate(melanin, melanin_blend, hemoglobin, 0.0, outputs=("albedo",),
-                                blender=tuple(bpy.app.version), engine="cycles")
-    return np.asarray(ev["diffuse_reflectance_rgb"], dtype=np.float64)
-
-
-def _skin(name: str, mode: str, **values: float):
-    material = bpy.data.materials.new(name)
-    props = material.spectral_skin
-    props.mode = mode
-    props.surface = "PAPER"  # oiliness 0: no surface reflection, the slab shows its albedo alone
-    props.override_subsurface = "ON"  # Baked and Live alike: the slab's albedo with subsurface
-    for key, value in {"melanin": 0.01, "melanin_blend": 0.7, "hemoglobin": 0.005, "oiliness": 0.0, **values}.items():
-        setattr(props, key, value)
-    return material
-
-
-def _apply(scene, *materials) -> list[dict]:
-    return apply_skins([(m, settings_from_material(m, scene)) for m in materials], scene)
-
-
-def _slab_scene(material):
-    """The flat slab under a white world, seen at most 0.1 m wide, narrower where one of the material's Burley radii
-    would cover less than a pixel (blender_scenes.span_resolving)."""
-    scene = bpy.context.scene
-    set_world(scene, strength=1.0)
-    slab = add_slab()
-    assign(slab, material)
-    props = material.spectral_skin
-    radius_mm = spectral_skin.evaluate(props.melanin, props.melanin_blend, props.hemoglobin, 0.0,
-                                       outputs=("albedo", "radius"), blender=tuple(bpy.app.version),
-                                       engine="cycles")["methods"]["burley"]["subsurface_radius_mm"]
-    add_top_camera(scene, ortho_scale=blender_scenes.span_resolving(radius_mm, 64, 0.1), width=64, height=64)
-    return scene
-
-
-def _centre(img: np.ndarray) -> np.ndarray:
-    return img[16:48, 16:48].reshape(-1, 3).mean(axis=0)
-
-
-def _check(what: str, got: np.ndarray, expected: np.ndarray, rtol: float = BOUND, atol: float = 0.0) -> float:
-    rel = got / expected - 1.0
-    print(f"\n[live] {what}: rendered {np.array2string(got, precision=6)} core "
-          f"{np.array2string(expected, precision=6)} rel.err {np.array2string(rel * 100, precision=4)} %")
-    np.testing.assert_allclose(got, expected, rtol=rtol, atol=atol, err_msg=what)
-    return float(np.abs(rel).max())
-
-
 def test_live_constants_render_the_cores_albedo(addon, tmp_path):
     scene = blender_scenes.reset_scene()
-    material = _skin("Skin", "LIVE", melanin=0.05, hemoglobin=0.02)
-    _slab_scene(material)
-    plan = _apply(scene, material)[0]
+    material = skin_material("Skin", "LIVE", melanin=0.05, hemoglobin=0.02)
+    slab_scene(material)
+    plan = apply_materials(scene, material)[0]
     assert plan.live is not None and plan.live["table"] is not None
     tree = material.node_tree
     (group_node,) = addon_nodes.tagged_nodes(tree, "live")
@@ -108,7 +51,7 @@ def test_live_constants_render_the_cores_albedo(addon, tmp_path):
     for image in group_node.node_tree.nodes:
         if image.type == "TEX_IMAGE":
             assert image.image.packed_file is not None and image.image.colorspace_settings.name == "Non-Color"
-    _check("constants", _centre(render(scene, samples=BURLEY_SPP)), _core_albedo(0.05, 0.7, 0.02))
+    check("constants", centre(render(scene, samples=BURLEY_SPP)), core_albedo(0.05, 0.7, 0.02))
     # The table travels packed in the .blend: saved, the table's temporary arrays gone, reopened, the same render.
     blend = tmp_path / "live.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
@@ -116,20 +59,20 @@ def test_live_constants_render_the_cores_albedo(addon, tmp_path):
     scene, material = bpy.context.scene, bpy.data.materials["Skin"]
     tree = material.node_tree
     principled = addon_nodes.tagged_nodes(tree, "principled")[0]
-    _check("constants, reopened", _centre(render(scene, samples=BURLEY_SPP)), _core_albedo(0.05, 0.7, 0.02))
+    check("constants, reopened", centre(render(scene, samples=BURLEY_SPP)), core_albedo(0.05, 0.7, 0.02))
     # Apply again: the table is reused from the blend file, not recomputed; Baked then removes the live nodes.
-    assert _apply(scene, material)[0].live["table"] is None
+    assert apply_materials(scene, material)[0].live["table"] is None
     material.spectral_skin.mode = "BAKED"
-    _apply(scene, material)
+    apply_materials(scene, material)
     assert not addon_nodes.tagged_nodes(tree, "live")
     assert not principled.inputs["Base Color"].is_linked
 
 
 def test_live_keyed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon):
     scene = blender_scenes.reset_scene()
-    material = _skin("Skin", "LIVE", melanin=0.02)
-    _slab_scene(material)
-    _apply(scene, material)
+    material = skin_material("Skin", "LIVE", melanin=0.02)
+    slab_scene(material)
+    apply_materials(scene, material)
     (group_node,) = addon_nodes.tagged_nodes(material.node_tree, "live")
     socket = group_node.inputs["Hemoglobin"]
     # How an artist keys haemoglobin: hover the group node's Hemoglobin field and press I (this, from a script).
@@ -138,8 +81,8 @@ def test_live_keyed_haemoglobin_renders_the_cores_albedo_at_two_frames(addon):
         socket.keyframe_insert("default_value", frame=frame)
     for frame, value in ((1, 0.003), (10, 0.06)):
         scene.frame_set(frame)
-        _check(f"keyed haemoglobin {value} at frame {frame}", _centre(render(scene, samples=BURLEY_SPP)),
-               _core_albedo(0.02, 0.7, value))
+        check(f"keyed haemoglobin {value} at frame {frame}", centre(render(scene, samples=BURLEY_SPP)),
+               core_albedo(0.02, 0.7, value))
 
 
 def _params() -> np.ndarray:
@@ -265,14 +208,14 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
         image = _painted(params[0, :, 2])
     materials = []
     for mode in ("LIVE", "BAKED"):
-        material = _skin(mode.title(), mode, melanin=0.05, melanin_blend=0.7)
+        material = skin_material(mode.title(), mode, melanin=0.05, melanin_blend=0.7)
         if source == "parameter exr":
             material.spectral_skin.params_map = image
         else:
             material.spectral_skin.hemoglobin_map = image
         material.spectral_skin.output_dir = str(tmp_path / "maps")
         materials.append(material)
-    _apply(scene, *materials)
+    apply_materials(scene, *materials)
     live_material, baked_material = materials
     assert addon_nodes.tagged_nodes(live_material.node_tree, "live hemoglobin")
     assert not addon_nodes.tagged_nodes(baked_material.node_tree, "live")
@@ -284,10 +227,10 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
     live, baked = _texels(scene, live_material), _texels(scene, baked_material)
     worst = {"live vs core": 0.0, "live vs baked": 0.0, "baked vs core": 0.0}
     for k in range(4):
-        worst["live vs core"] = max(worst["live vs core"], _check(f"{source} texel {k} live", live[k], core[k]))
-        worst["baked vs core"] = max(worst["baked vs core"], _check(f"{source} texel {k} baked", baked[k], core[k]))
+        worst["live vs core"] = max(worst["live vs core"], check(f"{source} texel {k} live", live[k], core[k]))
+        worst["baked vs core"] = max(worst["baked vs core"], check(f"{source} texel {k} baked", baked[k], core[k]))
         worst["live vs baked"] = max(worst["live vs baked"],
-                                     _check(f"{source} texel {k} live vs baked", live[k], baked[k]))
+                                     check(f"{source} texel {k} live vs baked", live[k], baked[k]))
     print(f"[live] {source}: worst |rel.err| " + ", ".join(f"{k} {v * 100:.3f} %" for k, v in worst.items()))
     if source == "painted haemoglobin":
         # Paint again, no Apply: the live material follows (the panel's acceptance path: paint, see).
@@ -297,7 +240,7 @@ def test_live_texture_matches_baked_and_the_core_per_texel(addon, tmp_path, sour
                                              method="burley")["albedo"], dtype=np.float64)[0]
         repainted = _texels(scene, live_material)
         for k in range(4):
-            _check(f"repainted texel {k} live, no Apply", repainted[k], core[k])
+            check(f"repainted texel {k} live, no Apply", repainted[k], core[k])
 
 
 def _write_exr(path: pathlib.Path, pixels: np.ndarray, channels: tuple[str, ...]) -> None:
@@ -340,14 +283,14 @@ def test_live_reads_a_udim_tile_set_as_baked_and_the_core_per_texel(addon, tmp_p
     assert sorted(t.number for t in image.tiles) == [1001, 1002]
     materials = []
     for mode in ("LIVE", "BAKED"):
-        material = _skin(mode.title(), mode, melanin=0.05, melanin_blend=0.7)
+        material = skin_material(mode.title(), mode, melanin=0.05, melanin_blend=0.7)
         if source == "parameter exr tile set":
             material.spectral_skin.params_map = image
         else:
             material.spectral_skin.hemoglobin_map = image
         material.spectral_skin.output_dir = str(tmp_path / "maps")
         materials.append(material)
-    _apply(scene, *materials)
+    apply_materials(scene, *materials)
     live_material, baked_material = materials
     read = addon_nodes.tagged_nodes(live_material.node_tree, "live hemoglobin")[0].image
     assert read.source == "TILED" and sorted(t.number for t in read.tiles) == [1001, 1002]
@@ -361,9 +304,9 @@ def test_live_reads_a_udim_tile_set_as_baked_and_the_core_per_texel(addon, tmp_p
                                          method="burley")["albedo"], dtype=np.float64)[0]
     live, baked = _texels(scene, live_material), _texels(scene, baked_material)
     for k in range(4):
-        _check(f"{source} texel {k} live", live[k], core[k])
-        _check(f"{source} texel {k} baked", baked[k], core[k])
-        _check(f"{source} texel {k} live vs baked", live[k], baked[k])
+        check(f"{source} texel {k} live", live[k], core[k])
+        check(f"{source} texel {k} baked", baked[k], core[k])
+        check(f"{source} texel {k} live vs baked", live[k], baked[k])
     if source == "parameter exr tile set":
         # Saved and opened again, the packed copy's tiles are still there (nothing depends on the temporary files).
         blend = tmp_path / "live.blend"
@@ -373,12 +316,12 @@ def test_live_reads_a_udim_tile_set_as_baked_and_the_core_per_texel(addon, tmp_p
         scene = bpy.context.scene
         again = _texels(scene, bpy.data.materials["Live"])
         for k in range(4):
-            _check(f"{source} texel {k} live, reopened", again[k], core[k])
+            check(f"{source} texel {k} live, reopened", again[k], core[k])
 
 
 def test_remove_restores_the_previous_shader_and_drops_the_packed_copies(addon, tmp_path):
     scene = blender_scenes.reset_scene()
-    material = _skin("Skin", "LIVE")
+    material = skin_material("Skin", "LIVE")
     if material.node_tree is None:  # Blender < 5.0
         material.use_nodes = True
     tree = material.node_tree
@@ -394,7 +337,7 @@ def test_remove_restores_the_previous_shader_and_drops_the_packed_copies(addon, 
     assert out.write_image(_params()), out.geterror()
     out.close()
     material.spectral_skin.params_map = bpy.data.images.load(str(path))
-    _apply(scene, material)
+    apply_materials(scene, material)
     copies = [f"SpectralSkin Skin {p}" for p in ("melanin", "melanin_blend", "hemoglobin", "oiliness")]
     assert all(bpy.data.images[name].packed_file is not None for name in copies)
     assert bpy.ops.spectral_skin.remove(material="Skin") == {"FINISHED"}
@@ -410,30 +353,30 @@ def test_live_in_eevee_renders_as_baked(addon):
     scene = blender_scenes.reset_scene()
     scene.render.engine = eevee_engine_id()
     scene.eevee.taa_render_samples = 16
-    live_material = _skin("Live", "LIVE", melanin=0.05, hemoglobin=0.02)
-    baked_material = _skin("Baked", "BAKED", melanin=0.05, hemoglobin=0.02)
+    live_material = skin_material("Live", "LIVE", melanin=0.05, hemoglobin=0.02)
+    baked_material = skin_material("Baked", "BAKED", melanin=0.05, hemoglobin=0.02)
     set_world(scene, strength=1.0)
     # Two slabs side by side in one render (x < 0 live, x > 0 baked), measured 16 pixels (24 mm) from the seam.
     assign(blender_scenes.add_box("Live", -0.5, 0.0, -0.5, 0.5, -0.2, 0.0), live_material)
     assign(blender_scenes.add_box("Baked", 0.0, 0.5, -0.5, 0.5, -0.2, 0.0), baked_material)
     add_top_camera(scene, ortho_scale=0.2, width=128, height=64)
-    plans = _apply(scene, live_material, baked_material)
+    plans = apply_materials(scene, live_material, baked_material)
     assert plans[0].live is not None and " eevee" in plans[0].live["group"]
     img = render(scene, samples=1)
     live, baked = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
     # EEVEE keeps the surface colour in its g-buffer at about 10 bits: its renders here come in steps of 1/1024
     # (0.8 % of the blue 0.12), so the two agree to the bit or one step apart (measured in 5.0 and 5.3).
-    _check("EEVEE live vs baked", live, baked, atol=EEVEE_STEP)
+    check("EEVEE live vs baked", live, baked, atol=EEVEE_STEP)
     # The group is evaluated in EEVEE: its input (haemoglobin 0.02 -> 0.06, no Apply) changes the live half as
     # applying Baked at 0.06 changes the baked one.
     (group_node,) = addon_nodes.tagged_nodes(live_material.node_tree, "live")
     group_node.inputs["Hemoglobin"].default_value = 0.06
     baked_material.spectral_skin.hemoglobin = 0.06
-    _apply(scene, baked_material)
+    apply_materials(scene, baked_material)
     img = render(scene, samples=1)
     live_high, baked_high = (img[16:48, x : x + 32].reshape(-1, 3).mean(axis=0) for x in (16, 80))
     assert np.abs(live_high / live - 1.0).max() > 0.01
-    _check("EEVEE live vs baked at haemoglobin 0.06", live_high, baked_high, atol=EEVEE_STEP)
+    check("EEVEE live vs baked at haemoglobin 0.06", live_high, baked_high, atol=EEVEE_STEP)
 
 
 def test_a_group_of_another_layout_is_rebuilt_not_reused(addon):
@@ -442,12 +385,12 @@ def test_a_group_of_another_layout_is_rebuilt_not_reused(addon):
     from blender_addon import live
 
     scene = blender_scenes.reset_scene()
-    material = _skin("Skin", "LIVE")
-    _slab_scene(material)
-    _apply(scene, material)
+    material = skin_material("Skin", "LIVE")
+    slab_scene(material)
+    apply_materials(scene, material)
     (group_node,) = addon_nodes.tagged_nodes(material.node_tree, "live")
     group = group_node.node_tree
-    assert _apply(scene, material)[0].live["table"] is None
+    assert apply_materials(scene, material)[0].live["table"] is None
     group[live.LAYOUT_KEY] = live.LAYOUT_VERSION - 1
-    assert _apply(scene, material)[0].live["table"] is not None
+    assert apply_materials(scene, material)[0].live["table"] is not None
     assert group[live.LAYOUT_KEY] == live.LAYOUT_VERSION

@@ -23,12 +23,9 @@ pytest.importorskip("OpenImageIO")
 pytest.importorskip("spectral_skin")
 
 import blender_scenes  # noqa: E402
-from farm_worker import BLENDER_CLI, REPO, only_in_edge_versions  # noqa: E402
-
-if str(REPO / "scripts" / "tools") not in sys.path:
-    sys.path.insert(0, str(REPO / "scripts" / "tools"))
 import render_blend  # noqa: E402  (scripts/tools/render_blend.py)
-from test_live_mode import _apply, _skin, _slab_scene  # noqa: E402
+from farm_worker import BLENDER_CLI, REPO, only_in_edge_versions  # noqa: E402
+from live_scene import apply_materials, skin_material, slab_scene  # noqa: E402
 
 pytestmark = only_in_edge_versions(bpy.app.version)
 
@@ -48,8 +45,8 @@ def _openjd() -> str:
 
 def test_openjd_run_renders_the_frames_of_a_local_render(addon, tmp_path):
     scene = blender_scenes.reset_scene()
-    material = _skin("Skin", "BAKED", melanin=0.005)
-    _slab_scene(material)
+    material = skin_material("Skin", "BAKED", melanin=0.005)
+    slab_scene(material)
     scene.render.resolution_x = scene.render.resolution_y = 32
     scene.frame_start, scene.frame_end = 1, 2
     scene.cycles.samples = 16
@@ -57,7 +54,7 @@ def test_openjd_run_renders_the_frames_of_a_local_render(addon, tmp_path):
         material.spectral_skin.hemoglobin = value
         material.keyframe_insert("spectral_skin.hemoglobin", frame=frame)
     scene.frame_set(1)
-    _apply(scene, material)
+    apply_materials(scene, material)
     blend = tmp_path / "shot.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
     local = render_blend.render_frames(str(blend), str(tmp_path / "local"), frames=[1, 2])

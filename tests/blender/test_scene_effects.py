@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import math
 import pathlib
-import sys
 
 import pytest
 
@@ -23,10 +22,7 @@ import numpy as np  # noqa: E402
 import spectral_skin  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
-sys.path.insert(0, str(REPO / "scripts" / "tools"))
 
 import render_blend  # noqa: E402  (scripts/tools/render_blend.py)
 from blender_scenes import add_box, assign  # noqa: E402

@@ -15,9 +15,7 @@ Run: .venv/bin/python -m pytest tests/blender/test_working_space.py -q -s
 
 from __future__ import annotations
 
-import sys
 import types
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,9 +24,6 @@ bpy = pytest.importorskip("bpy")
 pytest.importorskip("OpenImageIO")
 spectral_skin = pytest.importorskip("spectral_skin")
 
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
 from blender_scenes import add_slab, add_top_camera, assign, render, reset_scene, set_world  # noqa: E402
 

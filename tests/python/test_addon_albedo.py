@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import spectral_skin
-from test_addon_scene import _load_core
+from addon_helpers import load_core
 
-core = _load_core()
+core = load_core()
 albedo = importlib.import_module("addon_core.albedo")
 
 

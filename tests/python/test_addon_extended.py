@@ -11,9 +11,9 @@ import inspect
 import numpy as np
 import pytest
 import spectral_skin
-from test_addon_scene import _load_core
+from addon_helpers import load_core
 
-core = _load_core()
+core = load_core()
 plan_module = importlib.import_module("addon_core.plan")
 live = importlib.import_module("addon_core.live")
 

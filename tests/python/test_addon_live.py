@@ -9,9 +9,9 @@ import importlib
 import numpy as np
 import pytest
 import spectral_skin
-from test_addon_scene import _load_core
+from addon_helpers import load_core
 
-core = _load_core()
+core = load_core()
 live = importlib.import_module("addon_core.live")
 
 

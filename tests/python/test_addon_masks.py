@@ -8,9 +8,9 @@ import importlib
 import numpy as np
 import pytest
 import spectral_skin
-from test_addon_scene import _load_core
+from addon_helpers import load_core
 
-_load_core()
+load_core()
 masks = importlib.import_module("addon_core.masks")
 
 RANGES = {p["name"]: (p["min"], p["max"]) for p in spectral_skin.parameters()}

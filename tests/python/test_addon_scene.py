@@ -4,79 +4,52 @@ evaluate() for the albedo)."""
 
 from __future__ import annotations
 
-import importlib.util
-import pathlib
-import sys
-
 import numpy as np
 import pytest
 import spectral_skin
-
-REPO = pathlib.Path(__file__).resolve().parents[2]
-
-
-def _load_core():
-    """blender_addon/core as a top-level package: its own __init__ imports nothing of Blender's."""
-    if "addon_core" in sys.modules:
-        return sys.modules["addon_core"]
-    folder = REPO / "blender_addon" / "core"
-    spec = importlib.util.spec_from_file_location("addon_core", folder / "__init__.py",
-                                                  submodule_search_locations=[str(folder)])
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["addon_core"] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-core = _load_core()
-scene = importlib.import_module("addon_core.scene")
-
-BOX_AT_ORIGIN = tuple((x, y, z) for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1))
-
-
-def _camera(distance: float, **kw) -> scene.CameraFacts:
-    """A camera on -Y at ``distance`` from the origin looking along +Y."""
-    return scene.CameraFacts(name=kw.pop("name", "Camera"), type=kw.pop("type", "PERSP"),
-                             location=(0.0, -distance, 0.0), forward=(0.0, 1.0, 0.0), **kw)
-
-
-def _facts(distance: float, x: int = 1920, y: int = 1080, pct: int = 100, frame: int = 1, **kw) -> scene.SceneFacts:
-    cam = _camera(distance, **kw)
-    return scene.SceneFacts(resolution_x=x, resolution_y=y, resolution_percentage=pct,
-                            views=(scene.View("Head", frame, cam, BOX_AT_ORIGIN),))
+from addon_helpers import (
+    BOX_AT_ORIGIN,
+    animation_facts,
+    camera_facts,
+    core,
+    effect_entry,
+    scene,
+    scene_facts,
+    with_changes,
+)
 
 
 def test_perspective_footprint_by_hand():
     # 36 mm sensor over a 50 mm lens spans 0.72 m at 1 m; 1920 px wide: 0.375 mm per pixel at 1 m.
-    cam = _camera(3.0)
-    assert scene.footprint_mm(_facts(3.0), cam, 1.0) == pytest.approx(0.375)
+    cam = camera_facts(3.0)
+    assert scene.footprint_mm(scene_facts(3.0), cam, 1.0) == pytest.approx(0.375)
     # Half the resolution percentage doubles it.
-    assert scene.footprint_mm(_facts(3.0, pct=50), cam, 1.0) == pytest.approx(0.75)
+    assert scene.footprint_mm(scene_facts(3.0, pct=50), cam, 1.0) == pytest.approx(0.75)
     # Portrait frame with AUTO: the sensor width spans the taller side (1920 px).
-    assert scene.footprint_mm(_facts(3.0, x=1080, y=1920), cam, 1.0) == pytest.approx(0.375)
+    assert scene.footprint_mm(scene_facts(3.0, x=1080, y=1920), cam, 1.0) == pytest.approx(0.375)
     # VERTICAL: the 24 mm sensor height spans the 1080 px height: 24/50/1080 m per pixel at 1 m.
-    vertical = _camera(3.0, sensor_fit="VERTICAL")
-    assert scene.footprint_mm(_facts(3.0), vertical, 1.0) == pytest.approx(24 / 50 / 1080 * 1000)
+    vertical = camera_facts(3.0, sensor_fit="VERTICAL")
+    assert scene.footprint_mm(scene_facts(3.0), vertical, 1.0) == pytest.approx(24 / 50 / 1080 * 1000)
     # HORIZONTAL on a portrait frame: the width (1080 px) takes the sensor width.
-    horizontal = _camera(3.0, sensor_fit="HORIZONTAL")
-    assert scene.footprint_mm(_facts(3.0, x=1080, y=1920), horizontal, 1.0) == pytest.approx(36 / 50 / 1080 * 1000)
+    horizontal = camera_facts(3.0, sensor_fit="HORIZONTAL")
+    assert scene.footprint_mm(scene_facts(3.0, x=1080, y=1920), horizontal, 1.0) == pytest.approx(36 / 50 / 1080 * 1000)
 
 
 def test_orthographic_footprint_and_scene_units():
-    cam = _camera(5.0, type="ORTHO", ortho_scale=2.0)
+    cam = camera_facts(5.0, type="ORTHO", ortho_scale=2.0)
     facts = scene.SceneFacts(resolution_x=1000, resolution_y=500, scale_length=0.01)
     # 2 scene units of 1 cm over 1000 px: 0.02 mm per pixel, whatever the depth.
     assert scene.footprint_mm(facts, cam, 1.0) == pytest.approx(0.02)
     assert scene.footprint_mm(facts, cam, 50.0) == pytest.approx(0.02)
     with pytest.raises(ValueError, match="PANO"):
-        scene.footprint_mm(facts, _camera(5.0, type="PANO"), 1.0)
+        scene.footprint_mm(facts, camera_facts(5.0, type="PANO"), 1.0)
 
 
 def test_nearest_depth_of_a_box():
     # The box's near face is 0.1 in front of the origin.
-    assert scene.nearest_depth(_camera(2.0), BOX_AT_ORIGIN) == pytest.approx(1.9)
+    assert scene.nearest_depth(camera_facts(2.0), BOX_AT_ORIGIN) == pytest.approx(1.9)
     # Camera inside the box: the clip start.
-    assert scene.nearest_depth(_camera(0.0, clip_start=0.05), BOX_AT_ORIGIN) == pytest.approx(0.05)
+    assert scene.nearest_depth(camera_facts(0.0, clip_start=0.05), BOX_AT_ORIGIN) == pytest.approx(0.05)
     # Box behind the camera: not seen.
     behind = scene.CameraFacts("Back", "PERSP", (0.0, -2.0, 0.0), (0.0, -1.0, 0.0))
     assert scene.nearest_depth(behind, BOX_AT_ORIGIN) is None
@@ -93,16 +66,16 @@ def test_far_object_drops_subsurface_close_keeps_it():
     far_depth = largest / 0.1 / 0.375
     close_depth = largest / 5 / 0.375
     settings = core.SkinSettings.from_preset("caucasian")
-    far = scene.decide(plan, settings, _facts(far_depth + 0.1, frame=7, name="Far Cam"))
+    far = scene.decide(plan, settings, scene_facts(far_depth + 0.1, frame=7, name="Far Cam"))
     entry = next(e for e in far if e["effect"] == "subsurface")
     assert entry["enabled"] is False
     assert entry["figures"]["largest_radius_px"] == pytest.approx(0.1, rel=1e-6)
     assert "frame 7" in entry["reason"] and "Far Cam" in entry["reason"] and "0.1 px" in entry["reason"]
-    close = scene.decide(plan, settings, _facts(close_depth + 0.1))
+    close = scene.decide(plan, settings, scene_facts(close_depth + 0.1))
     assert scene.enabled(close, "subsurface")
     assert next(e for e in close if e["effect"] == "subsurface")["figures"]["largest_radius_px"] == pytest.approx(5)
     # The smallest footprint over views wins: a far and a close view keep subsurface.
-    both = scene.SceneFacts(1920, 1080, views=(*_facts(far_depth).views, *_facts(close_depth).views))
+    both = scene.SceneFacts(1920, 1080, views=(*scene_facts(far_depth).views, *scene_facts(close_depth).views))
     assert scene.enabled(scene.decide(plan, settings, both), "subsurface")
 
 
@@ -116,24 +89,24 @@ def test_no_view_keeps_subsurface_with_the_reason():
 def test_overrides_win_and_bad_override_is_refused():
     plan = _constant_plan()
     settings = core.SkinSettings.from_preset("caucasian")
-    far = _facts(1e4)
+    far = scene_facts(1e4)
     forced = scene.decide(plan, settings, far, {"subsurface": "ON"})
     entry = next(e for e in forced if e["effect"] == "subsurface")
     assert entry["enabled"] and entry["override"] == "ON" and "automatic" in entry["reason"]
-    off = scene.decide(plan, settings, _facts(0.5), {"subsurface": "OFF", "specular": "OFF"})
+    off = scene.decide(plan, settings, scene_facts(0.5), {"subsurface": "OFF", "specular": "OFF"})
     assert not scene.enabled(off, "subsurface") and not scene.enabled(off, "specular")
     with pytest.raises(ValueError, match="AUTO, ON, OFF"):
         scene.decide(plan, settings, far, {"subsurface": "MAYBE"})
 
 
 def test_scene_plan_far_is_plain_diffuse_with_the_cores_albedo():
-    far = _facts(1e4)
+    far = scene_facts(1e4)
     expected = spectral_skin.evaluate(preset="caucasian")["methods"]["burley"]["base_color"]
     for method in ("BURLEY", "RANDOM_WALK"):
         plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", method=method), far)
         assert plan.subsurface_weight == 0.0
         np.testing.assert_allclose(plan.base_color, expected, rtol=1e-6)
-    close = scene.scene_plan(core.SkinSettings.from_preset("caucasian"), _facts(0.5))
+    close = scene.scene_plan(core.SkinSettings.from_preset("caucasian"), scene_facts(0.5))
     assert close.subsurface_weight == 1.0
 
 
@@ -184,24 +157,14 @@ def test_constant_maps_override_off_keeps_the_textures(tmp_path):
     assert sorted(plan.textures) == ["albedo", "radius"] and plan.base_color is None
 
 
-def _entry(effects, name):
-    return next(e for e in effects if e["effect"] == name)
-
-
-def _with(facts, **changes):
-    import dataclasses
-
-    return dataclasses.replace(facts, **changes)
-
-
 def test_thin_closed_object_gets_a_random_walk_open_one_burley():
     plan = _constant_plan()
     largest = max(plan["radius"])  # mm
     settings = core.SkinSettings.from_preset("caucasian")
     shapes = (scene.ShapeFacts("Ear", 2.9 * largest, True), scene.ShapeFacts("Head", 3.1 * largest, True),
               scene.ShapeFacts("Scalp", 50 * largest, False, 12))
-    effects = scene.decide(plan, settings, _with(_facts(0.5), shapes=shapes))
-    entry = _entry(effects, "subsurface method")
+    effects = scene.decide(plan, settings, with_changes(scene_facts(0.5), shapes=shapes))
+    entry = effect_entry(effects, "subsurface method")
     objects = entry["figures"]["objects"]
     assert objects["Ear"]["recommended"] == "RANDOM_WALK"
     assert objects["Ear"]["thickness_radii"] == pytest.approx(2.9)
@@ -211,11 +174,11 @@ def test_thin_closed_object_gets_a_random_walk_open_one_burley():
     # Burley does not suit the thin ear: the entry says so, and only about the ear.
     assert entry["enabled"] is False and "Ear" in entry["reason"] and "Scalp" not in entry["reason"]
     # A random walk suits the ear but leaks out of the open scalp.
-    walk = _entry(scene.decide(plan, settings.replace(method="RANDOM_WALK"), _with(_facts(0.5), shapes=shapes)),
+    walk = effect_entry(scene.decide(plan, settings.replace(method="RANDOM_WALK"), with_changes(scene_facts(0.5), shapes=shapes)),
                   "subsurface method")
     assert walk["enabled"] is False and "Scalp" in walk["reason"] and "Ear" not in walk["reason"]
     # Thin and open: Burley, and the advice to close the mesh for a walk.
-    thin_open = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=(
+    thin_open = effect_entry(scene.decide(plan, settings, with_changes(scene_facts(0.5), shapes=(
         scene.ShapeFacts("Lid", largest, False, 3),))), "subsurface method")
     assert thin_open["enabled"] and "close the mesh, then a random walk" in thin_open["reason"]
 
@@ -224,22 +187,17 @@ def test_no_method_advice_where_subsurface_is_off_or_in_eevee():
     plan = _constant_plan()
     shapes = (scene.ShapeFacts("Ear", 1.0, True),)
     settings = core.SkinSettings.from_preset("caucasian")
-    off = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=shapes), {"subsurface": "OFF"}),
+    off = effect_entry(scene.decide(plan, settings, with_changes(scene_facts(0.5), shapes=shapes), {"subsurface": "OFF"}),
                  "subsurface method")
     assert off["enabled"] and "subsurface is off" in off["reason"]
     eevee = core.make_plan(settings.replace(engine="eevee"))
-    entry = _entry(scene.decide(eevee, settings, _with(_facts(0.5), shapes=shapes)), "subsurface method")
+    entry = effect_entry(scene.decide(eevee, settings, with_changes(scene_facts(0.5), shapes=shapes)), "subsurface method")
     assert entry["enabled"] and "EEVEE" in entry["reason"] and entry["figures"]["objects"] == {}
-
-
-def _animated(values: dict[str, tuple[float, ...]], current: int = 1, first: int = 1) -> scene.AnimationFacts:
-    frames = tuple(range(first, first + len(next(iter(values.values())))))
-    return scene.AnimationFacts({name: "keyframed" for name in values}, frames, values, current)
 
 
 def test_animated_constant_material_gets_the_cores_values_per_frame():
     hemoglobin = (0.005, 0.02, 0.02, 0.05)
-    facts = _with(_facts(0.5), animation=_animated({"hemoglobin": hemoglobin}, current=3, first=10))
+    facts = with_changes(scene_facts(0.5), animation=animation_facts({"hemoglobin": hemoglobin}, current=3, first=10))
     settings = core.SkinSettings.from_preset("caucasian")
     plan = scene.scene_plan(settings, facts)
     assert plan.animation["frames"] == (10, 11, 12, 13)
@@ -250,7 +208,7 @@ def test_animated_constant_material_gets_the_cores_values_per_frame():
         np.testing.assert_allclose(plan.animation["radius"][index], burley["subsurface_radius_mm"], rtol=1e-9)
     # The current frame (3, before the range) takes the first frame's values.
     np.testing.assert_allclose(plan.base_color, plan.animation["base_color"][0])
-    entry = _entry(plan.effects, "animation")
+    entry = effect_entry(plan.effects, "animation")
     assert entry["enabled"] and entry["figures"]["evaluations"] == 3 and "hemoglobin keyframed" in entry["reason"]
     # The plan's work: the three distinct parameter sets, each once (the current frame's is one of them).
     assert (plan.work["radius_fits"], plan.work["specular_evaluations"]) == (9, 3)
@@ -265,32 +223,32 @@ def test_animated_decisions_hold_over_every_frame():
     # A camera where the small radius is 0.2 px and the big one above 0.25 px: subsurface stays for the animation.
     assert radius[big] / radius[small] > 0.25 / 0.2
     depth = radius[small] / 0.2 / 0.375
-    facts = _with(_facts(depth + 0.1), animation=_animated({"hemoglobin": (small, big)}, current=1))
-    assert not scene.enabled(scene.scene_plan(settings.replace(hemoglobin=small), _with(facts, animation=None)).effects, "subsurface")
+    facts = with_changes(scene_facts(depth + 0.1), animation=animation_facts({"hemoglobin": (small, big)}, current=1))
+    assert not scene.enabled(scene.scene_plan(settings.replace(hemoglobin=small), with_changes(facts, animation=None)).effects, "subsurface")
     plan = scene.scene_plan(settings, facts)
-    entry = _entry(plan.effects, "subsurface")
+    entry = effect_entry(plan.effects, "subsurface")
     assert entry["enabled"] and entry["figures"]["largest_radius_mm"] == pytest.approx(radius[big], rel=1e-9)
     # Oiliness zero at one frame only: the specular lobe stays, with each frame's level.
-    oily = scene.scene_plan(settings, _with(_facts(0.5), animation=_animated({"oiliness": (0.0, 0.5)})))
+    oily = scene.scene_plan(settings, with_changes(scene_facts(0.5), animation=animation_facts({"oiliness": (0.0, 0.5)})))
     assert scene.enabled(oily.effects, "specular")
     assert oily.animation["specular_ior_level"][0] == 0.0 < oily.animation["specular_ior_level"][1]
-    dry = scene.scene_plan(settings, _with(_facts(0.5), animation=_animated({"oiliness": (0.0, 0.0)})))
+    dry = scene.scene_plan(settings, with_changes(scene_facts(0.5), animation=animation_facts({"oiliness": (0.0, 0.0)})))
     assert not scene.enabled(dry.effects, "specular")
 
 
 def test_animation_with_parameter_maps_is_reported_not_applied(tmp_path):
     maps = {"melanin": core.ParameterMap(np.linspace(0.01, 0.2, 16, dtype=np.float32).reshape(4, 4), False)}
     settings = core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path))
-    facts = _with(_facts(0.5), animation=_animated({"hemoglobin": (0.005, 0.05)}, current=2))
+    facts = with_changes(scene_facts(0.5), animation=animation_facts({"hemoglobin": (0.005, 0.05)}, current=2))
     plan = scene.scene_plan(settings, facts)
     assert plan.animation is None
-    entry = _entry(plan.effects, "animation")
+    entry = effect_entry(plan.effects, "animation")
     assert not entry["enabled"] and "per-frame maps or the live shader" in entry["reason"]
     # The maps are computed with the current frame's haemoglobin.
     expected = spectral_skin.evaluate(0.01, settings.melanin_blend, 0.05, settings.oiliness)["methods"]["burley"]
     np.testing.assert_allclose(np.asarray(plan.images["albedo"])[0, 0], expected["base_color"], rtol=1e-4)
     # Without animation: an entry that says so.
-    still = _entry(scene.scene_plan(core.SkinSettings(), None).effects, "animation")
+    still = effect_entry(scene.scene_plan(core.SkinSettings(), None).effects, "animation")
     assert not still["enabled"] and "no keyframed or driven" in still["reason"]
 
 
@@ -350,11 +308,11 @@ def test_dropped_effects_are_not_computed():
     """A far object with zero oiliness: the core's work for the material has no radius fit, no profile and no
     specular evaluation (the decisions were taken before computing); close and oily, it has them."""
     settings = core.SkinSettings.from_preset("caucasian", surface="PAPER", oiliness=0.0, method="RANDOM_WALK")
-    plan = scene.scene_plan(settings, _facts(1e4))
+    plan = scene.scene_plan(settings, scene_facts(1e4))
     work = plan.work
     assert (work["radius_fits"], work["radial_profiles"], work["specular_evaluations"]) == (0, 0, 0), work
     assert work["transform_samples"] == work["wavelengths"] > 0  # the albedo alone: one value per wavelength
-    entry = _entry(plan.effects, "subsurface")
+    entry = effect_entry(plan.effects, "subsurface")
     assert not entry["enabled"] and "not computed" in entry["reason"]
     assert entry["figures"]["largest_radius_bound_px"] < scene.SUBSURFACE_MIN_RADIUS_PX
     assert not scene.enabled(plan.effects, "specular") and plan.specular_ior_level == 0.0
@@ -362,13 +320,13 @@ def test_dropped_effects_are_not_computed():
     np.testing.assert_allclose(plan.base_color, albedo, rtol=1e-12)
     assert plan.subsurface_weight == 0.0 and plan.radius is None
     assert plan.ior == plan.subsurface_ior == spectral_skin.evaluate(preset="caucasian")["specular"]["ior"]
-    close = scene.scene_plan(settings.replace(oiliness=0.3), _facts(0.5))
+    close = scene.scene_plan(settings.replace(oiliness=0.3), scene_facts(0.5))
     work = close.work
     assert (work["radius_fits"], work["radial_profiles"], work["specular_evaluations"]) == (3, 0, 1), work
     # Forced off: not computed either, whatever the distance.
-    forced = scene.scene_plan(settings.replace(oiliness=0.3), _facts(0.5), {"subsurface": "OFF", "specular": "OFF"})
+    forced = scene.scene_plan(settings.replace(oiliness=0.3), scene_facts(0.5), {"subsurface": "OFF", "specular": "OFF"})
     assert (forced.work["radius_fits"], forced.work["specular_evaluations"]) == (0, 0)
-    assert not scene.enabled(forced.effects, "subsurface") and "forced off" in _entry(
+    assert not scene.enabled(forced.effects, "subsurface") and "forced off" in effect_entry(
         forced.effects, "subsurface")["reason"]
 
 
@@ -381,7 +339,7 @@ def test_dropped_effects_with_maps_are_not_kept(tmp_path, method):
     hemoglobin = core.ParameterMap(levels, False)
     settings = core.SkinSettings.from_preset("caucasian", surface="PAPER", maps={"hemoglobin": hemoglobin}, oiliness=0.0,
                                              output_dir=str(tmp_path), method=method)
-    plan = scene.scene_plan(settings, _facts(1e4))
+    plan = scene.scene_plan(settings, scene_facts(1e4))
     assert set(plan.textures) == {"albedo"} and plan.radius is None
     work = plan.work
     assert work["texels"] == 16 and work["evaluations"] == 16
@@ -406,18 +364,18 @@ def test_thin_parts_of_a_thick_object_by_area():
         parts = ((2.0, thin_area, (0.1, 0.0, 0.0)), (160.0, 100.0 - thin_area, (0.0, 0.0, 0.08)))
         return scene.ShapeFacts("Head", 160.0, True, parts=parts, sampled_faces=2)
 
-    entry = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=(head(5.0),))), "subsurface method")
+    entry = effect_entry(scene.decide(plan, settings, with_changes(scene_facts(0.5), shapes=(head(5.0),))), "subsurface method")
     figures = entry["figures"]["objects"]["Head"]
     assert figures["recommended"] == "RANDOM_WALK" and not entry["enabled"]
     assert figures["parts"]["thin_area_fraction"] == pytest.approx(0.05)
     assert figures["parts"]["thin_median_mm"] == 2.0 and figures["parts"]["thin_centre"] == (0.1, 0.0, 0.0)
     assert "5 % of its surface" in figures["reason"] and "2 mm thick" in figures["reason"]
     assert "(0.1, 0, 0)" in figures["reason"]
-    entry = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=(head(0.5),))), "subsurface method")
+    entry = effect_entry(scene.decide(plan, settings, with_changes(scene_facts(0.5), shapes=(head(0.5),))), "subsurface method")
     assert entry["enabled"] and entry["figures"]["objects"]["Head"]["recommended"] is None
     # The fallback: without samples, the bounds' 2 mm make the object thin.
     bounds = scene.ShapeFacts("Plate", 2.0, True)
-    entry = _entry(scene.decide(plan, settings, _with(_facts(0.5), shapes=(bounds,))), "subsurface method")
+    entry = effect_entry(scene.decide(plan, settings, with_changes(scene_facts(0.5), shapes=(bounds,))), "subsurface method")
     assert entry["figures"]["objects"]["Plate"]["recommended"] == "RANDOM_WALK"
     assert entry["figures"]["objects"]["Plate"]["parts"] is None
     assert 2.0 < scene.THIN_RADII * largest
@@ -432,9 +390,9 @@ def test_dropped_after_computing_the_radius_costs_one_evaluation():
     bound_mm, _work = scene.radius_bound_mm(settings)
     depth = own_mm / 0.2 / 0.375  # the material's largest extent at 0.2 px
     assert bound_mm / own_mm > scene.SUBSURFACE_MIN_RADIUS_PX / 0.2  # the bound alone does not drop it
-    plan = scene.scene_plan(settings, _facts(depth + 0.1))
+    plan = scene.scene_plan(settings, scene_facts(depth + 0.1))
     assert plan.subsurface_weight == 0.0
-    assert "not computed" not in _entry(plan.effects, "subsurface")["reason"]
+    assert "not computed" not in effect_entry(plan.effects, "subsurface")["reason"]
     assert plan.work["radius_fits"] == 3
     albedo = spectral_skin.evaluate(preset="african", outputs=["albedo"])["diffuse_reflectance_rgb"]
     np.testing.assert_allclose(plan.base_color, albedo, rtol=1e-12)
@@ -451,13 +409,13 @@ def test_thin_parts_keep_subsurface_however_far():
     for shapes, kept in (((thick,), False), ((thick, scene.ShapeFacts("Head", 160.0, True, parts=parts,
                                                                        sampled_faces=2)), True),
                          ((scene.ShapeFacts("Plate", 0.5 * largest, True),), True)):
-        entry = _entry(scene.decide(plan, settings, _with(_facts(1e4), shapes=shapes)), "subsurface")
+        entry = effect_entry(scene.decide(plan, settings, with_changes(scene_facts(1e4), shapes=shapes)), "subsurface")
         assert entry["figures"]["largest_radius_px"] < scene.SUBSURFACE_MIN_RADIUS_PX
         assert entry["enabled"] is kept, entry["reason"]
         if kept:
             assert entry["figures"]["thin_objects"] == [shapes[-1].object_name]
             assert shapes[-1].object_name in entry["reason"] and "thinner than 3 radii" in entry["reason"]
-        planned = scene.scene_plan(settings, _with(_facts(1e4), shapes=shapes))
+        planned = scene.scene_plan(settings, with_changes(scene_facts(1e4), shapes=shapes))
         assert (planned.work["radius_fits"] > 0) is kept, planned.work
         assert scene.enabled(planned.effects, "subsurface") is kept
 
@@ -480,7 +438,7 @@ def test_every_method_decides_alike_on_the_same_scene(preset):
         depth = burley / radius_px / 0.375
         decided = {}
         for method in ("BURLEY", "RANDOM_WALK", "RANDOM_WALK_SKIN"):
-            plan = scene.scene_plan(settings.replace(method=method), _facts(depth + 0.1))
+            plan = scene.scene_plan(settings.replace(method=method), scene_facts(depth + 0.1))
             decided[method] = plan.subsurface_weight == 1.0
         assert len(set(decided.values())) == 1, (preset, radius_px, decided)
         assert decided["BURLEY"] == (radius_px * depth / (depth + 0.1) >= scene.SUBSURFACE_MIN_RADIUS_PX), radius_px

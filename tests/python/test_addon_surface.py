@@ -11,7 +11,7 @@ import importlib
 import numpy as np
 import pytest
 import spectral_skin
-from test_addon_scene import _animated, _facts, _with, core, scene
+from addon_helpers import animation_facts, core, scene, scene_facts, with_changes
 
 MEASURED = next(key for key, name in core.SURFACES.items() if name == "measured")
 PAPER = next(key for key, name in core.SURFACES.items() if name == "paper")
@@ -85,7 +85,7 @@ def test_varying_oiliness_writes_the_coat_textures(tmp_path):
 
 def test_animated_oiliness_gives_the_coat_per_frame():
     settings = core.SkinSettings.from_preset("caucasian", surface=MEASURED)
-    plan = scene.scene_plan(settings, _with(_facts(0.5), animation=_animated({"oiliness": (0.0, 0.5, 1.0)})))
+    plan = scene.scene_plan(settings, with_changes(scene_facts(0.5), animation=animation_facts({"oiliness": (0.0, 0.5, 1.0)})))
     for index, oiliness in enumerate((0.0, 0.5, 1.0)):
         expected = _specular(oiliness)
         for field in ("specular_ior_level", "coat_weight", "coat_roughness"):

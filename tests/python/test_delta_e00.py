@@ -7,10 +7,10 @@ integrated, the numpy one IEC 61966-2-1's rounded matrix: they agree to about 1e
 
 from __future__ import annotations
 
+import color_difference
 import numpy as np
 import pytest
 import spectral_skin
-from test_color_difference import color_difference
 
 
 def test_cielab_of_white_grey_and_the_srgb_red_primary() -> None:
