@@ -952,9 +952,13 @@ struct FitMapsArgs {
 /// `fit-maps`: albedo texture -> parameter EXR + residual EXR, both staged and renamed into place together.
 mod fit_maps {
     use crate::color::WorkingSpace;
+    use std::path::{Path, PathBuf};
+
     use crate::inverse::albedo::AlbedoFitOptions;
-    use crate::inverse::albedo_maps::{fit_albedo_tiles_cancellable, AlbedoTile, EpidermisThickness, TextureFit};
-    use crate::maps::io::{check_output_dir, commit_all, output_folder_of, read_albedo_texture};
+    use crate::inverse::albedo_maps::{
+        fit_albedo_tiles_cancellable, AlbedoMapFit, AlbedoMapStats, AlbedoTile, EpidermisThickness, TextureFit,
+    };
+    use crate::maps::io::{check_output_dir, commit_all, output_folder_of, read_albedo_texture, AlbedoTexture};
     use crate::maps::udim::{find_tiles, is_tile_set, tile_path, UDIM_TOKEN};
 
     #[derive(Clone, Copy, clap::ValueEnum)]
@@ -965,16 +969,49 @@ mod fit_maps {
         Acescg,
     }
 
-    pub fn run(args: super::FitMapsArgs) -> Result<(), Box<dyn std::error::Error>> {
-        let rgb_gains: Option<[f64; 3]> = match &args.rgb_gains {
-            Some(g) => Some(g.as_slice().try_into().map_err(|_| {
-                format!("--rgb-gains takes three gains, R,G,B (e.g. --rgb-gains 0.8,1,1.6); got {} value(s)", g.len())
-            })?),
-            None => None,
-        };
+    type CliResult<T> = Result<T, Box<dyn std::error::Error>>;
+
+    /// One tile's texture (or the single texture): its tile, path, texels and skin mask.
+    type Texture = (Option<u32>, PathBuf, AlbedoTexture, Option<Vec<bool>>);
+
+    pub fn run(args: super::FitMapsArgs) -> CliResult<()> {
+        let rgb_gains = rgb_gains_of(&args)?;
         // A UDIM tile set in: a tile set out, with the same tiles.
         let tiles: Option<Vec<u32>> = if is_tile_set(&args.albedo) { Some(find_tiles(&args.albedo)?) } else { None };
-        if tiles.is_some() != is_tile_set(&args.out) {
+        let residual_path = checked_outputs(&args, tiles.is_some())?;
+        let textures = read_textures(&args, &tiles)?;
+        let options = fit_options(&args, rgb_gains)?;
+        let thickness =
+            if args.epidermis_thickness_mm.is_some() { EpidermisThickness::Held } else { EpidermisThickness::Chosen };
+        let texture = TextureFit { thickness, auto_gains: args.auto_gains };
+        let start = std::time::Instant::now();
+        super::ctrl_c::catch();
+        let pieces: Vec<AlbedoTile<'_>> = textures
+            .iter()
+            .map(|(_, path, t, mask)| AlbedoTile {
+                label: format!("albedo texture {}", path.display()),
+                width: t.width,
+                height: t.height,
+                texels: &t.texels,
+                mask: mask.as_deref(),
+            })
+            .collect();
+        let fits = fit_albedo_tiles_cancellable(&pieces, &options, texture, &super::ctrl_c::INTERRUPTED)?;
+        let seconds = start.elapsed().as_secs_f64();
+        let mut staged = Vec::new();
+        for ((tile, _, _, _), fit) in textures.iter().zip(&fits) {
+            let at = |p: &Path| tile.map_or(p.to_path_buf(), |t| tile_path(p, t));
+            staged.extend(fit.stage(&at(&args.out), Some(&at(&residual_path)))?);
+        }
+        commit_all(staged)?;
+        report(&args, &residual_path, &tiles, &fits, &options, seconds);
+        Ok(())
+    }
+
+    /// The residual's path (its default beside `--out`), after checking that both outputs' names fit the input (a
+    /// tile set for a tile set) and that their folders can be written: before the fit, not after it.
+    fn checked_outputs(args: &super::FitMapsArgs, tile_set: bool) -> CliResult<PathBuf> {
+        if tile_set != is_tile_set(&args.out) {
             return Err(format!(
                 "--albedo {} and --out {} must both name a tile set with {UDIM_TOKEN} (e.g. face.{UDIM_TOKEN}.png and \
                  params.{UDIM_TOKEN}.exr) or neither",
@@ -983,18 +1020,20 @@ mod fit_maps {
             )
             .into());
         }
-        let residual_default =
-            if tiles.is_some() { format!("residual.{UDIM_TOKEN}.exr") } else { "residual.exr".into() };
-        // The output folders first (checked now, created only to write): one that cannot be written fails now, not
-        // after the fit.
+        let residual_default = if tile_set { format!("residual.{UDIM_TOKEN}.exr") } else { "residual.exr".into() };
         let residual_path = args.residual.clone().unwrap_or_else(|| args.out.with_file_name(residual_default));
-        if tiles.is_some() && !is_tile_set(&residual_path) {
+        if tile_set && !is_tile_set(&residual_path) {
             return Err(format!("--residual {} must name a tile set with {UDIM_TOKEN}", residual_path.display()).into());
         }
         for file in [&args.out, &residual_path] {
-            crate::inverse::albedo_maps::check_output_name(file, tiles.is_some())?;
+            crate::inverse::albedo_maps::check_output_name(file, tile_set)?;
             check_output_dir(output_folder_of(file))?;
         }
+        Ok(residual_path)
+    }
+
+    /// Each tile's albedo texture (the single texture when `tiles` is None) and its skin mask, read and checked.
+    fn read_textures(args: &super::FitMapsArgs, tiles: &Option<Vec<u32>>) -> CliResult<Vec<Texture>> {
         let mut textures = Vec::new();
         for tile in tiles.clone().map_or(vec![None], |t| t.into_iter().map(Some).collect()) {
             let path = tile.map_or(args.albedo.clone(), |t| tile_path(&args.albedo, t));
@@ -1013,26 +1052,44 @@ mod fit_maps {
             }
             let mask = match &args.mask {
                 Some(pattern) => {
-                    let file = tile.map_or(pattern.clone(), |t| tile_path(pattern, t));
-                    let m = crate::maps::io::read_rgb_image(&file, "skin mask (--mask)")?;
-                    if (m.width, m.height) != (albedo.width, albedo.height) {
-                        return Err(format!(
-                            "--mask {} is {}x{}; the albedo {} is {}x{}: they must have one size",
-                            file.display(),
-                            m.width,
-                            m.height,
-                            path.display(),
-                            albedo.width,
-                            albedo.height
-                        )
-                        .into());
-                    }
-                    Some(m.texels.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0 > 0.5).collect::<Vec<bool>>())
+                    Some(read_mask(&tile.map_or(pattern.clone(), |t| tile_path(pattern, t)), &path, &albedo)?)
                 }
                 None => None,
             };
             textures.push((tile, path, albedo, mask));
         }
+        Ok(textures)
+    }
+
+    /// The skin mask `file` for the albedo at `albedo_path` (one size): a texel is skin where its mean is above 0.5.
+    fn read_mask(file: &Path, albedo_path: &Path, albedo: &AlbedoTexture) -> CliResult<Vec<bool>> {
+        let m = crate::maps::io::read_rgb_image(file, "skin mask (--mask)")?;
+        if (m.width, m.height) != (albedo.width, albedo.height) {
+            return Err(format!(
+                "--mask {} is {}x{}; the albedo {} is {}x{}: they must have one size",
+                file.display(),
+                m.width,
+                m.height,
+                albedo_path.display(),
+                albedo.width,
+                albedo.height
+            )
+            .into());
+        }
+        Ok(m.texels.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0 > 0.5).collect())
+    }
+
+    /// `--rgb-gains` as three gains (read before anything else, as its own argument's error).
+    fn rgb_gains_of(args: &super::FitMapsArgs) -> CliResult<Option<[f64; 3]>> {
+        let Some(g) = &args.rgb_gains else { return Ok(None) };
+        let gains: [f64; 3] = g.as_slice().try_into().map_err(|_| {
+            format!("--rgb-gains takes three gains, R,G,B (e.g. --rgb-gains 0.8,1,1.6); got {} value(s)", g.len())
+        })?;
+        Ok(Some(gains))
+    }
+
+    /// The fit's options from the arguments, validated.
+    fn fit_options(args: &super::FitMapsArgs, rgb_gains: Option<[f64; 3]>) -> CliResult<AlbedoFitOptions> {
         let mut options = AlbedoFitOptions {
             working_space: match args.working_space {
                 Space::LinearRec709 => WorkingSpace::LinearRec709,
@@ -1057,60 +1114,52 @@ mod fit_maps {
         if let Some(g) = rgb_gains {
             options.rgb_gains = g;
         }
-        let options = options.validated()?;
-        let thickness =
-            if args.epidermis_thickness_mm.is_some() { EpidermisThickness::Held } else { EpidermisThickness::Chosen };
-        let texture = TextureFit { thickness, auto_gains: args.auto_gains };
-        let start = std::time::Instant::now();
-        super::ctrl_c::catch();
-        let pieces: Vec<AlbedoTile<'_>> = textures
-            .iter()
-            .map(|(_, path, t, mask)| AlbedoTile {
-                label: format!("albedo texture {}", path.display()),
-                width: t.width,
-                height: t.height,
-                texels: &t.texels,
-                mask: mask.as_deref(),
-            })
-            .collect();
-        let fits = fit_albedo_tiles_cancellable(&pieces, &options, texture, &super::ctrl_c::INTERRUPTED)?;
-        let seconds = start.elapsed().as_secs_f64();
-        let mut staged = Vec::new();
-        for ((tile, _, _, _), fit) in textures.iter().zip(&fits) {
-            let at = |p: &std::path::Path| tile.map_or(p.to_path_buf(), |t| tile_path(p, t));
-            staged.extend(fit.stage(&at(&args.out), Some(&at(&residual_path)))?);
-        }
-        commit_all(staged)?;
+        Ok(options.validated()?)
+    }
+
+    /// The tiles' statistics as one texture's: texels and out-of-gamut counts summed, the worst ΔE00, the mean
+    /// weighted by texels.
+    fn combined_stats(fits: &[AlbedoMapFit]) -> AlbedoMapStats {
         let texels: usize = fits.iter().map(|f| f.stats.texels).sum();
-        let fit = &fits[0];
-        let mut s = fit.stats;
+        let mut s = fits[0].stats;
         s.texels = texels;
         s.max_delta_e00 = fits.iter().map(|f| f.stats.max_delta_e00).fold(0.0, f64::max);
         s.mean_delta_e00 =
             fits.iter().map(|f| f.stats.mean_delta_e00 * f.stats.texels as f64).sum::<f64>() / texels as f64;
         s.out_of_gamut_texels = fits.iter().map(|f| f.stats.out_of_gamut_texels).sum();
-        let size = match &tiles {
+        s
+    }
+
+    /// What the run did, on stderr (the diagnosis, the gains applied) and stdout (the summary, or JSON).
+    fn report(
+        args: &super::FitMapsArgs,
+        residual_path: &Path,
+        tiles: &Option<Vec<u32>>,
+        fits: &[AlbedoMapFit],
+        options: &AlbedoFitOptions,
+        seconds: f64,
+    ) {
+        let fit = &fits[0];
+        let s = &combined_stats(fits);
+        let size = match tiles {
             Some(t) => format!("{} tiles {:?}", t.len(), t),
             None => format!("{}x{}", fit.width, fit.height),
         };
-        let s = &s;
         if let Some(diagnosis) = &fit.diagnosis {
             let hint = if args.auto_gains { "" } else { " (--auto-gains applies the gains)" };
             eprintln!("warning: {diagnosis}{hint}");
         }
-        if args.auto_gains {
-            if let Some(g) = &fit.gains {
-                eprintln!(
-                    "applied gains R G B x {:.4} {:.4} {:.4} ({:+.2} stops): share of sampled texels outside skin's \
-                     colours {:.0} % -> {:.0} %",
-                    g.rgb_gains[0],
-                    g.rgb_gains[1],
-                    g.rgb_gains[2],
-                    g.exposure_stops,
-                    100.0 * g.outside_share_before,
-                    100.0 * g.outside_share_after
-                );
-            }
+        if let Some(g) = fit.gains.as_ref().filter(|_| args.auto_gains) {
+            eprintln!(
+                "applied gains R G B x {:.4} {:.4} {:.4} ({:+.2} stops): share of sampled texels outside skin's \
+                 colours {:.0} % -> {:.0} %",
+                g.rgb_gains[0],
+                g.rgb_gains[1],
+                g.rgb_gains[2],
+                g.exposure_stops,
+                100.0 * g.outside_share_before,
+                100.0 * g.outside_share_after
+            );
         }
         if args.json {
             println!(
@@ -1118,29 +1167,28 @@ mod fit_maps {
                 serde_json::json!({ "stats": s, "extended": fit.extended, "thickness": fit.thickness,
                     "gains": fit.gains, "diagnosis": fit.diagnosis, "tiles": tiles, "seconds": seconds })
             );
-        } else {
-            println!(
-                "wrote {} and {} ({size}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
-                 {} texel(s) out of the model's gamut (ΔE00 > {})",
-                args.out.display(),
-                residual_path.display(),
-                s.distinct_colours,
-                s.mean_delta_e00,
-                s.max_delta_e00,
-                s.out_of_gamut_texels,
-                options.ambiguity_delta_e
-            );
-            if let Some(choice) = &fit.thickness {
-                println!(
-                    "epidermis thickness {} mm chosen for the texture (mean ΔE00 per candidate [mm, ΔE00]: {:?}{}); \
-                     written into {} with the other extended physiology",
-                    choice.chosen_mm,
-                    choice.screened,
-                    choice.sampled_texels.map_or(String::new(), |n| format!(", screened on {n} texels")),
-                    args.out.display()
-                );
-            }
+            return;
         }
-        Ok(())
+        println!(
+            "wrote {} and {} ({size}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
+             {} texel(s) out of the model's gamut (ΔE00 > {})",
+            args.out.display(),
+            residual_path.display(),
+            s.distinct_colours,
+            s.mean_delta_e00,
+            s.max_delta_e00,
+            s.out_of_gamut_texels,
+            options.ambiguity_delta_e
+        );
+        if let Some(choice) = &fit.thickness {
+            println!(
+                "epidermis thickness {} mm chosen for the texture (mean ΔE00 per candidate [mm, ΔE00]: {:?}{}); \
+                 written into {} with the other extended physiology",
+                choice.chosen_mm,
+                choice.screened,
+                choice.sampled_texels.map_or(String::new(), |n| format!(", screened on {n} texels")),
+                args.out.display()
+            );
+        }
     }
 }
