@@ -272,27 +272,7 @@ pub fn fit_albedo_tiles_cancellable(
         &joined
     };
     crate::maps::io::check_texel_count("albedo tile set", texels.len(), 1)?;
-    // The skin mask of the set (None: every texel counts).
-    let mut mask: Option<Vec<bool>> = None;
-    if tiles.iter().any(|t| t.mask.is_some()) {
-        let mut joined_mask = Vec::with_capacity(texels.len());
-        for tile in tiles {
-            match tile.mask {
-                Some(m) if m.len() != tile.texels.len() => {
-                    return Err(SkinError::invalid(
-                        format!("mask of {}", tile.label),
-                        format!("has {} values for {} texels (one per texel, row-major)", m.len(), tile.texels.len()),
-                    ))
-                }
-                Some(m) => joined_mask.extend_from_slice(m),
-                None => joined_mask.extend(std::iter::repeat(true).take(tile.texels.len())),
-            }
-        }
-        if !joined_mask.contains(&true) {
-            return Err(SkinError::invalid("mask", "marks no texel as skin: at least one texel must be fitted"));
-        }
-        mask = Some(joined_mask);
-    }
+    let mask = set_mask(tiles, texels.len())?;
     let counts_in = |i: usize| !matches!(&mask, Some(m) if !m[i]);
     let skin_texels: Vec<[f32; 3]> = match &mask {
         Some(m) => texels.iter().zip(m).filter(|(_, &k)| k).map(|(t, _)| *t).collect(),
@@ -350,52 +330,94 @@ pub fn fit_albedo_tiles_cancellable(
         diagnosis = not_albedo_diagnosis(far, counted.len(), Some(&estimate), false);
         gains = Some(estimate);
     }
-    let oil = options.oiliness as f32;
+    let set = SetFit { options, choice, gains, diagnosis, distinct_colours: colours.len(), table_from_cache };
     let mut start = 0;
     let mut out = Vec::with_capacity(tiles.len());
     for tile in tiles {
         let range = start..start + tile.texels.len();
-        let of_tile = &of_texel[range.clone()];
         start += tile.texels.len();
-        let (params, residual_delta_e00): (Vec<[f32; 4]>, Vec<f32>) = of_tile
-            .par_iter()
-            .map(|&i| {
-                let (p, de) = fits[i as usize];
-                ([p[0], p[1], p[2], oil], de)
-            })
-            .unzip();
-        // The figures of the texels that count (the mask's skin; a tile without any: zeros).
-        let counted_de: Vec<f64> = residual_delta_e00
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| counts_in(range.start + i))
-            .map(|(_, &d)| d as f64)
-            .collect();
-        let max = counted_de.iter().copied().fold(0.0, f64::max);
-        let mean = if counted_de.is_empty() { 0.0 } else { counted_de.iter().sum::<f64>() / counted_de.len() as f64 };
-        let outside = counted_de.iter().filter(|&&d| d > options.ambiguity_delta_e).count();
-        out.push(AlbedoMapFit {
-            width: tile.width,
-            height: tile.height,
-            params,
-            residual_delta_e00,
-            extended: options.extended,
-            thickness: choice.clone(),
-            gains: gains.clone(),
-            diagnosis: diagnosis.clone(),
-            stats: AlbedoMapStats {
-                texels: of_tile.len(),
-                masked_out_texels: of_tile.len() - counted_de.len(),
-                distinct_colours: colours.len(),
-                table_from_cache,
-                max_delta_e00: max,
-                mean_delta_e00: mean,
-                out_of_gamut_texels: outside,
-                options,
-            },
-        });
+        out.push(tile_fit(tile, &of_texel[range.clone()], &fits, |i| counts_in(range.start + i), &set));
     }
     Ok(out)
+}
+
+/// The skin mask of a tile set, the tiles' masks joined (a tile without one: all skin); None when no tile has one.
+fn set_mask(tiles: &[AlbedoTile<'_>], texel_count: usize) -> Result<Option<Vec<bool>>, SkinError> {
+    if tiles.iter().all(|t| t.mask.is_none()) {
+        return Ok(None);
+    }
+    let mut joined_mask = Vec::with_capacity(texel_count);
+    for tile in tiles {
+        match tile.mask {
+            Some(m) if m.len() != tile.texels.len() => {
+                return Err(SkinError::invalid(
+                    format!("mask of {}", tile.label),
+                    format!("has {} values for {} texels (one per texel, row-major)", m.len(), tile.texels.len()),
+                ))
+            }
+            Some(m) => joined_mask.extend_from_slice(m),
+            None => joined_mask.extend(std::iter::repeat(true).take(tile.texels.len())),
+        }
+    }
+    if !joined_mask.contains(&true) {
+        return Err(SkinError::invalid("mask", "marks no texel as skin: at least one texel must be fitted"));
+    }
+    Ok(Some(joined_mask))
+}
+
+/// What every tile of a set shares: the options fitted with (the chosen thickness in them), the choice, the gains,
+/// the diagnosis and the set's figures.
+struct SetFit {
+    options: AlbedoFitOptions,
+    choice: Option<ThicknessChoice>,
+    gains: Option<GainEstimate>,
+    diagnosis: Option<String>,
+    distinct_colours: usize,
+    table_from_cache: bool,
+}
+
+/// One tile's fit: its texels' parameters and residuals from their colours' fits (`of_tile`: each texel's colour),
+/// and the figures of its texels that count (`counts_in(i)`, i within the tile: the mask's skin; none: zeros).
+fn tile_fit(
+    tile: &AlbedoTile<'_>,
+    of_tile: &[u32],
+    fits: &[([f32; 3], f32)],
+    counts_in: impl Fn(usize) -> bool,
+    set: &SetFit,
+) -> AlbedoMapFit {
+    let oil = set.options.oiliness as f32;
+    let (params, residual_delta_e00): (Vec<[f32; 4]>, Vec<f32>) = of_tile
+        .par_iter()
+        .map(|&i| {
+            let (p, de) = fits[i as usize];
+            ([p[0], p[1], p[2], oil], de)
+        })
+        .unzip();
+    let counted_de: Vec<f64> =
+        residual_delta_e00.iter().enumerate().filter(|(i, _)| counts_in(*i)).map(|(_, &d)| d as f64).collect();
+    let max = counted_de.iter().copied().fold(0.0, f64::max);
+    let mean = if counted_de.is_empty() { 0.0 } else { counted_de.iter().sum::<f64>() / counted_de.len() as f64 };
+    let outside = counted_de.iter().filter(|&&d| d > set.options.ambiguity_delta_e).count();
+    AlbedoMapFit {
+        width: tile.width,
+        height: tile.height,
+        params,
+        residual_delta_e00,
+        extended: set.options.extended,
+        thickness: set.choice.clone(),
+        gains: set.gains.clone(),
+        diagnosis: set.diagnosis.clone(),
+        stats: AlbedoMapStats {
+            texels: of_tile.len(),
+            masked_out_texels: of_tile.len() - counted_de.len(),
+            distinct_colours: set.distinct_colours,
+            table_from_cache: set.table_from_cache,
+            max_delta_e00: max,
+            mean_delta_e00: mean,
+            out_of_gamut_texels: outside,
+            options: set.options,
+        },
+    }
 }
 
 /// (C_m, beta_m, C_h) and the table's ΔE00 of each colour.
