@@ -71,6 +71,48 @@ def table_image(name: str, log_rgb: np.ndarray) -> Any:
     return image
 
 
+class _Nodes:
+    """Node-making helpers over one group's nodes and links (and its table images, by key)."""
+
+    def __init__(self, group: Any, images: dict[str, Any]) -> None:
+        self.nodes, self.links, self.images = group.nodes, group.links, images
+
+    def math(self, operation: str, a: Any, b: Any = None, c: Any = None, clamp: bool = False) -> Any:
+        node = self.nodes.new("ShaderNodeMath")
+        node.operation = operation
+        node.use_clamp = clamp
+        for i, value in enumerate((a, b, c)):
+            if value is None:
+                continue
+            if isinstance(value, (int, float)):
+                node.inputs[i].default_value = float(value)
+            else:
+                self.links.new(value, node.inputs[i])
+        return node.outputs[0]
+
+    def vector_mix(self, factor: Any, a: Any, b: Any) -> Any:
+        """(1 - factor) a + factor b of two vectors (the Mix node's visible vector sockets: they share names with
+        its float and colour ones)."""
+        mix = self.nodes.new("ShaderNodeMix")
+        mix.data_type = "VECTOR"
+        mix.clamp_factor = False
+        self.links.new(factor, mix.inputs["Factor"])
+        for value, socket in ((a, "A"), (b, "B")):
+            self.links.new(value, next(s for s in mix.inputs if s.name == socket and s.type == "VECTOR"))
+        return next(s for s in mix.outputs if s.type == "VECTOR")
+
+    def lookup(self, key: str, x: Any, y: Any, interpolation: str) -> Any:
+        combine = self.nodes.new("ShaderNodeCombineXYZ")
+        self.links.new(x, combine.inputs["X"])
+        self.links.new(y, combine.inputs["Y"])
+        tex = self.nodes.new("ShaderNodeTexImage")
+        tex.image = self.images[key]
+        tex.interpolation = interpolation
+        tex.extension = "EXTEND"
+        self.links.new(combine.outputs["Vector"], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+
+
 def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | None = None,
                 surface_nodes: dict[str, Any] | None = None) -> Any:
     """The node group for a ``spectral_skin.shader_table`` result (created, or rebuilt in place if it exists).
@@ -82,22 +124,30 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | Non
     Coat)."""
     import spectral_skin
 
-    if surface_nodes is None:
-        surface_nodes = dict(spectral_skin.surface_input_nodes("paper", engine=table["metadata"].get("engine",
-                                                                                                       "cycles")))
     meta = table["metadata"]
+    if surface_nodes is None:
+        surface_nodes = dict(spectral_skin.surface_input_nodes("paper", engine=meta.get("engine", "cycles")))
     if exact is None:
         exact = meta.get("engine") == "eevee"
-    n_m, n_b, n_h = (int(meta[a]["nodes"]) for a in ("melanin", "melanin_blend", "hemoglobin"))
-    width, slice_width, gutter = int(meta["width"]), int(meta["slice_width"]), int(meta["gutter"])
     images = {
         "base_color_log": table_image(f"{name} Base Color", table["base_color_log"]),
         "radius_log": table_image(f"{name} Radius", table["radius_log"]),
     }
+    group = _empty_group(name)
+    group_in = group.nodes.new("NodeGroupInput")
+    group_out = group.nodes.new("NodeGroupOutput")
+    build = _Nodes(group, images)
+    _table_outputs(build, meta, exact, group_in, group_out)
+    _surface_outputs(build, surface_nodes, group_in, group_out)
+    return group
+
+
+def _empty_group(name: str) -> Any:
+    """The node group ``name`` with no nodes, its interface this layout's (kept when it already is: clearing it would
+    cut the links and reset the inputs of every group node using the group, another material's or one applied
+    earlier in the same batch)."""
     group = bpy.data.node_groups.get(name) or bpy.data.node_groups.new(name, "ShaderNodeTree")
     group.nodes.clear()
-    # The interface is kept when it is already this one: clearing it would cut the links and reset the inputs of
-    # every group node using the group (another material's, or one applied earlier in the same batch).
     wanted = [(s, "INPUT", "NodeSocketFloat") for s in INPUTS] + [(s, "OUTPUT", t) for s, t in OUTPUTS]
     have = [(i.name, i.in_out, i.socket_type) for i in group.interface.items_tree if i.item_type == "SOCKET"]
     if sorted(have) != sorted(wanted) or [h for h in have if h[1] == "INPUT"] != wanted[:len(INPUTS)]:
@@ -105,22 +155,15 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | Non
         for socket, in_out, socket_type in wanted:
             group.interface.new_socket(name=socket, in_out=in_out, socket_type=socket_type)
     group[LAYOUT_KEY] = LAYOUT_VERSION
-    nodes, links = group.nodes, group.links
-    group_in = nodes.new("NodeGroupInput")
-    group_out = nodes.new("NodeGroupOutput")
+    return group
 
-    def math(operation: str, a: Any, b: Any = None, c: Any = None, clamp: bool = False) -> Any:
-        node = nodes.new("ShaderNodeMath")
-        node.operation = operation
-        node.use_clamp = clamp
-        for i, value in enumerate((a, b, c)):
-            if value is None:
-                continue
-            if isinstance(value, (int, float)):
-                node.inputs[i].default_value = float(value)
-            else:
-                links.new(value, node.inputs[i])
-        return node.outputs[0]
+
+def _table_outputs(build: _Nodes, meta: dict[str, Any], exact: bool, group_in: Any, group_out: Any) -> None:
+    """Base Color and Subsurface Radius: the table's two slices around the melanin blend, each looked up at the
+    warped (melanin, haemoglobin), mixed, and exponentiated (the table holds logarithms)."""
+    math, vector_mix, lookup = build.math, build.vector_mix, build.lookup
+    n_m, n_b, n_h = (int(meta[a]["nodes"]) for a in ("melanin", "melanin_blend", "hemoglobin"))
+    width, slice_width, gutter = int(meta["width"]), int(meta["slice_width"]), int(meta["gutter"])
 
     def unit(socket: str, scale: float) -> Any:
         """clamp(value / scale, 0, 1)."""
@@ -132,28 +175,6 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | Non
     b = math("MULTIPLY", unit("Melanin Blend", float(meta["melanin_blend"]["max"])), float(n_b - 1))
     j = math("MINIMUM", math("FLOOR", b), float(n_b - 2))
     t = math("SUBTRACT", b, j)
-    def vector_mix(factor: Any, a: Any, b: Any) -> Any:
-        """(1 - factor) a + factor b of two vectors (the Mix node's visible vector sockets: they share names with
-        its float and colour ones)."""
-        mix = nodes.new("ShaderNodeMix")
-        mix.data_type = "VECTOR"
-        mix.clamp_factor = False
-        links.new(factor, mix.inputs["Factor"])
-        for value, socket in ((a, "A"), (b, "B")):
-            links.new(value, next(s for s in mix.inputs if s.name == socket and s.type == "VECTOR"))
-        return next(s for s in mix.outputs if s.type == "VECTOR")
-
-    def lookup(key: str, x: Any, y: Any, interpolation: str) -> Any:
-        combine = nodes.new("ShaderNodeCombineXYZ")
-        links.new(x, combine.inputs["X"])
-        links.new(y, combine.inputs["Y"])
-        tex = nodes.new("ShaderNodeTexImage")
-        tex.image = images[key]
-        tex.interpolation = interpolation
-        tex.extension = "EXTEND"
-        links.new(combine.outputs["Vector"], tex.inputs["Vector"])
-        return tex.outputs["Color"]
-
     # Texel coordinates (texel k's centre at k): p_x(j) = j * slice_width + gutter + u_m (n_m - 1), p_y = u_h (n_h - 1);
     # image coordinates x = (p_x + 0.5) / width, y = (p_y + 0.5) / n_h.
     p_m = math("MULTIPLY", u_m, float(n_m - 1))
@@ -183,28 +204,30 @@ def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | Non
         else:
             slices = [lookup(key, x, y, "Linear") for x in xs]
         mix_out = vector_mix(t, slices[0], slices[1])
-        separate = nodes.new("ShaderNodeSeparateXYZ")
-        links.new(mix_out, separate.inputs["Vector"])
-        combine = nodes.new("ShaderNodeCombineXYZ")
+        separate = build.nodes.new("ShaderNodeSeparateXYZ")
+        build.links.new(mix_out, separate.inputs["Vector"])
+        combine = build.nodes.new("ShaderNodeCombineXYZ")
         for axis in "XYZ":
-            links.new(math("EXPONENT", separate.outputs[axis]), combine.inputs[axis])
-        links.new(combine.outputs["Vector"], group_out.inputs[output])
-    # The surface's inputs, linear in the oiliness between the core's nodes o_k (exact for the level and the Coat
-    # Weight; the Coat Roughness within 6e-5: spectral_skin.surface_input_nodes): v(o) = v_0 + sum over segments of
-    # clamp((o - o_k) / (o_k+1 - o_k), 0, 1) (v_k+1 - v_k). The paper's one segment is 0.5 * clamp(oiliness, 0, 1).
+            build.links.new(math("EXPONENT", separate.outputs[axis]), combine.inputs[axis])
+        build.links.new(combine.outputs["Vector"], group_out.inputs[output])
+
+
+def _surface_outputs(build: _Nodes, surface_nodes: dict[str, Any], group_in: Any, group_out: Any) -> None:
+    """The surface's inputs, linear in the oiliness between the core's nodes o_k (exact for the level and the Coat
+    Weight; the Coat Roughness within 6e-5: spectral_skin.surface_input_nodes): v(o) = v_0 + sum over segments of
+    clamp((o - o_k) / (o_k+1 - o_k), 0, 1) (v_k+1 - v_k). The paper's one segment is 0.5 * clamp(oiliness, 0, 1)."""
     knots = [float(o) for o in surface_nodes["oiliness"]]
-    ramps = [math("MULTIPLY_ADD", group_in.outputs["Oiliness"], 1.0 / (b - a), -a / (b - a), clamp=True)
+    ramps = [build.math("MULTIPLY_ADD", group_in.outputs["Oiliness"], 1.0 / (b - a), -a / (b - a), clamp=True)
              for a, b in zip(knots, knots[1:], strict=False)]
     for output, key in SURFACE_OUTPUTS.items():
         values = [float(v) for v in surface_nodes[key]]
         value: Any = values[0]
         for ramp, (a, b) in zip(ramps, zip(values, values[1:], strict=False), strict=True):
-            value = math("MULTIPLY_ADD", ramp, b - a, value)
+            value = build.math("MULTIPLY_ADD", ramp, b - a, value)
         if isinstance(value, float):
             group_out.inputs[output].default_value = value
         else:
-            links.new(value, group_out.inputs[output])
-    return group
+            build.links.new(value, group_out.inputs[output])
 
 
 def has_group(name: str) -> bool:
