@@ -893,11 +893,9 @@ pub fn run_maps_cancellable(
     check_output_dir(out_dir)?;
     let (image, clamped, tile_rows) = read_checked(inputs, settings.clamp)?;
     let read = start.elapsed().as_secs_f64();
+    // A flag set during the computation is its error; one set after it is read before the files are renamed.
     let mut result = compute_maps_cancellable(&image, settings, progress, cancel)?;
     drop(image);
-    if cancel.load(Ordering::Relaxed) {
-        return Err(cancelled());
-    }
     let write_start = Instant::now();
     let surface_maps = result.specular.as_ref().map(SpecularOutput::maps).unwrap_or_default();
     let mut staged = Vec::new();
