@@ -8,7 +8,7 @@ use crate::diffusion::{HankelQuadrature, MultipoleTerms};
 use crate::error::{check_range, SkinError};
 use crate::fit::RadiusFit;
 use crate::transport::adding_doubling::validate_streams;
-use crate::transport::{DEFAULT_STREAMS, STREAMS_RANGE};
+use crate::transport::{ExactTotals, DEFAULT_STREAMS, STREAMS_RANGE};
 
 /// Radii of radial profiles: `count` log-spaced values from `r_min_mm` to `r_max_mm`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -59,6 +59,10 @@ pub struct Accuracy {
     /// `Transport::AddingDoubling` ([`crate::transport`]); unused by `Transport::Diffusion`.
     #[serde(default = "default_streams")]
     pub streams: usize,
+    /// Exact totals read from the shipped table (32 streams) or solved at `streams` ([`ExactTotals`]); a request
+    /// written before the table reads as the table.
+    #[serde(default)]
+    pub exact_totals: ExactTotals,
 }
 
 /// [`DEFAULT_STREAMS`], for serde: a request written before the knob existed reads as the default level's.
@@ -91,6 +95,8 @@ impl Default for Accuracy {
             fit_frequencies_per_decade: 4.0,
             radius_fit: RadiusFit::EdgeL2,
             streams: DEFAULT_STREAMS,
+            // The table is closer to converged than a 10-stream solve (docs/accuracy-vs-time.md) and far cheaper.
+            exact_totals: ExactTotals::Table,
         }
     }
 }
@@ -110,7 +116,15 @@ impl Accuracy {
             fit_frequencies_per_decade: 16.0,
             radius_fit: RadiusFit::EdgeL2,
             streams: REFERENCE_STREAMS,
+            // The reference solves every total afresh: the table is checked against it.
+            exact_totals: ExactTotals::Solve,
         }
+    }
+
+    /// This accuracy with every exact total solved at `streams` (what giving streams asks for on every front: Python
+    /// `streams=`, the CLI's `--streams`), not read from the table.
+    pub fn solved_at(&self, streams: usize) -> Accuracy {
+        Accuracy { streams, exact_totals: ExactTotals::Solve, ..*self }
     }
 
     /// Every knob refined once more: half the wavelength step, twice the fit frequencies, four more nodes per panel,

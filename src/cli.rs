@@ -315,7 +315,8 @@ fn streams_help() -> String {
     let (lo, hi) = crate::transport::STREAMS_RANGE;
     format!(
         "Streams (directions per hemisphere) of the adding-doubling solver, even, {lo}..{hi} [default: the level's: \
-         {DRAFT_STREAMS} draft, {} default, {REFERENCE_STREAMS} reference]",
+         {DRAFT_STREAMS} draft, {} default, {REFERENCE_STREAMS} reference]. Given, every exact total is solved at \
+         them; else skin's totals are read from the shipped table (32 streams) and only the others solved",
         crate::transport::DEFAULT_STREAMS
     )
 }
@@ -325,7 +326,7 @@ impl TransportArgs {
     fn apply(&self, request: &mut Request) {
         request.transport = self.transport;
         if let Some(n) = self.streams {
-            request.accuracy.streams = n;
+            request.accuracy = request.accuracy.solved_at(n);
         }
     }
 }
@@ -782,9 +783,14 @@ fn print_summary(ev: &Evaluation, only: Option<SubsurfaceMethod>) {
     let t = ev.target;
     let tested = t.untested_reason().unwrap_or_else(|| "tested".into());
     println!("target: Blender {} {} ({tested})", t.blender, t.engine.name());
-    let streams = match ev.transport.exact_total() {
-        true => format!(", {} streams", ev.accuracy.streams),
-        false => String::new(),
+    let streams = match (ev.transport.exact_total(), ev.accuracy.exact_totals) {
+        (true, crate::transport::ExactTotals::Solve) => format!(", {} streams", ev.accuracy.streams),
+        (true, crate::transport::ExactTotals::Table) => format!(
+            ", totals from the table ({} streams; {} streams where it holds no stack)",
+            crate::transport::total_table::TABLE_STREAMS,
+            ev.accuracy.streams
+        ),
+        (false, _) => String::new(),
     };
     println!("transport: {}{streams}", ev.transport.name());
     if let Some(a) = ev.diffuse_reflectance_rgb {
@@ -1110,6 +1116,7 @@ mod fit_maps {
         options.transport = args.transport.transport;
         if let Some(n) = args.transport.streams {
             options.streams = n;
+            options.exact_totals = crate::transport::ExactTotals::Solve;
         }
         if let Some(g) = rgb_gains {
             options.rgb_gains = g;

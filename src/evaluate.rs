@@ -1,15 +1,14 @@
 //! The request-driven entry point: parameters and a [`Request`] in, only the requested outputs computed.
 
 use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 pub use crate::accuracy::{Accuracy, AccuracyLevel, ProfileGrid};
-use crate::color::{
-    placement_rgb_weights, rgb_luminance_weights, spectrum_to_rgb, RgbMapping, WavelengthGrid, WorkingSpace,
-};
+use crate::color::{spectrum_to_rgb, ColourIntegration, RgbMapping, WorkingSpace};
 use crate::diffusion::{clamped_reflectance_profiles_cancellable, Boundaries, Combination, LayerStack};
 use crate::error::{check_range, SkinError};
 use crate::fit::blender_target::{Target, TargetInfo};
@@ -23,7 +22,8 @@ use crate::skin::{skin_layers, SkinModel, SkinParams};
 use crate::surface::lobes::SurfaceModel;
 use crate::surface::principled::{specular_for, SpecularParams, SurfaceConstants};
 use crate::transport::profile_table::{exact_shape, Shape};
-use crate::transport::{total_diffuse_reflectance_cancellable, Transport};
+use crate::transport::total_table::TotalTable;
+use crate::transport::{total_diffuse_reflectance_cancellable, ExactTotals, Transport};
 
 /// Which outputs to compute. Each costs only what it needs: albedo is one transform value per wavelength, the radius
 /// a few dozen, a radial profile an inverse transform per wavelength.
@@ -207,6 +207,8 @@ pub struct Work {
     /// Exact (adding-doubling) totals solved (one per wavelength with `Transport::AddingDoubling`, none with
     /// `Transport::Diffusion`).
     pub transport_solves: usize,
+    /// Exact totals read from the shipped table instead (`ExactTotals::Table`, where the table holds the stack).
+    pub transport_table_lookups: usize,
 }
 
 /// The result of [`evaluate`]; fields not requested are `None`. Serialises to the CLI's stable JSON.
@@ -257,10 +259,8 @@ pub struct Evaluation {
 #[derive(Debug, Clone)]
 pub struct Prepared {
     request: Request,
-    grid: WavelengthGrid,
-    weights: Vec<[f64; 3]>,
-    /// Y = luminance . rgb for the RGB the weights make (for `RgbMapping`).
-    luminance: [f64; 3],
+    /// The wavelength grid, its RGB weights and their luminance (for `RgbMapping`), shared per process.
+    colour: Arc<ColourIntegration>,
     fit_s: Vec<f64>,
 }
 
@@ -277,14 +277,12 @@ impl Prepared {
         request.accuracy.validate()?;
         validate_model(&request.model)?;
         let acc = &request.accuracy;
-        let grid = WavelengthGrid::new(acc.wavelength_placement, acc.wavelength_step_nm);
-        let weights = placement_rgb_weights(&grid, acc.wavelength_placement, request.working_space);
-        let luminance = rgb_luminance_weights(&grid, request.working_space);
+        let colour = ColourIntegration::of(acc.wavelength_placement, acc.wavelength_step_nm, request.working_space);
         let fit_s = match acc.radius_fit {
             RadiusFit::EdgeL2 => fit_frequencies(acc.fit_frequencies_per_decade),
             RadiusFit::SecondMoment => vec![SECOND_MOMENT_FREQUENCY_PER_MM],
         };
-        Ok(Prepared { request: *request, grid, weights, luminance, fit_s })
+        Ok(Prepared { request: *request, colour, fit_s })
     }
 
     pub fn request(&self) -> &Request {
@@ -292,21 +290,21 @@ impl Prepared {
     }
 
     pub fn wavelengths_nm(&self) -> &[f64] {
-        &self.grid.wavelengths_nm
+        &self.colour.grid.wavelengths_nm
     }
 
     /// The weights that turn a spectrum on this request's wavelengths into linear RGB in its working space.
     pub fn rgb_weights(&self) -> &[[f64; 3]] {
-        &self.weights
+        &self.colour.rgb_weights
     }
 
-    /// The layer stack of `params` at each of this request's wavelengths.
+    /// The multipole's layer stack of `params` at each of this request's wavelengths.
     pub fn stacks(&self, params: &SkinParams) -> Result<Vec<LayerStack>, SkinError> {
-        Ok(self.optics(params)?.stacks)
+        stacks_of(&self.optics(params, false)?.layers, self.request.boundaries)
     }
 
-    fn optics(&self, params: &SkinParams) -> Result<Optics, SkinError> {
-        optics_of(params, &self.request, &self.grid.wavelengths_nm)
+    fn optics(&self, params: &SkinParams, needs_shape: bool) -> Result<Optics, SkinError> {
+        Optics::of(params, &self.request, &self.colour.grid.wavelengths_nm, needs_shape)
     }
 
     fn totals(&self, optics: &Optics, parallel: bool, cancel: &AtomicBool) -> Result<Totals, SkinError> {
@@ -320,13 +318,13 @@ impl Prepared {
         let s = &self.fit_s;
         let transform = |w: usize| self.transform(optics, totals, w, s);
         let transforms: Vec<Vec<f64>> = if parallel {
-            (0..optics.stacks.len()).into_par_iter().map(transform).collect()
+            (0..optics.wavelengths()).into_par_iter().map(transform).collect()
         } else {
-            (0..optics.stacks.len()).map(transform).collect()
+            (0..optics.wavelengths()).map(transform).collect()
         };
         // RGB transfer function per frequency, normalised by the albedo.
         let rgb: Vec<[f64; 3]> = (0..s.len())
-            .map(|i| spectrum_to_rgb(&transforms.iter().map(|t| t[i]).collect::<Vec<_>>(), &self.weights))
+            .map(|i| spectrum_to_rgb(&transforms.iter().map(|t| t[i]).collect::<Vec<_>>(), &self.colour.rgb_weights))
             .collect();
         [0, 1, 2].map(|c| {
             let normalized: Vec<f64> = rgb.iter().map(|v| crate::numeric::safe_div(v[c], albedo[c], 0.0)).collect();
@@ -341,10 +339,15 @@ impl Prepared {
     /// times its total where the table holds the stack, else the multipole's transform scaled to the total.
     fn transform(&self, optics: &Optics, totals: &Totals, w: usize, s_per_mm: &[f64]) -> Vec<f64> {
         let (comb, terms) = (self.request.combination, self.request.accuracy.multipole_terms);
-        match &totals.shapes {
-            Some(shapes) => s_per_mm.iter().map(|&x| shapes[w].normalized_transform(x) * totals.total[w]).collect(),
-            None => {
-                s_per_mm.iter().map(|&x| optics.stacks[w].reflectance_hat(x, comb, terms) * totals.scale[w]).collect()
+        match (&optics.shapes, &optics.stacks) {
+            (Some(shapes), _) => {
+                shapes[w].normalized_transforms(s_per_mm).into_iter().map(|n| n * totals.total[w]).collect()
+            }
+            (None, Some(stacks)) => {
+                s_per_mm.iter().map(|&x| stacks[w].reflectance_hat(x, comb, terms) * totals.scale_of(w)).collect()
+            }
+            (None, None) => {
+                unreachable!("Optics::of keeps the stacks where a shape is needed and no exact one is held")
             }
         }
     }
@@ -352,9 +355,9 @@ impl Prepared {
     /// Every wavelength's transform R~(s) at `s_per_mm` for one parameter set, as the radius fit sees it (the accuracy
     /// report's reference reads it on a denser frequency grid than the fit's).
     pub fn transforms(&self, params: &SkinParams, s_per_mm: &[f64]) -> Result<Vec<Vec<f64>>, SkinError> {
-        let optics = self.optics(params)?;
-        let totals = self.totals(&optics, false, &AtomicBool::new(false))?.with_shapes(&optics, &self.request);
-        Ok((0..optics.stacks.len()).map(|w| self.transform(&optics, &totals, w, s_per_mm)).collect())
+        let optics = self.optics(params, true)?;
+        let totals = self.totals(&optics, false, &AtomicBool::new(false))?;
+        Ok((0..optics.wavelengths()).map(|w| self.transform(&optics, &totals, w, s_per_mm)).collect())
     }
 
     /// The RGB albedo (total diffuse reflectance) of one parameter set, alone: one transform value per wavelength and
@@ -367,8 +370,8 @@ impl Prepared {
     /// [`Prepared::albedo`] that stops once `cancel` is set (read before each wavelength's transport solve), with
     /// [`SkinError::interrupted`].
     pub fn albedo_cancellable(&self, params: &SkinParams, cancel: &AtomicBool) -> Result<[f64; 3], SkinError> {
-        let optics = self.optics(params)?;
-        Ok(albedo_rgb(&self.totals(&optics, false, cancel)?.total, &self.weights))
+        let optics = self.optics(params, false)?;
+        Ok(albedo_rgb(&self.totals(&optics, false, cancel)?.total, &self.colour.rgb_weights))
     }
 
     /// Albedo and both methods' Base Color and radius for one parameter set, computed on the calling thread (callers
@@ -380,9 +383,9 @@ impl Prepared {
     /// [`Prepared::material`] that stops once `cancel` is set (read before each wavelength's transport solve), with
     /// [`SkinError::interrupted`].
     pub fn material_cancellable(&self, params: &SkinParams, cancel: &AtomicBool) -> Result<Material, SkinError> {
-        let optics = self.optics(params)?;
-        let totals = self.totals(&optics, false, cancel)?.with_shapes(&optics, &self.request);
-        let albedo = albedo_rgb(&totals.total, &self.weights);
+        let optics = self.optics(params, true)?;
+        let totals = self.totals(&optics, false, cancel)?;
+        let albedo = albedo_rgb(&totals.total, &self.colour.rgb_weights);
         let fits = self.fits(&optics, &totals, albedo, false);
         Ok(Material { albedo, fits, methods: methods_from(&self.request.target, albedo, &fits)? })
     }
@@ -408,22 +411,21 @@ pub fn evaluate_cancellable(
     let acc = &request.accuracy;
 
     let needs_layers = out.albedo || out.radius || out.spectrum || out.profile_rgb || out.profile_spectral;
-    let optics = if needs_layers { prepared.optics(&params)? } else { Optics::default() };
-    let stacks = &optics.stacks;
-    let mut work = Work { wavelengths: stacks.len(), ..Work::default() };
-
     let needs_shape = out.radius || out.profile_rgb || out.profile_spectral;
+    let optics = if needs_layers { prepared.optics(&params, needs_shape)? } else { Optics::default() };
+    let mut work = Work { wavelengths: optics.wavelengths(), ..Work::default() };
+
     let all_totals = prepared.totals(&optics, true, cancel)?;
-    let all_totals = if needs_shape { all_totals.with_shapes(&optics, request) } else { all_totals };
-    work.transform_samples += stacks.len();
+    work.transform_samples += optics.wavelengths(); // R~(0) of each wavelength: its total, however obtained
     work.transport_solves += all_totals.solves;
-    let albedo = albedo_rgb(&all_totals.total, &prepared.weights);
+    work.transport_table_lookups += all_totals.lookups;
+    let albedo = albedo_rgb(&all_totals.total, &prepared.colour.rgb_weights);
     let needs_albedo = out.albedo || out.radius;
-    let profile_shape = needs_shape.then(|| all_totals.shape_name());
+    let profile_shape = needs_shape.then(|| optics.shape_name());
 
     let (methods, radius_fit) = if out.radius {
         let fits = prepared.fits(&optics, &all_totals, albedo, true);
-        work.transform_samples += stacks.len() * prepared.fit_s.len();
+        work.transform_samples += optics.wavelengths() * prepared.fit_s.len();
         work.radius_fits += fits.len();
         (Some(methods_from(&request.target, albedo, &fits)?), Some(fits))
     } else {
@@ -432,9 +434,12 @@ pub fn evaluate_cancellable(
 
     let profile = if out.profile_rgb || out.profile_spectral {
         let radii = acc.profile_grid.radii_mm();
-        let (spectral, negative_lobe) = match &all_totals.shapes {
-            Some(shapes) => (exact_profiles(shapes, &all_totals.total, &radii, cancel)?, None),
-            None => {
+        let (spectral, negative_lobe) = match (&optics.shapes, &optics.stacks) {
+            (Some(shapes), _) => (exact_profiles(shapes, &all_totals.total, &radii, cancel)?, None),
+            (None, None) => {
+                unreachable!("Optics::of keeps the stacks where a shape is needed and no exact one is held")
+            }
+            (None, Some(stacks)) => {
                 let clamped = clamped_reflectance_profiles_cancellable(
                     stacks,
                     &radii,
@@ -444,7 +449,7 @@ pub fn evaluate_cancellable(
                     cancel,
                 )?;
                 let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
-                    wavelength_nm: prepared.grid.wavelengths_nm[l.profile],
+                    wavelength_nm: prepared.colour.grid.wavelengths_nm[l.profile],
                     boundaries: l.boundaries,
                     radius_mm: l.radius_mm,
                     relative_to_peak: l.relative_to_peak,
@@ -454,8 +459,15 @@ pub fn evaluate_cancellable(
                 let spectral: Vec<Vec<f64>> = clamped
                     .per_mm2
                     .into_iter()
-                    .zip(&all_totals.scale)
-                    .map(|(p, &k)| if k == 1.0 { p } else { p.into_iter().map(|v| v * k).collect() })
+                    .enumerate()
+                    .map(|(w, p)| {
+                        let k = all_totals.scale_of(w);
+                        if k == 1.0 {
+                            p
+                        } else {
+                            p.into_iter().map(|v| v * k).collect()
+                        }
+                    })
                     .collect();
                 (spectral, negative_lobe)
             }
@@ -464,8 +476,11 @@ pub fn evaluate_cancellable(
         let rgb = out.profile_rgb.then(|| {
             (0..radii.len())
                 .map(|i| {
-                    let rgb = spectrum_to_rgb(&spectral.iter().map(|p| p[i]).collect::<Vec<_>>(), &prepared.weights);
-                    request.rgb_mapping.apply(rgb, prepared.luminance)
+                    let rgb = spectrum_to_rgb(
+                        &spectral.iter().map(|p| p[i]).collect::<Vec<_>>(),
+                        &prepared.colour.rgb_weights,
+                    );
+                    request.rgb_mapping.apply(rgb, prepared.colour.luminance)
                 })
                 .collect()
         });
@@ -499,7 +514,7 @@ pub fn evaluate_cancellable(
         radius_fit,
         specular,
         surface: SurfaceConstants::of(request.surface),
-        wavelengths_nm: (out.spectrum || out.profile_spectral).then(|| prepared.grid.wavelengths_nm.clone()),
+        wavelengths_nm: (out.spectrum || out.profile_spectral).then(|| prepared.colour.grid.wavelengths_nm.clone()),
         spectral_reflectance: out.spectrum.then_some(all_totals.total),
         profile_shape,
         profile,
@@ -508,42 +523,42 @@ pub fn evaluate_cancellable(
     })
 }
 
-/// The layers of one parameter set at each wavelength, raw (what the exact solver takes) and as the multipole's stacks.
+/// The layers of one parameter set at each wavelength (what the exact solver and its tables take), with what the
+/// request needs of them beyond the totals: the exact shapes, or the multipole's stacks.
 #[derive(Debug, Clone, Default)]
 struct Optics {
     layers: Vec<[Layer; 2]>,
-    stacks: Vec<LayerStack>,
-}
-
-/// The layers of `params` at each of `wavelengths_nm` with the request's model, and their stacks with its boundaries.
-fn optics_of(params: &SkinParams, request: &Request, wavelengths_nm: &[f64]) -> Result<Optics, SkinError> {
-    let layers: Vec<[Layer; 2]> = wavelengths_nm.iter().map(|&w| skin_layers(params, &request.model, w)).collect();
-    let stacks =
-        layers.iter().map(|l| LayerStack::with_boundaries(l, request.boundaries)).collect::<Result<Vec<_>, _>>()?;
-    Ok(Optics { layers, stacks })
-}
-
-/// Each wavelength's total diffuse reflectance, and the factor that scales the multipole's transform (and so its radial
-/// profile) to it.
-struct Totals {
-    total: Vec<f64>,
-    /// `total / R~(0)` of the multipole: 1 with `Transport::Diffusion` (and where the multipole's total is 0).
-    scale: Vec<f64>,
-    /// Exact solves done.
-    solves: usize,
-    /// Each wavelength's exact shape, when the transport asks for it and the table holds every wavelength's stack
-    /// ([`Totals::with_shapes`]); None: the multipole's shape, scaled.
+    /// Each wavelength's exact shape, where a shape is needed, the request's transport takes exact shapes and the
+    /// profile table holds every wavelength's stack (a finite dermis is not held); else None.
     shapes: Option<Vec<Shape>>,
+    /// The multipole's stacks (the request's boundaries), only where the multipole is used: its totals
+    /// (`Transport::Diffusion`) or its shape (a shape needed and no exact one).
+    stacks: Option<Vec<LayerStack>>,
 }
 
-impl Totals {
-    /// These totals with the exact shape of every wavelength's stack, where the request's transport takes exact shapes
-    /// and the table holds them all (a finite dermis is not held: the multipole's shape then serves every wavelength).
-    fn with_shapes(mut self, optics: &Optics, request: &Request) -> Totals {
-        if request.transport.exact_shape() {
-            self.shapes = optics.layers.iter().map(|l| exact_shape(l)).collect();
-        }
-        self
+impl Optics {
+    /// The layers of `params` at each of `wavelengths_nm` with the request's model (validated), and their exact shapes
+    /// or multipole stacks where the request needs them (`needs_shape`: a radius or a profile is asked for).
+    fn of(
+        params: &SkinParams,
+        request: &Request,
+        wavelengths_nm: &[f64],
+        needs_shape: bool,
+    ) -> Result<Optics, SkinError> {
+        let layers: Vec<[Layer; 2]> = wavelengths_nm.iter().map(|&w| skin_layers(params, &request.model, w)).collect();
+        layers.iter().try_for_each(|l| crate::layer::validate_layers(l))?;
+        let shapes = if needs_shape && request.transport.exact_shape() {
+            layers.iter().map(|l| exact_shape(l)).collect()
+        } else {
+            None
+        };
+        let needs_multipole = request.transport == Transport::Diffusion || (needs_shape && shapes.is_none());
+        let stacks = needs_multipole.then(|| stacks_of(&layers, request.boundaries)).transpose()?;
+        Ok(Optics { layers, shapes, stacks })
+    }
+
+    fn wavelengths(&self) -> usize {
+        self.layers.len()
     }
 
     fn shape_name(&self) -> &'static str {
@@ -551,6 +566,31 @@ impl Totals {
             Some(_) => crate::reflectance::ProfileShape::Exact.name(),
             None => crate::reflectance::ProfileShape::Multipole.name(),
         }
+    }
+}
+
+/// The multipole's stack of each wavelength's layers with `boundaries`.
+fn stacks_of(layers: &[[Layer; 2]], boundaries: Boundaries) -> Result<Vec<LayerStack>, SkinError> {
+    layers.iter().map(|l| LayerStack::with_boundaries(l, boundaries)).collect()
+}
+
+/// Each wavelength's total diffuse reflectance, and the factor that scales the multipole's transform (and so its radial
+/// profile) to it.
+struct Totals {
+    total: Vec<f64>,
+    /// `total / R~(0)` of the multipole where the multipole's stacks are at hand (1 where the multipole's total is 0);
+    /// None: 1 (`Transport::Diffusion`, or no multipole used).
+    scale: Option<Vec<f64>>,
+    /// Exact totals solved.
+    solves: usize,
+    /// Exact totals read from the table of totals.
+    lookups: usize,
+}
+
+impl Totals {
+    /// Wavelength `w`'s factor on the multipole's transform.
+    fn scale_of(&self, w: usize) -> f64 {
+        self.scale.as_ref().map_or(1.0, |s| s[w])
     }
 }
 
@@ -595,23 +635,34 @@ fn albedo_rgb(totals: &[f64], weights: &[[f64; 3]]) -> [f64; 3] {
 /// terms), or with `Transport::AddingDoubling` the exact one at the request's streams. The one place totals come from.
 fn totals_of(optics: &Optics, request: &Request, parallel: bool, cancel: &AtomicBool) -> Result<Totals, SkinError> {
     let (comb, terms) = (request.combination, request.accuracy.multipole_terms);
-    let multipole: Vec<f64> = optics.stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect();
+    let multipole: Option<Vec<f64>> =
+        optics.stacks.as_ref().map(|stacks| stacks.iter().map(|s| s.reflectance_hat(0.0, comb, terms)).collect());
     match request.transport {
         Transport::Diffusion => {
-            let scale = vec![1.0; multipole.len()];
+            let multipole = multipole.expect("Optics::of keeps the stacks for the diffusion transport");
             // A skin that absorbs nothing reflects exactly everything; the multipole's sum reaches 1 + 4e-16.
-            Ok(Totals { total: multipole.into_iter().map(one_at_round_off).collect(), scale, solves: 0, shapes: None })
+            let total = multipole.into_iter().map(one_at_round_off).collect();
+            Ok(Totals { total, scale: None, solves: 0, lookups: 0 })
         }
         Transport::AddingDoubling | Transport::AddingDoublingDiffusionShape => {
             let streams = request.accuracy.streams;
-            let solve = |layers: &[Layer; 2]| total_diffuse_reflectance_cancellable(layers, streams, cancel);
-            let total: Vec<f64> = if parallel {
-                optics.layers.par_iter().map(solve).collect::<Result<_, _>>()?
-            } else {
-                optics.layers.iter().map(solve).collect::<Result<_, _>>()?
+            let table = (request.accuracy.exact_totals == ExactTotals::Table).then(TotalTable::shipped);
+            let looked_up: Vec<Option<f64>> =
+                optics.layers.iter().map(|layers| table.and_then(|t| t.total_of(layers))).collect();
+            let solve = |(layers, held): (&[Layer; 2], &Option<f64>)| match held {
+                Some(total) => Ok(*total),
+                None => total_diffuse_reflectance_cancellable(layers, streams, cancel),
             };
-            let scale = total.iter().zip(&multipole).map(|(&t, &m)| crate::numeric::safe_div(t, m, 1.0)).collect();
-            Ok(Totals { solves: total.len(), total, scale, shapes: None })
+            let pairs = optics.layers.iter().zip(&looked_up);
+            let total: Vec<f64> = if parallel && looked_up.iter().any(Option::is_none) {
+                pairs.collect::<Vec<_>>().into_par_iter().map(solve).collect::<Result<_, _>>()?
+            } else {
+                pairs.map(solve).collect::<Result<_, _>>()?
+            };
+            let scale =
+                multipole.map(|m| total.iter().zip(&m).map(|(&t, &m)| crate::numeric::safe_div(t, m, 1.0)).collect());
+            let lookups = looked_up.iter().filter(|t| t.is_some()).count();
+            Ok(Totals { solves: total.len() - lookups, lookups, total, scale })
         }
     }
 }
@@ -626,7 +677,7 @@ pub fn diffuse_reflectance_at(
     wavelengths_nm: &[f64],
     cancel: &AtomicBool,
 ) -> Result<Vec<f64>, SkinError> {
-    Ok(totals_of(&optics_of(params, request, wavelengths_nm)?, request, false, cancel)?.total)
+    Ok(totals_of(&Optics::of(params, request, wavelengths_nm, false)?, request, false, cancel)?.total)
 }
 
 /// Every method's inputs on `target` from the albedo and the Burley fit (`fit::blender_target`).

@@ -33,8 +33,8 @@ pub const THICKNESS_RANGE_MM: (f64, f64) = (1e-11, 1e6);
 
 impl Layer {
     fn validate(&self, index: usize, is_last: bool) -> Result<(), SkinError> {
-        let name = format!("layer {index}");
-        let bad = |reason: String| Err(SkinError::invalid(name.clone(), reason));
+        // The name is formatted only for an error: validation runs for every wavelength of every evaluation.
+        let bad = |reason: String| Err(SkinError::invalid(format!("layer {index}"), reason));
         let t = self.thickness_mm;
         let (t_min, t_max) = THICKNESS_RANGE_MM;
         let finite_ok = t.is_finite() && (t_min..=t_max).contains(&t);

@@ -6,10 +6,51 @@ pub mod gamut;
 pub mod rgb;
 pub mod spectrum;
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
 pub use difference::{ciede2000, lab_from_xyz};
 pub use gamut::{RgbMapping, ALL_RGB_MAPPINGS};
 pub use rgb::{WorkingSpace, ALL_WORKING_SPACES};
 pub use spectrum::{spectrum_to_xyz, WavelengthGrid, WavelengthPlacement, ALL_WAVELENGTH_PLACEMENTS};
+
+/// A request's colour integration: its wavelength grid, the weights turning a spectrum on it into linear RGB
+/// ([`placement_rgb_weights`]) and the RGB's luminance weights ([`rgb_luminance_weights`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColourIntegration {
+    pub grid: WavelengthGrid,
+    pub rgb_weights: Vec<[f64; 3]>,
+    pub luminance: [f64; 3],
+}
+
+/// Distinct colour integrations kept per process before the cache is cleared (a process uses a handful).
+const COLOUR_CACHE_ENTRIES: usize = 64;
+
+impl ColourIntegration {
+    /// The integration of `placement` at `step_nm` in `space`, built once per process: building it integrates the
+    /// 1 nm colour tables (about 80 µs, most of an albedo's evaluation before it was kept; docs/performance.md).
+    pub fn of(placement: WavelengthPlacement, step_nm: f64, space: WorkingSpace) -> Arc<ColourIntegration> {
+        type Key = (WavelengthPlacement, u64, WorkingSpace);
+        static CACHE: OnceLock<Mutex<HashMap<Key, Arc<ColourIntegration>>>> = OnceLock::new();
+        let key = (placement, step_nm.to_bits(), space);
+        let cache = CACHE.get_or_init(Default::default);
+        if let Some(hit) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return Arc::clone(hit);
+        }
+        let grid = WavelengthGrid::new(placement, step_nm);
+        let fresh = Arc::new(ColourIntegration {
+            rgb_weights: placement_rgb_weights(&grid, placement, space),
+            luminance: rgb_luminance_weights(&grid, space),
+            grid,
+        });
+        let mut cache = cache.lock().unwrap_or_else(|e| e.into_inner());
+        if cache.len() >= COLOUR_CACHE_ENTRIES {
+            cache.clear();
+        }
+        cache.insert(key, Arc::clone(&fresh));
+        fresh
+    }
+}
 
 /// Weights turning a spectrum sampled on `grid` into linear RGB in `space`: rgb[c] = sum_k w[k][c] R(lambda_k).
 pub fn spectral_rgb_weights(grid: &WavelengthGrid, space: WorkingSpace) -> Vec<[f64; 3]> {

@@ -9,7 +9,7 @@
 use serde::{Deserialize, Serialize};
 
 /// A linear RGB working space.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 pub enum WorkingSpace {
     /// ITU-R BT.709 / sRGB primaries, linear (Blender's default scene-linear space).
     #[default]

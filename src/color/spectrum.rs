@@ -8,7 +8,7 @@ use super::cmf::{cie1931_2deg, illuminant_d65};
 pub const VISIBLE_RANGE_NM: (f64, f64) = (380.0, 780.0);
 
 /// Where the spectral computation places its wavelengths (the number is set by the step, see [`WavelengthGrid::new`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum), value(rename_all = "snake_case"))]
 #[serde(rename_all = "snake_case")]
 pub enum WavelengthPlacement {

@@ -32,7 +32,7 @@ use crate::skin::params::{
     BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_DEFAULTS, HEMOGLOBIN, MELANIN, MELANIN_BLEND,
 };
 use crate::skin::SkinParams;
-use crate::transport::{Transport, DEFAULT_STREAMS};
+use crate::transport::{ExactTotals, Transport, DEFAULT_STREAMS};
 
 /// The melanin blend the prior pulls toward: 0.7, that of the Caucasian and African skin types of Donner & Jensen
 /// (2006, teaser caption; `PRESETS`).
@@ -66,6 +66,8 @@ pub struct AlbedoFitOptions {
     /// How the model's albedo is computed (exact totals by default, [`Transport`]) and the adding-doubling streams.
     pub transport: Transport,
     pub streams: usize,
+    /// Exact totals from the shipped table (the default) or solved at `streams` ([`ExactTotals`]).
+    pub exact_totals: ExactTotals,
     /// Exposure and white balance: each target colour's (texel's) linear RGB is multiplied by these before the fit
     /// (default 1, 1, 1; [`super::albedo_gains`] estimates them for a photograph).
     pub rgb_gains: [f64; 3],
@@ -82,6 +84,7 @@ impl Default for AlbedoFitOptions {
             ambiguity_delta_e: DEFAULT_AMBIGUITY_DELTA_E,
             transport: Transport::default(),
             streams: DEFAULT_STREAMS,
+            exact_totals: ExactTotals::Table,
             rgb_gains: [1.0; 3],
         }
     }
@@ -120,7 +123,7 @@ impl AlbedoFitOptions {
         Prepared::new(&Request {
             working_space: self.working_space,
             transport: self.transport,
-            accuracy: Accuracy { streams: self.streams, ..request.accuracy },
+            accuracy: Accuracy { streams: self.streams, exact_totals: self.exact_totals, ..request.accuracy },
             ..request
         })
     }
@@ -246,11 +249,12 @@ pub fn cached_albedo_table_cancellable(
 /// The key of [`cached_albedo_table`]'s cache: everything the table depends on.
 pub fn albedo_table_key(options: &AlbedoFitOptions) -> String {
     format!(
-        "{:?}|{:?}|{}|{}",
+        "{:?}|{:?}|{}|{}|{}",
         options.working_space,
         options.extended.map(f64::to_bits),
         options.transport.name(),
-        options.streams
+        options.streams,
+        options.exact_totals.name()
     )
 }
 

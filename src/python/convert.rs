@@ -400,9 +400,10 @@ impl<'a> Knobs<'a> {
                 r_max_mm: self.profile_r_max_mm.map_or(defaults.r_max_mm, |r| r.0),
                 count,
             },
-            streams: self.streams.unwrap_or(level.streams),
             ..level
         };
+        // Streams given ask for solved totals at them; else the level's (the table, or the reference's solves).
+        let accuracy = self.streams.map_or(accuracy, |n| accuracy.solved_at(n));
         Ok(Request {
             outputs,
             accuracy,

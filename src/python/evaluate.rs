@@ -136,8 +136,9 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///     transport: how each wavelength's total diffuse reflectance (the albedo, and the scale of the radial profile
 ///         and of the radius fit's transform) is computed, a name from :func:`transports`: "adding_doubling" (exact
 ///         radiative transfer; the default) or "diffusion" (the paper's layered multipole: reproduces DJ2006).
-///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; None: the level's
-///         (8 at "default"). Unused with transport="diffusion".
+///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64. Given, every exact
+///         total is solved at them; None: skin's totals are read from the shipped table of 32-stream totals (the
+///         reference level solves at 32) and others solved at the level's streams. Unused with transport="diffusion".
 ///     surface: the surface reflection the specular inputs stand in for: "measured" (two lobes, a broad base lobe
 ///         and a sharp Coat, reflecting like a dielectric at every oiliness: docs/model.md, "Principled mapping of
 ///         the measured surface") or "paper" (DJ2006's oil layer, one lobe scaled by the oiliness, no reflection on
@@ -382,8 +383,8 @@ pub(super) fn extract_layer(index: usize, item: &Bound<'_, PyAny>) -> PyResult<L
 ///     radii_mm: 1-D radii in mm, finite and >= 0.
 ///     boundaries: "paper" (the default) or "capped": the multipole's boundary conditions.
 ///     transport: "adding_doubling" (the default) or "diffusion" (the multipole alone), as for :func:`evaluate`.
-///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; None: the default
-///         level's (10).
+///     streams: quadrature directions per hemisphere of the adding-doubling solver, even, 2..64; given, every exact
+///         total is solved at them; None: the default level's (skin's totals from the shipped table).
 ///
 /// Returns:
 ///     (total diffuse reflectance, R(r) at radii_mm in mm^-2 as a float64 array of the same length).

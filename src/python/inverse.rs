@@ -40,7 +40,8 @@ use super::errors::invalid;
 ///         (docs/measured-skin.md, the restart check).
 ///     transport: the model fitted, "adding_doubling" (exact totals; the default) or "diffusion" (the paper's), as
 ///         for :func:`evaluate`.
-///     streams: adding-doubling streams per hemisphere, even, 2..64; None: the default level's (10).
+///     streams: adding-doubling streams per hemisphere, even, 2..64; given, every exact total is solved at them;
+///         None: skin's totals from the shipped table of 32-stream totals.
 ///
 /// Returns:
 ///     A dict: "params" (every model parameter, fitted and fixed, by name), "free" (the fitted names), "specular"
@@ -118,7 +119,7 @@ pub(super) fn fit_spectrum_py<'py>(
     }
     options.request.transport = transport_arg(transport)?;
     if let Some(n) = streams_arg(streams)? {
-        options.request.accuracy.streams = n;
+        options.request.accuracy = options.request.accuracy.solved_at(n);
     }
     let cancel = std::sync::atomic::AtomicBool::new(false);
     let fit = detached_interruptible(py, &cancel, || {

@@ -13,6 +13,7 @@ use crate::inverse::albedo_maps::{
     fit_albedo_tiles_cancellable, AlbedoMapFit, AlbedoTile, EpidermisThickness, TextureFit,
 };
 use crate::skin::params::EXTENDED_PARAMS;
+use crate::transport::ExactTotals;
 
 use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg};
 use super::detach::{detached, detached_interruptible};
@@ -32,10 +33,13 @@ fn options_from(
     rgb_gains: Option<[f64; 3]>,
 ) -> PyResult<AlbedoFitOptions> {
     let defaults = AlbedoFitOptions::default();
+    let streams = streams_arg(streams)?;
     let mut o = AlbedoFitOptions {
         working_space: by_name("working_space", working_space, &ALL_WORKING_SPACES)?,
         transport: transport_arg(transport)?,
-        streams: streams_arg(streams)?.unwrap_or(defaults.streams),
+        streams: streams.unwrap_or(defaults.streams),
+        // Streams given ask for solved totals at them; else the shipped table's.
+        exact_totals: if streams.is_some() { ExactTotals::Solve } else { defaults.exact_totals },
         ..defaults
     };
     for ((spec, obj), value) in EXTENDED_PARAMS.iter().zip(extended).zip(&mut o.extended) {
@@ -134,7 +138,8 @@ fn gains_arg(obj: Option<&Bound<'_, PyAny>>, auto: bool) -> PyResult<(Option<[f6
 ///         None: 0.5.
 ///     transport: the model whose albedo is fitted, "adding_doubling" (exact totals; the default) or "diffusion"
 ///         (the paper's), as for :func:`evaluate`.
-///     streams: adding-doubling streams per hemisphere, even, 2..64; None: the default level's (10).
+///     streams: adding-doubling streams per hemisphere, even, 2..64; given, every exact total is solved at them;
+///         None: skin's totals from the shipped table of 32-stream totals.
 ///     rgb_gains: None, or 3 factors (R, G, B, each 1/64..64) the colour is multiplied by before the fit (exposure and
 ///         white balance).
 ///

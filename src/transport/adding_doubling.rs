@@ -115,6 +115,45 @@ pub fn slab_reflectance_cancellable(
     })
 }
 
+/// Reflection operators of semi-infinite isotropic layers, one per albedo, at one quadrature (index and streams): the
+/// last layers that a table of totals puts under many upper stacks ([`totals_over_semi_infinite`];
+/// `transport::total_table`), each doubled once.
+#[derive(Debug)]
+pub struct SemiInfiniteLayers {
+    streams: usize,
+    ior: f64,
+    reflection: Vec<Matrix>,
+}
+
+impl SemiInfiniteLayers {
+    /// The layers of single-scattering albedo `albedos` (each in [0, 1]) under index `ior`, in `streams` streams.
+    pub fn new(albedos: &[f64], ior: f64, streams: usize) -> Result<SemiInfiniteLayers, SkinError> {
+        validate_streams(streams)?;
+        if let Some(a) = albedos.iter().find(|a| !(0.0..=1.0).contains(*a)) {
+            return Err(SkinError::invalid("albedos", format!("each albedo must be in [0, 1]; got {a}")));
+        }
+        let reflection = with_quadrature(streams, ior, |q| {
+            albedos
+                .iter()
+                .map(|&albedo| {
+                    Operators::of_slab(q, &OpticalSlab { albedo, optical_thickness: f64::INFINITY, g: 0.0 }).r_down
+                })
+                .collect()
+        });
+        Ok(SemiInfiniteLayers { streams, ior, reflection })
+    }
+}
+
+/// The total reflectance (as [`slab_reflectance`]) of `upper` over each of `lower`'s semi-infinite layers, in
+/// `lower`'s order: the upper stack's operators computed once for all of them.
+pub fn totals_over_semi_infinite(upper: &[OpticalSlab], lower: &SemiInfiniteLayers) -> Result<Vec<f64>, SkinError> {
+    let never = AtomicBool::new(false);
+    with_quadrature(lower.streams, lower.ior, |q| {
+        let above = UpperSystem::of(q, upper, &never)?;
+        Ok(lower.reflection.iter().map(|r| above.total_over(r)).collect())
+    })
+}
+
 /// What the top boundary and every layer above the last do to the light, seen from the last layer's top face: the
 /// part of a stack that many evaluations share (a table varies the dermis's blood under one epidermis; a fit's
 /// derivative in the blood keeps the epidermis), so it is kept per thread, keyed by those layers' bits.

@@ -6,6 +6,7 @@ pub mod adding_doubling;
 pub mod half_space;
 mod matrix;
 pub mod profile_table;
+pub mod total_table;
 
 use serde::{Deserialize, Serialize};
 
@@ -71,5 +72,29 @@ impl Transport {
     /// Whether the profile's shape is the exact one (where the table holds the stack).
     pub fn exact_shape(self) -> bool {
         self == Transport::AddingDoubling
+    }
+}
+
+/// Where an exact total comes from. Python's `streams=` and the CLI's `--streams` ask for `Solve` at the streams
+/// given; the levels' settings are in `crate::accuracy`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, Hash)]
+#[serde(rename_all = "snake_case")]
+pub enum ExactTotals {
+    /// Read from the shipped table of adding-doubling totals ([`total_table`], 32 streams; within 2e-5 of fresh
+    /// solves for every skin stack) where it holds the stack (two layers over a semi-infinite dermis at skin's index),
+    /// solved otherwise: the default, about 500 times cheaper than a solve.
+    #[default]
+    Table,
+    /// Solved for every wavelength at the accuracy's streams.
+    Solve,
+}
+
+impl ExactTotals {
+    /// The serde name ("table", "solve").
+    pub fn name(self) -> &'static str {
+        match self {
+            ExactTotals::Table => "table",
+            ExactTotals::Solve => "solve",
+        }
     }
 }

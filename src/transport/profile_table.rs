@@ -370,11 +370,6 @@ impl Shape {
         self.weights.iter().map(|&(at, w)| w * self.values[at + v] as f64).sum()
     }
 
-    /// N at transform node `m`, in [0, 1].
-    fn n(&self, m: usize) -> f64 {
-        self.value(1 + m).clamp(0.0, 1.0)
-    }
-
     /// The encircled energy per ln r of bin `c`, >= 0.
     fn q(&self, c: usize) -> f64 {
         self.value(1 + K_NODES + c).max(0.0)
@@ -383,19 +378,41 @@ impl Shape {
     /// N(s) = R~(s) / R~(0) at `s_per_mm` (radians per mm): linear in log k between the nodes; below the first node
     /// 1 - c k^2 (the second moment's term), above the last N ~ 1/k (the single scattering's 1/r near field).
     pub fn normalized_transform(&self, s_per_mm: f64) -> f64 {
-        let k = s_per_mm * self.mfp_mm;
-        let x = (k.log10() - K_LOG10_MIN) * NODES_PER_DECADE;
-        let last = (K_NODES - 1) as f64;
-        if x.is_nan() || x <= 0.0 {
-            let k0 = 10f64.powf(K_LOG10_MIN);
-            return 1.0 - (1.0 - self.n(0)) * (k / k0).powi(2);
+        self.normalized_transforms(&[s_per_mm])[0]
+    }
+
+    /// [`Shape::normalized_transform`] at each of `s_per_mm`: the nodes they need interpolated once, entry by entry
+    /// over contiguous values (a radius fit reads 33 frequencies: 5 times faster than node by node).
+    pub fn normalized_transforms(&self, s_per_mm: &[f64]) -> Vec<f64> {
+        let positions: Vec<f64> =
+            s_per_mm.iter().map(|&s| ((s * self.mfp_mm).log10() - K_LOG10_MIN) * NODES_PER_DECADE).collect();
+        let last = K_NODES - 1;
+        let node = |x: f64| if x.is_nan() || x <= 0.0 { 0 } else { (x.floor() as usize).min(last) };
+        let lo = positions.iter().map(|&x| node(x)).min().unwrap_or(0);
+        let hi = positions.iter().map(|&x| (node(x) + 1).min(last)).max().unwrap_or(0);
+        let mut n = vec![0.0; hi + 1 - lo];
+        for &(at, w) in &self.weights {
+            let entry = &self.values[at + 1 + lo..at + 2 + hi];
+            n.iter_mut().zip(entry).for_each(|(v, &e)| *v += w * e as f64);
         }
-        if x >= last {
-            return self.n(K_NODES - 1) * 10f64.powf(x / NODES_PER_DECADE - last / NODES_PER_DECADE).recip();
-        }
-        let (i, t) = (x.floor() as usize, x - x.floor());
-        let (a, b) = (self.n(i), self.n(i + 1));
-        a + t * (b - a)
+        n.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0));
+        let n_at = |m: usize| n[m - lo];
+        positions
+            .iter()
+            .zip(s_per_mm)
+            .map(|(&x, &s)| {
+                if x.is_nan() || x <= 0.0 {
+                    let k0 = 10f64.powf(K_LOG10_MIN);
+                    return 1.0 - (1.0 - n_at(0)) * (s * self.mfp_mm / k0).powi(2);
+                }
+                if x >= last as f64 {
+                    return n_at(last) * 10f64.powf((x - last as f64) / NODES_PER_DECADE).recip();
+                }
+                let (i, t) = (x.floor() as usize, x - x.floor());
+                let (a, b) = (n_at(i), n_at(i + 1));
+                a + t * (b - a)
+            })
+            .collect()
     }
 
     /// The integral over ln r of the encircled energy per ln r as [`Shape::normalized_profile_per_mm2`]

@@ -656,7 +656,11 @@ fn transport_on_every_front() {
     let default = eval_json("african");
     assert_eq!(default["transport"], "adding_doubling");
     assert_eq!(default["accuracy"]["streams"], DEFAULT_STREAMS);
-    assert_eq!(default["work"]["transport_solves"], default["work"]["wavelengths"]);
+    assert_eq!(default["work"]["transport_table_lookups"], default["work"]["wavelengths"]);
+    assert_eq!(default["work"]["transport_solves"], 0, "the table holds every skin total");
+    let solved = run(&["eval", "--preset", "african", "--json", "--streams", "16"]);
+    let solved: serde_json::Value = serde_json::from_slice(&solved.stdout).unwrap();
+    assert_eq!(solved["work"]["transport_solves"], solved["work"]["wavelengths"], "--streams solves at them");
     let out = run(&["eval", "--preset", "african", "--json", "--transport", "diffusion", "--streams", "16"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -664,7 +668,9 @@ fn transport_on_every_front() {
     assert_eq!(j["accuracy"]["streams"], 16);
     assert_eq!(j["work"]["transport_solves"], 0);
     let summary = String::from_utf8(run(&["eval", "--preset", "african"]).stdout).unwrap();
-    assert!(summary.contains(&format!("transport: adding_doubling, {DEFAULT_STREAMS} streams")), "{summary}");
+    assert!(summary.contains("transport: adding_doubling, totals from the table (32 streams"), "{summary}");
+    let summary = String::from_utf8(run(&["eval", "--preset", "african", "--streams", "12"]).stdout).unwrap();
+    assert!(summary.contains("transport: adding_doubling, 12 streams"), "{summary}");
 
     for (args, needles) in [
         (vec!["eval", "--preset", "asian", "--transport", "monte_carlo"], vec!["adding_doubling", "diffusion"]),

@@ -22,7 +22,7 @@ use spectral_skin::maps::lut::{MaterialTable, TableResolution};
 use spectral_skin::maps::pipeline::compute_maps_cancellable;
 use spectral_skin::maps::{MapSettings, StrategyChoice};
 use spectral_skin::reflectance::{layered_reflectance_cancellable, LayeredOptions};
-use spectral_skin::transport::Transport;
+use spectral_skin::transport::{ExactTotals, Transport};
 use spectral_skin::{Accuracy, Outputs, Request, SkinError, SkinParams};
 
 const STOP_BOUND: Duration = Duration::from_millis(500);
@@ -104,7 +104,7 @@ fn a_spectrum_fit_at_64_streams_stops() {
 }
 
 fn an_albedo_fit_at_64_streams_stops() {
-    let options = AlbedoFitOptions { streams: 64, ..AlbedoFitOptions::default() };
+    let options = AlbedoFitOptions { streams: 64, exact_totals: ExactTotals::Solve, ..AlbedoFitOptions::default() };
     stop_delay("fit_albedo", Duration::from_millis(300), |cancel| {
         fit_albedo_cancellable([0.4, 0.3, 0.25], &options, cancel)
     });

@@ -3,8 +3,8 @@
 //! step, photons starting just below the surface: per unit refracted power, as the totals are).
 //!
 //! Stacks: fair skin (the caucasian preset at 550 nm), an optically thin epidermis, an absorbing epidermis, dark skin
-//! (the african preset at 450 and 550 nm) and a homogeneous medium. Each: 16 streams within the Monte Carlo's
-//! standard error plus 0.3 %; the default stream count within 1 %. The diffusion total's excess is printed beside.
+//! (the african preset at 450 and 550 nm) and a homogeneous medium. Each: 16 streams (and the shipped table of totals, where it
+//! holds the stack) within the Monte Carlo's standard error plus 0.3 %; the default stream count within 1 %. The diffusion total's excess is printed beside.
 //!
 //! Run with `cargo test --release --test physics exact_transport:: -- --nocapture` to see the figures.
 
@@ -12,6 +12,7 @@ use crate::support::mc::{simulate, McConfig, McLayer};
 use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
 use spectral_skin::layer::Layer;
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
+use spectral_skin::transport::total_table::TotalTable;
 use spectral_skin::transport::{total_diffuse_reflectance, DEFAULT_STREAMS};
 
 fn layer(thickness_mm: f64, sigma_a_per_mm: f64, sigma_s_reduced_per_mm: f64) -> Layer {
@@ -26,6 +27,7 @@ fn check(name: &str, layers: &[Layer], photons: u64, seed: u64) {
     let mc = simulate(&McLayer::isotropic_stack(layers), &McConfig::new(photons, seed, vec![]));
     let exact = total_diffuse_reflectance(layers, 16).unwrap();
     let default = total_diffuse_reflectance(layers, DEFAULT_STREAMS).unwrap();
+    let table = TotalTable::shipped().total_of(layers);
     let diffusion =
         LayerStack::new(layers).unwrap().reflectance_hat(0.0, Combination::Directional, MultipoleTerms::All);
     let rel = |x: f64| x / mc.reflectance - 1.0;
@@ -46,6 +48,16 @@ fn check(name: &str, layers: &[Layer], photons: u64, seed: u64) {
         mc.reflectance_se
     );
     assert!(rel(default).abs() <= 0.01, "{name}: {DEFAULT_STREAMS} streams {default} vs MC {}", mc.reflectance);
+    // The shipped table of totals (the default's source for two layers over a semi-infinite dermis) as the 16 streams.
+    if let Some(table) = table {
+        println!("{name}: table of totals {table:.5} ({:+.3} %)", 100.0 * rel(table));
+        assert!(
+            rel(table).abs() <= se + 0.003,
+            "{name}: table {table} vs MC {} +- {}",
+            mc.reflectance,
+            mc.reflectance_se
+        );
+    }
 }
 
 #[test]

@@ -17,6 +17,7 @@ mod profile_rgb_mapping;
 mod reference_numbers;
 mod robustness;
 mod robustness_properties;
+mod total_table;
 mod transport_fronts;
 mod transport_limits;
 mod transport_properties;

@@ -14,7 +14,10 @@ use spectral_skin::reflectance::{layered_reflectance_with, LayeredOptions, Profi
 use spectral_skin::skin::params::EXTENDED_DEFAULTS;
 use spectral_skin::skin::skin_layers;
 use spectral_skin::transport::profile_table::exact_shape;
-use spectral_skin::transport::{total_diffuse_reflectance, Transport, ALL_TRANSPORTS, DEFAULT_STREAMS, STREAMS_RANGE};
+use spectral_skin::transport::total_table::TotalTable;
+use spectral_skin::transport::{
+    total_diffuse_reflectance, ExactTotals, Transport, ALL_TRANSPORTS, DEFAULT_STREAMS, STREAMS_RANGE,
+};
 use spectral_skin::{evaluate, Outputs, Request, SkinParams, PRESETS};
 
 fn request(transport: Transport, outputs: Outputs) -> Request {
@@ -56,8 +59,8 @@ fn diffusion_reproduces_the_multipole_bit_for_bit() {
     }
 }
 
-/// The exact-total transports: each total is the exact solver's at the request's streams and the work counts one
-/// solve per wavelength; the profile is the total times the exact shape of the stack (`AddingDoubling`, which
+/// The exact-total transports with `ExactTotals::Solve`: each total is the exact solver's at the request's streams and
+/// the work counts one solve per wavelength; the profile is the total times the exact shape of the stack (`AddingDoubling`, which
 /// reports `profile_shape` "exact") or the multipole's profile scaled by total / multipole total
 /// (`AddingDoublingDiffusionShape`, "multipole").
 #[test]
@@ -67,8 +70,10 @@ fn exact_totals_carry_their_profile_shape() {
         for streams in [4, DEFAULT_STREAMS, 16] {
             let mut r = request(transport, everything());
             r.accuracy.streams = streams;
+            r.accuracy.exact_totals = ExactTotals::Solve;
             let ev = evaluate(&params, &r).unwrap();
             assert_eq!(ev.transport, transport, "{streams} streams");
+            assert_eq!(ev.work.transport_table_lookups, 0, "{streams} streams");
             assert_eq!(ev.accuracy.streams, streams);
             let wavelengths = ev.wavelengths_nm.as_ref().unwrap();
             assert_eq!(ev.work.transport_solves, wavelengths.len(), "{streams} streams");
@@ -92,6 +97,39 @@ fn exact_totals_carry_their_profile_shape() {
                     assert!((got - want).abs() <= 1e-15 * want.abs(), "{transport:?} {w} nm: {got} vs {want}");
                 }
             }
+        }
+    }
+}
+
+/// With `ExactTotals::Table` (the default) every skin total is read from the shipped table, none solved: each equals
+/// the table's value of that wavelength's stack, and the colour is within the table's error of fresh 32-stream solves.
+#[test]
+fn default_totals_are_read_from_the_table() {
+    assert_eq!(Accuracy::default().exact_totals, ExactTotals::Table);
+    assert_eq!(AccuracyLevel::Reference.accuracy().exact_totals, ExactTotals::Solve);
+    let table = TotalTable::shipped();
+    for preset in PRESETS {
+        let r = request(Transport::AddingDoubling, everything());
+        let ev = evaluate(&preset.params, &r).unwrap();
+        let wavelengths = ev.wavelengths_nm.as_ref().unwrap();
+        assert_eq!(
+            (ev.work.transport_solves, ev.work.transport_table_lookups),
+            (0, wavelengths.len()),
+            "{}",
+            preset.name
+        );
+        let mut solved = r;
+        solved.accuracy.exact_totals = ExactTotals::Solve;
+        solved.accuracy.streams = table.streams();
+        let reference = evaluate(&preset.params, &solved).unwrap();
+        assert_eq!(reference.work.transport_solves, wavelengths.len());
+        for (k, &w) in wavelengths.iter().enumerate() {
+            let layers = skin_layers(&preset.params, &r.model, w);
+            let held = table.total_of(&layers).expect("skin's stacks are in the table");
+            let got = ev.spectral_reflectance.as_ref().unwrap()[k];
+            assert_eq!(got.to_bits(), held.to_bits(), "{} {w} nm", preset.name);
+            let fresh = reference.spectral_reflectance.as_ref().unwrap()[k];
+            assert!((got - fresh).abs() <= 1e-4 * fresh.max(1e-3), "{} {w} nm: {got} vs {fresh}", preset.name);
         }
     }
 }

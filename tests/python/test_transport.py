@@ -37,7 +37,11 @@ def test_evaluate_reports_the_transport_and_streams():
     assert default["transport"] == DEFAULT
     assert default["accuracy"]["streams"] == spectral_skin.evaluate(preset="african", accuracy="default")["accuracy"][
         "streams"]
-    assert default["work"]["transport_solves"] == default["work"]["wavelengths"]
+    assert default["work"]["transport_table_lookups"] == default["work"]["wavelengths"]
+    assert default["work"]["transport_solves"] == 0  # the shipped table holds every skin total
+    solved = spectral_skin.evaluate(preset="african", streams=16)
+    assert solved["work"]["transport_solves"] == solved["work"]["wavelengths"]  # streams given: solved at them
+    assert solved["accuracy"]["exact_totals"] == "solve" and default["accuracy"]["exact_totals"] == "table"
     diffusion = spectral_skin.evaluate(preset="african", transport="diffusion", streams=16)
     assert diffusion["transport"] == "diffusion" and diffusion["accuracy"]["streams"] == 16
     assert diffusion["work"]["transport_solves"] == 0
