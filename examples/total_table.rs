@@ -8,6 +8,8 @@
 //! stacks and at skin's stacks (random physiology inside the accepted ranges, 380-780 nm), printing the worst and
 //! the 99th percentile of the relative error for each grid.
 
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64Mcg;
 use spectral_skin::skin::params::PARAMS;
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams, SKIN_IOR};
 use spectral_skin::transport::adding_doubling::{slab_reflectance, OpticalSlab};
@@ -15,38 +17,34 @@ use spectral_skin::transport::total_table::{
     build_values, encode, TotalTable, TwoLayerStack, TABLE_NODES, TABLE_STREAMS,
 };
 
-/// A uniform pseudo-random number in [0, 1) (SplitMix64).
-fn uniform(state: &mut u64) -> f64 {
-    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+/// A uniform pseudo-random number in [0, 1).
+fn uniform(rng: &mut Pcg64Mcg) -> f64 {
+    rng.random()
 }
 
 fn skin_stacks(count: usize, seed: u64) -> Vec<TwoLayerStack> {
-    let mut state = seed;
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let model = SkinModel::default();
     (0..count)
         .map(|_| {
             let values = PARAMS.map(|spec| {
                 let (lo, hi) = spec.range();
-                lo + (hi - lo) * uniform(&mut state)
+                lo + (hi - lo) * uniform(&mut rng)
             });
             let params = SkinParams::from_values(values).expect("inside the ranges");
-            let wavelength_nm = 380.0 + 400.0 * uniform(&mut state);
+            let wavelength_nm = 380.0 + 400.0 * uniform(&mut rng);
             TwoLayerStack::of_layers(&skin_layers(&params, &model, wavelength_nm), SKIN_IOR).expect("two layers")
         })
         .collect()
 }
 
 fn random_stacks(count: usize, seed: u64) -> Vec<TwoLayerStack> {
-    let mut state = seed;
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
     (0..count)
         .map(|_| TwoLayerStack {
-            top_albedo: uniform(&mut state),
-            top_optical_thickness: 10f64.powf(-3.0 + 6.0 * uniform(&mut state)),
-            bottom_albedo: uniform(&mut state),
+            top_albedo: uniform(&mut rng),
+            top_optical_thickness: 10f64.powf(-3.0 + 6.0 * uniform(&mut rng)),
+            bottom_albedo: uniform(&mut rng),
         })
         .collect()
 }

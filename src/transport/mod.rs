@@ -80,7 +80,7 @@ impl Transport {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, Hash)]
 #[serde(rename_all = "snake_case")]
 pub enum ExactTotals {
-    /// Read from the shipped table of adding-doubling totals ([`total_table`], 32 streams; within 2e-5 of fresh
+    /// Read from the shipped table of adding-doubling totals ([`total_table`], 32 streams; within 2.2e-5 of fresh
     /// solves for every skin stack) where it holds the stack (two layers over a semi-infinite dermis at skin's index),
     /// solved otherwise: the default, about 500 times cheaper than a solve.
     #[default]
