@@ -3,7 +3,9 @@
 pub mod example;
 pub mod io;
 pub mod lut;
+pub mod output;
 pub mod pipeline;
+pub mod plan;
 pub mod shader_table;
 pub mod thickness_tables;
 pub mod udim;

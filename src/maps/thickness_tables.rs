@@ -163,22 +163,20 @@ impl ThicknessTables {
     }
 }
 
-/// The largest relative errors of the stack against direct evaluation at `samples` texels spread evenly over a map:
-/// (Base Color, radius), each the maximum over the channels and texels. `texel(i)` gives texel i's (C_m, beta_m, C_h,
-/// thickness) and `exact(i)` its direct evaluation (Base Color, radius).
+/// The largest relative errors of the stack against direct evaluation at `count` check texels (the map plan picks them
+/// spread evenly over the texture): (Base Color, radius), each the maximum over the channels and texels. `texel(i)`
+/// gives check texel i's (C_m, beta_m, C_h, thickness) and `exact(i)` its direct evaluation (Base Color, radius).
 pub fn measure_stack_error(
     stack: &ThicknessTables,
-    texels: usize,
-    samples: usize,
+    count: usize,
     radius: bool,
     texel: impl Fn(usize) -> [f32; 4] + Sync,
     exact: impl Fn(usize) -> Result<[[f32; 3]; 2], SkinError> + Sync,
     cancel: &AtomicBool,
 ) -> Result<[f64; 2], SkinError> {
-    let picks: Vec<usize> = (0..samples.min(texels)).map(|k| crate::numeric::golden_index(k, texels)).collect();
-    let errors = picks
-        .par_iter()
-        .map(|&i| {
+    let errors = (0..count)
+        .into_par_iter()
+        .map(|i| {
             SkinError::check_cancel(cancel, "thickness table check")?;
             let [m, b, h, t] = texel(i);
             let approx = stack.lookup(m, b, h, t, radius);

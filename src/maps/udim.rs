@@ -8,7 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::io::{ParamImage, ParamInputs, ParamSource, Plane};
+use super::io::{ParamInputs, ParamSource};
 use crate::error::SkinError;
 
 /// The token that stands for the tile number in a file name.
@@ -186,46 +186,19 @@ impl ParamInputs {
 /// Tiles stacked into one image, top to bottom in tile order: `(tile, first row, rows)` of each.
 pub type TileRows = Vec<(u32, usize, usize)>;
 
-/// Stack the tiles' images (one per tile of `tiles`, the same width) into one: a plane constant at one value in every
-/// tile stays a constant; any other becomes texels. An error names the first tile whose width differs.
-pub fn stack_tiles(tiles: &[u32], images: Vec<ParamImage>) -> Result<(ParamImage, TileRows), SkinError> {
-    let width = images.first().map_or(0, |i| i.width);
-    if let Some((t, i)) = tiles.iter().zip(&images).find(|(_, i)| i.width != width) {
+/// Check that the tiles of a set (`sizes`: each tile's width and height, in `tiles` order) can be computed as one
+/// texture: one width (an error names the first tile whose width differs), and a texel count in range.
+pub fn check_tile_widths(tiles: &[u32], sizes: &[(usize, usize)]) -> Result<(), SkinError> {
+    let width = sizes.first().map_or(0, |s| s.0);
+    if let Some((t, s)) = tiles.iter().zip(sizes).find(|(_, s)| s.0 != width) {
         return Err(SkinError::invalid(
             "tile set",
             format!(
                 "the tiles must have one width to be computed as one texture: tile {} is {} wide, tile {t} is {} wide \
                  (resize the tiles, or compute each tile alone)",
-                tiles[0], width, i.width
+                tiles[0], width, s.0
             ),
         ));
     }
-    let mut rows = Vec::with_capacity(tiles.len());
-    let mut start = 0;
-    for (&t, image) in tiles.iter().zip(&images) {
-        rows.push((t, start, image.height));
-        start += image.height;
-    }
-    let height = start;
-    crate::maps::io::check_texel_count("tile set", width, height)?;
-    let stack = |plane_of: &dyn Fn(&ParamImage) -> &Plane| -> Plane {
-        let first = plane_of(&images[0]);
-        if let Plane::Constant(v) = first {
-            if images.iter().all(|i| matches!(plane_of(i), Plane::Constant(w) if w.to_bits() == v.to_bits())) {
-                return Plane::Constant(*v);
-            }
-        }
-        let mut values = Vec::with_capacity(width * height);
-        for image in &images {
-            match plane_of(image) {
-                Plane::Texels(t) => values.extend_from_slice(t),
-                Plane::Constant(v) => values.extend(std::iter::repeat(*v).take(image.width * image.height)),
-            }
-        }
-        Plane::Texels(values)
-    };
-    let planes: [Plane; 4] = std::array::from_fn(|p| stack(&|i: &ParamImage| &i.planes[p]));
-    let extended: [Plane; 3] = std::array::from_fn(|p| stack(&|i: &ParamImage| &i.extended[p]));
-    let notes = images.iter().flat_map(|i| i.notes.iter().cloned()).collect();
-    Ok((ParamImage { width, height, planes, extended, notes }, rows))
+    crate::maps::io::check_texel_count("tile set", width, sizes.iter().map(|s| s.1).sum())
 }

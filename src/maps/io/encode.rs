@@ -1,25 +1,35 @@
-//! EXR encoding of output planes: single-part scan-line files, blocks built straight from the planes and compressed
-//! in parallel, staged beside their destination (see [`super::staging`]). [`Compression::Auto`] is resolved here,
-//! per file, from a sample of its blocks.
+//! EXR encoding of output planes: single-part scan-line files written a block of rows at a time ([`ExrStream`]: a
+//! writer thread per file, fed rows in order, compressing each block's chunks in parallel), staged beside their
+//! destination (see [`super::staging`]). Whole planes in memory go through the same writer ([`stage_files`]).
+//! [`Compression::Auto`] is resolved here, per file, from a sample of its blocks.
 
 use std::cell::Cell;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+use std::thread::JoinHandle;
 
+use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
 use exr::block::writer::ChunksWriter;
 use exr::block::UncompressedBlock;
 use exr::meta::attribute::{ChannelDescription, LineOrder, SampleType, Text};
 use exr::meta::header::Header;
 use exr::meta::BlockDescription;
 use exr::prelude::f16;
+use rayon::prelude::*;
 
 use super::staging::{create_temp, Staged};
 use super::{guard, Compression, ExrOptions, Precision, AUTO_MIN_SAVING};
 use crate::error::SkinError;
 
+/// Rows a stream is fed at a time (the last block of an image may be shorter): a multiple of every scan-line
+/// compression's block height (1, 16, 32), so each fed block is whole compression blocks; it bounds the rows held
+/// per file (256 rows of an 8192-wide RGB float map: 24 MiB).
+pub const STREAM_ROWS: usize = 256;
+
 /// Stage an RGB EXR (channels `R`, `G`, `B`) from three row-major planes of `width * height` values each (row 0 at
 /// the top; units are the caller's: reflectance for albedo, millimetres for radius). Samples are converted to f16
-/// on the fly for [`Precision::Half`] (no extra copy of the planes is made).
+/// on the fly for [`Precision::Half`].
 pub fn stage_rgb_exr(
     path: &Path,
     width: usize,
@@ -40,49 +50,291 @@ pub fn stage_channels_exr(
     channels: &[(&str, &[f32])],
     options: ExrOptions,
 ) -> Result<Staged, SkinError> {
-    let what = format!("output {}", path.display());
-    super::check_texel_count(&what, width, height)?;
-    if channels.is_empty() {
-        return Err(SkinError::invalid(what, "expected at least one channel; got none"));
-    }
-    let texels = width * height;
-    for (i, (name, plane)) in channels.iter().enumerate() {
-        if plane.len() != texels {
+    let mut staged = stage_files(width, height, &[(path.to_path_buf(), channels.to_vec())], options)?;
+    Ok(staged.remove(0))
+}
+
+/// One file of [`stage_files`]: its path and its named planes.
+pub type PlaneFile<'a> = (PathBuf, Vec<(&'a str, &'a [f32])>);
+
+/// Stage several EXRs of one size from planes in memory, all streams fed a block of rows at a time together (each
+/// file's writer thread compresses while the others do: both cores stay busy). The one way planes become files.
+pub fn stage_files(
+    width: usize,
+    height: usize,
+    files: &[PlaneFile<'_>],
+    options: ExrOptions,
+) -> Result<Vec<Staged>, SkinError> {
+    let mut streams = Vec::with_capacity(files.len());
+    for (path, channels) in files {
+        let what = format!("output {}", path.display());
+        let names: Vec<&str> = channels.iter().map(|(n, _)| *n).collect();
+        check_channels(&what, width, height, &names)?;
+        let texels = width * height;
+        if let Some((name, plane)) = channels.iter().find(|(_, p)| p.len() != texels) {
             return Err(SkinError::invalid(
                 what,
                 format!("channel {name}: expected {width}x{height} = {texels} values; got {}", plane.len()),
             ));
         }
+        let compression = resolve_compression(width, height, channels, options)
+            .map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
+        streams.push(ExrStream::start(path, width, height, &names, ExrOptions { compression, ..options })?);
+    }
+    for first_row in (0..height).step_by(STREAM_ROWS) {
+        let rows = STREAM_ROWS.min(height - first_row);
+        let span = first_row * width..(first_row + rows) * width;
+        for (stream, (_, channels)) in streams.iter_mut().zip(files) {
+            stream.send(first_row, channels.iter().map(|(_, p)| p[span.clone()].to_vec()).collect())?;
+        }
+    }
+    streams.into_iter().map(ExrStream::finish).collect()
+}
+
+/// Check an output's size and channel names as the writer needs them.
+fn check_channels(what: &str, width: usize, height: usize, names: &[&str]) -> Result<(), SkinError> {
+    super::check_texel_count(what, width, height)?;
+    if names.is_empty() {
+        return Err(SkinError::invalid(what, "expected at least one channel; got none"));
+    }
+    for (i, name) in names.iter().enumerate() {
         if name.is_empty() || name.len() > 255 || Text::new_or_none(name).is_none() {
             return Err(SkinError::invalid(
                 what,
                 format!("channel name {name:?}: expected 1 to 255 Latin-1 characters"),
             ));
         }
-        if channels[..i].iter().any(|(other, _)| other == name) {
+        if names[..i].contains(name) {
             return Err(SkinError::invalid(what, format!("channel {name} is given twice")));
         }
     }
+    Ok(())
+}
 
-    let compression = resolve_compression(width, height, channels, options)
-        .map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
-    let mut temp = create_temp(path)?;
+/// Rows `first_row..` of a streamed file's channels (in the order the stream was started with), row-major.
+struct RowBlock {
+    first_row: usize,
+    planes: Vec<Vec<f32>>,
+}
+
+/// An EXR being written a block of rows at a time by a thread of its own: [`ExrStream::send`] the rows in order from
+/// row 0 (each block [`STREAM_ROWS`] rows, the last one the rest), then [`ExrStream::finish`] for the staged file.
+/// Dropped before it is finished (a cancelled or failed run), its temporary file is deleted.
+pub struct ExrStream {
+    path: PathBuf,
+    width: usize,
+    channels: usize,
+    sender: Option<SyncSender<RowBlock>>,
+    worker: Option<JoinHandle<Result<Staged, SkinError>>>,
+}
+
+impl ExrStream {
+    /// Start writing `path` (staged beside it) with these channels; `options.compression` must be resolved (not
+    /// [`Compression::Auto`]: see [`resolve_compression`] and [`choose_compression`]).
+    pub fn start(
+        path: &Path,
+        width: usize,
+        height: usize,
+        channels: &[&str],
+        options: ExrOptions,
+    ) -> Result<ExrStream, SkinError> {
+        let what = format!("output {}", path.display());
+        check_channels(&what, width, height, channels)?;
+        let failed = |e: String| SkinError::io(path, format!("cannot write output EXR: {e}"));
+        let exr_compression = options
+            .compression
+            .to_exr()
+            .ok_or_else(|| failed("internal error: the compression was not resolved".into()))?;
+        let header = exr_header(width, height, channels, options.precision, exr_compression).map_err(failed)?;
+        let order = stored_order(channels);
+        let temp = create_temp(path)?;
+        // One block queued while the writer compresses the one before: the rows held per file stay two blocks.
+        let (sender, receiver) = sync_channel::<RowBlock>(1);
+        let (target, precision, compression) = (path.to_path_buf(), options.precision, options.compression);
+        let worker = std::thread::spawn(move || {
+            write_stream(temp, &target, header, &order, width, height, precision, receiver)
+                .map(|staged| staged.with_compression(compression))
+        });
+        Ok(ExrStream {
+            path: path.to_path_buf(),
+            width,
+            channels: channels.len(),
+            sender: Some(sender),
+            worker: Some(worker),
+        })
+    }
+
+    /// The next rows, from `first_row` (the row after the last block sent), one plane per channel in the order the
+    /// stream was started with.
+    pub fn send(&mut self, first_row: usize, planes: Vec<Vec<f32>>) -> Result<(), SkinError> {
+        if planes.len() != self.channels || planes.iter().any(|p| p.len() % self.width.max(1) != 0) {
+            return Err(SkinError::invalid(
+                format!("output {}", self.path.display()),
+                format!("internal error: a block of {} planes for {} channels", planes.len(), self.channels),
+            ));
+        }
+        let sent = self.sender.as_ref().map(|s| s.send(RowBlock { first_row, planes }).is_ok()).unwrap_or(false);
+        if sent {
+            return Ok(());
+        }
+        // The writer stopped: its error says why.
+        self.sender = None;
+        match self.join() {
+            Err(e) => Err(e),
+            Ok(_) => Err(SkinError::io(&self.path, "cannot write output EXR: the writer stopped early")),
+        }
+    }
+
+    /// Wait for the writer: the staged file, complete.
+    pub fn finish(mut self) -> Result<Staged, SkinError> {
+        self.sender = None;
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<Staged, SkinError> {
+        let worker =
+            self.worker.take().ok_or_else(|| SkinError::io(&self.path, "cannot write output EXR: finished twice"))?;
+        worker.join().unwrap_or_else(|_| Err(SkinError::io(&self.path, "cannot write output EXR: the writer panicked")))
+    }
+}
+
+impl Drop for ExrStream {
+    fn drop(&mut self) {
+        // Closing the channel ends the writer (with an error: the file is incomplete), which deletes its temporary.
+        self.sender = None;
+        if let Some(worker) = self.worker.take() {
+            let _ = worker.join();
+        }
+    }
+}
+
+/// The writer thread of an [`ExrStream`]: every block received, compressed and written in order, then the file
+/// flushed and synced.
+#[allow(clippy::too_many_arguments)] // one thread's inputs, moved in once
+fn write_stream(
+    mut temp: tempfile::NamedTempFile,
+    path: &Path,
+    header: Header,
+    order: &[usize],
+    width: usize,
+    height: usize,
+    precision: Precision,
+    receiver: Receiver<RowBlock>,
+) -> Result<Staged, SkinError> {
+    let failed = |e: String| SkinError::io(path, format!("cannot write output EXR: {e}"));
     {
         let mut out = BufWriter::with_capacity(1 << 20, temp.as_file_mut());
-        write_exr_to(&mut out, width, height, channels, options.precision, compression)
-            .map_err(|e| SkinError::io(path, format!("cannot write output EXR: {e}")))?;
+        let written = guard(|| {
+            exr::block::write(&mut out, std::iter::once(header).collect(), true, |meta, chunk_writer| {
+                write_blocks(&meta.headers, chunk_writer, order, width, height, precision, receiver)
+            })
+        });
+        match written {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => return Err(failed(e.to_string())),
+            Err(panic) => return Err(failed(panic)),
+        }
         out.flush().map_err(|e| SkinError::io_caused(path, format!("cannot write output EXR: {e}"), e))?;
     }
     temp.as_file().sync_all().map_err(|e| SkinError::io_caused(path, format!("cannot write output EXR: {e}"), e))?;
-    Ok(Staged::from_temp(temp, path).with_compression(compression))
+    Ok(Staged::from_temp(temp, path))
+}
+
+/// Compress and write every block of rows `receiver` gives, in increasing order; an error if they do not cover the
+/// image's rows exactly (a stream dropped early: the file is discarded).
+fn write_blocks(
+    headers: &[Header],
+    chunk_writer: &mut impl ChunksWriter,
+    order: &[usize],
+    width: usize,
+    height: usize,
+    precision: Precision,
+    receiver: Receiver<RowBlock>,
+) -> exr::error::UnitResult {
+    let invalid = |m: &str| exr::error::Error::Invalid(m.to_string().into());
+    let lines = headers[0].compression.scan_lines_per_block();
+    let mut next_row = 0;
+    for block in receiver.iter() {
+        let rows = block.planes.first().map_or(0, |p| p.len() / width.max(1));
+        if block.first_row != next_row || next_row + rows > height || (rows % lines != 0 && next_row + rows != height) {
+            return Err(invalid("a block of rows out of order"));
+        }
+        let sources: Vec<&[f32]> = order.iter().map(|&c| block.planes[c].as_slice()).collect();
+        let chunks: Vec<Chunk> = (0..rows.div_ceil(lines))
+            .into_par_iter()
+            .map(|b| {
+                let local = b * lines;
+                let n = lines.min(rows - local);
+                compress_block(headers, local, block.first_row + local, n, width, &sources, precision)
+            })
+            .collect::<exr::error::Result<_>>()?;
+        for (b, chunk) in chunks.into_iter().enumerate() {
+            chunk_writer.write_chunk((block.first_row + b * lines) / lines, chunk)?;
+        }
+        next_row += rows;
+    }
+    if next_row != height {
+        return Err(invalid("the image's rows were not all given"));
+    }
+    Ok(())
+}
+
+/// The chunk of the `lines` rows from row `local` of `sources` (the file's rows from `row`): ZIP and ZIPS blocks
+/// built by [`zip_block`], the others by the exr crate.
+fn compress_block(
+    headers: &[Header],
+    local: usize,
+    row: usize,
+    lines: usize,
+    width: usize,
+    sources: &[&[f32]],
+    precision: Precision,
+) -> exr::error::Result<Chunk> {
+    let y_coordinate = i32::try_from(row).map_err(|_| exr::error::Error::Invalid("image height".into()))?;
+    if matches!(headers[0].compression, exr::compression::Compression::ZIP1 | exr::compression::Compression::ZIP16) {
+        let block = CompressedScanLineBlock {
+            y_coordinate,
+            compressed_pixels_le: zip_block(local, lines, width, sources, precision),
+        };
+        return Ok(Chunk { layer_index: 0, compressed_block: CompressedBlock::ScanLine(block) });
+    }
+    let failed = Cell::new(false);
+    let index = block_index(row, lines, width);
+    let block = fill_block(&headers[0], index, local, width, sources, precision, &failed);
+    if failed.get() {
+        return Err(exr::error::Error::Invalid("a pixel line did not match the image layout".into()));
+    }
+    block.compress_to_chunk(headers)
+}
+
+/// The index of the scan-line block of `lines` rows from `row`.
+fn block_index(row: usize, lines: usize, width: usize) -> exr::block::BlockIndex {
+    exr::block::BlockIndex {
+        layer: 0,
+        pixel_position: exr::math::Vec2(0, row),
+        pixel_size: exr::math::Vec2(width, lines),
+        level: exr::math::Vec2(0, 0),
+    }
 }
 
 /// How many blocks [`Compression::Auto`] compresses to decide (evenly spaced over the image; all of a smaller one).
 const AUTO_SAMPLE_BLOCKS: usize = 32;
 
-/// The compression `options` mean for these planes: itself, or for [`Compression::Auto`] the precision's candidate
-/// ([`Compression::auto_candidate`]) if it shrinks a sample of the blocks (built as the writer builds them) by at
-/// least [`AUTO_MIN_SAVING`], else none. The planes must have been checked as [`stage_channels_exr`] checks them.
+/// The rows [`Compression::Auto`] tries for an image of `height` rows at `precision`: (first row, rows) of each
+/// sampled block of the precision's candidate compression, in increasing order.
+pub fn auto_sample_rows(height: usize, precision: Precision) -> Vec<(usize, usize)> {
+    let lines = Compression::auto_candidate(precision).to_exr().map_or(1, |c| c.scan_lines_per_block());
+    let blocks = height.div_ceil(lines);
+    let picked: Vec<usize> = if blocks <= AUTO_SAMPLE_BLOCKS {
+        (0..blocks).collect()
+    } else {
+        (0..AUTO_SAMPLE_BLOCKS).map(|i| (2 * i + 1) * blocks / (2 * AUTO_SAMPLE_BLOCKS)).collect()
+    };
+    picked.into_iter().map(|b| (b * lines, lines.min(height - b * lines))).collect()
+}
+
+/// The compression `options` mean for these planes: itself, or for [`Compression::Auto`] what
+/// [`choose_compression`] makes of the rows of [`auto_sample_rows`].
 pub fn resolve_compression(
     width: usize,
     height: usize,
@@ -92,72 +344,57 @@ pub fn resolve_compression(
     if options.compression != Compression::Auto {
         return Ok(options.compression);
     }
-    let candidate = Compression::auto_candidate(options.precision);
-    let header = exr_header(width, height, channels, options.precision, candidate.to_exr().ok_or("no candidate")?)?;
-    let sources = sorted_sources(channels);
-    let lines = header.compression.scan_lines_per_block();
-    let blocks = height.div_ceil(lines);
-    let picked: Vec<usize> = if blocks <= AUTO_SAMPLE_BLOCKS {
-        (0..blocks).collect()
-    } else {
-        (0..AUTO_SAMPLE_BLOCKS).map(|i| (2 * i + 1) * blocks / (2 * AUTO_SAMPLE_BLOCKS)).collect()
-    };
-    if matches!(candidate, Compression::Zip | Compression::Zips) {
-        // The writer's own ZIP blocks (`zip_block`), as the file would hold them.
-        let sizes = guard(|| {
-            use rayon::prelude::*;
-            picked
-                .par_iter()
-                .map(|&b| {
-                    let y = b * lines;
-                    let n = lines.min(height - y);
-                    (
-                        n * width * header.channels.bytes_per_pixel,
-                        zip_block(y, n, width, &sources, options.precision).len(),
-                    )
-                })
-                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
-        })?;
-        let (raw, packed) = sizes;
-        return Ok(if (packed as f64) <= (1.0 - AUTO_MIN_SAVING) * raw as f64 { candidate } else { Compression::None });
+    let rows = auto_sample_rows(height, options.precision);
+    let sample: Vec<Vec<f32>> = channels
+        .iter()
+        .map(|(_, plane)| rows.iter().flat_map(|&(y, n)| &plane[y * width..(y + n) * width]).copied().collect())
+        .collect();
+    let named: Vec<(&str, &[f32])> = channels.iter().zip(&sample).map(|((n, _), s)| (*n, s.as_slice())).collect();
+    choose_compression(width, &named, options)
+}
+
+/// [`Compression::Auto`] resolved from `sample`, the rows of [`auto_sample_rows`] stacked (each sampled block whole
+/// compression blocks of the candidate): the precision's candidate ([`Compression::auto_candidate`]) if it shrinks
+/// those blocks (built as the writer builds them) by at least [`AUTO_MIN_SAVING`], else none.
+pub fn choose_compression(width: usize, sample: &[(&str, &[f32])], options: ExrOptions) -> Result<Compression, String> {
+    if options.compression != Compression::Auto {
+        return Ok(options.compression);
     }
+    let candidate = Compression::auto_candidate(options.precision);
+    let height = sample.first().map_or(0, |(_, p)| p.len() / width.max(1));
+    if height == 0 {
+        return Ok(Compression::None);
+    }
+    let names: Vec<&str> = sample.iter().map(|(n, _)| *n).collect();
+    let header = exr_header(width, height, &names, options.precision, candidate.to_exr().ok_or("no candidate")?)?;
+    let order = stored_order(&names);
+    let sources: Vec<&[f32]> = order.iter().map(|&c| sample[c].1).collect();
+    let lines = header.compression.scan_lines_per_block();
     let headers = [header];
-    let failed = Cell::new(false);
     let sizes = guard(|| {
-        use rayon::prelude::*;
-        let uncompressed: Vec<UncompressedBlock> = picked
-            .iter()
-            .map(|&b| {
-                let y = b * lines;
-                let index = exr::block::BlockIndex {
-                    layer: 0,
-                    pixel_position: exr::math::Vec2(0, y),
-                    pixel_size: exr::math::Vec2(width, lines.min(height - y)),
-                    level: exr::math::Vec2(0, 0),
-                };
-                fill_block(&headers[0], index, width, &sources, options.precision, &failed)
-            })
-            .collect();
-        let raw: usize = uncompressed.iter().map(|b| b.data.len()).sum();
-        let packed: Result<Vec<usize>, exr::error::Error> = uncompressed
+        (0..height.div_ceil(lines))
             .into_par_iter()
-            .map(|b| b.compress_to_chunk(&headers).map(|c| compressed_len(&c.compressed_block)))
-            .collect();
-        packed.map(|p| (raw, p.iter().sum::<usize>()))
+            .map(|b| {
+                let n = lines.min(height - b * lines);
+                let chunk = compress_block(&headers, b * lines, b * lines, n, width, &sources, options.precision)?;
+                Ok((n * width * headers[0].channels.bytes_per_pixel, compressed_len(&chunk.compressed_block)))
+            })
+            .collect::<exr::error::Result<Vec<(usize, usize)>>>()
     });
     match sizes {
-        Ok(Ok(_)) if failed.get() => Err("internal error: a pixel line did not match the image layout".to_string()),
-        Ok(Ok((raw, packed))) if (packed as f64) <= (1.0 - AUTO_MIN_SAVING) * raw as f64 => Ok(candidate),
-        Ok(Ok(_)) => Ok(Compression::None),
+        Ok(Ok(sizes)) => {
+            let (raw, packed) = sizes.iter().fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            Ok(if (packed as f64) <= (1.0 - AUTO_MIN_SAVING) * raw as f64 { candidate } else { Compression::None })
+        }
         Ok(Err(e)) => Err(e.to_string()),
         Err(panic) => Err(panic),
     }
 }
 
 /// Bytes of a compressed scan-line block's pixel data.
-fn compressed_len(block: &exr::block::chunk::CompressedBlock) -> usize {
+fn compressed_len(block: &CompressedBlock) -> usize {
     match block {
-        exr::block::chunk::CompressedBlock::ScanLine(b) => b.compressed_pixels_le.len(),
+        CompressedBlock::ScanLine(b) => b.compressed_pixels_le.len(),
         _ => 0,
     }
 }
@@ -166,7 +403,7 @@ fn compressed_len(block: &exr::block::chunk::CompressedBlock) -> usize {
 fn exr_header(
     width: usize,
     height: usize,
-    channels: &[(&str, &[f32])],
+    channels: &[&str],
     precision: Precision,
     compression: exr::compression::Compression,
 ) -> Result<Header, String> {
@@ -175,7 +412,8 @@ fn exr_header(
         Precision::Float => SampleType::F32,
     };
     let mut descriptions = Vec::with_capacity(channels.len());
-    for (name, _) in sorted(channels) {
+    for c in stored_order(channels) {
+        let name = channels[c];
         let name = Text::new_or_none(name).ok_or_else(|| format!("invalid channel name {name:?}"))?;
         descriptions.push(ChannelDescription::named(name, sample_type));
     }
@@ -189,31 +427,28 @@ fn exr_header(
     Ok(header)
 }
 
-/// The channels sorted by name, as they are stored.
-fn sorted<'a>(channels: &[(&'a str, &'a [f32])]) -> Vec<(&'a str, &'a [f32])> {
-    let mut order = channels.to_vec();
-    order.sort_by(|a, b| a.0.as_bytes().cmp(b.0.as_bytes()));
+/// The channels' indices in stored order (sorted by name).
+fn stored_order(channels: &[&str]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..channels.len()).collect();
+    order.sort_by(|&a, &b| channels[a].as_bytes().cmp(channels[b].as_bytes()));
     order
 }
 
-/// The planes in stored (name) order.
-fn sorted_sources<'a>(channels: &[(&'a str, &'a [f32])]) -> Vec<&'a [f32]> {
-    sorted(channels).into_iter().map(|(_, plane)| plane).collect()
-}
-
-/// One uncompressed block of the file, built straight from the planes; a line that does not match the layout sets
-/// `failed`.
+/// One uncompressed block of the file (`index`), built straight from the planes: `local` is the block's first row
+/// within `sources`; a line that does not match the layout sets `failed`.
 fn fill_block(
     header: &Header,
     index: exr::block::BlockIndex,
+    local: usize,
     width: usize,
     sources: &[&[f32]],
     precision: Precision,
     failed: &Cell<bool>,
 ) -> UncompressedBlock {
+    let row0 = index.pixel_position.1;
     UncompressedBlock::from_lines(&header.channels, index, |line| {
         let (x, y, n) = (line.location.position.0, line.location.position.1, line.location.sample_count);
-        let start = y * width + x;
+        let start = (y - row0 + local) * width + x;
         let Some(row) = sources.get(line.location.channel).and_then(|s| s.get(start..start + n)) else {
             failed.set(true);
             return;
@@ -228,59 +463,10 @@ fn fill_block(
     })
 }
 
-/// Encode an EXR block by block straight from the planes (no full-image copy).
-fn write_exr_to<W: std::io::Write + std::io::Seek>(
-    out: W,
-    width: usize,
-    height: usize,
-    channels: &[(&str, &[f32])],
-    precision: Precision,
-    compression: Compression,
-) -> Result<(), String> {
-    let exr_compression = compression.to_exr().ok_or("internal error: the compression was not resolved")?;
-    let header = exr_header(width, height, channels, precision, exr_compression)?;
-    let sources = sorted_sources(channels);
-    let failed = Cell::new(false);
-
-    if matches!(compression, Compression::Zip | Compression::Zips) {
-        let lines = header.compression.scan_lines_per_block();
-        let written = guard(|| {
-            exr::block::write(out, std::iter::once(header).collect(), true, |_, chunk_writer| {
-                write_zip_chunks(chunk_writer, width, height, lines, &sources, precision)
-            })
-        });
-        return match written {
-            Ok(Ok(())) => Ok(()),
-            Ok(Err(e)) => Err(e.to_string()),
-            Err(panic) => Err(panic),
-        };
-    }
-    let written = guard(|| {
-        exr::block::write(out, std::iter::once(header).collect(), true, |meta, chunk_writer| {
-            let header = &meta.headers[0];
-            let blocks = meta.collect_ordered_blocks(|block_index| {
-                fill_block(header, block_index, width, &sources, precision, &failed)
-            });
-            chunk_writer.on_progress(|_| ()).compress_all_blocks_parallel(&meta, blocks)?;
-            Ok(())
-        })
-    });
-    match written {
-        Ok(Ok(())) if !failed.get() => Ok(()),
-        Ok(Ok(())) => Err("internal error: a pixel line did not match the image layout".to_string()),
-        Ok(Err(e)) => Err(e.to_string()),
-        Err(panic) => Err(panic),
-    }
-}
-
 /// Deflate level of ZIP and ZIPS blocks (zlib-rs levels, 1 to 9). On the 4096² face example's half-float maps
 /// (docs/maps-performance.md) level 4 gives files about 9 % larger than the exr crate's miniz_oxide at its level 4
 /// in half its CPU time; level 1 would be a third faster again but 45 % larger.
 const ZIP_LEVEL: u32 = 4;
-
-/// Scan lines whose blocks are compressed together before they are written in order (bounds the compressed data
-/// held at once: at most the raw size of this many lines).
-const ZIP_BATCH_LINES: usize = 256;
 
 /// One thread's ZIP working state: the deflate stream (reset per block) and the block buffers.
 struct ZipState {
@@ -369,36 +555,6 @@ fn zip_block(y0: usize, lines: usize, width: usize, sources: &[&[f32]], precisio
             _ => raw_lines(y0, lines, width, sources, precision),
         }
     })
-}
-
-/// Write every block of a ZIP or ZIPS file (`lines` per block) in increasing order, compressing a batch of blocks
-/// in parallel at a time.
-fn write_zip_chunks(
-    chunk_writer: &mut impl ChunksWriter,
-    width: usize,
-    height: usize,
-    lines: usize,
-    sources: &[&[f32]],
-    precision: Precision,
-) -> exr::error::UnitResult {
-    use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
-    use rayon::prelude::*;
-    let blocks = height.div_ceil(lines);
-    let batch = (ZIP_BATCH_LINES / lines).max(1);
-    for first in (0..blocks).step_by(batch) {
-        let packed: Vec<Vec<u8>> = (first..blocks.min(first + batch))
-            .into_par_iter()
-            .map(|b| zip_block(b * lines, lines.min(height - b * lines), width, sources, precision))
-            .collect();
-        for (b, bytes) in (first..).zip(packed) {
-            let y_coordinate =
-                i32::try_from(b * lines).map_err(|_| exr::error::Error::Invalid("image height".into()))?;
-            let block = CompressedScanLineBlock { y_coordinate, compressed_pixels_le: bytes };
-            chunk_writer
-                .write_chunk(b, Chunk { layer_index: 0, compressed_block: CompressedBlock::ScanLine(block) })?;
-        }
-    }
-    Ok(())
 }
 
 /// Write an RGB EXR (channels R, G, B) from three row-major planes, atomically (temp file in the same directory,

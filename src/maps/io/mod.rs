@@ -24,7 +24,10 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-pub use encode::{resolve_compression, stage_channels_exr, stage_rgb_exr, write_channels_exr, write_rgb_exr};
+pub use encode::{
+    auto_sample_rows, choose_compression, resolve_compression, stage_channels_exr, stage_files, stage_rgb_exr,
+    write_channels_exr, write_rgb_exr, ExrStream, PlaneFile, STREAM_ROWS,
+};
 pub use read::{
     read_albedo_texture, read_exr_channels, read_params, read_params_from_bytes, read_rgb_image, AlbedoTexture,
 };
