@@ -2,10 +2,16 @@
 """Map pipeline performance report: wall time and peak memory per strategy and size, the lookup table's build time
 and measured error, and the ratio to the memory-bandwidth floor. Writes docs/maps-performance.md.
 
-    .venv/bin/python scripts/reports/maps_report.py                 # 512, 2048, 4096 (a few minutes on 2 cores)
+    .venv/bin/python scripts/reports/maps_report.py                 # 512, 2048, 4096, then the scale runs
     .venv/bin/python scripts/reports/maps_report.py --quick --out /tmp/report.md   # 64, 128: what CI runs
 
-Needs the release CLI (cargo build --release) and numpy (to measure copy bandwidth).
+The scale runs (not with --quick): the face example at 4096² and 8192² and a UDIM set of ten 8192² tiles, wall time,
+CPU time and peak memory, and `examples/maps_floor.rs` (the maps against copying the same data through the same
+reader and writer) when it is built. About 15 minutes on 2 cores.
+
+Needs the release CLI (cargo build --release; for the floor, cargo build --release --example maps_floor) and numpy (to
+measure copy bandwidth). The sections of docs/maps-performance.md after the generated ones (from SECTIONS_KEPT on)
+are kept as they are.
 """
 
 from __future__ import annotations
@@ -26,6 +32,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 CLI = ROOT / "target" / "release" / "spectral-skin"
+FLOOR = ROOT / "target" / "release" / "examples" / "maps_floor"
+# The first heading of the hand-written sections the report keeps when it rewrites the file.
+SECTIONS_KEPT = "\n## A varying epidermis thickness"
 
 
 def copy_bandwidth_gb_per_s(megabytes: int = 256, repeats: int = 7) -> float:
@@ -98,6 +107,31 @@ def write_noise_params(path: Path, size: int, seed: int = 1) -> None:
         rows[:, 2 + k * size : 2 + (k + 1) * size] = rng.uniform(0.0, top, (size, size))
     with path.open("wb") as f:
         f.write(header + offsets.tobytes() + rows.tobytes())
+
+
+def scale_runs(tmp: Path, env: dict[str, str]) -> tuple[list[tuple], str]:
+    """The face example (table cached) at 4096² and 8192² (median of 3) and a UDIM set of ten 8192² tiles (one run):
+    (name, texels, wall, CPU, peak MiB, seconds) each; and the maps_floor example's table, if it is built."""
+    rows = []
+    for size in (4096, 8192):
+        path = tmp / f"scale-{size}.exr"
+        subprocess.run([str(CLI), "example", "--size", str(size), "--out", str(path)], check=True, capture_output=True)
+        results = [run(["maps", "--params", str(path), "--out", str(tmp / "scale-out")], env) for _ in range(3)]
+        report = json.loads((tmp / "scale-out" / "skin_maps.json").read_text())["report"]
+        rows.append((f"{size}²", size * size, statistics.median(r[0] for r in results),
+                     statistics.median(r[2] for r in results), max(r[1] for r in results), report["seconds"]))
+    tiles = tmp / "tiles"
+    tiles.mkdir()
+    for tile in range(1001, 1011):
+        os.link(tmp / "scale-8192.exr", tiles / f"face.{tile}.exr")
+    wall, peak, cpu = run(["maps", "--params", str(tiles / "face.<UDIM>.exr"), "--out", str(tmp / "udim-out")], env)
+    report = json.loads((tmp / "udim-out" / "skin_maps.json").read_text())["report"]
+    rows.append(("ten 8192² UDIM tiles", 10 * 8192 * 8192, wall, cpu, peak, report["seconds"]))
+    print(f"scale: {rows}", file=sys.stderr)
+    floor = ""
+    if FLOOR.exists():
+        floor = subprocess.run([str(FLOOR), "5", "4096", "8192"], check=True, capture_output=True, text=True, env=env).stdout
+    return rows, floor
 
 
 def main() -> None:
@@ -223,6 +257,7 @@ def main() -> None:
                     f"{size:>5} {kind:<8} {name:<16} {encoding:<12} {wall:7.2f} s  cpu {cpu:6.2f} s  {peak:5.0f} MiB  {megabytes:6.1f} MB  ratio {wall / floor:6.0f}",
                     file=sys.stderr,
                 )
+        scale, floor = ([], "") if opts.quick else scale_runs(tmp, env)
     load_after = os.getloadavg()[0]
 
     lines = [
@@ -330,7 +365,38 @@ def main() -> None:
         f"Exact mode evaluates every texel directly, as the table's cold build evaluates every node: it is run at "
         f"{exact_size}² only ({exact_size * exact_size} evaluations); time scales with the texel count.",
     ]
-    opts.out.write_text("\n".join(lines) + "\n")
+    if scale:
+        lines += [
+            "",
+            "## Scale: bounded memory, flat time per texel",
+            "",
+            "`spectral-skin maps` decides the strategy once for the whole texture, then fills the outputs 256 rows at a "
+            "time and streams each block to a writer thread per file (`src/maps/plan.rs`, `src/maps/io/encode.rs`, "
+            "`ExrStream`): it holds the input planes (4 bytes a texel per varying parameter) and a few blocks of "
+            "outputs, not the whole maps. A UDIM set is read a tile at a time, once for the set's summary (so it is "
+            "decided as one texture) and once to write each tile: its memory is one tile's, whatever the number of "
+            "tiles. Face example, table cached, default encoding:",
+            "",
+            "| input | texels | wall (s) | CPU (s) | peak memory (MiB) | read / compute / write (s) | CPU ns per texel |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for name, texels, wall, cpu, peak, sec in scale:
+            lines.append(f"| {name} | {texels} | {wall:.2f} | {cpu:.2f} | {peak:.0f} | {sec['read']:.2f} / "
+                         f"{sec['compute']:.2f} / {sec['write']:.2f} | {1e9 * cpu / texels:.1f} |")
+        if floor:
+            lines += [
+                "",
+                "The maps against their copy floor (`cargo run --release --example maps_floor -- 5 4096 8192`: the same "
+                "input read and checked and the same files written through the same writer, without the model; medians "
+                "of 5 in one process):",
+                "",
+                floor.strip(),
+            ]
+    kept = ""
+    if opts.out.exists() and SECTIONS_KEPT in opts.out.read_text():
+        text = opts.out.read_text()
+        kept = text[text.index(SECTIONS_KEPT):]
+    opts.out.write_text("\n".join(lines) + "\n" + kept)
     print(f"wrote {opts.out}", file=sys.stderr)
 
 
