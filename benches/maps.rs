@@ -50,7 +50,7 @@ fn bench_maps(c: &mut Criterion) {
     // The pipeline's lookup (`lookup_method_rows`: Base Color and radius, a row at a time) on one thread, over texels
     // that never repeat their neighbour (a noise map: no run is skipped): 1e5 texels in rows of 4096.
     let noise: [Vec<f32>; 3] = std::array::from_fn(|p| {
-        (0..100_000u32).map(|i| ((i as f32 * [0.618_034, 0.414_214, 0.732_051][p]).fract())).collect()
+        (0..100_000u32).map(|i| (i as f32 * [0.618_034, 0.414_214, 0.732_051][p]).fract()).collect()
     });
     let (melanin, blend, hemoglobin): (Vec<f32>, Vec<f32>, Vec<f32>) = (
         noise[0].iter().map(|u| 0.5 * u * u * u).collect(),

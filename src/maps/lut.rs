@@ -140,7 +140,7 @@ fn cbrt_unit(x: f64) -> f64 {
 
 /// [`cbrt_unit`] of a positive normal `x`, without the branch, so that [`MaterialTable::lookup_method_rows`]'s loop
 /// over a run of texels vectorises (any other input gives some finite or NaN value, never a trap).
-#[inline]
+#[inline(always)]
 fn cbrt_normal(x: f64) -> f64 {
     let mut y = f64::from_bits(x.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
     for _ in 0..3 {
@@ -159,7 +159,7 @@ const RUN: usize = 64;
 /// two parts, e^r by its degree-7 polynomial, 2^n put into the exponent bits. Written without branches or calls so
 /// that the compiler vectorises [`MaterialTable::lookup_method`]'s six at once: the libm calls were a fifth of that
 /// function's time.
-#[inline]
+#[inline(always)]
 fn exp_stored(x: f32) -> f32 {
     const ROUND: f32 = 12_582_912.0; // 1.5 * 2^23
     const LN2_HI: f32 = 0.693_359_4; // Cephes C1: ln 2 to 9 bits, so n * LN2_HI is exact for |n| < 2^15
@@ -440,39 +440,7 @@ impl MaterialTable {
     /// texels into `logs`, as [`MaterialTable::lookup_method`] computes them.
     #[inline]
     fn lookup_run(&self, m: &[f32], b: &[f32], h: &[f32], logs: &mut [[f32; 8]; RUN]) {
-        let len = m.len();
-        assert!(len <= RUN && b.len() == len && h.len() == len);
-        let r = self.resolution;
-        let (di, dj) = (r.melanin_blend * r.hemoglobin, r.hemoglobin);
-        let v = &self.method_logs;
-        let (mut q_m, mut u_m) = ([0f64; RUN], [0f64; RUN]);
-        let (mut q_h, mut u_h) = ([0f64; RUN], [0f64; RUN]);
-        // The warps, as `warp` computes them: cube roots of the clamped shares of the maximum.
-        for x in 0..len {
-            q_m[x] = (m[x] as f64 / MELANIN.max).clamp(0.0, 1.0);
-            q_h[x] = (h[x] as f64 / HEMOGLOBIN.max).clamp(0.0, 1.0);
-        }
-        for x in 0..len {
-            u_m[x] = cbrt_normal(q_m[x]);
-            u_h[x] = cbrt_normal(q_h[x]);
-        }
-        for x in 0..len {
-            if q_m[x].is_nan() || q_m[x] < f64::MIN_POSITIVE {
-                u_m[x] = cbrt_unit(q_m[x]);
-            }
-            if q_h[x].is_nan() || q_h[x] < f64::MIN_POSITIVE {
-                u_h[x] = cbrt_unit(q_h[x]);
-            }
-        }
-        for x in 0..len {
-            let (corner, [ti, tj, tk]) =
-                self.cell_of_warped(u_m[x], (b[x] as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, u_h[x]);
-            let out = trilinear_row(v, corner, di, dj, [ti, tj, tk]);
-            // All eight lanes (two of them padding), so that the sums and the exponentials stay vector code.
-            for q in 0..8 {
-                logs[x][q] = exp_stored(out[q]);
-            }
-        }
+        lookup_run(&self.method_logs, self.resolution, [m, b, h], logs)
     }
 
     /// Trilinear interpolation in the warped coordinates of the logarithms. Inputs are clamped to the domain.
@@ -515,16 +483,7 @@ impl MaterialTable {
     /// [`MaterialTable::cell`] from the warped coordinates (u_m, beta_m share, u_h), each clamped to [0, 1].
     #[inline]
     fn cell_of_warped(&self, u_m: f64, u_b: f64, u_h: f64) -> (usize, [f32; 3]) {
-        let r = self.resolution;
-        let axis = |u: f64, n: usize| {
-            let x = u.clamp(0.0, 1.0) * (n - 1) as f64;
-            let i = (x as usize).min(n - 2); // x >= 0: truncation is floor, without a libm call
-            (i, (x - i as f64) as f32)
-        };
-        let (i, ti) = axis(u_m, r.melanin);
-        let (j, tj) = axis(u_b, r.melanin_blend);
-        let (k, tk) = axis(u_h, r.hemoglobin);
-        ((i * r.melanin_blend + j) * r.hemoglobin + k, [ti, tj, tk])
+        cell_of_warped(self.resolution, u_m, u_b, u_h)
     }
 
     /// The table for `prepared` and `resolution`: read from `cache_dir` when a table with the same key is there,
@@ -751,9 +710,64 @@ pub fn default_cache_dir() -> Option<PathBuf> {
         .or_else(|| dirs::cache_dir().map(|d| d.join("spectral-skin")))
 }
 
+/// [`MaterialTable::lookup_run`] over the rows `v` of a table of `resolution`. Compiled also for AVX2 (x86_64) and
+/// NEON (aarch64), chosen at run time: the same operations in the same order (no fused multiply-add: Rust does not
+/// contract `a * b + c`), so every clone gives the same bits; only the vector width differs (8 lanes of f32 instead of
+/// SSE2's 4: about twice the lookups per second, docs/maps-performance.md).
+#[multiversion::multiversion(targets("x86_64+avx2+fma", "aarch64+neon"))]
+fn lookup_run(v: &[[f32; 8]], resolution: TableResolution, [m, b, h]: [&[f32]; 3], logs: &mut [[f32; 8]; RUN]) {
+    let len = m.len();
+    assert!(len <= RUN && b.len() == len && h.len() == len);
+    let r = resolution;
+    let (di, dj) = (r.melanin_blend * r.hemoglobin, r.hemoglobin);
+    let (mut q_m, mut u_m) = ([0f64; RUN], [0f64; RUN]);
+    let (mut q_h, mut u_h) = ([0f64; RUN], [0f64; RUN]);
+    // The warps, as `warp` computes them: cube roots of the clamped shares of the maximum.
+    for x in 0..len {
+        q_m[x] = (m[x] as f64 / MELANIN.max).clamp(0.0, 1.0);
+        q_h[x] = (h[x] as f64 / HEMOGLOBIN.max).clamp(0.0, 1.0);
+    }
+    for x in 0..len {
+        u_m[x] = cbrt_normal(q_m[x]);
+        u_h[x] = cbrt_normal(q_h[x]);
+    }
+    for x in 0..len {
+        if q_m[x].is_nan() || q_m[x] < f64::MIN_POSITIVE {
+            u_m[x] = cbrt_unit(q_m[x]);
+        }
+        if q_h[x].is_nan() || q_h[x] < f64::MIN_POSITIVE {
+            u_h[x] = cbrt_unit(q_h[x]);
+        }
+    }
+    for x in 0..len {
+        let (corner, [ti, tj, tk]) =
+            cell_of_warped(r, u_m[x], (b[x] as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, u_h[x]);
+        let out = trilinear_row(v, corner, di, dj, [ti, tj, tk]);
+        // All eight lanes (two of them padding), so that the sums and the exponentials stay vector code.
+        for q in 0..8 {
+            logs[x][q] = exp_stored(out[q]);
+        }
+    }
+}
+
+/// The first corner and the fractions of the cell of a table of resolution `r` around the warped coordinates
+/// (u_m, beta_m share, u_h), each clamped to [0, 1] (see [`MaterialTable::cell`]).
+#[inline(always)]
+fn cell_of_warped(r: TableResolution, u_m: f64, u_b: f64, u_h: f64) -> (usize, [f32; 3]) {
+    let axis = |u: f64, n: usize| {
+        let x = u.clamp(0.0, 1.0) * (n - 1) as f64;
+        let i = (x as usize).min(n - 2); // x >= 0: truncation is floor, without a libm call
+        (i, (x - i as f64) as f32)
+    };
+    let (i, ti) = axis(u_m, r.melanin);
+    let (j, tj) = axis(u_b, r.melanin_blend);
+    let (k, tk) = axis(u_h, r.hemoglobin);
+    ((i * r.melanin_blend + j) * r.hemoglobin + k, [ti, tj, tk])
+}
+
 /// Trilinear interpolation of the 8-lane rows `v` in the cell whose first node is `corner` (node strides `di` along
 /// melanin, `dj` along the melanin blend, 1 along haemoglobin) at the cell fractions `t`.
-#[inline]
+#[inline(always)] // into each clone of `lookup_run`, with its vector width
 fn trilinear_row(v: &[[f32; 8]], corner: usize, di: usize, dj: usize, t: [f32; 3]) -> [f32; 8] {
     let [ti, tj, tk] = t;
     let mut out = [0.0f32; 8];
