@@ -2,10 +2,12 @@
 
 pub mod example;
 pub mod io;
+pub mod kinds;
 pub mod lut;
 pub mod output;
 pub mod pipeline;
 pub mod plan;
+pub mod report;
 pub mod shader_table;
 pub mod thickness_tables;
 pub mod udim;

@@ -14,11 +14,9 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::io::{ParamImage, Plane, ALL_CHANNELS, ALL_RANGES};
+use super::kinds::{MapKind, ALBEDO_MAP, COAT_ROUGHNESS_MAP, COAT_WEIGHT_MAP, RADIUS_MAP, SPECULAR_MAP};
 use super::lut::{measure_error_cancellable, MaterialTable, TexelMaterial};
-use super::pipeline::{
-    MapKind, MapReport, MapSettings, MapWork, Strategy, StrategyChoice, Timings, ALBEDO_MAP, COAT_ROUGHNESS_MAP,
-    COAT_WEIGHT_MAP, MAX_DISTINCT_TUPLES, RADIUS_MAP, SPECULAR_MAP,
-};
+use super::report::{MapReport, MapSettings, MapWork, Strategy, StrategyChoice, Timings, MAX_DISTINCT_TUPLES};
 use super::thickness_tables::{measure_stack_error, ThicknessTables};
 use crate::error::SkinError;
 use crate::evaluate::{Outputs, Prepared};
