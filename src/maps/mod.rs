@@ -9,6 +9,7 @@ pub mod pipeline;
 pub mod plan;
 pub mod report;
 pub mod shader_table;
+pub mod summary;
 pub mod thickness_tables;
 pub mod udim;
 

@@ -15,7 +15,8 @@ use super::io::{
     STREAM_ROWS,
 };
 use super::output::sidecar_json;
-use super::plan::{MapPlan, Summary, SurfacePlan};
+use super::plan::{MapPlan, SurfacePlan};
+use super::summary::Summary;
 use super::udim::{check_tile_widths, find_tiles};
 use crate::error::SkinError;
 
