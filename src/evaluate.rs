@@ -12,9 +12,7 @@ use crate::color::{spectrum_to_rgb, ColourIntegration, RgbMapping, WorkingSpace}
 use crate::diffusion::{clamped_reflectance_profiles_cancellable, Boundaries, Combination, LayerStack};
 use crate::error::{check_range, SkinError};
 use crate::fit::blender_target::{Target, TargetInfo};
-use crate::fit::burley::{
-    fit_burley, fit_burley_second_moment, fit_frequencies, BurleyFit, SECOND_MOMENT_FREQUENCY_PER_MM,
-};
+use crate::fit::burley::{fit_burley_second_moment, BurleyFit, BurleyGrid, SECOND_MOMENT_FREQUENCY_PER_MM};
 pub use crate::fit::MethodParams;
 use crate::fit::{RadiusFit, SubsurfaceMethod, DEFAULT_METHOD};
 use crate::layer::Layer;
@@ -262,6 +260,8 @@ pub struct Prepared {
     /// The wavelength grid, its RGB weights and their luminance (for `RgbMapping`), shared per process.
     colour: Arc<ColourIntegration>,
     fit_s: Vec<f64>,
+    /// The edge-L2 fit's tables on `fit_s` (shared per process), None with the second-moment fit.
+    burley: Option<Arc<BurleyGrid>>,
 }
 
 /// The per-texel outputs of a material: the RGB albedo, the Burley fit and every method's inputs for the target.
@@ -278,11 +278,12 @@ impl Prepared {
         validate_model(&request.model)?;
         let acc = &request.accuracy;
         let colour = ColourIntegration::of(acc.wavelength_placement, acc.wavelength_step_nm, request.working_space);
-        let fit_s = match acc.radius_fit {
-            RadiusFit::EdgeL2 => fit_frequencies(acc.fit_frequencies_per_decade),
-            RadiusFit::SecondMoment => vec![SECOND_MOMENT_FREQUENCY_PER_MM],
+        let burley = match acc.radius_fit {
+            RadiusFit::EdgeL2 => Some(BurleyGrid::of(acc.fit_frequencies_per_decade)),
+            RadiusFit::SecondMoment => None,
         };
-        Ok(Prepared { request: *request, colour, fit_s })
+        let fit_s = burley.as_ref().map_or_else(|| vec![SECOND_MOMENT_FREQUENCY_PER_MM], |g| g.s_per_mm().to_vec());
+        Ok(Prepared { request: *request, colour, fit_s, burley })
     }
 
     pub fn request(&self) -> &Request {
@@ -328,9 +329,9 @@ impl Prepared {
             .collect();
         [0, 1, 2].map(|c| {
             let normalized: Vec<f64> = rgb.iter().map(|v| crate::numeric::safe_div(v[c], albedo[c], 0.0)).collect();
-            match self.request.accuracy.radius_fit {
-                RadiusFit::EdgeL2 => fit_burley(s, &normalized),
-                RadiusFit::SecondMoment => fit_burley_second_moment(normalized[0]),
+            match &self.burley {
+                Some(grid) => grid.fit(&normalized),
+                None => fit_burley_second_moment(normalized[0]),
             }
         })
     }

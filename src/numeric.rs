@@ -168,7 +168,9 @@ pub fn illinois(
 }
 
 /// Minimiser of a unimodal `f` on [a, b] by golden-section search (Kiefer 1953), until the bracket is narrower than
-/// `tolerance`; returns the final bracket (a, b).
+/// `tolerance`; returns the final bracket (a, b). The Burley fit's reference (its tests): the fit itself refines by
+/// [`newton_min`].
+#[cfg(test)]
 pub fn golden_section_min(a: f64, b: f64, tolerance: f64, mut f: impl FnMut(f64) -> f64) -> (f64, f64) {
     let (mut a, mut b) = (a, b);
     let phi = 0.5 * (5f64.sqrt() - 1.0);
@@ -190,6 +192,46 @@ pub fn golden_section_min(a: f64, b: f64, tolerance: f64, mut f: impl FnMut(f64)
         }
     }
     (a, b)
+}
+
+/// Minimiser of a smooth `f` on [a, b] from its slope and curvature (`slope_curvature(x) = (f'(x), f''(x))`), from
+/// `start` inside: Newton's steps towards the slope's root, each kept inside the bracket the slopes' signs have
+/// narrowed, with a bisection of the bracket instead where a step would leave it or the curvature is not positive.
+/// Stops when a Newton step is at most `tolerance` (quadratic convergence: the error after it is far smaller), when a
+/// bisected bracket is at most `tolerance` wide, on a zero slope or after `max_steps`; returns the last point. Where f
+/// falls all the way to an end, it ends within `tolerance` of that end. For a unimodal f it finds what
+/// [`golden_section_min`] does in a handful of steps instead of some 35 (each needs both derivatives).
+pub fn newton_min(
+    a: f64,
+    b: f64,
+    start: f64,
+    tolerance: f64,
+    max_steps: usize,
+    mut slope_curvature: impl FnMut(f64) -> (f64, f64),
+) -> f64 {
+    let (mut a, mut b, mut x) = (a, b, start);
+    for _ in 0..max_steps {
+        let (slope, curvature) = slope_curvature(x);
+        if slope == 0.0 {
+            break;
+        }
+        if slope > 0.0 {
+            b = x;
+        } else {
+            a = x;
+        }
+        let newton = x - slope / curvature;
+        let (next, converged) = if curvature > 0.0 && newton > a && newton < b {
+            (newton, (newton - x).abs() <= tolerance)
+        } else {
+            (0.5 * (a + b), b - a <= tolerance)
+        };
+        x = next;
+        if converged {
+            break;
+        }
+    }
+    x
 }
 
 /// `|a - b| / |b|`: the relative error of `a` against the reference `b`, for the tests' tolerances.
