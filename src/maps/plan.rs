@@ -158,7 +158,8 @@ impl MapPlan {
             color_space: settings.request.working_space.name(),
             strategy,
             clamped: Vec::new(),
-            constant_parameters: constant_values.keys().copied().collect(),
+            // In plane order (the paper's four, then the extended physiology), not the map's name order.
+            constant_parameters: ALL_CHANNELS.into_iter().filter(|n| constant_values.contains_key(n)).collect(),
             constant_values,
             request: *evaluator.prepared.request(),
             work,
