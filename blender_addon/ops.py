@@ -3,9 +3,10 @@
 From Albedo Texture (:func:`from_albedo_texture`: a parameter map fitted to the material's Base Color image by the
 core, core/albedo.py).
 
-Apply with parameter maps, started from the UI, runs the computing step in a worker thread (the core releases the
-GIL) while a modal timer shows the progress and Esc cancels with nothing changed; the material is edited on Blender's
-main thread once everything is computed and written. From a script (or without maps) it runs synchronously, the same
+Apply with parameter maps and From Albedo Texture, started from the UI, run their computing step in a worker thread
+(:class:`_Work`; the core releases the GIL) while a modal timer shows the progress and Esc cancels with nothing
+changed (:class:`_ModalWork`); the material is edited on Blender's main thread once everything is computed and
+written. From a script (or without maps) it runs synchronously, the same
 steps. In Live mode (core/live.py, live.py) the computing step is the plan of the panel's constants and, unless the
 blend file has it, the shader table; the last step wires the live node group.
 """
@@ -15,7 +16,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import bpy
 import spectral_skin
@@ -112,16 +113,24 @@ def _find_material(name: str, context: bpy.types.Context) -> bpy.types.Material 
     return material
 
 
-class _Work:
-    """Apply's :func:`compute` in a worker thread: its progress, a cancel flag, and its outcome."""
+# A computing step for a worker: task(progress, before_write) -> its result, None when cancelled before writing.
+# (_Work is not a typing.Generic: a Generic class in the add-on made bpy 4.2 crash at interpreter exit.)
+Task = Callable[[Callable[[int, int], bool], Callable[[], bool]], Any]
 
-    def __init__(self, job: Job) -> None:
+
+class _Work:
+    """A computing step in a worker thread (Apply's :func:`compute`, From Albedo Texture's
+    ``core.albedo.fit_and_write``): its progress, a cancel flag, and its outcome. ``task(progress, before_write)``
+    gets the core's callback (``progress(done, total)``, False once cancelled) and the check made before anything is
+    written (False when cancelled: the task then writes nothing and returns None)."""
+
+    def __init__(self, task: Task) -> None:
         self.fraction = 0.0
         self.cancel = threading.Event()
         self.writing = False
-        self.plan: MaterialPlan | None = None
+        self.result: Any = None
         self.error: BaseException | None = None
-        self.thread = threading.Thread(target=self._run, args=(job,), daemon=True)
+        self.thread = threading.Thread(target=self._run, args=(task,), daemon=True)
 
     def _progress(self, done: int, total: int) -> bool:
         self.fraction = done / total if total else 1.0
@@ -131,15 +140,82 @@ class _Work:
         self.writing = not self.cancel.is_set()
         return self.writing
 
-    def _run(self, job: Job) -> None:
+    def _run(self, task: Task) -> None:
         try:
-            plans = compute([job], self._progress, self._start_writing)
-            self.plan = plans[0] if plans else None
+            self.result = task(self._progress, self._start_writing)
         except BaseException as error:  # reported on the main thread
             self.error = error
 
 
-class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
+def apply_task(job: Job) -> Task:
+    """Apply's :func:`compute` of one job as a :class:`_Work` task: its plan, or None when cancelled."""
+    def task(progress: Callable[[int, int], bool], before_write: Callable[[], bool]) -> MaterialPlan | None:
+        plans = compute([job], progress, before_write)
+        return plans[0] if plans else None
+    return task
+
+
+class _ModalWork:
+    """What Apply and From Albedo Texture share when started from the UI: the computing step in a :class:`_Work`
+    while a modal timer shows its progress (the progress bar and the status text) and Esc cancels it (until it starts
+    writing); once it has succeeded, :meth:`_succeed` changes Blender's data on the main thread, and on a cancel or an
+    error nothing is changed. A mixin of the two operators (before bpy.types.Operator in their bases)."""
+
+    if TYPE_CHECKING:
+        def report(self, kind: set[str], message: str) -> None: ...
+
+    _work: _Work | None = None
+    _timer: Any = None
+    _writing_state = "writing the maps"
+
+    def _start(self, context: bpy.types.Context, work: _Work) -> set[str]:
+        self._work = work
+        work.thread.start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.progress_begin(0, 100)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _end(self, context: bpy.types.Context) -> None:
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+    def _succeed(self, context: bpy.types.Context, result: Any) -> set[str]:
+        raise NotImplementedError
+
+    def modal(self, context: bpy.types.Context, event: bpy.types.Event) -> set[str]:
+        work = self._work
+        if work is None:
+            return {"CANCELLED"}
+        if event.type == "ESC" and not work.writing:
+            work.cancel.set()
+            return {"RUNNING_MODAL"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}  # the rest of Blender stays usable meanwhile
+        if work.thread.is_alive():
+            context.window_manager.progress_update(int(100 * work.fraction))
+            if context.workspace is not None:
+                state = self._writing_state if work.writing else (
+                    "cancelling" if work.cancel.is_set() else f"{100 * work.fraction:.0f} % (Esc to cancel)")
+                context.workspace.status_text_set(f"Spectral Skin: {state}")
+            return {"RUNNING_MODAL"}
+        self._end(context)
+        if work.cancel.is_set() and work.result is None:
+            self.report({"WARNING"}, "Spectral Skin: cancelled, nothing changed")
+            return {"CANCELLED"}
+        if work.error is not None or work.result is None:
+            self.report({"ERROR"}, f"Spectral Skin: {describe_error(work.error) if work.error else 'no result'}")
+            return {"CANCELLED"}
+        return self._succeed(context, work.result)
+
+
+class SPECTRAL_SKIN_OT_apply(_ModalWork, bpy.types.Operator):
     """Compute the skin with spectral-skin and set up the material's Principled BSDF (and texture maps)"""
 
     bl_idname = "spectral_skin.apply"
@@ -149,8 +225,6 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
     material: bpy.props.StringProperty(
         name="Material", description="Name of the material to set up; empty: the active material")
 
-    _work: _Work | None = None
-    _timer: Any = None
     _material_name = ""
 
     def _material(self, context: bpy.types.Context) -> bpy.types.Material | None:
@@ -194,56 +268,20 @@ class SPECTRAL_SKIN_OT_apply(bpy.types.Operator):
         if (not settings.maps and settings.mode != "LIVE") or context.window is None:
             return self.execute(context)  # one evaluation: no time to show (Live mode may build its shader table)
         self._material_name = material.name
-        self._work = _Work(prepare(material, settings, context.scene))
-        self._work.thread.start()
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(0.1, window=context.window)
-        wm.progress_begin(0, 100)
-        wm.modal_handler_add(self)
-        return {"RUNNING_MODAL"}
+        return self._start(context, _Work(apply_task(prepare(material, settings, context.scene))))
 
-    def _end(self, context: bpy.types.Context) -> None:
-        wm = context.window_manager
-        if self._timer is not None:
-            wm.event_timer_remove(self._timer)
-            self._timer = None
-        wm.progress_end()
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
-
-    def modal(self, context: bpy.types.Context, event: bpy.types.Event) -> set[str]:
-        work = self._work
-        if work is None:
-            return {"CANCELLED"}
-        if event.type == "ESC" and not work.writing:
-            work.cancel.set()
-            return {"RUNNING_MODAL"}
-        if event.type != "TIMER":
-            return {"PASS_THROUGH"}  # the rest of Blender stays usable meanwhile
-        if work.thread.is_alive():
-            context.window_manager.progress_update(int(100 * work.fraction))
-            if context.workspace is not None:
-                state = "writing the maps" if work.writing else (
-                    "cancelling" if work.cancel.is_set() else f"{100 * work.fraction:.0f} % (Esc to cancel)")
-                context.workspace.status_text_set(f"Spectral Skin: {state}")
-            return {"RUNNING_MODAL"}
-        self._end(context)
-        if work.cancel.is_set() and work.plan is None:
-            self.report({"WARNING"}, "Spectral Skin: cancelled, nothing changed")
-            return {"CANCELLED"}
-        if work.error is not None or work.plan is None:
-            self.report({"ERROR"}, f"Spectral Skin: {describe_error(work.error) if work.error else 'no result'}")
-            return {"CANCELLED"}
+    def _succeed(self, context: bpy.types.Context, result: Any) -> set[str]:
+        plan: MaterialPlan = result
         material = bpy.data.materials.get(self._material_name)
         if material is None:
             self.report({"ERROR"}, f"Spectral Skin: the material {self._material_name!r} is gone")
             return {"CANCELLED"}
         try:
-            finish(material, work.plan)
+            finish(material, plan)
         except ERRORS as error:
             self.report({"ERROR"}, f"Spectral Skin: {describe_error(error)}")
             return {"CANCELLED"}
-        return self._done(work.plan)
+        return self._done(plan)
 
 
 class SPECTRAL_SKIN_OT_remove(bpy.types.Operator):
@@ -332,21 +370,16 @@ def base_color_texels(image: bpy.types.Image, raw: bool = False) -> tuple[Any, s
     return np.ascontiguousarray(np.concatenate(parts, axis=0)), space, tiles
 
 
-def from_albedo_texture(material: bpy.types.Material, hold_thickness: bool = False,
-                        auto_gains: bool = False) -> dict[str, Any]:
-    """From Albedo Texture: the material's Base Color image (or UDIM tile set, fitted as one texture) fitted per texel
-    by the core (core/albedo.py; the epidermis thickness chosen for the texture, or the material's held with
-    ``hold_thickness``; with ``auto_gains`` the exposure and white balance corrected first), the parameter EXR and
-    the residual EXR written beside the .blend by the core (tile sets for a tile set), the material's Skin Mask (if
-    set, of the same size or tiles) marking the texels that count, the parameters set as the
-    material's Parameter Map (a Non-Color image), the residual loaded as an image to inspect, the Advanced sliders set
-    to the extended physiology the fit holds for. Returns the fit's summary (core.albedo.fit without the fit object,
-    plus "path", "residual"). Raises ValueError / OSError / spectral_skin.SpectralSkinError; the material is then
-    unchanged."""
+def prepare_albedo(material: bpy.types.Material, hold_thickness: bool = False,
+                   auto_gains: bool = False) -> core_albedo.AlbedoJob:
+    """From Albedo Texture's first step (main thread; reads Blender's data, changes nothing): the material's Base
+    Color image (or UDIM tile set, fitted as one texture) as linear RGB, the material's Skin Mask (if set, of the same
+    size or tiles) as the texels that count, the held epidermis thickness (``hold_thickness``; else chosen for the
+    texture), ``auto_gains`` (exposure and white balance corrected first), and the parameter and residual EXR paths
+    beside the .blend. Raises ValueError for a material it cannot read."""
     image = base_color_image(material)
     pixels, space, tiles = base_color_texels(image)
     settings = material.spectral_skin
-    held = float(settings.epidermis_thickness_mm) if hold_thickness else None
     mask = None
     if settings.skin_mask is not None:
         mask_rgb, _, mask_tiles = base_color_texels(settings.skin_mask, raw=True)
@@ -354,26 +387,50 @@ def from_albedo_texture(material: bpy.types.Material, hold_thickness: bool = Fal
             raise ValueError(f"the skin mask {settings.skin_mask.name!r} has the tiles {[t for t, _ in mask_tiles]} "
                              f"but the Base Color {image.name!r} has {[t for t, _ in tiles]}: they must be the same")
         mask = core_albedo.skin_mask(mask_rgb, pixels.shape, settings.skin_mask.name, image.name)
-    result = core_albedo.fit(pixels, space, held, settings.transport, auto_gains, mask)
     prefix = texture_prefix(bpy.data.filepath, material.name)
-    path = core_albedo.parameter_map_path(bpy.data.filepath, prefix, tiled=bool(tiles))
-    residual = core_albedo.parameter_map_path(bpy.data.filepath, prefix, tiled=bool(tiles), kind="residual")
-    result["fit"].write(path, residual, tiles=tiles or None)
-    loaded = nodes.load_image(path)
+    return core_albedo.AlbedoJob(
+        image=image.name, albedo=pixels, working_space=space, tiles=tiles,
+        epidermis_thickness_mm=float(settings.epidermis_thickness_mm) if hold_thickness else None,
+        transport=settings.transport, auto_gains=auto_gains, mask=mask,
+        path=core_albedo.parameter_map_path(bpy.data.filepath, prefix, tiled=bool(tiles)),
+        residual_path=core_albedo.parameter_map_path(bpy.data.filepath, prefix, tiled=bool(tiles), kind="residual"))
+
+
+def finish_albedo(material: bpy.types.Material, job: core_albedo.AlbedoJob, result: dict[str, Any]) -> dict[str, Any]:
+    """From Albedo Texture's last step, once the fit and its files succeeded (main thread only): the parameter EXR
+    set as the material's Parameter Map (a Non-Color image), the residual loaded as an image to inspect, the Advanced
+    sliders set to the extended physiology the fit holds for. Returns the fit's summary (``result`` without the fit
+    object, plus "path", "residual", "image", "working_space", "tiles")."""
+    loaded = nodes.load_image(job.path)
     loaded.reload()
     loaded.colorspace_settings.name = "Non-Color"
-    residual_image = nodes.load_image(residual)
+    residual_image = nodes.load_image(job.residual_path)
     residual_image.reload()
     residual_image.colorspace_settings.name = "Non-Color"
+    settings = material.spectral_skin
     settings.params_map = loaded
     for name, value in result["extended"].items():
         setattr(settings, name, value)
     return {key: value for key, value in result.items() if key != "fit"} | {
-        "path": path, "residual": residual_image.name, "image": image.name, "working_space": space,
-        "tiles": [t for t, _ in tiles]}
+        "path": job.path, "residual": residual_image.name, "image": job.image, "working_space": job.working_space,
+        "tiles": [t for t, _ in job.tiles]}
 
 
-class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
+def from_albedo_texture(material: bpy.types.Material, hold_thickness: bool = False,
+                        auto_gains: bool = False) -> dict[str, Any]:
+    """From Albedo Texture at once (:func:`prepare_albedo`, ``core.albedo.fit_and_write``, :func:`finish_albedo`;
+    the operator started from the panel runs the middle step in a worker thread): the material's Base Color image fitted
+    per texel by the core (core/albedo.py), the parameter and residual EXRs written beside the .blend by the core,
+    then the parameter map set on the material. Returns the fit's summary. Raises ValueError / OSError /
+    spectral_skin.SpectralSkinError; the material is then unchanged."""
+    job = prepare_albedo(material, hold_thickness, auto_gains)
+    result = core_albedo.fit_and_write(job)
+    if result is None:  # only a cancel (before_write) gives None, and there is none here
+        raise RuntimeError("From Albedo Texture: the fit returned no result")
+    return finish_albedo(material, job, result)
+
+
+class SPECTRAL_SKIN_OT_from_albedo_texture(_ModalWork, bpy.types.Operator):
     """Fit the skin parameters per texel to the material's Base Color image (the core's albedo fit) and set the
     result, a parameter EXR written beside the .blend, as the material's Parameter Map"""
 
@@ -392,6 +449,10 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
         description="Fit at the material's Epidermis Thickness instead of choosing one for the texture (the "
                     "default: the thickness of 0.05 to 0.5 mm that fits the texture best, never worse than 0.25)")
 
+    _writing_state = "writing the parameter map"
+    _material_name = ""
+    _job: core_albedo.AlbedoJob | None = None
+
     @classmethod
     def poll(cls, context: bpy.types.Context) -> bool:
         if not core_albedo.available():
@@ -399,16 +460,51 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
             return False
         return True
 
-    def execute(self, context: bpy.types.Context) -> set[str]:
+    def _fail(self, error: BaseException) -> set[str]:
+        self.report({"ERROR"}, f"Spectral Skin: From Albedo Texture: {describe_error(error)}")
+        return {"CANCELLED"}
+
+    def _material_or_report(self, context: bpy.types.Context) -> bpy.types.Material | None:
         material = _find_material(self.material, context)
         if material is None:
             self.report({"ERROR"}, f"no material {self.material!r}" if self.material else "no active material")
+        return material
+
+    def execute(self, context: bpy.types.Context) -> set[str]:
+        material = self._material_or_report(context)
+        if material is None:
             return {"CANCELLED"}
         try:
             summary = from_albedo_texture(material, self.hold_thickness, self.auto_gains)
         except ERRORS as error:
-            self.report({"ERROR"}, f"Spectral Skin: From Albedo Texture: {describe_error(error)}")
+            return self._fail(error)
+        return self._done(material, summary)
+
+    def invoke(self, context: bpy.types.Context, _event: bpy.types.Event) -> set[str]:
+        if context.window is None:
+            return self.execute(context)
+        material = self._material_or_report(context)
+        if material is None:
             return {"CANCELLED"}
+        try:
+            job = prepare_albedo(material, self.hold_thickness, self.auto_gains)
+        except ERRORS as error:
+            return self._fail(error)
+        self._material_name, self._job = material.name, job
+        return self._start(context, _Work(albedo_task(job)))
+
+    def _succeed(self, context: bpy.types.Context, result: Any) -> set[str]:
+        material = bpy.data.materials.get(self._material_name)
+        if material is None or self._job is None:
+            self.report({"ERROR"}, f"Spectral Skin: the material {self._material_name!r} is gone")
+            return {"CANCELLED"}
+        try:
+            summary = finish_albedo(material, self._job, result)
+        except ERRORS as error:
+            return self._fail(error)
+        return self._done(material, summary)
+
+    def _done(self, material: bpy.types.Material, summary: dict[str, Any]) -> set[str]:
         thickness = summary["extended"]["epidermis_thickness_mm"]
         masked = (f", {summary['masked_out_texels']} outside the skin mask (fitted to their nearest skin colour)"
                   if material.spectral_skin.skin_mask is not None else "")
@@ -426,6 +522,13 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(bpy.types.Operator):
             self.report({"WARNING"}, f"Spectral Skin: {summary['diagnosis']}"
                         + ("" if self.auto_gains else " (tick Correct Exposure and White Balance to apply the gains)"))
         return {"FINISHED"}
+
+
+def albedo_task(job: core_albedo.AlbedoJob) -> Task:
+    """From Albedo Texture's ``core.albedo.fit_and_write`` of ``job`` as a :class:`_Work` task."""
+    def task(progress: Callable[[int, int], bool], before_write: Callable[[], bool]) -> dict[str, Any] | None:
+        return core_albedo.fit_and_write(job, progress, before_write)
+    return task
 
 
 classes = (SPECTRAL_SKIN_OT_apply, SPECTRAL_SKIN_OT_remove, SPECTRAL_SKIN_OT_from_albedo_texture)

@@ -1,15 +1,22 @@
-//! Time the albedo-texture fit (src/inverse/albedo_maps.rs) on a 4096² texture: the face-like example parameter map's
-//! albedo (by the fit's forward table), once as 8-bit sRGB (as a painted or photographed texture: colours repeat) and
-//! once as float (nearly every texel distinct), cold (table built) and with the table cached in the process.
+//! Time the albedo-texture fit (src/inverse/albedo_maps.rs) on a SIZE² texture (default 4096²): the face-like example
+//! parameter map's albedo (by the fit's forward table), as 8-bit sRGB (as a painted or photographed texture: colours
+//! repeat), as float, and as float with 2 % multiplicative noise per channel (as a scan: hundreds of thousands of
+//! distinct colours); cold (tables built) once, then with the tables cached in the process, with and without the
+//! exposure and white-balance gains estimated (`auto_gains`, Python `rgb_gains="auto"`). Each cached run is repeated
+//! REPEATS times (default 3) and the median printed.
 //!
-//!     cargo run --release --example albedo_fit_timing -- [SIZE]
+//!     cargo run --release --example albedo_fit_timing -- [SIZE] [REPEATS] [TEXTURE [RUN]]
+//!
+//! TEXTURE (8-bit, float or noisy) and RUN (held, chosen or auto) time that one texture and run alone, once cold and
+//! REPEATS times cached: what `/usr/bin/time -v` measures the peak memory of (the process holds that texture and
+//! one fit at a time).
 //!
 //! Figures: docs/skin-atlas.md, "Fitting a texture". RAYON_NUM_THREADS sets the cores.
 
 use std::time::Instant;
 
 use spectral_skin::inverse::albedo::{table_coordinates, AlbedoFitOptions, AlbedoTable};
-use spectral_skin::inverse::albedo_maps::{fit_albedo_map, EpidermisThickness};
+use spectral_skin::inverse::albedo_maps::{fit_albedo_map, AlbedoMapFit, EpidermisThickness, TextureFit};
 use spectral_skin::maps::example::face_params;
 use spectral_skin::skin::SkinParams;
 
@@ -29,8 +36,39 @@ fn from_8bit(code: u8) -> f32 {
     }
 }
 
+/// A deterministic value in [-1, 1) from an index (SplitMix64's finaliser).
+fn noise(i: u64) -> f32 {
+    let mut z = i.wrapping_add(0x9E37_79B9_7F4A_7C15).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+}
+
+/// FNV-1a over the bits of the fit's parameters and residuals: equal checksums, equal maps.
+fn checksum(fit: &AlbedoMapFit) -> u64 {
+    let bits = fit.params.iter().flatten().chain(&fit.residual_delta_e00).map(|v| v.to_bits());
+    bits.fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3))
+}
+
+fn describe(fit: &AlbedoMapFit) -> String {
+    let s = fit.stats;
+    format!(
+        "maps {:016x}, thickness {} mm, {} distinct colours, gains {:?}, ΔE00 mean {:.4} max {:.4}, {} out of gamut",
+        checksum(fit),
+        fit.extended[0],
+        s.distinct_colours,
+        fit.gains.as_ref().map(|g| g.rgb_gains.map(|v| (v * 1e4).round() / 1e4)),
+        s.mean_delta_e00,
+        s.max_delta_e00,
+        s.out_of_gamut_texels
+    )
+}
+
 fn main() {
     let size: usize = std::env::args().nth(1).map_or(4096, |s| s.parse().expect("SIZE"));
+    let repeats: usize = std::env::args().nth(2).map_or(3, |s| s.parse().expect("REPEATS"));
+    let only = std::env::args().nth(3);
+    let only_run = std::env::args().nth(4);
     let options = AlbedoFitOptions::default();
     let table = AlbedoTable::build(&options).unwrap();
     let params = face_params(size);
@@ -41,37 +79,61 @@ fn main() {
             table.albedo(table_coordinates(&p)).map(|v| v as f32)
         })
         .collect();
-    let eight: Vec<[f32; 3]> = float.iter().map(|c| c.map(|v| from_8bit(to_8bit(v)))).collect();
-    println!("{size}x{size}, {} threads", rayon::current_num_threads());
+    drop(params);
+    let wanted = |name: &str| only.as_deref().map_or(true, |o| o == name);
+    let eight: Vec<[f32; 3]> =
+        if wanted("8-bit") { float.iter().map(|c| c.map(|v| from_8bit(to_8bit(v)))).collect() } else { Vec::new() };
+    let noisy: Vec<[f32; 3]> = if wanted("noisy") {
+        float
+            .iter()
+            .enumerate()
+            .map(|(i, c)| [0, 1, 2].map(|k| c[k] * (1.0 + 0.02 * noise(3 * i as u64 + k as u64))))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let float = if wanted("float") {
+        float
+    } else {
+        drop(float);
+        Vec::new()
+    };
+    println!("{size}x{size}, {} threads, median of {repeats} cached runs", rayon::current_num_threads());
+    let chosen = TextureFit { thickness: EpidermisThickness::Chosen, auto_gains: false };
+    let auto = TextureFit { auto_gains: true, ..chosen };
+    let held = TextureFit { thickness: EpidermisThickness::Held, auto_gains: false };
     let runs = [
-        ("held 0.25 mm, first (cold table, in-process cache empty)", EpidermisThickness::Held),
-        ("held 0.25 mm, second (table cached)", EpidermisThickness::Held),
-        ("thickness chosen (the default), first (five more tables built)", EpidermisThickness::Chosen),
-        ("thickness chosen (the default), second (tables cached)", EpidermisThickness::Chosen),
+        ("held", "held 0.25 mm", held),
+        ("chosen", "thickness chosen", chosen),
+        ("auto", "thickness chosen, rgb_gains auto", auto),
     ];
-    for (name, texels) in [("8-bit", &eight), ("float", &float)] {
-        for (run, thickness) in runs {
-            if name == "float" && run.contains("first") {
-                continue; // the tables are cached by then
+    let runs: Vec<_> = runs.into_iter().filter(|r| only_run.as_deref().map_or(true, |o| o == r.0)).collect();
+    let textures = [("8-bit", "8-bit", &eight), ("float", "float", &float), ("noisy", "float + 2 % noise", &noisy)];
+    let textures: Vec<_> = textures.into_iter().filter(|t| wanted(t.0)).collect();
+    // Cold: the tables built (held: one; chosen: five more).
+    for &(_, run, texture) in runs.iter().take(2) {
+        let (_, name, texels) = textures[0];
+        let start = Instant::now();
+        let fit = fit_albedo_map(texels, size, size, &options, texture).unwrap();
+        println!("{name} {run}, cold: {:.2} s, {}", start.elapsed().as_secs_f64(), describe(&fit));
+    }
+    for &(_, name, texels) in &textures {
+        for &(_, run, texture) in &runs {
+            let mut seconds = Vec::new();
+            let mut last = String::new();
+            for _ in 0..repeats {
+                let start = Instant::now();
+                let fit = fit_albedo_map(texels, size, size, &options, texture).unwrap();
+                seconds.push(start.elapsed().as_secs_f64());
+                last = describe(&fit); // the fit dropped before the next: one fit's memory at a time
             }
-            let start = Instant::now();
-            let fit = fit_albedo_map(texels, size, size, &options, thickness).unwrap();
-            let s = fit.stats;
+            seconds.sort_by(f64::total_cmp);
             println!(
-                "{name} {run}: {:.2} s, thickness {} mm, {} distinct colours, table from cache {}, ΔE00 mean {:.4} max {:.4}, {} out of gamut",
-                start.elapsed().as_secs_f64(),
-                fit.extended[0],
-                s.distinct_colours,
-                s.table_from_cache,
-                s.mean_delta_e00,
-                s.max_delta_e00,
-                s.out_of_gamut_texels
+                "{name} {run}: median {:.2} s (runs {:?}), {}",
+                seconds[seconds.len() / 2],
+                seconds.iter().map(|s| (s * 100.0).round() / 100.0).collect::<Vec<_>>(),
+                last
             );
-            if let Some(i) =
-                (0..texels.len()).max_by(|&a, &b| fit.residual_delta_e00[a].total_cmp(&fit.residual_delta_e00[b]))
-            {
-                println!("  worst texel {i}: colour {:?}, params {:?}", texels[i], fit.params[i]);
-            }
         }
     }
 }

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import spectral_skin
@@ -61,7 +63,8 @@ def linear_albedo(pixels: Any, colorspace: str, is_float: bool, scene_space: str
 
 
 def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
-        transport: str = DEFAULT_TRANSPORT, auto_gains: bool = False, mask: Any = None) -> dict[str, Any]:
+        transport: str = DEFAULT_TRANSPORT, auto_gains: bool = False, mask: Any = None,
+        progress: Callable[[int, int], bool | None] | None = None) -> dict[str, Any]:
     """The core's per-texel fit (``spectral_skin.fit_albedo_map``, of the model with ``transport``, a key of
     TRANSPORTS; the epidermis thickness chosen for the texture when ``epidermis_thickness_mm`` is None, as the core's
     default, else held; with ``auto_gains`` the exposure and white-balance gains estimated and applied first; with
@@ -72,7 +75,8 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
     held), "gains" (applied, or measured as the diagnosis' remedy; None), "diagnosis" (why the texture does not look
     like an albedo; None), "median_delta_e00", "max_delta_e00" (over the masked texels), "out_of_gamut_texels",
     "masked_out_texels"}. The core's warning about a
-    texture that is not an albedo is not raised here: it is the "diagnosis". Raises
+    texture that is not an albedo is not raised here: it is the "diagnosis". ``progress(done, total)`` is the core's
+    callback (returning False cancels: InterruptedError). Raises
     spectral_skin.SpectralSkinError when the core refuses the input; RuntimeError when this spectral_skin has no fit."""
     import numpy as np
 
@@ -84,6 +88,8 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
         keywords["rgb_gains"] = "auto"
     if mask is not None:
         keywords["mask"] = mask
+    if progress is not None:
+        keywords["progress"] = progress
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", spectral_skin.SpectralSkinWarning)  # the same text is result.diagnosis
         result = fit_map(albedo, working_space=working_space, epidermis_thickness_mm=epidermis_thickness_mm,
@@ -123,3 +129,37 @@ def parameter_map_path(blend_path: str, prefix: str, tiled: bool = False, kind: 
         raise ValueError("the .blend is not saved yet, so the parameter map has no place beside it: save it first")
     name = f"{prefix}_{kind}.{UDIM_TOKEN}.exr" if tiled else f"{prefix}_{kind}.exr"
     return os.path.join(os.path.dirname(os.path.abspath(blend_path)), name)
+
+
+@dataclass(frozen=True)
+class AlbedoJob:
+    """What From Albedo Texture fits and where it writes, gathered from bpy on Blender's main thread (``ops``): the
+    Base Color image's name, the albedo as (H, W, 3) linear RGB in ``working_space``, the UDIM ``tiles`` stacked top to bottom ((tile, rows); empty
+    for one image), the held epidermis thickness (None: chosen), the transport (a key of TRANSPORTS), whether to
+    correct exposure and white balance, the skin mask ((H, W) bool or None) and the parameter and residual EXR paths
+    (:func:`parameter_map_path`)."""
+
+    image: str
+    albedo: Any
+    working_space: str
+    tiles: list[tuple[int, int]]
+    epidermis_thickness_mm: float | None
+    transport: str
+    auto_gains: bool
+    mask: Any
+    path: str
+    residual_path: str
+
+
+def fit_and_write(job: AlbedoJob, progress: Callable[[int, int], bool | None] | None = None,
+                  before_write: Callable[[], bool] | None = None) -> dict[str, Any] | None:
+    """From Albedo Texture's computing step, which needs no bpy (safe in a worker thread): :func:`fit`, then the core
+    writes the parameter and residual EXRs (tile sets for ``job.tiles``). ``progress`` is the fit's callback (False
+    cancels: InterruptedError); ``before_write()`` is called between the two, and when it returns False nothing is
+    written and None is returned (a cancel). Returns :func:`fit`'s result."""
+    result = fit(job.albedo, job.working_space, job.epidermis_thickness_mm, job.transport, job.auto_gains, job.mask,
+                 progress)
+    if before_write is not None and not before_write():
+        return None
+    result["fit"].write(job.path, job.residual_path, tiles=job.tiles or None)
+    return result

@@ -434,6 +434,7 @@ def fit_albedo_map(
     streams: int | None = None,
     rgb_gains: npt.ArrayLike | Literal["auto"] | None = None,
     mask: npt.NDArray[np.bool_] | _MapArray | None = None,
+    progress: Callable[[int, int], bool | None] | None = None,
 ) -> AlbedoMapFit:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_albedo_map)``."""
 

@@ -15,11 +15,9 @@
 //! Out-of-gamut targets (a green texel) end at the nearest reachable colour on the domain's boundary, with their ΔE00
 //! reported; nothing returns NaN.
 
-use std::collections::HashMap;
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 
-use rayon::prelude::*;
 use serde::Serialize;
 
 use super::lm::{self, LmSettings};
@@ -172,6 +170,16 @@ impl AlbedoTable {
     /// [`AlbedoTable::build`] that stops once `cancel` is set (read before each node), with
     /// [`SkinError::interrupted`].
     pub fn build_cancellable(options: &AlbedoFitOptions, cancel: &AtomicBool) -> Result<AlbedoTable, SkinError> {
+        AlbedoTable::build_ticking(options, cancel, None)
+    }
+
+    /// [`AlbedoTable::build_cancellable`] that calls `tick` about once per percent of the nodes (from the worker
+    /// threads), so that a front's progress callback is asked during the build.
+    pub fn build_ticking(
+        options: &AlbedoFitOptions,
+        cancel: &AtomicBool,
+        tick: Option<&(dyn Fn() + Sync)>,
+    ) -> Result<AlbedoTable, SkinError> {
         let options = options.validated()?;
         let prepared = options.prepared()?;
         // An albedo-only table: no node fits a radius, so the method only names the target's entry.
@@ -182,7 +190,7 @@ impl AlbedoTable {
             false,
             options.extended,
             cancel,
-            None,
+            tick,
         )?;
         let converter = LabConverter::new(options.working_space);
         let lab = (0..table.node_count()).map(|n| converter.lab(table.node_albedo(n))).collect();
@@ -232,12 +240,21 @@ pub fn cached_albedo_table_cancellable(
     options: &AlbedoFitOptions,
     cancel: &AtomicBool,
 ) -> Result<(Arc<AlbedoTable>, bool), SkinError> {
+    cached_albedo_table_ticking(options, cancel, None)
+}
+
+/// [`cached_albedo_table_cancellable`] whose build calls `tick` ([`AlbedoTable::build_ticking`]).
+pub fn cached_albedo_table_ticking(
+    options: &AlbedoFitOptions,
+    cancel: &AtomicBool,
+    tick: Option<&(dyn Fn() + Sync)>,
+) -> Result<(Arc<AlbedoTable>, bool), SkinError> {
     static CACHE: Mutex<Vec<(String, Arc<AlbedoTable>)>> = Mutex::new(Vec::new());
     let key = albedo_table_key(options);
     if let Some((_, t)) = CACHE.lock().map_err(|_| poisoned())?.iter().find(|(k, _)| *k == key) {
         return Ok((t.clone(), true));
     }
-    let table = Arc::new(AlbedoTable::build_cancellable(options, cancel)?);
+    let table = Arc::new(AlbedoTable::build_ticking(options, cancel, tick)?);
     let mut cache = CACHE.lock().map_err(|_| poisoned())?;
     if cache.len() >= TABLE_CACHE_SIZE {
         cache.remove(0);
@@ -303,7 +320,8 @@ const ALBEDO_LM: LmSettings = LmSettings {
 };
 
 /// The coarse start: the table node nearest the target in CIELAB (plus the prior's term), searched on every
-/// `stride`-th node of the concentration axes.
+/// `stride`-th node of the concentration axes. The hot path of a texture fit: the prior's term is taken once per
+/// melanin blend and a node's coordinates only for the nearest (as [`MaterialTable::node_warped`] gives them).
 pub(crate) fn coarse_start(
     table: &AlbedoTable,
     target_lab: [f64; 3],
@@ -312,23 +330,27 @@ pub(crate) fn coarse_start(
     blend_level: Option<usize>,
 ) -> [f64; 3] {
     let n = table.axes();
-    let mut best = (f64::INFINITY, [0.0; 3]);
+    let mut best = (f64::INFINITY, 0);
     let levels = blend_level.map_or(0..n[1], |j| j..j + 1);
     for i in (0..n[0]).step_by(stride) {
         for j in levels.clone() {
+            let blend = j as f64 / (n[1] - 1) as f64;
+            let prior = (options.prior_weight * (blend - options.melanin_blend_prior)).powi(2);
+            let row = (i * n[1] + j) * n[2];
             for k in (0..n[2]).step_by(stride) {
-                let node = (i * n[1] + j) * n[2] + k;
-                let l = table.lab[node];
-                let u = table.node_u(node);
-                let d = (0..3).map(|c| (l[c] - target_lab[c]).powi(2)).sum::<f64>()
-                    + (options.prior_weight * (u[1] - options.melanin_blend_prior)).powi(2);
+                let l = table.lab[row + k];
+                let d = (0..3).map(|c| (l[c] - target_lab[c]).powi(2)).sum::<f64>() + prior;
                 if d < best.0 {
-                    best = (d, u);
+                    best = (d, row + k);
                 }
             }
         }
     }
-    best.1
+    if best.0 < f64::INFINITY {
+        table.node_u(best.1)
+    } else {
+        [0.0; 3]
+    }
 }
 
 /// The cost (ΔE00² plus the prior's term) above which a table fit is restarted from other blends: 0.2² ΔE00².
@@ -337,6 +359,16 @@ const RESTART_COST: f64 = 0.04;
 /// The table fit of one colour: coarse start, then Levenberg-Marquardt on the table. Returns table coordinates and
 /// the table's ΔE00 there.
 pub(crate) fn fit_on_table(table: &AlbedoTable, target_rgb: [f64; 3], options: &AlbedoFitOptions) -> ([f64; 3], f64) {
+    let (u, de, _) = fit_on_table_costed(table, target_rgb, options);
+    (u, de)
+}
+
+/// [`fit_on_table`] with the fit's cost (ΔE00² plus the prior's term) as well.
+pub(crate) fn fit_on_table_costed(
+    table: &AlbedoTable,
+    target_rgb: [f64; 3],
+    options: &AlbedoFitOptions,
+) -> ([f64; 3], f64, f64) {
     let conv = table.converter();
     let target_lab = conv.lab(target_rgb);
     let problem = Problem {
@@ -358,7 +390,35 @@ pub(crate) fn fit_on_table(table: &AlbedoTable, target_rgb: [f64; 3], options: &
             }
         }
     }
-    (u, ciede2000(target_lab, conv.lab(table.albedo(u))))
+    (u, ciede2000(target_lab, conv.lab(table.albedo(u))), cost)
+}
+
+/// A colour's table fit when the fit of a nearby colour (the same texel under slightly other gains) is known: its
+/// table coordinates `start` and cost `start_cost`. Levenberg-Marquardt from there; the full fit ([`fit_on_table`]:
+/// coarse start and restarts) only where that ends above the restart cost while the nearby fit did not (a colour
+/// that has just left skin's colours). A colour outside them already keeps the basin its full fit's restarts chose.
+/// Returns table coordinates, the table's ΔE00 there and the cost.
+pub(crate) fn refit_on_table(
+    table: &AlbedoTable,
+    target_rgb: [f64; 3],
+    options: &AlbedoFitOptions,
+    (start, start_cost): ([f64; 3], f64),
+) -> ([f64; 3], f64, f64) {
+    let conv = table.converter();
+    let target_lab = conv.lab(target_rgb);
+    let problem = Problem {
+        forward: |u| table.albedo(u),
+        converter: conv,
+        target_lab,
+        prior: options.melanin_blend_prior,
+        weight: options.prior_weight,
+        free: [true; 3],
+    };
+    let (u, cost) = problem.solve(start, 40);
+    if cost > RESTART_COST && start_cost <= RESTART_COST {
+        return fit_on_table_costed(table, target_rgb, options);
+    }
+    (u, ciede2000(target_lab, conv.lab(table.albedo(u))), cost)
 }
 
 /// Parameters that reproduce a colour within the ambiguity ΔE00: the best fit at each melanin blend of a grid.
@@ -485,8 +545,11 @@ pub fn fit_albedo_cancellable(
 pub const CACHE_LEVELS: f32 = 1023.0;
 
 /// The cache key of a colour: its 10-bit sRGB codes where every channel is in [0, 1], else its exact bits (an
-/// out-of-gamut colour is fitted as it is).
-fn colour_key(t: &[f32; 3]) -> [u32; 3] {
+/// out-of-gamut colour is fitted as it is). A texture's distinct colours are its distinct keys (8-bit textures repeat
+/// colours, and each is fitted once), kept in an FNV-1a hash map (the crate's one hasher, src/maps/lut.rs's cache
+/// keys): measured on 4096² keys, 0.29 s against 0.18 s for a hand-written Fx hash at 192 000 distinct colours (2.1 s
+/// against 1.3 s at 7.2 million), small beside the fit of those colours.
+pub(crate) fn colour_key(t: &[f32; 3]) -> [u32; 3] {
     if t.iter().all(|v| (0.0..=1.0).contains(v)) {
         t.map(|v| {
             let s = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
@@ -497,27 +560,6 @@ fn colour_key(t: &[f32; 3]) -> [u32; 3] {
         let b = t.map(|v| (v + 0.0).to_bits());
         [b[0], b[1], b[2] | 0x8000_0000]
     }
-}
-
-/// Distinct colours of a texture (up to the cache key's quantisation, [`CACHE_LEVELS`]) and each texel's index into
-/// them: 8-bit textures repeat colours, and each is fitted once.
-pub(crate) fn distinct_colours(texels: &[[f32; 3]]) -> (Vec<[f32; 3]>, Vec<u32>) {
-    // FNV-1a, the crate's one hasher (src/maps/lut.rs's cache keys): measured on 4096² keys, 0.29 s against 0.18 s
-    // for a hand-written Fx hash at 192 000 distinct colours (2.1 s against 1.3 s at 7.2 million), small beside the
-    // fit of those colours.
-    let mut index: HashMap<[u32; 3], u32, fnv::FnvBuildHasher> = HashMap::default();
-    let mut colours = Vec::new();
-    let keys: Vec<[u32; 3]> = texels.par_iter().map(colour_key).collect();
-    let mut of_texel = Vec::with_capacity(texels.len());
-    for (t, key) in texels.iter().zip(keys) {
-        let next = colours.len() as u32;
-        let i = *index.entry(key).or_insert_with(|| {
-            colours.push(*t);
-            next
-        });
-        of_texel.push(i);
-    }
-    (colours, of_texel)
 }
 
 /// The extended parameters' names, for messages and results.

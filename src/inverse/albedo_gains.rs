@@ -16,7 +16,9 @@ use std::sync::atomic::AtomicBool;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::albedo::{cached_albedo_table_cancellable, fit_on_table, AlbedoFitOptions, AlbedoTable, GAIN_RANGE};
+use super::albedo::{
+    cached_albedo_table_ticking, fit_on_table_costed, refit_on_table, AlbedoFitOptions, AlbedoTable, GAIN_RANGE,
+};
 use crate::error::SkinError;
 
 /// A texel this far (ΔE00) from every colour skin can have is plainly not skin's albedo (the fit's own residual on
@@ -51,10 +53,14 @@ pub struct GainEstimate {
 
 /// Texels spread evenly over `texels` (the golden-ratio sequence), as distinct colours with their counts.
 pub(crate) fn spread_sample(texels: &[[f32; 3]], count: usize) -> Vec<([f32; 3], u32)> {
-    let n = texels.len();
+    spread_sample_of(texels.len(), count, |i| texels[i])
+}
+
+/// [`spread_sample`] of the `n` texels `texel(0)`, ..., `texel(n - 1)` (none: an empty sample).
+pub(crate) fn spread_sample_of(n: usize, count: usize, texel: impl Fn(usize) -> [f32; 3]) -> Vec<([f32; 3], u32)> {
     let mut seen: HashMap<[u32; 3], ([f32; 3], u32)> = HashMap::new();
-    for k in 0..count.min(n.max(1) * 4) {
-        let t = texels[crate::numeric::golden_index(k, n)];
+    for k in 0..count.min(n * 4) {
+        let t = texel(crate::numeric::golden_index(k, n));
         seen.entry(t.map(f32::to_bits)).or_insert((t, 0)).1 += 1;
     }
     let mut sample: Vec<([f32; 3], u32)> = seen.into_values().collect();
@@ -62,26 +68,37 @@ pub(crate) fn spread_sample(texels: &[[f32; 3]], count: usize) -> Vec<([f32; 3],
     sample
 }
 
-/// Each sampled colour times `gains`, fitted on the table: (ΔE00, the table's albedo at the fit).
+/// A sampled colour's fit: (ΔE00, the table's albedo there, (table coordinates, cost)).
+type SampleFit = (f64, [f64; 3], ([f64; 3], f64));
+
+/// Each sampled colour times `gains`, fitted on the table: (ΔE00, the table's albedo at the fit, the fit's table
+/// coordinates and cost). With `previous` (each colour's fit under the last round's gains: coordinates and cost), each
+/// is refitted from there ([`refit_on_table`]); without, fitted afresh.
 fn fit_sample(
     table: &AlbedoTable,
     sample: &[([f32; 3], u32)],
     gains: [f64; 3],
     options: &AlbedoFitOptions,
+    previous: Option<&[([f64; 3], f64)]>,
     cancel: &AtomicBool,
-) -> Result<Vec<(f64, [f64; 3])>, SkinError> {
+) -> Result<Vec<SampleFit>, SkinError> {
     sample
         .par_iter()
-        .map(|(c, _)| {
+        .enumerate()
+        .map(|(i, (c, _))| {
             SkinError::check_cancel(cancel, "gain estimate")?;
-            let (u, de) = fit_on_table(table, [0, 1, 2].map(|k| c[k] as f64 * gains[k]), options);
-            Ok((de, table.albedo(u)))
+            let target = [0, 1, 2].map(|k| c[k] as f64 * gains[k]);
+            let (u, de, cost) = match previous {
+                Some(previous) => refit_on_table(table, target, options, previous[i]),
+                None => fit_on_table_costed(table, target, options),
+            };
+            Ok((de, table.albedo(u), (u, cost)))
         })
         .collect()
 }
 
 /// (share outside, median ΔE00) of a fitted sample, weighted by the counts.
-fn figures(fits: &[(f64, [f64; 3])], sample: &[([f32; 3], u32)], ambiguity: f64) -> (f64, f64) {
+fn figures(fits: &[SampleFit], sample: &[([f32; 3], u32)], ambiguity: f64) -> (f64, f64) {
     let total: f64 = sample.iter().map(|s| s.1 as f64).sum();
     let outside: f64 = fits.iter().zip(sample).filter(|(f, _)| f.0 > ambiguity).map(|(_, s)| s.1 as f64).sum();
     let mut weighted: Vec<(f64, u32)> = fits.iter().zip(sample).map(|(f, s)| (f.0, s.1)).collect();
@@ -108,16 +125,35 @@ pub fn estimate_gains(
     thicknesses_mm: &[f64],
     cancel: &AtomicBool,
 ) -> Result<GainEstimate, SkinError> {
+    estimate_gains_of_sample(&spread_sample(texels, GAIN_SAMPLE), options, thicknesses_mm, &|_| {}, cancel)
+}
+
+/// [`estimate_gains`] on a texture's [`spread_sample`] (distinct colours with their counts; empty: an error), telling
+/// `part(f)` the share `f` of the estimate done after each round of fits (and again, the same share, while a table is
+/// built), so that a front's progress callback is asked throughout.
+pub(crate) fn estimate_gains_of_sample(
+    sample: &[([f32; 3], u32)],
+    options: &AlbedoFitOptions,
+    thicknesses_mm: &[f64],
+    part: &(dyn Fn(f64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<GainEstimate, SkinError> {
     let options = AlbedoFitOptions { rgb_gains: [1.0; 3], ..options.validated()? };
-    if texels.is_empty() {
+    if sample.is_empty() {
         return Err(SkinError::invalid("albedo texture", "has no texels to estimate gains on"));
     }
-    let sample = spread_sample(texels, GAIN_SAMPLE);
     let sampled: usize = sample.iter().map(|s| s.1 as usize).sum();
     let ambiguity = options.ambiguity_delta_e;
-    let (table, _) = cached_albedo_table_cancellable(&options, cancel)?;
+    // Progress in rounds of fits: the figures before, then up to GAIN_ROUNDS + 1 per start and thickness.
+    let rounds = (1 + 2 * thicknesses_mm.len() * (GAIN_ROUNDS + 1)) as f64;
+    let round = std::sync::atomic::AtomicUsize::new(0);
+    let at_round = || round.load(std::sync::atomic::Ordering::Relaxed) as f64 / rounds;
+    let next_round = || part(round.fetch_add(1, std::sync::atomic::Ordering::Relaxed) as f64 / rounds);
+    let tick = || part(at_round());
+    let (table, _) = cached_albedo_table_ticking(&options, cancel, Some(&tick))?;
     let (outside_before, median_before) =
-        figures(&fit_sample(&table, &sample, [1.0; 3], &options, cancel)?, &sample, ambiguity);
+        figures(&fit_sample(&table, sample, [1.0; 3], &options, None, cancel)?, sample, ambiguity);
+    next_round();
     let conv = *table.converter();
     // Two starts: the texture as it is, and scaled to skin's typical brightness (Y 0.25).
     let mut luminances: Vec<f64> = sample.iter().map(|(c, _)| conv.luminance(c.map(f64::from))).collect();
@@ -125,17 +161,20 @@ pub fn estimate_gains(
     let median_y = luminances[luminances.len() / 2];
     let scaled = if median_y > 0.0 { (0.25 / median_y).clamp(GAIN_RANGE.0, GAIN_RANGE.1) } else { 1.0 };
     let mut best = ([1.0; 3], options.extended[0], (outside_before, median_before));
-    for &thickness in thicknesses_mm {
+    for (k, &thickness) in thicknesses_mm.iter().enumerate() {
         let at = AlbedoFitOptions { extended: [thickness, options.extended[1], options.extended[2]], ..options }
             .validated()?;
-        let (table, _) = cached_albedo_table_cancellable(&at, cancel)?;
-        for start in [[1.0; 3], [scaled; 3]] {
-            let (gains, here) = calibrate(&table, &sample, start, &at, cancel)?;
+        let (table, _) = cached_albedo_table_ticking(&at, cancel, Some(&tick))?;
+        for (s, start) in [[1.0; 3], [scaled; 3]].into_iter().enumerate() {
+            let (gains, here) = calibrate(&table, sample, start, &at, &next_round, cancel)?;
             if here < best.2 {
                 best = (gains, thickness, here);
             }
+            // The rounds this start did not need.
+            round.store(1 + (2 * k + s + 1) * (GAIN_ROUNDS + 1), std::sync::atomic::Ordering::Relaxed);
         }
     }
+    part(1.0);
     let (rgb_gains, epidermis_thickness_mm, (outside_after, median_after)) = best;
     Ok(GainEstimate {
         rgb_gains,
@@ -149,18 +188,24 @@ pub fn estimate_gains(
     })
 }
 
-/// Fit, then solve the gains, from `start`, until they settle: the best gains seen and their figures.
+/// Fit, then solve the gains, from `start`, until they settle: the best gains seen and their figures. The first
+/// round fits the colours afresh, each later one refits them from the round before (the gains move little from round
+/// to round: [`refit_on_table`]).
 fn calibrate(
     table: &AlbedoTable,
     sample: &[([f32; 3], u32)],
     start: [f64; 3],
     options: &AlbedoFitOptions,
+    round_done: &dyn Fn(),
     cancel: &AtomicBool,
 ) -> Result<([f64; 3], (f64, f64)), SkinError> {
     let mut gains = start;
     let mut best: Option<([f64; 3], (f64, f64))> = None;
+    let mut previous: Option<Vec<([f64; 3], f64)>> = None;
     for _ in 0..GAIN_ROUNDS {
-        let fits = fit_sample(table, sample, gains, options, cancel)?;
+        let fits = fit_sample(table, sample, gains, options, previous.as_deref(), cancel)?;
+        previous = Some(fits.iter().map(|f| f.2).collect());
+        round_done();
         let here = figures(&fits, sample, options.ambiguity_delta_e);
         if !matches!(best, Some((_, b)) if b <= here) {
             best = Some((gains, here));
@@ -170,7 +215,7 @@ fn calibrate(
         let mut next = gains;
         for (c, g) in next.iter_mut().enumerate() {
             let (mut num, mut den) = (0.0, 0.0);
-            for ((de, model), (colour, count)) in fits.iter().zip(sample) {
+            for ((de, model, _), (colour, count)) in fits.iter().zip(sample) {
                 let w = *count as f64 / (1.0 + (de / 2.0).powi(2));
                 let a = colour[c] as f64;
                 num += w * a * model[c];
@@ -186,7 +231,7 @@ fn calibrate(
             break;
         }
     }
-    let fits = fit_sample(table, sample, gains, options, cancel)?;
+    let fits = fit_sample(table, sample, gains, options, previous.as_deref(), cancel)?;
     let here = figures(&fits, sample, options.ambiguity_delta_e);
     Ok(match best {
         Some((g, b)) if b <= here => (g, b),

@@ -1,16 +1,18 @@
 //! Fit an albedo texture: per texel, the parameters whose model albedo is closest in CIEDE2000 to the texel's colour
 //! (src/inverse/albedo.rs), on the forward table only (coarse nearest node, then Levenberg-Marquardt in table
-//! coordinates), each distinct colour once.
+//! coordinates), each distinct colour once, the texels in blocks of rows.
 
 use std::collections::HashMap;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::albedo::{cached_albedo_table_cancellable, distinct_colours, fit_on_table, AlbedoFitOptions, AlbedoTable};
-use super::albedo_gains::{estimate_gains, not_albedo_diagnosis, GainEstimate, NOT_ALBEDO_DELTA_E00};
+use super::albedo::{cached_albedo_table_ticking, colour_key, fit_on_table, AlbedoFitOptions, AlbedoTable};
+use super::albedo_gains::{
+    estimate_gains_of_sample, not_albedo_diagnosis, spread_sample_of, GainEstimate, GAIN_SAMPLE, NOT_ALBEDO_DELTA_E00,
+};
 use crate::error::SkinError;
 use crate::maps::io::{
     commit_all, create_output_dir, output_folder_of, stage_channels_exr, ExrOptions, Staged, EXTENDED_CHANNELS,
@@ -259,110 +261,299 @@ pub fn fit_albedo_tiles_cancellable(
     texture: impl Into<TextureFit>,
     cancel: &AtomicBool,
 ) -> Result<Vec<AlbedoMapFit>, SkinError> {
+    fit_albedo_tiles_with_progress(tiles, options, texture, None, cancel)
+}
+
+/// [`fit_albedo_tiles_cancellable`] that tells `progress(done, total)` how many more of the set's `total` texels are
+/// done, as the maps pipeline's `compute_maps_cancellable` does: `(0, total)` while a forward table is built (about
+/// once per percent of its nodes), the gains are estimated (each round) and the thickness is screened (each
+/// candidate), then increments as the colours are fitted and the texels filled in, adding up to `total` when the fit
+/// has succeeded, so that a front whose callback decides to cancel (and sets `cancel`) is asked at every stage. A
+/// cancelled fit never returns a (partial) result.
+///
+/// The per-texel passes work in blocks of whole rows ([`BLOCK_TEXELS`]): beside its input and its output the fit
+/// holds the distinct colours and their fits, and a block of cache keys per thread. Until the colours are fitted,
+/// each texel's residual holds its colour's index.
+pub fn fit_albedo_tiles_with_progress(
+    tiles: &[AlbedoTile<'_>],
+    options: &AlbedoFitOptions,
+    texture: impl Into<TextureFit>,
+    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    cancel: &AtomicBool,
+) -> Result<Vec<AlbedoMapFit>, SkinError> {
     let texture = texture.into();
     let mut options = options.validated()?;
     for tile in tiles {
         check_texels(&tile.label, tile.texels, tile.width, tile.height)?;
     }
-    let joined;
-    let texels: &[[f32; 3]] = if let [one] = tiles {
-        one.texels
-    } else {
-        joined = tiles.iter().flat_map(|t| t.texels.iter().copied()).collect::<Vec<_>>();
-        &joined
-    };
-    crate::maps::io::check_texel_count("albedo tile set", texels.len(), 1)?;
-    let mask = set_mask(tiles, texels.len())?;
-    let counts_in = |i: usize| !matches!(&mask, Some(m) if !m[i]);
-    let skin_texels: Vec<[f32; 3]> = match &mask {
-        Some(m) => texels.iter().zip(m).filter(|(_, &k)| k).map(|(t, _)| *t).collect(),
-        None => Vec::new(),
-    };
-    let skin: &[[f32; 3]] = if mask.is_some() { &skin_texels } else { texels };
+    let set = TileSet::new(tiles)?;
+    let ticks = &Ticks { progress, total: set.total, done: AtomicUsize::new(0), filled: AtomicUsize::new(0) };
+    // The shares of the progress bar: the gains' estimate (when asked for), the distinct colours, their fits, the
+    // texels filled in (the rest).
+    let gains_end = if texture.auto_gains { 0.2 } else { 0.0 };
+    let (colours_end, fits_end) = (gains_end + 0.05, 0.95);
     let mut gains = None;
     // The thicknesses the gains are estimated with: those the fit may choose from.
     let mut thicknesses = vec![options.extended[0]];
     if texture.thickness == EpidermisThickness::Chosen {
         thicknesses.extend(THICKNESS_CANDIDATES_MM.iter().filter(|&&t| t != options.extended[0]));
     }
+    let skin_sample = || set.skin_sample(GAIN_SAMPLE);
     if texture.auto_gains {
-        let estimate = estimate_gains(skin, &options, &thicknesses, cancel)?;
+        let part = |f: f64| ticks.reach(gains_end * f);
+        let estimate = estimate_gains_of_sample(&skin_sample(), &options, &thicknesses, &part, cancel)?;
         options.rgb_gains = estimate.rgb_gains;
         gains = Some(estimate);
     }
-    let gained;
-    let texels: &[[f32; 3]] = if options.rgb_gains == [1.0; 3] {
-        texels
-    } else {
-        let g = options.rgb_gains.map(|v| v as f32);
-        gained = texels.par_iter().map(|t| [t[0] * g[0], t[1] * g[1], t[2] * g[2]]).collect::<Vec<_>>();
-        &gained
+    // The outputs, each texel's residual holding its colour's index until the colours are fitted.
+    let params: Vec<Vec<[f32; 4]>> = tiles.iter().map(|t| vec![[0.0; 4]; t.texels.len()]).collect();
+    let mut residuals: Vec<Vec<f32>> = tiles.iter().map(|t| vec![0.0; t.texels.len()]).collect();
+    let (colours, counts) =
+        set.distinct_colours(options.rgb_gains, &mut residuals, ticks, (gains_end, colours_end), cancel)?;
+    let colour_of = |g: usize| {
+        let (t, i) = set.locate(g);
+        residuals[t][i].to_bits()
     };
-    let (colours, of_texel) = distinct_colours(texels);
-    // The colour of each texel that counts (the mask's skin).
-    let counted: Vec<u32> = match &mask {
-        Some(m) => of_texel.iter().zip(m).filter(|(_, &k)| k).map(|(&i, _)| i).collect(),
-        None => Vec::new(),
-    };
-    let counted: &[u32] = if mask.is_some() { &counted } else { &of_texel };
     // The gains are estimated at the extended physiology given (before any thickness is chosen), as auto_gains does.
     let given = options;
+    let fitting = |from: f64, to: f64| move |f: f64| ticks.reach(from + (to - from) * f);
     let (options, fits, table_from_cache, choice) = match texture.thickness {
         EpidermisThickness::Held => {
-            let (table, cached) = cached_albedo_table_cancellable(&options, cancel)?;
-            (options, fit_colours(&table, &colours, &options, cancel)?, cached, None)
+            let (table, cached) = cached_albedo_table_ticking(&options, cancel, Some(&|| ticks.tick()))?;
+            let fits = fit_colours(&table, &colours, &options, &fitting(colours_end, fits_end), cancel)?;
+            (options, fits, cached, None)
         }
         EpidermisThickness::Chosen => {
-            let (options, fits, cached, choice) = choose_thickness(&colours, counted, &options, cancel)?;
+            let counted = |j: usize| colour_of(set.skin_texel(j));
+            let (options, fits, cached, choice) = choose_thickness(
+                &colours,
+                &counts,
+                (set.skin, &counted),
+                &options,
+                (ticks, colours_end, fits_end),
+                cancel,
+            )?;
             (options, fits, cached, Some(choice))
         }
     };
     // The diagnosis of the whole set, with the remedy measured when the gains were not estimated already.
     let far = fits
         .iter()
-        .zip(colour_counts(counted, colours.len()))
+        .zip(&counts)
         .filter(|(f, _)| f.1 as f64 > NOT_ALBEDO_DELTA_E00)
-        .map(|(_, c)| c as usize)
+        .map(|(_, &c)| c as usize)
         .sum::<usize>();
-    let mut diagnosis = not_albedo_diagnosis(far, counted.len(), gains.as_ref(), texture.auto_gains);
+    let mut diagnosis = not_albedo_diagnosis(far, set.skin, gains.as_ref(), texture.auto_gains);
     if diagnosis.is_some() && gains.is_none() {
-        let estimate = estimate_gains(skin, &given, &thicknesses, cancel)?;
-        diagnosis = not_albedo_diagnosis(far, counted.len(), Some(&estimate), false);
+        let estimate = estimate_gains_of_sample(&skin_sample(), &given, &thicknesses, &|_| ticks.tick(), cancel)?;
+        diagnosis = not_albedo_diagnosis(far, set.skin, Some(&estimate), false);
         gains = Some(estimate);
     }
-    let set = SetFit { options, choice, gains, diagnosis, distinct_colours: colours.len(), table_from_cache };
-    let mut start = 0;
+    let shared = SetFit { options, choice, gains, diagnosis, distinct_colours: colours.len(), table_from_cache };
     let mut out = Vec::with_capacity(tiles.len());
-    for tile in tiles {
-        let range = start..start + tile.texels.len();
-        start += tile.texels.len();
-        out.push(tile_fit(tile, &of_texel[range.clone()], &fits, |i| counts_in(range.start + i), &set));
+    for ((tile, params), residual) in tiles.iter().zip(params).zip(residuals) {
+        SkinError::check_cancel(cancel, "albedo map fit")?;
+        out.push(tile_fit(tile, params, residual, &fits, &shared, &|n| ticks.advance(n, fits_end)));
     }
+    ticks.reach(1.0);
+    // A flag set by the last call is an interruption too (nothing returned).
+    SkinError::check_cancel(cancel, "albedo map fit")?;
     Ok(out)
 }
 
-/// The skin mask of a tile set, the tiles' masks joined (a tile without one: all skin); None when no tile has one.
-fn set_mask(tiles: &[AlbedoTile<'_>], texel_count: usize) -> Result<Option<Vec<bool>>, SkinError> {
-    if tiles.iter().all(|t| t.mask.is_none()) {
-        return Ok(None);
+/// Texels per block of the per-texel passes (whole rows; one row at least).
+pub const BLOCK_TEXELS: usize = 1 << 16;
+/// Texels per entry of [`TileSet`]'s count of skin texels (the k-th skin texel is found by scanning at most this
+/// many).
+const SKIN_CHUNK: usize = 4096;
+
+/// The progress of a set fit, in texels of the set ([`fit_albedo_tiles_with_progress`]).
+struct Ticks<'a> {
+    progress: Option<&'a (dyn Fn(usize, usize) + Sync)>,
+    total: usize,
+    /// Texels reported done so far (never back).
+    done: AtomicUsize,
+    /// Texels filled in by the last pass.
+    filled: AtomicUsize,
+}
+
+impl Ticks<'_> {
+    /// `(0, total)`: nothing more done, but the front is asked.
+    fn tick(&self) {
+        if let Some(p) = self.progress {
+            p(0, self.total);
+        }
     }
-    let mut joined_mask = Vec::with_capacity(texel_count);
-    for tile in tiles {
-        match tile.mask {
-            Some(m) if m.len() != tile.texels.len() => {
+
+    /// The fit is `fraction` (0..1) of the way: the texels done go up to that share of the total (a tick when that is
+    /// no more than before).
+    fn reach(&self, fraction: f64) {
+        let Some(p) = self.progress else { return };
+        let target = ((fraction.clamp(0.0, 1.0) * self.total as f64).round() as usize).min(self.total);
+        let before = self.done.fetch_max(target, Ordering::Relaxed);
+        p(target.saturating_sub(before), self.total);
+    }
+
+    /// `texels` more of the set filled in, the filling being the share of the progress after `from`.
+    fn advance(&self, texels: usize, from: f64) {
+        let filled = self.filled.fetch_add(texels, Ordering::Relaxed) + texels;
+        self.reach(from + (1.0 - from) * filled as f64 / self.total.max(1) as f64);
+    }
+}
+
+/// The tiles of a set as one texture, their rows one after another: where each global texel is, which are skin, and
+/// the blocks of rows the per-texel passes work in.
+struct TileSet<'a, 't> {
+    tiles: &'a [AlbedoTile<'t>],
+    /// The first global texel of each tile.
+    starts: Vec<usize>,
+    total: usize,
+    /// Skin texels (all of them without a mask).
+    skin: usize,
+    /// With a mask: the skin texels before each [`SKIN_CHUNK`] of global texels.
+    skin_before: Option<Vec<usize>>,
+}
+
+impl<'a, 't> TileSet<'a, 't> {
+    /// The set, its size checked ([`crate::maps::io::check_texel_count`]) and its masks (one value per texel, at
+    /// least one skin texel).
+    fn new(tiles: &'a [AlbedoTile<'t>]) -> Result<Self, SkinError> {
+        let mut starts = Vec::with_capacity(tiles.len());
+        let mut total = 0;
+        for tile in tiles {
+            starts.push(total);
+            total += tile.texels.len();
+        }
+        crate::maps::io::check_texel_count("albedo tile set", total, 1)?;
+        let mut set = TileSet { tiles, starts, total, skin: total, skin_before: None };
+        if tiles.iter().all(|t| t.mask.is_none()) {
+            return Ok(set);
+        }
+        for tile in tiles {
+            if let Some(m) = tile.mask.filter(|m| m.len() != tile.texels.len()) {
                 return Err(SkinError::invalid(
                     format!("mask of {}", tile.label),
                     format!("has {} values for {} texels (one per texel, row-major)", m.len(), tile.texels.len()),
-                ))
+                ));
             }
-            Some(m) => joined_mask.extend_from_slice(m),
-            None => joined_mask.extend(std::iter::repeat(true).take(tile.texels.len())),
+        }
+        let mut before = Vec::with_capacity(total / SKIN_CHUNK + 1);
+        let mut skin = 0;
+        for g in 0..total {
+            if g % SKIN_CHUNK == 0 {
+                before.push(skin);
+            }
+            skin += set.is_skin(g) as usize;
+        }
+        if skin == 0 {
+            return Err(SkinError::invalid("mask", "marks no texel as skin: at least one texel must be fitted"));
+        }
+        set.skin = skin;
+        set.skin_before = Some(before);
+        Ok(set)
+    }
+
+    /// (tile, texel within it) of global texel `g`.
+    fn locate(&self, g: usize) -> (usize, usize) {
+        let t = self.starts.partition_point(|&s| s <= g) - 1;
+        (t, g - self.starts[t])
+    }
+
+    fn is_skin(&self, g: usize) -> bool {
+        let (t, i) = self.locate(g);
+        self.tiles[t].mask.map_or(true, |m| m[i])
+    }
+
+    /// The global index of the `j`-th skin texel (`j < skin`).
+    fn skin_texel(&self, j: usize) -> usize {
+        let Some(before) = &self.skin_before else { return j };
+        let chunk = before.partition_point(|&b| b <= j) - 1;
+        let mut seen = before[chunk];
+        let mut g = chunk * SKIN_CHUNK;
+        loop {
+            if self.is_skin(g) {
+                if seen == j {
+                    return g;
+                }
+                seen += 1;
+            }
+            g += 1;
         }
     }
-    if !joined_mask.contains(&true) {
-        return Err(SkinError::invalid("mask", "marks no texel as skin: at least one texel must be fitted"));
+
+    /// The skin texels spread over the set that the gains are estimated on ([`spread_sample`]'s).
+    fn skin_sample(&self, count: usize) -> Vec<([f32; 3], u32)> {
+        spread_sample_of(self.skin, count, |j| {
+            let (t, i) = self.locate(self.skin_texel(j));
+            self.tiles[t].texels[i]
+        })
     }
-    Ok(Some(joined_mask))
+
+    /// The blocks of the per-texel passes in order: (tile, its texels), whole rows, [`BLOCK_TEXELS`] at most unless
+    /// a row is longer.
+    fn blocks(&self) -> Vec<(usize, std::ops::Range<usize>)> {
+        let mut blocks = Vec::new();
+        for (t, tile) in self.tiles.iter().enumerate() {
+            let step = (BLOCK_TEXELS / tile.width).max(1) * tile.width;
+            blocks.extend((0..tile.texels.len()).step_by(step).map(|s| (t, s..(s + step).min(tile.texels.len()))));
+        }
+        blocks
+    }
+
+    /// The distinct colours of the set times `gains` (up to the cache key's quantisation, [`colour_key`]: the first
+    /// texel's colour of each key, scanning the tiles in order) and how many skin texels have each; each texel's
+    /// colour index is written into `index` (per tile, as the bits of an f32). The keys are computed a few blocks at
+    /// a time in parallel and entered in order; a texel whose key is its left neighbour's skips the hash.
+    fn distinct_colours(
+        &self,
+        gains: [f64; 3],
+        index: &mut [Vec<f32>],
+        ticks: &Ticks<'_>,
+        (from, to): (f64, f64),
+        cancel: &AtomicBool,
+    ) -> Result<(Vec<[f32; 3]>, Vec<u32>), SkinError> {
+        let g = gains.map(|v| v as f32);
+        let gained = |t: &[f32; 3]| if gains == [1.0; 3] { *t } else { [t[0] * g[0], t[1] * g[1], t[2] * g[2]] };
+        let mut lookup: HashMap<[u32; 3], u32, fnv::FnvBuildHasher> = HashMap::default();
+        let mut colours = Vec::new();
+        let mut counts: Vec<u32> = Vec::new();
+        let blocks = self.blocks();
+        let group = 2 * rayon::current_num_threads().max(1);
+        let mut done = 0;
+        for run in blocks.chunks(group) {
+            SkinError::check_cancel(cancel, "albedo map fit")?;
+            let keys: Vec<Vec<[u32; 3]>> = run
+                .par_iter()
+                .map(|(t, range)| self.tiles[*t].texels[range.clone()].iter().map(|x| colour_key(&gained(x))).collect())
+                .collect();
+            for ((t, range), keys) in run.iter().zip(keys) {
+                let tile = &self.tiles[*t];
+                let mut last: Option<([u32; 3], u32)> = None;
+                for (i, key) in range.clone().zip(keys) {
+                    let c = match last {
+                        Some((k, c)) if k == key => c,
+                        _ => {
+                            let next = colours.len() as u32;
+                            let c = *lookup.entry(key).or_insert_with(|| {
+                                colours.push(gained(&tile.texels[i]));
+                                counts.push(0);
+                                next
+                            });
+                            last = Some((key, c));
+                            c
+                        }
+                    };
+                    index[*t][i] = f32::from_bits(c);
+                    if tile.mask.map_or(true, |m| m[i]) {
+                        counts[c as usize] += 1;
+                    }
+                }
+                done += range.len();
+            }
+            ticks.reach(from + (to - from) * done as f64 / self.total as f64);
+        }
+        Ok((colours, counts))
+    }
 }
 
 /// What every tile of a set shares: the options fitted with (the chosen thickness in them), the choice, the gains,
@@ -376,66 +567,90 @@ struct SetFit {
     table_from_cache: bool,
 }
 
-/// One tile's fit: its texels' parameters and residuals from their colours' fits (`of_tile`: each texel's colour),
-/// and the figures of its texels that count (`counts_in(i)`, i within the tile: the mask's skin; none: zeros).
+/// One tile's fit: its texels' parameters and residuals from their colours' fits (`residual` holds each texel's
+/// colour index on the way in), filled in blocks of rows in parallel (`filled(texels)` after each), and the figures
+/// of its texels that count (the mask's skin; none: zeros).
 fn tile_fit(
     tile: &AlbedoTile<'_>,
-    of_tile: &[u32],
+    mut params: Vec<[f32; 4]>,
+    mut residual: Vec<f32>,
     fits: &[([f32; 3], f32)],
-    counts_in: impl Fn(usize) -> bool,
     set: &SetFit,
+    filled: &(dyn Fn(usize) + Sync),
 ) -> AlbedoMapFit {
     let oil = set.options.oiliness as f32;
-    let (params, residual_delta_e00): (Vec<[f32; 4]>, Vec<f32>) = of_tile
-        .par_iter()
-        .map(|&i| {
-            let (p, de) = fits[i as usize];
-            ([p[0], p[1], p[2], oil], de)
+    let ambiguity = set.options.ambiguity_delta_e;
+    let step = (BLOCK_TEXELS / tile.width).max(1) * tile.width;
+    // (sum, max, count above the ambiguity ΔE00, count) of the ΔE00 of the texels that count.
+    let (sum, max, outside, counted) = params
+        .par_chunks_mut(step)
+        .zip(residual.par_chunks_mut(step))
+        .enumerate()
+        .map(|(b, (params, residual))| {
+            let mut figures = (0.0f64, 0.0f64, 0usize, 0usize);
+            for (k, (p, r)) in params.iter_mut().zip(residual.iter_mut()).enumerate() {
+                let (q, de) = fits[r.to_bits() as usize];
+                *p = [q[0], q[1], q[2], oil];
+                *r = de;
+                if tile.mask.map_or(true, |m| m[b * step + k]) {
+                    let d = de as f64;
+                    figures = (figures.0 + d, figures.1.max(d), figures.2 + (d > ambiguity) as usize, figures.3 + 1);
+                }
+            }
+            filled(params.len());
+            figures
         })
-        .unzip();
-    let counted_de: Vec<f64> =
-        residual_delta_e00.iter().enumerate().filter(|(i, _)| counts_in(*i)).map(|(_, &d)| d as f64).collect();
-    let max = counted_de.iter().copied().fold(0.0, f64::max);
-    let mean = if counted_de.is_empty() { 0.0 } else { counted_de.iter().sum::<f64>() / counted_de.len() as f64 };
-    let outside = counted_de.iter().filter(|&&d| d > set.options.ambiguity_delta_e).count();
+        .reduce(|| (0.0, 0.0, 0, 0), |a, b| (a.0 + b.0, a.1.max(b.1), a.2 + b.2, a.3 + b.3));
     AlbedoMapFit {
         width: tile.width,
         height: tile.height,
         params,
-        residual_delta_e00,
+        residual_delta_e00: residual,
         extended: set.options.extended,
         thickness: set.choice.clone(),
         gains: set.gains.clone(),
         diagnosis: set.diagnosis.clone(),
         stats: AlbedoMapStats {
-            texels: of_tile.len(),
-            masked_out_texels: of_tile.len() - counted_de.len(),
+            texels: tile.texels.len(),
+            masked_out_texels: tile.texels.len() - counted,
             distinct_colours: set.distinct_colours,
             table_from_cache: set.table_from_cache,
             max_delta_e00: max,
-            mean_delta_e00: mean,
+            mean_delta_e00: if counted == 0 { 0.0 } else { sum / counted as f64 },
             out_of_gamut_texels: outside,
             options: set.options,
         },
     }
 }
 
-/// (C_m, beta_m, C_h) and the table's ΔE00 of each colour.
+/// (C_m, beta_m, C_h) and the table's ΔE00 of each colour, fitted in parallel in chunks; `part(f)` is told the
+/// share `f` of the colours done after each chunk.
 fn fit_colours(
     table: &AlbedoTable,
     colours: &[[f32; 3]],
     options: &AlbedoFitOptions,
+    part: &(dyn Fn(f64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<Vec<([f32; 3], f32)>, SkinError> {
-    colours
-        .par_iter()
-        .map(|c| {
-            SkinError::check_cancel(cancel, "albedo map fit")?;
-            let (u, de) = fit_on_table(table, c.map(f64::from), options);
-            let p = options.params_at(u);
-            Ok(([p.melanin, p.melanin_blend, p.hemoglobin].map(f32_not_above), de as f32))
+    let done = AtomicUsize::new(0);
+    let chunk = (colours.len() / 200).clamp(16, 1024);
+    let chunks = colours
+        .par_chunks(chunk)
+        .map(|chunk| {
+            let fits = chunk
+                .iter()
+                .map(|c| {
+                    SkinError::check_cancel(cancel, "albedo map fit")?;
+                    let (u, de) = fit_on_table(table, c.map(f64::from), options);
+                    let p = options.params_at(u);
+                    Ok(([p.melanin, p.melanin_blend, p.hemoglobin].map(f32_not_above), de as f32))
+                })
+                .collect::<Result<Vec<_>, SkinError>>()?;
+            part((done.fetch_add(chunk.len(), Ordering::Relaxed) + chunk.len()) as f64 / colours.len() as f64);
+            Ok(fits)
         })
-        .collect()
+        .collect::<Result<Vec<_>, SkinError>>()?;
+    Ok(chunks.concat())
 }
 
 /// `x` (>= 0) as the nearest f32 not above it, so that a parameter at its range's maximum (0.1) stays in range.
@@ -456,15 +671,6 @@ pub const THICKNESS_CANDIDATES_MM: [f64; 6] = [0.05, 0.1, 0.15, 0.25, 0.35, 0.5]
 /// fitted in full and the better on every texel is kept.
 pub const SCREEN_COLOURS: usize = 4096;
 
-/// How many texels have each colour (`of_texel`: each texel's colour index).
-fn colour_counts(of_texel: &[u32], colours: usize) -> Vec<u32> {
-    let mut counts = vec![0u32; colours];
-    for &i in of_texel {
-        counts[i as usize] += 1;
-    }
-    counts
-}
-
 /// The mean over the texture's texels of per-colour values (`count[i]` texels of colour i).
 fn texel_mean(values: &[([f32; 3], f32)], counts: &[u32]) -> f64 {
     let total: f64 = counts.iter().map(|&c| c as f64).sum();
@@ -472,12 +678,15 @@ fn texel_mean(values: &[([f32; 3], f32)], counts: &[u32]) -> f64 {
 }
 
 /// [`EpidermisThickness::Chosen`]: the options at the chosen thickness, every colour's fit at it, whether every
-/// table came from the cache, and the report.
+/// table came from the cache, and the report. `counts`: the skin texels of each colour; `colour_of_skin(j)`: the
+/// colour of the `j`-th of the `skin` texels (for the screen); the progress goes from `from` to `to` of the way.
 #[allow(clippy::type_complexity)]
 fn choose_thickness(
     colours: &[[f32; 3]],
-    of_texel: &[u32],
+    counts: &[u32],
+    (skin, colour_of_skin): (usize, &dyn Fn(usize) -> u32),
     options: &AlbedoFitOptions,
+    (ticks, from, to): (&Ticks<'_>, f64, f64),
     cancel: &AtomicBool,
 ) -> Result<(AlbedoFitOptions, Vec<([f32; 3], f32)>, bool, ThicknessChoice), SkinError> {
     let held = options.extended[0];
@@ -488,20 +697,21 @@ fn choose_thickness(
     }
     let at = |t: f64| AlbedoFitOptions { extended: [t, options.extended[1], options.extended[2]], ..*options };
     let all_cached = std::cell::Cell::new(true);
-    let fit_all = |t: f64, colours: &[[f32; 3]]| -> Result<Vec<([f32; 3], f32)>, SkinError> {
+    let fit_all = |t: f64, colours: &[[f32; 3]], part: &(dyn Fn(f64) + Sync)| {
         let o = at(t).validated()?;
-        let (table, cached) = cached_albedo_table_cancellable(&o, cancel)?;
+        let (table, cached) = cached_albedo_table_ticking(&o, cancel, Some(&|| ticks.tick()))?;
         all_cached.set(all_cached.get() && cached);
-        fit_colours(&table, colours, &o, cancel)
+        fit_colours(&table, colours, &o, part, cancel)
     };
-    let counts = colour_counts(of_texel, colours.len());
+    // The k-th of n passes over every colour: its share of the way from `from` to `to`.
+    let pass = |k: usize, n: usize| move |f: f64| ticks.reach(from + (to - from) * (k as f64 + f) / n as f64);
     if colours.len() <= SCREEN_COLOURS {
         // Every colour at every candidate: the means are the texture's own, and the best's fits are the result.
         let mut best: Option<(f64, f64, Vec<([f32; 3], f32)>)> = None;
         let mut screened = Vec::new();
-        for &t in &candidates {
-            let fits = fit_all(t, colours)?;
-            let mean = texel_mean(&fits, &counts);
+        for (k, &t) in candidates.iter().enumerate() {
+            let fits = fit_all(t, colours, &pass(k, candidates.len()))?;
+            let mean = texel_mean(&fits, counts);
             screened.push([t, mean]);
             if !matches!(&best, Some(b) if b.1 <= mean) {
                 best = Some((t, mean, fits));
@@ -515,7 +725,7 @@ fn choose_thickness(
     // distinct colour fitted once with its multiplicity.
     let mut weight: HashMap<u32, u32> = HashMap::new();
     for k in 0..SCREEN_COLOURS {
-        *weight.entry(of_texel[crate::numeric::golden_index(k, of_texel.len())]).or_default() += 1;
+        *weight.entry(colour_of_skin(crate::numeric::golden_index(k, skin))).or_default() += 1;
     }
     let mut sample: Vec<(u32, u32)> = weight.into_iter().collect();
     sample.sort_unstable();
@@ -523,14 +733,15 @@ fn choose_thickness(
     let sample_counts: Vec<u32> = sample.iter().map(|&(_, c)| c).collect();
     let mut screened = Vec::new();
     for &t in &candidates {
-        screened.push([t, texel_mean(&fit_all(t, &sample_colours)?, &sample_counts)]);
+        screened.push([t, texel_mean(&fit_all(t, &sample_colours, &|_| ticks.tick())?, &sample_counts)]);
     }
     let best = screened.iter().fold(screened[0], |b, m| if m[1] < b[1] { *m } else { b })[0];
     let mut whole_texture = Vec::new();
     let mut kept: Option<(f64, f64, Vec<([f32; 3], f32)>)> = None;
-    for t in if best == held { vec![held] } else { vec![best, held] } {
-        let fits = fit_all(t, colours)?;
-        let mean = texel_mean(&fits, &counts);
+    let full = if best == held { vec![held] } else { vec![best, held] };
+    for (k, &t) in full.iter().enumerate() {
+        let fits = fit_all(t, colours, &pass(k, full.len()))?;
+        let mean = texel_mean(&fits, counts);
         whole_texture.push([t, mean]);
         if !matches!(&kept, Some(k) if k.1 <= mean) {
             kept = Some((t, mean, fits));

@@ -1,8 +1,9 @@
 //! `fit_albedo` and `fit_albedo_map`: the parameters that reproduce an albedo colour or texture
 //! (src/inverse/albedo.rs).
 
-use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -10,14 +11,17 @@ use pyo3::types::PyDict;
 use crate::color::ALL_WORKING_SPACES;
 use crate::inverse::albedo::{fit_albedo_cancellable, AlbedoFitOptions};
 use crate::inverse::albedo_maps::{
-    fit_albedo_tiles_cancellable, AlbedoMapFit, AlbedoTile, EpidermisThickness, TextureFit,
+    fit_albedo_tiles_with_progress, AlbedoMapFit, AlbedoTile, EpidermisThickness, TextureFit,
 };
 use crate::skin::params::EXTENDED_PARAMS;
 use crate::transport::ExactTotals;
 
-use super::convert::{by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg};
+use super::convert::{
+    by_name, float_array, real_arg, real_vector, shape_text, streams_arg, to_py, transport_arg, FloatArray,
+};
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid, SpectralSkinWarning};
+use super::progress::Progress;
 
 /// The options from the keyword arguments (None: the defaults of src/inverse/albedo.rs).
 #[allow(clippy::too_many_arguments)]
@@ -97,6 +101,25 @@ fn mask_arg(obj: Option<&Bound<'_, PyAny>>, height: usize, width: usize) -> PyRe
         ));
     }
     Ok(Some(values))
+}
+
+/// An (H, W, 3) float array's texels as the core takes them, row-major: one pass over the data (float64 converted),
+/// any strides.
+fn rgb_texels(array: &FloatArray<'_>) -> PyResult<Vec<[f32; 3]>> {
+    fn of<T: numpy::Element + Copy>(a: &Bound<'_, PyArrayDyn<T>>, f: impl Fn(T) -> f32) -> PyResult<Vec<[f32; 3]>> {
+        let readonly = a
+            .try_readonly()
+            .map_err(|e| pyo3::exceptions::PyTypeError::new_err(format!("cannot read the array: {e}")))?;
+        let view = readonly.as_array();
+        Ok(match view.as_slice() {
+            Some(values) => values.chunks_exact(3).map(|c| [f(c[0]), f(c[1]), f(c[2])]).collect(),
+            None => view.rows().into_iter().map(|c| [f(c[0]), f(c[1]), f(c[2])]).collect(),
+        })
+    }
+    match array {
+        FloatArray::F32(a) => of(a, |v| v),
+        FloatArray::F64(a) => of(a, |v| v as f32),
+    }
 }
 
 /// ``rgb_gains``: None, three numbers, or (with ``auto``) the string "auto"; returns the gains given and whether
@@ -217,6 +240,13 @@ pub(super) fn fit_albedo_py<'py>(
 ///         background) are fitted too, each to the skin colour nearest it.
 ///     working_space, baseline_absorption_scale, blood_oxygenation, oiliness, melanin_blend_prior, prior_weight,
 ///     ambiguity_delta_e, transport, streams: as for :func:`fit_albedo`.
+///     progress: None, or a callable ``progress(done, total)`` told how many texels of ``total`` (H x W) are done,
+///         as for :func:`maps`: once with 0 before the fit, with the same ``done`` while a forward table is built,
+///         the gains are estimated or the thickness is screened, then about once per percent as the texture's
+///         colours are fitted and its texels filled in, the last call with ``total`` (from the core's worker
+///         threads, taking the GIL for each call). Returning False cancels: the work under way is finished, the rest
+///         skipped, nothing is returned and InterruptedError is raised. An exception raised by the callback cancels
+///         the same way and is re-raised.
 ///
 /// Returns:
 ///     An :class:`AlbedoMapFit`: the parameter maps, the extended physiology they hold for, the residual, the
@@ -224,8 +254,9 @@ pub(super) fn fit_albedo_py<'py>(
 ///
 /// Raises:
 ///     SpectralSkinError: a non-finite texel, a value out of range, another shape.
-///     TypeError: another dtype.
+///     TypeError: another dtype; a progress that is not callable.
 ///     KeyboardInterrupt: Ctrl-C during the fit.
+///     InterruptedError: the progress callback returned False.
 ///
 /// Warns:
 ///     SpectralSkinWarning: the texture does not look like an albedo (over a quarter of its texels more than 2
@@ -237,7 +268,8 @@ pub(super) fn fit_albedo_py<'py>(
     signature = (
         albedo, *, working_space = "Linear Rec.709", epidermis_thickness_mm = None, baseline_absorption_scale = None,
         blood_oxygenation = None, oiliness = None, melanin_blend_prior = None, prior_weight = None,
-        ambiguity_delta_e = None, transport = "adding_doubling", streams = None, rgb_gains = None, mask = None
+        ambiguity_delta_e = None, transport = "adding_doubling", streams = None, rgb_gains = None, mask = None,
+        progress = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -256,7 +288,9 @@ pub(super) fn fit_albedo_map_py(
     streams: Option<&Bound<'_, PyAny>>,
     rgb_gains: Option<&Bound<'_, PyAny>>,
     mask: Option<&Bound<'_, PyAny>>,
+    progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<AlbedoMapFitPy> {
+    let progress = Progress::from_arg("fit_albedo_map", progress)?;
     let (gains, auto_gains) = gains_arg(rgb_gains, true)?;
     const EXPECTED: &str = "an (H, W, 3) float array of linear RGB";
     let array = float_array("albedo", albedo, 3, EXPECTED)?
@@ -268,8 +302,7 @@ pub(super) fn fit_albedo_map_py(
     let (height, width) = (shape[0], shape[1]);
     // Before any copy: a broadcast view of any size costs nothing until its planes are gathered.
     crate::maps::io::check_texel_count("albedo", width, height)?;
-    let planes = [array.plane(Some(0))?, array.plane(Some(1))?, array.plane(Some(2))?];
-    let texels: Vec<[f32; 3]> = (0..height * width).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
+    let texels = rgb_texels(&array)?;
     let options = options_from(
         working_space,
         [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation],
@@ -286,14 +319,33 @@ pub(super) fn fit_albedo_map_py(
     } else {
         EpidermisThickness::Chosen
     };
-    // Ctrl-C stops the thickness choice, the table builds and the texels' fits.
-    let cancel = std::sync::atomic::AtomicBool::new(false);
     let texture = TextureFit { thickness, auto_gains };
     let mask = mask_arg(mask, height, width)?;
-    let fit = detached_interruptible(py, &cancel, || {
+    // Ctrl-C (and a progress callback's False or exception) stops the thickness choice, the table builds and the
+    // texels' fits through one flag.
+    let hook = progress.as_ref();
+    let own_flag = AtomicBool::new(false);
+    let cancel = hook.map_or(&own_flag, |h| &h.stopped);
+    let fit = detached_interruptible(py, cancel, || {
+        let report = |done: usize, total: usize| {
+            if let Some(h) = hook {
+                h.report(done, total)
+            }
+        };
+        report(0, texels.len());
         let tile = AlbedoTile { label: "albedo texture".into(), width, height, texels: &texels, mask: mask.as_deref() };
-        Ok(fit_albedo_tiles_cancellable(&[tile], &options, texture, &cancel)?.remove(0))
+        let progress = hook.map(|_| &report as &(dyn Fn(usize, usize) + Sync));
+        let fit = fit_albedo_tiles_with_progress(&[tile], &options, texture, progress, cancel);
+        // A stopped fit is an error; the callback's answer (or exception) is what the caller sees.
+        if hook.is_some_and(Progress::stopped) {
+            return Ok(None);
+        }
+        Ok(Some(fit?.remove(0)))
     })?;
+    drop(texels);
+    let Some(fit) = fit else {
+        return Err(progress.map(Progress::into_error).unwrap_or_else(|| internal("stopped without a progress hook")));
+    };
     if let Some(diagnosis) = &fit.diagnosis {
         PyErr::warn(py, &py.get_type::<SpectralSkinWarning>(), &std::ffi::CString::new(diagnosis.as_str())?, 1)?;
     }

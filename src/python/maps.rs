@@ -1,15 +1,14 @@
 //! `maps`, `read_parameter_map` and `write_maps`: texture maps, with progress and cancelling.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use numpy::ndarray::{Array2, Array3};
 use numpy::{PyArray, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
-use pyo3::exceptions::{PyInterruptedError, PyKeyError, PyTypeError};
+use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyBytes, PyDict, PyIterator, PyList, PyString};
+use pyo3::types::{PyBytes, PyDict, PyIterator, PyList, PyString};
 use rayon::prelude::*;
 
 use crate::evaluate::Outputs;
@@ -34,6 +33,7 @@ use super::convert::{
 };
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid, warn_notes};
+use super::progress::Progress;
 
 /// The fields of `SpecularParams` that do not depend on the oiliness: what `maps` returns in "specular_constants"
 /// when the oiliness varies (beside the per-texel maps), and for the `paper` surface its Coat (weight 0).
@@ -117,66 +117,6 @@ pub(super) fn rgb_image(
     data: Vec<f32>,
 ) -> PyResult<Bound<'_, PyArray3<f32>>> {
     Ok(PyArray::from_owned_array(py, Array3::from_shape_vec((height, width, 3), data).map_err(internal)?))
-}
-
-/// `maps(progress=...)`: a Python callable told (texels done, total texels) from the worker threads, about once per
-/// percent (it takes the GIL for each call); returning False cancels (the core skips the rows not yet started). An
-/// exception it raises cancels too and is re-raised by `maps`.
-pub(super) struct Progress {
-    callback: Py<PyAny>,
-    done: AtomicUsize,
-    reported_percent: AtomicUsize,
-    stopped: AtomicBool,
-    error: Mutex<Option<PyErr>>,
-}
-
-impl Progress {
-    fn new(callback: Py<PyAny>) -> Self {
-        Progress {
-            callback,
-            done: AtomicUsize::new(0),
-            reported_percent: AtomicUsize::new(0),
-            stopped: AtomicBool::new(false),
-            error: Mutex::new(None),
-        }
-    }
-
-    fn stopped(&self) -> bool {
-        self.stopped.load(Ordering::Relaxed)
-    }
-
-    /// `increment` more texels are done out of `total` (0 for the first call).
-    fn report(&self, increment: usize, total: usize) {
-        let done = self.done.fetch_add(increment, Ordering::Relaxed) + increment;
-        let percent = done.saturating_mul(100) / total.max(1);
-        if self.stopped() || (increment > 0 && self.reported_percent.fetch_max(percent, Ordering::Relaxed) >= percent) {
-            return;
-        }
-        // Calls are serialised by the GIL but may arrive out of order (a thread that counted fewer texels can get the
-        // GIL after the one that finished), so each call reports the count as it stands once the GIL is held: what
-        // the callback sees never goes backwards, and the last call says total.
-        Python::attach(|py| match self.callback.call1(py, (self.done.load(Ordering::Relaxed).min(total), total)) {
-            Ok(answer) => {
-                if answer.bind(py).is_instance_of::<PyBool>() && !answer.bind(py).is_truthy().unwrap_or(true) {
-                    self.stopped.store(true, Ordering::Relaxed);
-                }
-            }
-            Err(e) => {
-                if let Ok(mut slot) = self.error.lock() {
-                    slot.get_or_insert(e);
-                }
-                self.stopped.store(true, Ordering::Relaxed);
-            }
-        });
-    }
-
-    /// Why the work stopped: the callback's exception, or an InterruptedError for a False answer.
-    fn into_error(self) -> PyErr {
-        match self.error.into_inner().ok().flatten() {
-            Some(e) => e,
-            None => PyInterruptedError::new_err("maps: cancelled by the progress callback (it returned False)"),
-        }
-    }
 }
 
 /// Parameter maps read from a file with the core's reader: the formats and rules of ``spectral-skin maps``.
@@ -403,13 +343,7 @@ pub(super) fn maps_py<'py>(
     surface: Option<&str>,
 ) -> PyResult<MapsPy> {
     let start = Instant::now();
-    if let Some(callback) = progress.as_ref().filter(|c| !c.is_callable()) {
-        let type_name = callback.get_type().name().map(|n| n.to_string()).unwrap_or_default();
-        return Err(PyTypeError::new_err(format!(
-            "progress must be a callable (done, total) -> bool | None, or None; got {type_name}"
-        )));
-    }
-    let progress = progress.map(|callback| Progress::new(callback.unbind()));
+    let progress = Progress::from_arg("maps", progress)?;
     // Settings first: their errors come before any copy.
     let knobs = Knobs {
         wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,

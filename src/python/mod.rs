@@ -13,6 +13,7 @@ mod evaluate;
 mod inverse;
 mod inverse_albedo;
 mod maps;
+mod progress;
 mod shader_table;
 mod surface;
 

@@ -237,3 +237,84 @@ fn a_screened_choice_is_never_worse_than_the_held_value() {
     assert!(chosen.stats.mean_delta_e00 <= held.stats.mean_delta_e00, "{choice:?} {:?}", held.stats);
     assert!(chosen.extended[0] > 0.25, "made at 0.35 mm, chose {:?}: {choice:?}", chosen.extended);
 }
+
+/// A texture wider than a block of the per-texel passes (`BLOCK_TEXELS`), split into three tiles with a skin mask:
+/// the tiles fitted as a set are the rows of the whole texture fitted as one (the blocks and the tiles change
+/// nothing), each tile's figures counting its own skin texels; the progress told `(done, total)` increments adds up
+/// to the set's texels exactly, never backwards, and a callback that sets the cancel flag stops the fit with the
+/// interruption and no result.
+#[test]
+fn tiles_and_blocks_change_nothing_and_the_progress_adds_up() {
+    use spectral_skin::inverse::albedo_maps::{fit_albedo_tiles_with_progress, AlbedoTile, BLOCK_TEXELS};
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use std::sync::Mutex;
+
+    let (width, heights) = (BLOCK_TEXELS / 64 + 3, [70usize, 1, 65]); // blocks of 63 rows, a one-row tile
+    let height: usize = heights.iter().sum();
+    let colours = spread(97, EXTENDED_DEFAULTS);
+    let texels: Vec<[f32; 3]> = (0..width * height)
+        .map(|i| {
+            let a = albedo_of(&colours[(i / 7 + i % 5) % colours.len()], WorkingSpace::LinearRec709);
+            a.map(|v| v as f32)
+        })
+        .collect();
+    let mask: Vec<bool> = (0..width * height).map(|i| i % 11 != 3).collect();
+    let options = AlbedoFitOptions::default();
+    let texture = TextureFit { thickness: EpidermisThickness::Held, auto_gains: true };
+    let whole_tile = AlbedoTile { label: "whole".into(), width, height, texels: &texels, mask: Some(&mask) };
+    let never = AtomicBool::new(false);
+    let whole = fit_albedo_tiles_with_progress(&[whole_tile], &options, texture, None, &never).unwrap().remove(0);
+    let mut first = 0;
+    let tiles: Vec<AlbedoTile<'_>> = heights
+        .iter()
+        .enumerate()
+        .map(|(k, &h)| {
+            let range = first * width..(first + h) * width;
+            first += h;
+            AlbedoTile {
+                label: format!("tile {k}"),
+                width,
+                height: h,
+                texels: &texels[range.clone()],
+                mask: Some(&mask[range]),
+            }
+        })
+        .collect();
+    let calls = Mutex::new(Vec::new());
+    let done = AtomicUsize::new(0);
+    let progress = |increment: usize, total: usize| {
+        let now = done.fetch_add(increment, Ordering::Relaxed) + increment;
+        calls.lock().unwrap().push((now, total));
+    };
+    let fits = fit_albedo_tiles_with_progress(&tiles, &options, texture, Some(&progress), &never).unwrap();
+    let mut row = 0;
+    for (fit, &h) in fits.iter().zip(&heights) {
+        let range = row * width..(row + h) * width;
+        row += h;
+        assert_eq!(fit.params, whole.params[range.clone()], "parameters of rows {range:?}");
+        assert_eq!(fit.residual_delta_e00, whole.residual_delta_e00[range.clone()]);
+        let skin: Vec<f64> = range.clone().filter(|&i| mask[i]).map(|i| whole.residual_delta_e00[i] as f64).collect();
+        assert_eq!(fit.stats.masked_out_texels, h * width - skin.len());
+        assert_eq!(fit.stats.max_delta_e00, skin.iter().copied().fold(0.0, f64::max));
+        let mean = skin.iter().sum::<f64>() / skin.len() as f64;
+        assert!(
+            (fit.stats.mean_delta_e00 - mean).abs() <= 1e-12 * mean.max(1.0),
+            "{} {mean}",
+            fit.stats.mean_delta_e00
+        );
+    }
+    assert_eq!((fits[0].gains.as_ref(), fits[0].extended), (whole.gains.as_ref(), whole.extended));
+    let calls = calls.into_inner().unwrap();
+    let total = width * height;
+    assert!(calls.iter().all(|c| c.1 == total) && calls.last() == Some(&(total, total)), "{:?}", calls.last());
+    assert!(calls.iter().any(|c| 0 < c.0 && c.0 < total), "the progress moves on the way");
+    // A callback that cancels once texels are done.
+    let cancel = AtomicBool::new(false);
+    let stop = |increment: usize, _: usize| {
+        if increment > 0 {
+            cancel.store(true, Ordering::Relaxed);
+        }
+    };
+    let e = fit_albedo_tiles_with_progress(&tiles, &options, texture, Some(&stop), &cancel).unwrap_err();
+    assert!(e.to_string().contains("interrupted"), "{e}");
+}

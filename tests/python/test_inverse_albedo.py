@@ -161,3 +161,46 @@ def test_write_refuses_names_it_would_not_honour(tmp_path: Path) -> None:
     with pytest.raises(spectral_skin.SpectralSkinError, match="ending in .exr"):
         fit.write(tmp_path / "p.exr", tmp_path / "residual.tif")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_progress_reaches_the_total_and_false_cancels_with_no_result() -> None:
+    """``progress(done, total)`` as for maps(): (0, total) first, never backwards, the last call (total, total), and
+    the fit the same as without it; returning False (at the first call, or once texels are done) cancels with
+    InterruptedError naming fit_albedo_map and returns nothing; an exception in the callback is re-raised; a
+    callback that is not callable is a TypeError."""
+    rows = [[albedo(*p) * s for p in TRUTH] for s in (1.0, 0.9, 0.8, 1.1)]  # 4 x 6 texels, 24 distinct colours
+    texture = np.array(rows, dtype=np.float32)
+    total = texture.shape[0] * texture.shape[1]
+    calls: list[tuple[int, int]] = []
+
+    def record(done: int, of: int) -> None:
+        calls.append((done, of))
+
+    fit = spectral_skin.fit_albedo_map(texture, rgb_gains="auto", progress=record)
+    assert calls[0] == (0, total) and calls[-1] == (total, total), calls
+    assert all(of == total for _, of in calls)
+    assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:], strict=False)), calls
+    assert any(0 < done < total for done, _ in calls), calls  # it moves on the way, not only at the end
+    plain = spectral_skin.fit_albedo_map(texture, rgb_gains="auto")
+    np.testing.assert_array_equal(fit.params, plain.params)
+    np.testing.assert_array_equal(fit.residual_delta_e00, plain.residual_delta_e00)
+
+    for stop_after in (0, 1):
+        seen: list[int] = []
+
+        def stop(done: int, of: int, stop_after: int = stop_after, seen: list[int] = seen) -> bool:
+            seen.append(done)
+            return len(seen) <= stop_after
+
+        result = None
+        with pytest.raises(InterruptedError, match=r"fit_albedo_map: cancelled by the progress callback"):
+            result = spectral_skin.fit_albedo_map(texture, progress=stop)
+        assert result is None and len(seen) == stop_after + 1, seen
+
+    def fail(done: int, of: int) -> None:
+        raise ValueError("from the callback")
+
+    with pytest.raises(ValueError, match="from the callback"):
+        spectral_skin.fit_albedo_map(texture, progress=fail)
+    with pytest.raises(TypeError, match="progress must be a callable"):
+        spectral_skin.fit_albedo_map(texture, progress=3)  # type: ignore[arg-type]
