@@ -31,8 +31,10 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-CLI = ROOT / "target" / "release" / "spectral-skin"
-FLOOR = ROOT / "target" / "release" / "examples" / "maps_floor"
+# Cargo's target folder ($CARGO_TARGET_DIR when set, as cargo itself reads it).
+TARGET = Path(os.environ.get("CARGO_TARGET_DIR") or ROOT / "target")
+CLI = TARGET / "release" / "spectral-skin"
+FLOOR = TARGET / "release" / "examples" / "maps_floor"
 # The first heading of the hand-written sections the report keeps when it rewrites the file.
 SECTIONS_KEPT = "\n## A varying epidermis thickness"
 

@@ -127,22 +127,29 @@ pub(crate) fn warp(value: f64, max: f64) -> f64 {
 }
 
 /// Cube root of `x` in [0, 1] (NaN passes through), within two ulps of `f64::cbrt` (the result places a texel in
-/// the table's cells; nothing needs more). A bit-level first guess (Kahan's: relative error below 4 %) is refined by
-/// three Halley steps, each of which cubes the relative error (4e-2 -> 6e-5 -> 2e-13 -> round-off). It replaces the
-/// libm call, which perf showed taking a quarter of a 4096² table run's CPU time (docs/maps-performance.md).
+/// the table's cells; nothing needs more). A bit-level first guess (Kahan's, on the f32 bits: relative error below
+/// 4 %) is refined by three Halley steps in f64, each of which cubes the relative error (4e-2 -> 6e-5 -> 2e-13 ->
+/// round-off). It replaces the libm call, which perf showed taking a quarter of a 4096² table run's CPU time
+/// (docs/maps-performance.md).
 #[inline]
 fn cbrt_unit(x: f64) -> f64 {
-    if x.is_nan() || x < f64::MIN_POSITIVE {
-        return x.cbrt(); // zero, subnormals, NaN
+    if x.is_nan() || x < CBRT_NORMAL_MIN {
+        return x.cbrt(); // zero, tiny values, NaN
     }
     cbrt_normal(x)
 }
 
-/// [`cbrt_unit`] of a positive normal `x`, without the branch, so that [`MaterialTable::lookup_method_rows`]'s loop
-/// over a run of texels vectorises (any other input gives some finite or NaN value, never a trap).
+/// The least `x` [`cbrt_normal`] takes: f32's least normal, so that its first guess is made from a normal f32.
+const CBRT_NORMAL_MIN: f64 = f32::MIN_POSITIVE as f64;
+
+/// [`cbrt_unit`] of `x` in [[`CBRT_NORMAL_MIN`], 1], without the branch, so that [`MaterialTable::lookup_method_rows`]'s
+/// loop over a run of texels vectorises (any other input gives some finite or NaN value, never a trap). The first
+/// guess divides the f32 bits by 3: a u32 division by a constant, which vectorises (the f64 bits' u64 division did
+/// not: a sixth of the row lookup's time went to it, one lane at a time).
 #[inline(always)]
 fn cbrt_normal(x: f64) -> f64 {
-    let mut y = f64::from_bits(x.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
+    // fdlibm's cbrtf constant B1 (709958130 = 0x2A5137A0): (127 - 127/3 - 0.03306235651) * 2^23.
+    let mut y = f64::from(f32::from_bits((x as f32).to_bits() / 3 + 0x2A51_37A0));
     for _ in 0..3 {
         let y3 = y * y * y;
         y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
@@ -732,21 +739,22 @@ fn lookup_run(v: &[[f32; 8]], resolution: TableResolution, [m, b, h]: [&[f32]; 3
         u_h[x] = cbrt_normal(q_h[x]);
     }
     for x in 0..len {
-        if q_m[x].is_nan() || q_m[x] < f64::MIN_POSITIVE {
+        if q_m[x].is_nan() || q_m[x] < CBRT_NORMAL_MIN {
             u_m[x] = cbrt_unit(q_m[x]);
         }
-        if q_h[x].is_nan() || q_h[x] < f64::MIN_POSITIVE {
+        if q_h[x].is_nan() || q_h[x] < CBRT_NORMAL_MIN {
             u_h[x] = cbrt_unit(q_h[x]);
         }
     }
     for x in 0..len {
         let (corner, [ti, tj, tk]) =
             cell_of_warped(r, u_m[x], (b[x] as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, u_h[x]);
-        let out = trilinear_row(v, corner, di, dj, [ti, tj, tk]);
-        // All eight lanes (two of them padding), so that the sums and the exponentials stay vector code.
-        for q in 0..8 {
-            logs[x][q] = exp_stored(out[q]);
-        }
+        logs[x] = trilinear_row(v, corner, di, dj, [ti, tj, tk]);
+    }
+    // The exponentials in a loop of their own over every lane of the run (two of each eight are padding), so that
+    // independent exponentials overlap instead of each texel waiting on its own polynomial's chain.
+    for lane in &mut logs.as_flattened_mut()[..8 * len] {
+        *lane = exp_stored(*lane);
     }
 }
 
