@@ -23,6 +23,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// The floor: read and check the parameters, then write the same files (kinds and channels) the run wrote, each
 /// channel filled from an input plane.
 fn copy(inputs: &ParamInputs, out: &Path, files: &[(String, Vec<&'static str>)]) {
+    std::fs::create_dir_all(out).unwrap();
     let mut image = read_params(inputs).unwrap();
     check_planes(&mut image, false).unwrap();
     let planes: Vec<&[f32]> = image

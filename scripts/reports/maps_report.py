@@ -259,7 +259,7 @@ def main() -> None:
                     f"{size:>5} {kind:<8} {name:<16} {encoding:<12} {wall:7.2f} s  cpu {cpu:6.2f} s  {peak:5.0f} MiB  {megabytes:6.1f} MB  ratio {wall / floor:6.0f}",
                     file=sys.stderr,
                 )
-        scale, floor = ([], "") if opts.quick else scale_runs(tmp, env)
+        scale, floor_table = ([], "") if opts.quick else scale_runs(tmp, env)
     load_after = os.getloadavg()[0]
 
     lines = [
@@ -385,14 +385,14 @@ def main() -> None:
         for name, texels, wall, cpu, peak, sec in scale:
             lines.append(f"| {name} | {texels} | {wall:.2f} | {cpu:.2f} | {peak:.0f} | {sec['read']:.2f} / "
                          f"{sec['compute']:.2f} / {sec['write']:.2f} | {1e9 * cpu / texels:.1f} |")
-        if floor:
+        if floor_table:
             lines += [
                 "",
                 "The maps against their copy floor (`cargo run --release --example maps_floor -- 5 4096 8192`: the same "
                 "input read and checked and the same files written through the same writer, without the model; medians "
                 "of 5 in one process):",
                 "",
-                floor.strip(),
+                floor_table.strip(),
             ]
     kept = ""
     if opts.out.exists() and SECTIONS_KEPT in opts.out.read_text():
