@@ -746,10 +746,13 @@ fn lookup_run(v: &[[f32; 8]], resolution: TableResolution, [m, b, h]: [&[f32]; 3
             u_h[x] = cbrt_unit(q_h[x]);
         }
     }
+    // The cells first, in a loop of their own (it vectorises), then each texel's interpolation (a gather).
+    let (mut corner, mut t) = ([0usize; RUN], [[0f32; 3]; RUN]);
     for x in 0..len {
-        let (corner, [ti, tj, tk]) =
-            cell_of_warped(r, u_m[x], (b[x] as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, u_h[x]);
-        logs[x] = trilinear_row(v, corner, di, dj, [ti, tj, tk]);
+        (corner[x], t[x]) = cell_of_warped(r, u_m[x], (b[x] as f64 - MELANIN_BLEND.min) / MELANIN_BLEND.max, u_h[x]);
+    }
+    for x in 0..len {
+        logs[x] = trilinear_row(v, corner[x], di, dj, t[x]);
     }
     // The exponentials in a loop of their own over every lane of the run (two of each eight are padding), so that
     // independent exponentials overlap instead of each texel waiting on its own polynomial's chain.
@@ -764,7 +767,8 @@ fn lookup_run(v: &[[f32; 8]], resolution: TableResolution, [m, b, h]: [&[f32]; 3
 fn cell_of_warped(r: TableResolution, u_m: f64, u_b: f64, u_h: f64) -> (usize, [f32; 3]) {
     let axis = |u: f64, n: usize| {
         let x = u.clamp(0.0, 1.0) * (n - 1) as f64;
-        let i = (x as usize).min(n - 2); // x >= 0: truncation is floor, without a libm call
+        // x in [0, n - 1]: truncation is floor, without a libm call; through i32, which vectorises (u64 does not).
+        let i = ((x as i32) as usize).min(n - 2);
         (i, (x - i as f64) as f32)
     };
     let (i, ti) = axis(u_m, r.melanin);
