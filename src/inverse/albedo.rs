@@ -363,6 +363,22 @@ pub(crate) fn fit_on_table(table: &AlbedoTable, target_rgb: [f64; 3], options: &
     (u, de)
 }
 
+/// The fit of `target_lab` on the table's albedo over all three coordinates, with the options' prior.
+fn table_problem<'a>(
+    table: &'a AlbedoTable,
+    target_lab: [f64; 3],
+    options: &AlbedoFitOptions,
+) -> Problem<'a, impl Fn([f64; 3]) -> [f64; 3] + 'a> {
+    Problem {
+        forward: |u| table.albedo(u),
+        converter: table.converter(),
+        target_lab,
+        prior: options.melanin_blend_prior,
+        weight: options.prior_weight,
+        free: [true; 3],
+    }
+}
+
 /// [`fit_on_table`] with the fit's cost (ΔE00² plus the prior's term) as well.
 pub(crate) fn fit_on_table_costed(
     table: &AlbedoTable,
@@ -371,14 +387,7 @@ pub(crate) fn fit_on_table_costed(
 ) -> ([f64; 3], f64, f64) {
     let conv = table.converter();
     let target_lab = conv.lab(target_rgb);
-    let problem = Problem {
-        forward: |u| table.albedo(u),
-        converter: conv,
-        target_lab,
-        prior: options.melanin_blend_prior,
-        weight: options.prior_weight,
-        free: [true; 3],
-    };
+    let problem = table_problem(table, target_lab, options);
     let (mut u, mut cost) = problem.solve(coarse_start(table, target_lab, options, 2, None), 40);
     // A poor fit may be a local minimum (or a start stuck on a bound): restart from the nearest node at every other
     // melanin blend of the table and keep the best.
@@ -406,14 +415,7 @@ pub(crate) fn refit_on_table(
 ) -> ([f64; 3], f64, f64) {
     let conv = table.converter();
     let target_lab = conv.lab(target_rgb);
-    let problem = Problem {
-        forward: |u| table.albedo(u),
-        converter: conv,
-        target_lab,
-        prior: options.melanin_blend_prior,
-        weight: options.prior_weight,
-        free: [true; 3],
-    };
+    let problem = table_problem(table, target_lab, options);
     let (u, cost) = problem.solve(start, 40);
     if cost > RESTART_COST && start_cost <= RESTART_COST {
         return fit_on_table_costed(table, target_rgb, options);
