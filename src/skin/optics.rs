@@ -23,6 +23,15 @@ pub struct SkinModel {
     /// In JSON an infinite thickness is the string "inf".
     #[serde(with = "finite_or_inf")]
     pub dermis_thickness_mm: f64,
+    /// Radius of the dermal blood vessels the blood is confined to, mm, for the packaging correction
+    /// ([`vessel_packaging_factor`]); 0 (the default, DJ2006's eq. 7) spreads the blood evenly through the dermis.
+    /// At most [`MAX_VESSEL_RADIUS_MM`]. Absent from JSON when 0 (docs/model.md, Vessel packaging).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub blood_vessel_radius_mm: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// Serde for a length that may be infinite: a number, or the string "inf" (JSON has no infinity).
@@ -54,7 +63,7 @@ mod finite_or_inf {
 
 impl Default for SkinModel {
     fn default() -> Self {
-        SkinModel { eumelanin_k_per_mm: K_EM_PER_MM, dermis_thickness_mm: f64::INFINITY }
+        SkinModel { eumelanin_k_per_mm: K_EM_PER_MM, dermis_thickness_mm: f64::INFINITY, blood_vessel_radius_mm: 0.0 }
     }
 }
 
@@ -71,12 +80,13 @@ pub fn sigma_a_epidermis_per_mm(p: &SkinParams, wavelength_nm: f64, k_em_per_mm:
 }
 
 /// `sigma_a_derm(lambda)`, mm^-1: oxygenated/deoxygenated blood blend (gamma = the blood oxygenation) plus baseline
-/// (DJ2006 eq. 7).
-pub fn sigma_a_dermis_per_mm(p: &SkinParams, wavelength_nm: f64) -> f64 {
+/// (DJ2006 eq. 7), the blood's term times the packaging factor of vessels of radius `vessel_radius_mm` (1 at 0).
+pub fn sigma_a_dermis_per_mm(p: &SkinParams, wavelength_nm: f64, vessel_radius_mm: f64) -> f64 {
     let gamma = p.blood_oxygenation;
     let blood =
         gamma * sigma_a_oxy_blood_per_mm(wavelength_nm) + (1.0 - gamma) * sigma_a_deoxy_blood_per_mm(wavelength_nm);
-    p.hemoglobin * blood + (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(p, wavelength_nm)
+    let packed = blood * vessel_packaging_factor(blood, vessel_radius_mm);
+    p.hemoglobin * packed + (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(p, wavelength_nm)
 }
 
 /// The two layers, top to bottom, at one wavelength: epidermis over dermis, both with index 1.4.
@@ -90,7 +100,7 @@ pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [La
         },
         Layer {
             thickness_mm: model.dermis_thickness_mm,
-            sigma_a_per_mm: sigma_a_dermis_per_mm(p, wavelength_nm),
+            sigma_a_per_mm: sigma_a_dermis_per_mm(p, wavelength_nm, model.blood_vessel_radius_mm),
             sigma_s_reduced_per_mm: sigma_s_reduced_dermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,
         },
