@@ -119,6 +119,35 @@ mod tests {
         assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m);
     }
 
+    /// The packaging option is absent from a default model's JSON (so earlier JSON and cache keys read the same) and
+    /// round-trips when set.
+    #[test]
+    fn vessel_radius_is_absent_from_json_unless_set() {
+        let text = serde_json::to_string(&SkinModel::default()).unwrap();
+        assert!(!text.contains("blood_vessel_radius_mm"), "{text}");
+        let packed = SkinModel { blood_vessel_radius_mm: 0.02, ..SkinModel::default() };
+        let text = serde_json::to_string(&packed).unwrap();
+        assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), packed);
+    }
+
+    /// Packaging scales the dermis's blood term alone, by the factor of the blood's own absorption: the epidermis and
+    /// the bloodless part of the dermis are unchanged.
+    #[test]
+    fn packaging_scales_only_the_blood() {
+        let p = SkinParams::preset("caucasian").unwrap();
+        let packed = SkinModel { blood_vessel_radius_mm: 0.015, ..SkinModel::default() };
+        for w in [414.0, 542.0, 560.0, 650.0] {
+            let [epi0, derm0] = skin_layers(&p, &SkinModel::default(), w);
+            let [epi1, derm1] = skin_layers(&p, &packed, w);
+            assert_eq!(epi0, epi1);
+            let tissue = (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(&p, w);
+            let blood = 0.75 * sigma_a_oxy_blood_per_mm(w) + 0.25 * sigma_a_deoxy_blood_per_mm(w);
+            let factor = (derm1.sigma_a_per_mm - tissue) / (derm0.sigma_a_per_mm - tissue);
+            assert!((factor - vessel_packaging_factor(blood, 0.015)).abs() < 1e-12, "{w} nm: {factor}");
+            assert!(factor < 1.0 && derm1.sigma_s_reduced_per_mm == derm0.sigma_s_reduced_per_mm);
+        }
+    }
+
     /// Independently computed values, Caucasian at 550 nm (docs/model.md, section Reference numbers).
     #[test]
     fn caucasian_550() {
