@@ -288,10 +288,12 @@ fn main() {
         );
     }
 
-    // Skin-type groups by the individual typology angle of the measured colour (classes.rs): the default set's fit
-    // quality, Q-band residual and physiology per group.
-    println!("\nBy skin type, default set (ITA of the measured colour; Chardon et al. 1991):\n");
-    classes::print_class_table(&classes::class_rows(&default_run.fits, &spectra, &wl));
+    // Skin-type groups by the individual typology angle of the measured colour (classes.rs): the paper set's and the
+    // default set's fit quality, Q-band residual and physiology per group.
+    for (label, r) in [("paper set", &runs[0]), ("default set", default_run)] {
+        println!("\nBy skin type, {label} (ITA of the measured colour; Chardon et al. 1991):\n");
+        classes::print_class_table(&classes::class_rows(&r.fits, &spectra, &wl));
+    }
 
     // Plots.
     let rms_series: Vec<Series> =

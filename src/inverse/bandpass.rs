@@ -2,16 +2,16 @@
 //!
 //! A grating spectrophotometer does not sample the reflectance at its nominal wavelengths: each reported value is the
 //! reflectance weighted by the instrument's slit function, close to a triangle whose full width at half maximum
-//! (FWHM) is the bandpass (ASTM E308-18, "Standard Practice for Computing the Colors of Objects by Using the CIE
-//! System", section 7.5 and its Tables 5-6, which assume a triangle with the bandpass equal to the measurement
-//! interval). The Konica Minolta CM-2600d of the Xiao et al. 2016 spectra reports every 10 nm with a "half bandwidth
-//! approx. 10 nm" (Konica Minolta, CM-2600d/CM-2500d specifications). Haemoglobin's Q bands are about as narrow
-//! (oxyhaemoglobin's 577 nm peak falls to half in about 12 nm: Prahl's table, data/hemoglobin_extinction.csv), so
-//! a model sampled at points draws them deeper than such an instrument records them.
+//! (FWHM) is the bandpass (ASTM E308, "Standard Practice for Computing the Colors of Objects by Using the CIE
+//! System", whose weights for 10 and 20 nm data assume a triangular bandpass equal to the measurement interval). The
+//! Konica Minolta CM-2600d of the Xiao et al. 2016 spectra reports every 10 nm with a "half bandwidth approx. 10 nm"
+//! (Konica Minolta, CM-2600d/CM-2500d specifications). Haemoglobin's Q bands are about as narrow (oxyhaemoglobin's
+//! 576 nm peak falls to half within 10 nm on its red side: Prahl's table, data/hemoglobin_extinction.csv), so a
+//! model sampled at points draws them deeper than such an instrument records them.
 //!
-//! In effect the CM-2600d data average over more than the nominal 10 nm: the mean residual of the fits in the Q bands
-//! shrinks as the modelled bandpass widens to 15 nm and overshoots beyond (docs/measured-skin.md, Instrument
-//! bandpass), hence the default [`Bandpass::Spacing`] of 1.5 times the spacing.
+//! In effect the CM-2600d data average over more than the nominal 10 nm: the fits' mean residual in the Q bands
+//! shrinks as the modelled bandpass widens, and the steep edge at 580-600 nm is matched at 15 nm and overshot beyond
+//! (docs/measured-skin.md, Instrument bandpass), hence the default [`Bandpass::Spacing`] of 1.5 times the spacing.
 //!
 //! [`Sampling`] computes the model on a finer grid of nodes and averages it with triangle weights, exact for a
 //! reflectance linear between nodes.
@@ -30,8 +30,8 @@ pub const MAX_NODE_STEP_NM: f64 = 1.0;
 
 /// The bandpass (FWHM) of [`Bandpass::Spacing`] over the wavelength spacing: ASTM E308 assumes 1 (a bandpass equal
 /// to the measurement interval), and the CM-2600d states about 10 nm at its 10 nm interval; its data's Q-band residual
-/// shrinks to a third by 15 nm and turns over beyond (0 / 10 / 15 / 20 nm: docs/measured-skin.md, Instrument
-/// bandpass), so 1.5.
+/// shrinks to a third by 15 nm, where the steep edge at 580-600 nm is matched and beyond which it is overshot
+/// (0 to 20 nm: docs/measured-skin.md, Skin types and the Q bands), so 1.5.
 pub const SPACING_TO_FWHM: f64 = 1.5;
 
 /// How the measured values relate to the model's spectrum.
@@ -176,15 +176,15 @@ mod tests {
     #[test]
     fn neighbours_share_nodes_and_zero_width_is_the_point() {
         let wl: Vec<f64> = (0..31).map(|i| 400.0 + 10.0 * i as f64).collect();
-        let s = Sampling::new(&wl, &vec![10.0; 31]);
+        let s = Sampling::new(&wl, &[10.0; 31]);
         // 390 to 710 nm every 1 nm: the triangles' reach.
         assert_eq!(s.nodes_nm.len(), 321, "{:?}", &s.nodes_nm[..12]);
-        assert_eq!(Sampling::new(&wl, &vec![15.0; 31]).nodes_nm.len(), 331);
+        assert_eq!(Sampling::new(&wl, &[15.0; 31]).nodes_nm.len(), 331);
         // A narrow bandpass gets nodes half its width apart.
         let fine: Vec<f64> = (0..11).map(|i| 500.0 + i as f64).collect();
-        let narrow = Sampling::new(&fine, &vec![1.5; 11]);
+        let narrow = Sampling::new(&fine, &[1.5; 11]);
         assert!((narrow.nodes_nm[1] - narrow.nodes_nm[0] - 0.75).abs() < 1e-12, "{:?}", &narrow.nodes_nm[..3]);
-        let p = Sampling::new(&wl, &vec![0.0; 31]);
+        let p = Sampling::new(&wl, &[0.0; 31]);
         assert_eq!(p.nodes_nm, wl);
         let values: Vec<f64> = wl.iter().map(|x| x.sin()).collect();
         assert_eq!(p.apply(&values), values);
