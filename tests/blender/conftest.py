@@ -4,7 +4,9 @@ sys.path here, with the repository root and scripts/tools, before any test modul
 
 from __future__ import annotations
 
+import platform
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -92,3 +94,17 @@ def draw_panel():
         return drawn
 
     return draw
+
+
+@pytest.fixture
+def extension_zip() -> Path:
+    """This machine's extension zip from scripts/build_addon.sh (Blender's `--split-platforms` name: the manifest's
+    id and version, then the platform); the test is skipped when it has not been built."""
+    manifest = tomllib.loads((REPO / "blender_addon" / "blender_manifest.toml").read_text())
+    system = {"Linux": "linux", "Darwin": "macos", "Windows": "windows"}.get(platform.system(), platform.system())
+    machine = {"x86_64": "x64", "AMD64": "x64", "aarch64": "arm64", "ARM64": "arm64"}.get(platform.machine(),
+                                                                                         platform.machine())
+    path = REPO / "dist" / f"{manifest['id']}-{manifest['version']}-{system}_{machine}.zip"
+    if not path.exists():
+        pytest.skip(f"no {path.relative_to(REPO)}: run bash scripts/build_addon.sh")
+    return path
