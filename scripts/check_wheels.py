@@ -11,7 +11,8 @@ own DLLs on Windows, so no MinGW runtime DLL and no version-specific python3XY.d
 macOS, so no libpython), the export `PyInit__core`, the lowest macOS it loads on (not above the tag's), and on macOS
 arm64 a valid ad-hoc code signature (arm64 macOS refuses to load unsigned code).
 A zip: Blender's `--split-platforms` name for one platform, the add-on's tracked Python files, the manifest whose
-`platforms` is that one platform and whose `wheels` names the one wheel inside, which passes the wheel checks; and
+`platforms` is that one platform and whose `wheels` names the one wheel inside (as [build.generated], which the split
+build adds and Blender reads in place of the source's lists), which passes the wheel checks; and
 Blender's own validator (blender_ext.py, shipped with bpy) accepts the zip.
 
 Prints one line of facts per artefact, or its problems; exits 1 if any artefact has a problem.
@@ -48,6 +49,7 @@ try:
     import lief
 except ImportError:  # scripts/pins/requirements-dev.txt
     sys.exit("check_wheels: no lief (the binaries' reader) in this Python: bash scripts/setup-python.sh --test")
+lief.logging.disable()  # its parser's notes on stderr; what the checks need is read and reported below
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 PROJECT = "spectral_skin"
@@ -75,13 +77,13 @@ PLATFORMS = {
     "macosx_11_0_arm64": Platform("macos-arm64", "macos_arm64", "macho", "arm64", (11, 0)),
 }
 
-# DLLs every 64-bit Windows has, that a Rust cdylib built by MinGW may import (kernel32, ntdll, the CRT msvcrt.dll,
-# Rust std's bcrypt and bcryptprimitives, ws2_32, userenv, advapi32 ...) and the API sets. Anything else, such as
-# libgcc_s_seh-1.dll or libwinpthread-1.dll (the MinGW runtime, which must be linked statically), is not on a user's
-# machine.
+# DLLs every 64-bit Windows (8 and newer) has, that a Rust cdylib built by MinGW may import (kernel32, ntdll, the CRT
+# msvcrt.dll, Rust std's bcryptprimitives, ws2_32 and userenv, the dirs crate's shell32 and combase ...) and the API
+# sets. Anything else, such as libgcc_s_seh-1.dll or libwinpthread-1.dll (the MinGW runtime, which must be linked
+# statically), is not on a user's machine.
 WINDOWS_SYSTEM_DLLS = {
-    "advapi32.dll", "bcrypt.dll", "bcryptprimitives.dll", "crypt32.dll", "gdi32.dll", "kernel32.dll", "msvcrt.dll",
-    "ntdll.dll", "ole32.dll", "oleaut32.dll", "secur32.dll", "shell32.dll", "ucrtbase.dll", "user32.dll",
+    "advapi32.dll", "bcrypt.dll", "bcryptprimitives.dll", "combase.dll", "crypt32.dll", "gdi32.dll", "kernel32.dll",
+    "msvcrt.dll", "ntdll.dll", "ole32.dll", "oleaut32.dll", "secur32.dll", "shell32.dll", "ucrtbase.dll", "user32.dll",
     "userenv.dll", "ws2_32.dll",
 }
 MACOS_SYSTEM_PREFIXES = ("/usr/lib/", "/System/Library/")
@@ -99,6 +101,8 @@ class Binary:
     macos_min: tuple[int, int] | None = None
     signature: str | None = None  # Mach-O: None unsigned, "" valid, else what is wrong with it
     signature_flags: str = ""
+    # Mach-O: Python's symbols bound to a library rather than looked up in the process that loads the module
+    python_bound: list[str] = dataclasses.field(default_factory=list)
 
 
 # --- reading binaries (LIEF) ---------------------------------------------------------------------------------------
@@ -148,8 +152,19 @@ def macho_binary(parsed: lief.MachO.Binary, data: bytes) -> Binary:
     else:
         minos = (99, 0)
     shared = header.file_type in (lief.MachO.Header.FILE_TYPE.DYLIB, lief.MachO.Header.FILE_TYPE.BUNDLE)
-    binary = Binary("macho", machine, [text(lib.name) for lib in parsed.libraries],
+    # The dylibs it loads (LC_LOAD_DYLIB and the like), not its own install name (LC_ID_DYLIB).
+    linked = [text(lib.name) for lib in parsed.libraries if lib.command != lief.MachO.LoadCommand.TYPE.ID_DYLIB]
+    binary = Binary("macho", machine, linked,
                     {text(s.name) for s in parsed.exported_symbols}, shared, (int(minos[0]), int(minos[1])))
+    # An extension module finds Python's C API in the interpreter that loads it (linked with -undefined
+    # dynamic_lookup: bound with the flat-lookup ordinal, -2), never in a library it names. (An undefined symbol
+    # that nothing binds is never looked up.)
+    two_level = lief.MachO.Header.FLAGS.TWOLEVEL in header.flags_list
+    for symbol in parsed.imported_symbols:
+        name = text(symbol.name)
+        bound = symbol.binding_info if symbol.has_binding_info else None
+        if two_level and name.lstrip("_").startswith("Py") and bound is not None and bound.library_ordinal != -2:
+            binary.python_bound.append(name)
     if (sig := parsed.code_signature) is not None:
         problems, flags = code_directory_problems(data, sig.data_offset, sig.data_size)
         binary.signature = "; ".join(problems)
@@ -277,6 +292,9 @@ def binary_problems(binary: Binary, platform: Platform) -> list[str]:
         if platform.macos_min is not None and binary.macos_min is not None and binary.macos_min > platform.macos_min:
             problems.append(f"needs macOS {binary.macos_min[0]}.{binary.macos_min[1]}, the tag says "
                             f"{platform.macos_min[0]}.{platform.macos_min[1]}")
+        if binary.python_bound:
+            problems.append(f"{len(binary.python_bound)} Python symbols bound to a library, not looked up in the "
+                            f"interpreter (-undefined dynamic_lookup): {binary.python_bound[:3]}")
         if binary.signature:
             problems.append(f"invalid code signature: {binary.signature}")
         elif binary.signature is None and platform.machine == "arm64":
@@ -379,11 +397,15 @@ def zip_problems(path: pathlib.Path, blender_ext: pathlib.Path | None) -> tuple[
         problems.append(f"Python files the add-on does not track: {sorted(python - expected)}")
     inner, facts, platform = wheel_problems(pathlib.Path(wheel_name), wheel_data)
     problems += [f"{wheel_name}: {p}" for p in inner]
-    if manifest.get("wheels") != [f"./{wheel_name}"]:
-        problems.append(f"manifest wheels {manifest.get('wheels')}, the zip holds {wheel_name}")
+    # `build --split-platforms` keeps the source manifest's lists and appends the zip's own as [build.generated],
+    # which Blender reads in their place.
+    generated = manifest.get("build", {}).get("generated", {})
+    wheels, platforms = generated.get("wheels", manifest.get("wheels")), generated.get("platforms", manifest.get("platforms"))
+    if wheels != [f"./{wheel_name}"]:
+        problems.append(f"manifest wheels {wheels}, the zip holds {wheel_name}")
     if platform is not None:
-        if manifest.get("platforms") != [platform.blender]:
-            problems.append(f"manifest platforms {manifest.get('platforms')}, the wheel is for {platform.blender}")
+        if platforms != [platform.blender]:
+            problems.append(f"manifest platforms {platforms}, the wheel is for {platform.blender}")
         expected_name = f"{manifest.get('id')}-{manifest.get('version')}-{platform.zip_suffix}.zip"
         if path.name != expected_name:
             problems.append(f"named {path.name}, expected {expected_name}")

@@ -7,6 +7,7 @@ Run: .venv/bin/python -m pytest tests/build -q (scripts/test-all.sh runs it afte
 from __future__ import annotations
 
 import hashlib
+import io
 import pathlib
 import shutil
 import struct
@@ -149,6 +150,9 @@ def test_the_good_binaries_pass():
      "links libraries outside macOS: ['/opt/homebrew/lib/libomp.dylib']"),
     (replace(GOOD_MACHO, libraries=["/usr/lib/libSystem.B.dylib", "@rpath/libpython3.11.dylib"]), MAC_ARM,
      "links a version-specific Python: ['@rpath/libpython3.11.dylib']"),
+    (replace(GOOD_MACHO, python_bound=["_PyTuple_New"]), MAC_ARM,
+     "1 Python symbols bound to a library, not looked up in the interpreter (-undefined dynamic_lookup): "
+     "['_PyTuple_New']"),
     (replace(GOOD_ELF, libraries=["libc.so.6", "libssl.so.3"]), LINUX,
      "links libraries outside manylinux2014: ['libssl.so.3']"),
 ])
@@ -237,9 +241,29 @@ def test_the_zip_check_reads_the_manifest(tmp_path):
     with zipfile.ZipFile(path) as source, zipfile.ZipFile(wrong, "w") as target:
         for item in source.infolist():
             data = source.read(item)
-            if item.filename == "blender_manifest.toml":
-                data = data.replace(b'platforms = ["windows-x64"]', b'platforms = ["linux-x64"]')
+            if item.filename == "blender_manifest.toml":  # the split build's [build.generated] list
+                assert b'\nplatforms = ["windows-x64"]\n' in data
+                data = data.replace(b'\nplatforms = ["windows-x64"]\n', b'\nplatforms = ["linux-x64"]\n')
             target.writestr(item, data)
     problems, _ = cw.zip_problems(wrong, None)
     assert problems == ["manifest platforms ['linux-x64'], the wheel is for windows-x64"]
 
+
+
+def test_the_arm64_signature_check_sees_a_changed_byte():
+    """The macOS arm64 module as built verifies; one byte changed in its code (as stripping after linking would
+    change many) no longer does."""
+    path = ZIPS["macos_arm64"]
+    if not path.exists():
+        pytest.skip(f"no {path.relative_to(REPO)}: run {BUILD}")
+    with zipfile.ZipFile(path) as archive:
+        wheel = next(n for n in archive.namelist() if n.endswith(".whl"))
+        with zipfile.ZipFile(io.BytesIO(archive.read(wheel))) as inner:
+            module = inner.read("spectral_skin/_core.abi3.so")
+    binary = cw.read_binary(module)
+    assert binary.signature == "" and "(adhoc)" in binary.signature_flags
+    changed = bytearray(module)
+    changed[0x4000 + 123] ^= 0xFF  # in the second 4 KiB page, inside __TEXT
+    broken = cw.read_binary(bytes(changed))
+    assert broken.signature is not None
+    assert "1 of" in broken.signature and "page hashes differ (first: page 4)" in broken.signature
