@@ -79,12 +79,14 @@ PLATFORMS = {
 
 # DLLs every 64-bit Windows (8 and newer) has, that a Rust cdylib built by MinGW may import (kernel32, ntdll, the CRT
 # msvcrt.dll, Rust std's bcryptprimitives, ws2_32 and userenv, the dirs crate's shell32 and combase ...) and the API
-# sets. Anything else, such as libgcc_s_seh-1.dll or libwinpthread-1.dll (the MinGW runtime, which must be linked
-# statically), is not on a user's machine.
+# sets; and the Visual C++ runtime that a wheel built by MSVC (the release workflow's) imports: CPython for Windows
+# and Blender ship it beside python.exe and blender.exe, so the process that imports the module has it. Anything else,
+# such as libgcc_s_seh-1.dll or libwinpthread-1.dll (the MinGW runtime, which must be linked statically), is not on
+# a user's machine.
 WINDOWS_SYSTEM_DLLS = {
     "advapi32.dll", "bcrypt.dll", "bcryptprimitives.dll", "combase.dll", "crypt32.dll", "gdi32.dll", "kernel32.dll",
     "msvcrt.dll", "ntdll.dll", "ole32.dll", "oleaut32.dll", "secur32.dll", "shell32.dll", "ucrtbase.dll", "user32.dll",
-    "userenv.dll", "ws2_32.dll",
+    "userenv.dll", "ws2_32.dll", "vcruntime140.dll", "vcruntime140_1.dll",
 }
 MACOS_SYSTEM_PREFIXES = ("/usr/lib/", "/System/Library/")
 

@@ -127,6 +127,9 @@ def replace(binary: cw.Binary, **changes) -> cw.Binary:
 
 def test_the_good_binaries_pass():
     assert cw.binary_problems(GOOD_PE, WINDOWS) == []
+    msvc = replace(GOOD_PE, libraries=["python3.dll", "VCRUNTIME140.dll", "api-ms-win-crt-runtime-l1-1-0.dll",
+                                       "api-ms-win-crt-math-l1-1-0.dll", "KERNEL32.dll", "ntdll.dll"])
+    assert cw.binary_problems(msvc, WINDOWS) == []  # as the release workflow's MSVC build links
     assert cw.binary_problems(GOOD_MACHO, MAC_ARM) == []
     assert cw.binary_problems(replace(GOOD_MACHO, machine="x86_64", macos_min=(10, 12), signature=None), MAC_X64) == []
     assert cw.binary_problems(GOOD_ELF, LINUX) == []
