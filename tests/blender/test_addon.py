@@ -25,8 +25,8 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 from blender_scenes import material_snapshot  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
+from blender_addon.apply import apply_skin, apply_skins  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
-from blender_addon.ops import apply_skin, apply_skins  # noqa: E402
 
 # scripts/build_addon.sh builds one zip per platform (Blender's `--split-platforms` names): this machine's.
 SYSTEM = {"Linux": "linux", "Darwin": "macos", "Windows": "windows"}.get(platform.system(), platform.system())
