@@ -1,6 +1,7 @@
 """pytest fixtures of the Blender render tests, and their import path. The scene helpers they use (blender_scenes.py)
 and the random-walk reference (walk_reference.py) live in scripts/lib/, shared with the measurement scripts: put on
-sys.path here, with the repository root and scripts/tools, before any test module imports them."""
+sys.path here, with the repository root, scripts/tools and tests/python (the tests' shared color_difference), before
+any test module imports them."""
 
 from __future__ import annotations
 
@@ -13,9 +14,10 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 # The one place the Blender tests' import path is set: the repository root (blender_addon), scripts/lib (the scene
-# helpers) and scripts/tools (render_blend); this folder's helper modules (live_scene, eevee_scene, farm_worker) are
-# on it as pytest puts it there.
-for _folder in (REPO / "scripts" / "tools", REPO, REPO / "scripts" / "lib"):
+# helpers), scripts/tools (render_blend) and tests/python's shared helper modules (color_difference: the tests'
+# independent CIEDE2000); this folder's helper modules (live_scene, eevee_scene, farm_worker) are on it as pytest
+# puts it there.
+for _folder in (REPO / "tests" / "python", REPO / "scripts" / "tools", REPO, REPO / "scripts" / "lib"):
     if str(_folder) not in sys.path:
         sys.path.insert(0, str(_folder))
 

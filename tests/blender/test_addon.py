@@ -24,8 +24,8 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 from blender_scenes import material_snapshot  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
+from blender_addon.apply import apply_skin, apply_skins  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
-from blender_addon.ops import apply_skin, apply_skins  # noqa: E402
 
 BLENDER_EXT = pathlib.Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"
 

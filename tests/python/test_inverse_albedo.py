@@ -4,18 +4,12 @@ of tests/python/color_difference.py (checked against Sharma et al.'s table in te
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
+import color_difference
 import numpy as np
 import pytest
 import spectral_skin
-
-SCRIPT = Path(__file__).resolve().parent / "color_difference.py"
-_spec = importlib.util.spec_from_file_location("_color_difference", SCRIPT)
-assert _spec is not None and _spec.loader is not None
-color_difference = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(color_difference)
 
 TRUTH = [(0.005, 0.7, 0.005), (0.15, 0.0, 0.01), (0.5, 0.7, 0.05), (0.05, 0.3, 0.002), (0.02, 0.9, 0.08),
          (0.3, 0.5, 0.03)]
