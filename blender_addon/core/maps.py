@@ -19,20 +19,6 @@ UDIM_TOKEN = "<UDIM>"
 # inputs a texture can feed and the animation keys per frame.
 PLAN_INPUTS = {"base_color": "Base Color", "radius": "Subsurface Radius", "specular_ior_level": "Specular IOR Level",
                "coat_weight": "Coat Weight", "coat_roughness": "Coat Roughness"}
-# The Principled inputs that take a colour (a texture of theirs is tagged with the working space); every other
-# texture is data (Non-Color).
-COLOUR_INPUTS = ("Base Color",)
-
-# The core's map kinds (src/maps/kinds.rs MAP_KINDS), for a spectral_skin without ``map_kinds()``.
-_CORE_MAP_KINDS: tuple[dict[str, Any], ...] = (
-    {"name": "albedo", "channels": ("R", "G", "B"), "unit": "", "principled_input": "Base Color"},
-    {"name": "radius", "channels": ("R", "G", "B"), "unit": "mm", "principled_input": "Subsurface Radius"},
-    {"name": "specular", "channels": ("Y",), "unit": "", "principled_input": "Specular IOR Level"},
-    {"name": "coat_weight", "channels": ("Y",), "unit": "", "principled_input": "Coat Weight"},
-    {"name": "coat_roughness", "channels": ("Y",), "unit": "", "principled_input": "Coat Roughness"},
-)
-
-
 @dataclass(frozen=True)
 class MapKind:
     """One of the core's output maps: its name (the ``maps()`` output's key and its file's name), channels, unit and
@@ -43,6 +29,8 @@ class MapKind:
     channels: tuple[str, ...]
     unit: str
     principled_input: str
+    # The colour space to load its texture in: None for the run's working space (a colour), else data (Non-Color).
+    color_space: str | None
 
     @property
     def field(self) -> str:
@@ -52,7 +40,7 @@ class MapKind:
     @property
     def colour(self) -> bool:
         """Whether the texels are a colour (linear RGB in the working space), not data."""
-        return self.principled_input in COLOUR_INPUTS
+        return self.color_space is None
 
     @property
     def scalar(self) -> bool:
@@ -60,19 +48,13 @@ class MapKind:
         return len(self.channels) == 1
 
 
-def _fact(spec: Any, key: str) -> Any:
-    return spec[key] if isinstance(spec, Mapping) else getattr(spec, key)
-
-
 @functools.cache
 def map_kinds() -> tuple[MapKind, ...]:
-    """The core's map kinds, in its order (albedo, radius, then the surface's single-channel maps): the one place
-    the add-on takes them from. ``spectral_skin.map_kinds()`` where this spectral_skin has it, else the core's table
-    as src/maps/kinds.rs spells it."""
-    from_core = getattr(spectral_skin, "map_kinds", None)
-    specs = from_core() if callable(from_core) else _CORE_MAP_KINDS
-    return tuple(MapKind(name=str(_fact(s, "name")), channels=tuple(_fact(s, "channels")), unit=str(_fact(s, "unit")),
-                         principled_input=str(_fact(s, "principled_input"))) for s in specs)
+    """The core's map kinds (``spectral_skin.map_kinds()``, from src/maps/kinds.rs), in its order (albedo, radius,
+    then the surface's single-channel maps): the one place the add-on takes them from."""
+    return tuple(MapKind(name=k["name"], channels=tuple(k["channels"]), unit=k["unit"],
+                         principled_input=k["principled_input"], color_space=k["color_space"])
+                 for k in spectral_skin.map_kinds())
 
 
 def map_kind(name: str) -> MapKind:
