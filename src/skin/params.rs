@@ -334,6 +334,14 @@ const fn measured(name: &'static str, description: &'static str, v: [f64; 5]) ->
     Preset { name, description, params }
 }
 
+/// A palette preset: melanin, melanin blend, haemoglobin, epidermis thickness (mm), baseline absorption scale and
+/// blood oxygenation as fitted, oiliness the presets' 0.3.
+const fn palette(name: &'static str, description: &'static str, v: [f64; 6]) -> Preset {
+    let mut params = measured(name, description, [v[0], v[1], v[2], v[3], v[4]]).params;
+    params.blood_oxygenation = v[5];
+    Preset { name, description, params }
+}
+
 /// The presets. The first three are the skin types of the SIGGRAPH 2006 sketch (Donner & Jensen, teaser caption;
 /// docs/model.md, section Parameters). The `measured-*` ones are the median fitted parameters (melanin, melanin
 /// blend, haemoglobin, epidermis thickness, baseline scale) of the lightest, middle and darkest third by L* of the
@@ -358,6 +366,40 @@ pub const PRESETS: &[Preset] = &[
         "darkest third of in-vivo spectra (Xiao et al. 2016), median fit; docs/measured-skin.md",
         [0.0799, 0.266, 0.0142, 0.064, 1.36],
     ),
+    // The palette: one preset per ITA class, the fit of the class's median measured spectrum (docs/measured-skin.md,
+    // Palette). Written by `cargo run --release --example palette -- --write`; do not edit by hand.
+    // BEGIN palette
+    palette(
+        "ita-very-light",
+        "median of the 66 in-vivo spectra of ITA class very light (> 55°) (Xiao et al. 2016); docs/measured-skin.md",
+        [0.0259, 0.000, 0.0094, 0.023, 3.29, 0.75],
+    ),
+    palette(
+        "ita-light",
+        "median of the 749 in-vivo spectra of ITA class light (41–55°) (Xiao et al. 2016); docs/measured-skin.md",
+        [0.0803, 0.000, 0.0118, 0.031, 2.57, 0.75],
+    ),
+    palette(
+        "ita-intermediate",
+        "median of the 1492 in-vivo spectra of ITA class intermediate (28–41°) (Xiao et al. 2016); docs/measured-skin.md",
+        [0.0270, 0.000, 0.0096, 0.103, 1.43, 0.75],
+    ),
+    palette(
+        "ita-tan",
+        "median of the 1467 in-vivo spectra of ITA class tan (10–28°) (Xiao et al. 2016); docs/measured-skin.md",
+        [0.1833, 0.317, 0.0132, 0.029, 1.54, 0.75],
+    ),
+    palette(
+        "ita-brown",
+        "median of the 531 in-vivo spectra of ITA class brown (−30–10°) (Xiao et al. 2016); docs/measured-skin.md",
+        [0.0538, 0.238, 0.0174, 0.089, 2.37, 0.75],
+    ),
+    palette(
+        "ita-dark",
+        "median of the 87 in-vivo spectra of ITA class dark (< −30°) (Xiao et al. 2016); docs/measured-skin.md",
+        [0.0942, 0.153, 0.0423, 0.081, 10.00, 0.75],
+    ),
+    // END palette
 ];
 
 #[cfg(test)]
