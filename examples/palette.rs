@@ -1,21 +1,28 @@
 //! The palette of measured skin tones (docs/measured-skin.md, section Palette; the `ita-*` presets of
 //! src/skin/params.rs): the Xiao et al. 2016 in-vivo spectra (data/xiao2016_skin_reflectance_400_700nm.csv) grouped
 //! by the ITA° class of their measured colour (`spectral_skin::color::ita`), each class's median spectrum (the median
-//! at each wavelength) fitted with `fit_spectrum`'s defaults. Prints the table; with `--write`, rewrites the presets'
-//! block in src/skin/params.rs and the section's table in docs/measured-skin.md (between their markers).
+//! at each wavelength) fitted in the paper's three parameters (melanin, melanin blend, haemoglobin) over one epidermis
+//! for the whole palette: a spectrum cannot tell the epidermis's thickness from its melanin (docs/measured-skin.md,
+//! Fitted parameters), so the palette's tones differ only in pigment and blood, and the thickness, scanned over the
+//! published range, is the one whose worst class fits best; the baseline absorption and the oxygenation stay the
+//! paper's. Prints the table; with `--write`, rewrites the presets' block in src/skin/params.rs and the section's
+//! table in docs/measured-skin.md (between their markers).
 //!
 //! cargo run --release --example palette [-- --write]
 
 use spectral_skin::color::ita::{ita_class, ita_degrees, ItaClass, ITA_CLASSES};
+use spectral_skin::inverse::spectrum::PAPER_FREE;
 use spectral_skin::inverse::{FitOptions, SpectrumFit, SpectrumFitter};
+use spectral_skin::skin::params::PARAMS;
 
 const DATA: &str = "data/xiao2016_skin_reflectance_400_700nm.csv";
 const PARAMS_RS: &str = "src/skin/params.rs";
 const DOC: &str = "docs/measured-skin.md";
 /// The least spectra a class needs for its median to become a preset.
 const MIN_SPECTRA: usize = 20;
-/// The oiliness of every preset (the paper's presets' 0.3): a reflectance spectrum does not determine it.
-const OILINESS: f64 = 0.3;
+/// The epidermis thicknesses tried (mm): 0.05 to 0.15 mm every 0.01, the published range of adult epidermis
+/// (docs/model.md, Extended physiology).
+const THICKNESSES_MM: [f64; 11] = [0.05, 0.06, 0.07, 0.08, 0.09, 0.10, 0.11, 0.12, 0.13, 0.14, 0.15];
 
 /// The wavelengths and spectra of the data file (comment lines start with '#'; then a header `index,R400,...`).
 fn read_data(path: &str) -> (Vec<f64>, Vec<Vec<f64>>) {
@@ -47,7 +54,16 @@ struct Tone {
     fit: SpectrumFit,
 }
 
-fn tones(wavelengths: &[f64], spectra: &[Vec<f64>]) -> Vec<Tone> {
+/// The fit options of the palette: the paper's three free, the epidermis `thickness_mm`.
+fn options(thickness_mm: f64) -> FitOptions {
+    let mut options = FitOptions { free: PAPER_FREE.iter().map(|s| s.to_string()).collect(), ..FitOptions::default() };
+    let at = PARAMS.iter().position(|p| p.name == "epidermis_thickness_mm").expect("the thickness parameter");
+    options.fixed[at] = Some(thickness_mm);
+    options
+}
+
+/// The class medians, each with its count.
+fn class_medians(wavelengths: &[f64], spectra: &[Vec<f64>]) -> Vec<(&'static ItaClass, usize, Vec<f64>)> {
     let fitter = SpectrumFitter::new(wavelengths, &FitOptions::default()).expect("fitter");
     let classes: Vec<Option<&ItaClass>> = spectra.iter().map(|s| ita_class(ita_degrees(fitter.lab(s)))).collect();
     let mut out = Vec::new();
@@ -64,10 +80,29 @@ fn tones(wavelengths: &[f64], spectra: &[Vec<f64>]) -> Vec<Tone> {
         }
         let median_spectrum: Vec<f64> =
             (0..wavelengths.len()).map(|k| median(members.iter().map(|s| s[k]).collect())).collect();
-        let fit = fitter.fit(&median_spectrum).expect("fit of a class median");
-        out.push(Tone { class, count: members.len(), fit });
+        out.push((class, members.len(), median_spectrum));
     }
     out
+}
+
+/// The palette at the thickness whose worst class fits best.
+fn tones(wavelengths: &[f64], spectra: &[Vec<f64>]) -> Vec<Tone> {
+    let medians = class_medians(wavelengths, spectra);
+    let at = |thickness_mm: f64| -> Vec<Tone> {
+        let fitter = SpectrumFitter::new(wavelengths, &options(thickness_mm)).expect("fitter");
+        let fit = |m: &Vec<f64>| fitter.fit(m).expect("fit of a class median");
+        medians.iter().map(|(class, count, m)| Tone { class, count: *count, fit: fit(m) }).collect()
+    };
+    let worst = |tones: &[Tone]| tones.iter().map(|t| t.fit.delta_e00).fold(0.0, f64::max);
+    let mut best = at(THICKNESSES_MM[0]);
+    for &d in &THICKNESSES_MM[1..] {
+        let tones = at(d);
+        eprintln!("epidermis {d:.2} mm: worst ΔE00 {:.2}", worst(&tones));
+        if worst(&tones) < worst(&best) {
+            best = tones;
+        }
+    }
+    best
 }
 
 fn table(tones: &[Tone]) -> String {
