@@ -8,3 +8,4 @@ mod support;
 mod inverse_albedo;
 mod inverse_recovery;
 mod measured_spectra;
+mod palette;
