@@ -202,7 +202,7 @@ class SPECTRAL_SKIN_OT_from_albedo_texture(ModalWork, bpy.types.Operator):
                   if material.spectral_skin.skin_mask is not None else "")
         self.report({"INFO"}, f"Spectral Skin: fitted {summary['image']!r} ({summary['working_space']}): ΔE00 median "
                     f"{summary['median_delta_e00']:.2f}, max {summary['max_delta_e00']:.2f}, "
-                    f"{summary['out_of_gamut_texels']} texel(s) outside skin's colours{masked}; epidermis thickness "
+                    f"{summary['outside_skin_texels']} texel(s) outside skin's colours{masked}; epidermis thickness "
                     f"{thickness:g} mm ({'held' if summary['thickness'] is None else 'chosen for the texture'}); "
                     f"parameter map {summary['path']} set (Apply to use it); residual ΔE00 in the image "
                     f"{summary['residual']!r}")

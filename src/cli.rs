@@ -958,6 +958,7 @@ mod fit_maps {
     use std::path::{Path, PathBuf};
 
     use crate::inverse::albedo::AlbedoFitOptions;
+    use crate::inverse::albedo_gains::OUTSIDE_SKIN_DELTA_E00;
     use crate::inverse::albedo_maps::{
         fit_albedo_tiles_cancellable, AlbedoMapFit, AlbedoMapStats, AlbedoTile, EpidermisThickness, TextureFit,
     };
@@ -1007,7 +1008,7 @@ mod fit_maps {
             staged.extend(fit.stage(&at(&args.out), Some(&at(&residual_path)))?);
         }
         commit_all(staged)?;
-        report(&args, &residual_path, &tiles, &fits, &options, seconds);
+        report(&args, &residual_path, &tiles, &fits, seconds);
         Ok(())
     }
 
@@ -1121,8 +1122,8 @@ mod fit_maps {
         Ok(options.validated()?)
     }
 
-    /// The tiles' statistics as one texture's: texels and out-of-gamut counts summed, the worst ΔE00, the mean
-    /// weighted by texels.
+    /// The tiles' statistics as one texture's: texels and the texels outside skin's colours summed, the worst ΔE00,
+    /// the mean weighted by texels.
     fn combined_stats(fits: &[AlbedoMapFit]) -> AlbedoMapStats {
         let texels: usize = fits.iter().map(|f| f.stats.texels).sum();
         let mut s = fits[0].stats;
@@ -1130,7 +1131,7 @@ mod fit_maps {
         s.max_delta_e00 = fits.iter().map(|f| f.stats.max_delta_e00).fold(0.0, f64::max);
         s.mean_delta_e00 =
             fits.iter().map(|f| f.stats.mean_delta_e00 * f.stats.texels as f64).sum::<f64>() / texels as f64;
-        s.out_of_gamut_texels = fits.iter().map(|f| f.stats.out_of_gamut_texels).sum();
+        s.outside_skin_texels = fits.iter().map(|f| f.stats.outside_skin_texels).sum();
         s
     }
 
@@ -1140,7 +1141,6 @@ mod fit_maps {
         residual_path: &Path,
         tiles: &Option<Vec<u32>>,
         fits: &[AlbedoMapFit],
-        options: &AlbedoFitOptions,
         seconds: f64,
     ) {
         let fit = &fits[0];
@@ -1155,14 +1155,15 @@ mod fit_maps {
         }
         if let Some(g) = fit.gains.as_ref().filter(|_| args.auto_gains) {
             eprintln!(
-                "applied gains R G B x {:.4} {:.4} {:.4} ({:+.2} stops): share of sampled texels outside skin's \
-                 colours {:.0} % -> {:.0} %",
+                "applied gains R G B x {:.4} {:.4} {:.4} ({:+.2} stops): median ΔE00 of {} sampled texels {:.2} -> \
+                 {:.2}",
                 g.rgb_gains[0],
                 g.rgb_gains[1],
                 g.rgb_gains[2],
                 g.exposure_stops,
-                100.0 * g.outside_share_before,
-                100.0 * g.outside_share_after
+                g.sampled_texels,
+                g.median_delta_e00_before,
+                g.median_delta_e00_after
             );
         }
         if args.json {
@@ -1175,14 +1176,13 @@ mod fit_maps {
         }
         println!(
             "wrote {} and {} ({size}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
-             {} texel(s) out of the model's gamut (ΔE00 > {})",
+             {} texel(s) outside skin's colours (more than {OUTSIDE_SKIN_DELTA_E00} ΔE00 from every colour skin can have)",
             args.out.display(),
             residual_path.display(),
             s.distinct_colours,
             s.mean_delta_e00,
             s.max_delta_e00,
-            s.out_of_gamut_texels,
-            options.ambiguity_delta_e
+            s.outside_skin_texels,
         );
         if let Some(choice) = &fit.thickness {
             println!(

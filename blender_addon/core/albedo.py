@@ -71,7 +71,8 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
     the operator needs of it: {"fit": the core's ``AlbedoMapFit`` (``write(path)`` writes the parameter EXR),
     "extended": the extended physiology the parameters hold for, "thickness": how the thickness was chosen (None:
     held), "gains" (applied, or measured as the diagnosis' remedy; None), "diagnosis" (why the texture does not look
-    like an albedo; None), "median_delta_e00", "max_delta_e00" (over the masked texels), "out_of_gamut_texels",
+    like an albedo; None), "median_delta_e00", "max_delta_e00" (over the masked texels), "outside_skin_texels" (the
+    core's count of texels outside skin's colours, the one the diagnosis judges),
     "masked_out_texels"}. The core's warning about a
     texture that is not an albedo is not raised here: it is the "diagnosis". ``progress(done, total)`` is the core's
     callback (returning False cancels: InterruptedError). Raises
@@ -101,7 +102,7 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
     return {"fit": result, "extended": extended, "thickness": result.thickness,
             "gains": getattr(result, "gains", None), "diagnosis": getattr(result, "diagnosis", None),
             "median_delta_e00": float(np.median(skin)), "max_delta_e00": float(np.max(skin)),
-            "out_of_gamut_texels": int(result.stats["out_of_gamut_texels"]),
+            "outside_skin_texels": int(result.stats["outside_skin_texels"]),
             "masked_out_texels": int(result.stats.get("masked_out_texels", 0))}
 
 

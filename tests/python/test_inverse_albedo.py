@@ -26,7 +26,7 @@ def test_texture_round_trip_is_within_half_a_delta_e() -> None:
     assert isinstance(fit, spectral_skin.AlbedoMapFit) and fit.shape == (1, 6) and fit.thickness is None
     assert fit.params.shape == (1, 6, 4) and fit.params.dtype == np.float32
     assert fit.residual_delta_e00.shape == (1, 6)
-    assert fit.stats["distinct_colours"] == 6 and fit.stats["out_of_gamut_texels"] == 0
+    assert fit.stats["distinct_colours"] == 6 and fit.stats["outside_skin_texels"] == 0
     back = np.array([albedo(*map(float, p[:3])) for p in fit.params[0]])
     de = color_difference.delta_e00_linear_rgb(texture[0].astype(np.float64), back)
     assert np.all(de <= 0.5), de
@@ -72,7 +72,7 @@ def test_green_is_out_of_gamut_with_finite_parameters() -> None:
     with pytest.warns(spectral_skin.SpectralSkinWarning, match="1 of 2 texels"):  # half the texture is not skin
         m = spectral_skin.fit_albedo_map(texture)
     assert np.all(np.isfinite(m.params)) and m.residual_delta_e00[0, 0] > 20.0
-    assert m.residual_delta_e00[0, 1] < 0.5 and m.stats["out_of_gamut_texels"] == 1
+    assert m.residual_delta_e00[0, 1] < 0.5 and m.stats["outside_skin_texels"] == 1
 
 
 def test_bad_input_names_it() -> None:
