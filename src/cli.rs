@@ -147,6 +147,11 @@ struct FitArgs {
     /// Surface reflection added to the model: free (fitted), fresnel (0.0278, index 1.4) or a number 0..0.1.
     #[arg(long, default_value = "free")]
     specular: String,
+    /// The instrument's spectral bandpass the model is averaged over: spacing (a triangle as wide as the wavelength
+    /// spacing, at most 20 nm) or its FWHM in nm, 0..20 (0: the model at the wavelengths themselves); default: the
+    /// choice of docs/measured-skin.md (Instrument bandpass).
+    #[arg(long)]
+    bandpass: Option<String>,
     /// What is minimised.
     #[arg(long, value_enum, default_value_t = crate::inverse::Objective::Reflectance)]
     objective: crate::inverse::Objective,
@@ -610,6 +615,14 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
             v.parse().map_err(|_| format!("--specular: expected free, fresnel or a number; got {v:?}"))?,
         ),
     };
+    if let Some(b) = args.bandpass.as_deref() {
+        options.bandpass = match b {
+            "spacing" => crate::inverse::Bandpass::Spacing,
+            v => crate::inverse::Bandpass::FwhmNm(
+                v.parse().map_err(|_| format!("--bandpass: expected spacing or a number; got {v:?}"))?,
+            ),
+        };
+    }
     ctrl_c::catch();
     let fit =
         crate::inverse::spectrum::fit_spectrum_cancellable(&wavelengths, &reflectance, &options, &ctrl_c::INTERRUPTED)?;

@@ -715,8 +715,10 @@ fn methods_from(target: &Target, albedo: [f64; 3], fits: &[BurleyFit; 3]) -> Res
     })
 }
 
-fn validate_model(m: &SkinModel) -> Result<(), SkinError> {
+pub(crate) fn validate_model(m: &SkinModel) -> Result<(), SkinError> {
     check_range("eumelanin_k_per_mm", "eumelanin constant K_em", m.eumelanin_k_per_mm, 0.0, 1e13)?;
+    let max_radius = crate::skin::chromophores::MAX_VESSEL_RADIUS_MM;
+    check_range("blood_vessel_radius_mm", "dermal blood vessel radius, mm", m.blood_vessel_radius_mm, 0.0, max_radius)?;
     if !(m.dermis_thickness_mm.is_infinite() && m.dermis_thickness_mm > 0.0) {
         check_range("dermis_thickness_mm", "dermis thickness (or infinity)", m.dermis_thickness_mm, 1e-3, 1e4)?;
     }

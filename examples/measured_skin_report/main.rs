@@ -3,6 +3,13 @@
 //! report's tables (markdown) and writes its plots to docs/images/measured-skin/.
 //!
 //! cargo run --release --example measured_skin_report [-- --every N]
+//! cargo run --release --example measured_skin_report -- --classes [--every N]: the per-class table of
+//! docs/measured-skin.md (Skin types and the Q bands): the fit before the bandpass, the default, and the options.
+//! cargo run --release --example measured_skin_report -- --study [--every N] [--only "LABEL;LABEL"]: issue 39's study
+//! of the Q-band residual by skin type, every candidate (study.rs).
+
+mod classes;
+mod study;
 
 use std::path::Path;
 use std::time::Instant;
@@ -37,17 +44,7 @@ fn read_data(path: &str) -> (Vec<f64>, Vec<Vec<f64>>) {
     (wavelengths, spectra)
 }
 
-fn quantile(values: &[f64], q: f64) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    let pos = q * (v.len() - 1) as f64;
-    let (i, t) = (pos.floor() as usize, pos.fract());
-    if i + 1 < v.len() {
-        v[i] * (1.0 - t) + v[i + 1] * t
-    } else {
-        v[i]
-    }
-}
+use classes::quantile;
 
 struct Run {
     label: String,
@@ -140,6 +137,22 @@ fn main() {
     let every: usize = args.iter().position(|a| a == "--every").map(|i| args[i + 1].parse().unwrap()).unwrap_or(1);
     let (wl, all) = read_data(DATA);
     let spectra: Vec<Vec<f64>> = all.iter().step_by(every).cloned().collect();
+    let header = format!(
+        "{} spectra (every {every}th of {}), {} threads",
+        spectra.len(),
+        all.len(),
+        rayon::current_num_threads()
+    );
+    if args.iter().any(|a| a == "--classes") {
+        println!("{header}");
+        study::by_class(&wl, &spectra);
+        return;
+    }
+    if args.iter().any(|a| a == "--study") {
+        println!("{header}");
+        study::study(&wl, &spectra, args.iter().position(|a| a == "--only").map(|i| args[i + 1].as_str()));
+        return;
+    }
     let out = Path::new(OUT);
     std::fs::create_dir_all(out).unwrap();
     println!(
@@ -275,51 +288,10 @@ fn main() {
         );
     }
 
-    // Skin-type groups by the individual typology angle ITA = atan((L* - 50) / b*) of the measured colour, with
-    // Chardon, Cretois & Hourseau's bounds (Int. J. Cosmet. Sci. 13:191, 1991): fit quality and fitted physiology per
-    // group, for the paper's three parameters and the default set.
-    println!("\nBy skin type (ITA of the measured colour; Chardon et al. 1991):\n");
-    println!(
-        "| group (ITA) | spectra | paper set: median / p90 ΔE00 | default set: median / p90 ΔE00 | melanin (p10 / median / p90) | \
-         epidermis mm (median) | haemoglobin (median) |"
-    );
-    println!("|---|---|---|---|---|---|---|");
-    let ita = |lab: [f64; 3]| (lab[0] - 50.0).atan2(lab[2]).to_degrees();
-    let groups = [
-        ("very light (> 55°)", 55.0, f64::INFINITY),
-        ("light (41–55°)", 41.0, 55.0),
-        ("intermediate (28–41°)", 28.0, 41.0),
-        ("tan (10–28°)", 10.0, 28.0),
-        ("brown (−30–10°)", -30.0, 10.0),
-        ("dark (< −30°)", f64::NEG_INFINITY, -30.0),
-    ];
-    for (name, lo, hi) in groups {
-        let pick = |r: &Run| -> Vec<SpectrumFit> {
-            r.fits.iter().filter(|f| (lo..hi).contains(&ita(f.lab_measured))).cloned().collect()
-        };
-        let (paper_fits, fits) = (pick(&runs[0]), pick(default_run));
-        if fits.is_empty() {
-            println!("| {name} | 0 | | | | | |");
-            continue;
-        }
-        let q = |fits: &[SpectrumFit], f: &dyn Fn(&SpectrumFit) -> f64, p: f64| {
-            quantile(&fits.iter().map(f).collect::<Vec<_>>(), p)
-        };
-        let de = |f: &SpectrumFit| f.delta_e00;
-        println!(
-            "| {name} | {} | {:.2} / {:.2} | {:.2} / {:.2} | {:.3} / {:.3} / {:.3} | {:.3} | {:.4} |",
-            fits.len(),
-            q(&paper_fits, &de, 0.5),
-            q(&paper_fits, &de, 0.9),
-            q(&fits, &de, 0.5),
-            q(&fits, &de, 0.9),
-            q(&fits, &|f| f.params.melanin, 0.1),
-            q(&fits, &|f| f.params.melanin, 0.5),
-            q(&fits, &|f| f.params.melanin, 0.9),
-            q(&fits, &|f| f.params.epidermis_thickness_mm, 0.5),
-            q(&fits, &|f| f.params.hemoglobin, 0.5),
-        );
-    }
+    // Skin-type groups by the individual typology angle of the measured colour (classes.rs): the default set's fit
+    // quality, Q-band residual and physiology per group.
+    println!("\nBy skin type, default set (ITA of the measured colour; Chardon et al. 1991):\n");
+    classes::print_class_table(&classes::class_rows(&default_run.fits, &spectra, &wl));
 
     // Plots.
     let rms_series: Vec<Series> =

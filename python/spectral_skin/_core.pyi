@@ -552,5 +552,6 @@ def fit_spectrum(
     starts: int | None = None,
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
+    bandpass: Literal["spacing"] | float | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_spectrum)``."""

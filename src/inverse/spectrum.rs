@@ -15,6 +15,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::bandpass::{Bandpass, Sampling};
 use super::lm::{minimize, LmResult, LmSettings};
 use crate::color::spectrum::VISIBLE_RANGE_NM;
 use crate::color::{ciede2000, lab_from_xyz, spectrum_to_xyz, WavelengthGrid};
@@ -37,6 +38,11 @@ pub const DEFAULT_STARTS: usize = 4;
 /// The most table starts refined: beyond a few the restarts find nothing new (docs/measured-skin.md), and each is a
 /// local fit of up to hundreds of forward spectra, minutes at 64 streams on a fine spectrum.
 pub const MAX_STARTS: usize = 64;
+
+/// The bandpass [`fit_spectrum`] assumes unless told otherwise: 1.5 times the wavelength spacing (the Q-band study
+/// of docs/measured-skin.md, Instrument bandpass); `Bandpass::FwhmNm(0.0)` is the fit before (the model sampled at the
+/// measured wavelengths).
+pub const DEFAULT_BANDPASS: Bandpass = Bandpass::Spacing;
 
 /// The oiliness a fit reports when none is given: the value of all three DJ2006 presets (it does not change the
 /// diffuse reflectance, so a spectrum cannot tell it).
@@ -102,6 +108,9 @@ pub struct FitOptions {
     pub fixed: [Option<f64>; PARAM_COUNT],
     pub specular: Specular,
     pub objective: Objective,
+    /// The instrument's spectral bandpass the model spectrum is averaged over before it is compared with the
+    /// measurement ([`Bandpass`]; docs/measured-skin.md, Instrument bandpass).
+    pub bandpass: Bandpass,
     /// How many of the table's best starts are refined (the best result is kept); the default 4 leaves little for
     /// more starts to find on the measured skin spectra (docs/measured-skin.md, the restart check).
     pub starts: usize,
@@ -117,6 +126,7 @@ impl Default for FitOptions {
             fixed: [None; PARAM_COUNT],
             specular: Specular::Free,
             objective: Objective::Reflectance,
+            bandpass: DEFAULT_BANDPASS,
             starts: DEFAULT_STARTS,
             request: Request::default(),
         }
@@ -136,7 +146,11 @@ pub struct SpectrumFit {
     pub specular_offset: f64,
     pub objective: Objective,
     pub wavelengths_nm: Vec<f64>,
-    /// The model's diffuse reflectance plus the offset, at `wavelengths_nm`: what was compared with the measurement.
+    /// "spacing" or "fwhm" ([`Bandpass`]) and the bandpass (FWHM, nm) at each wavelength; 0: the model sampled there.
+    pub bandpass: &'static str,
+    pub bandpass_nm: Vec<f64>,
+    /// The model's diffuse reflectance (averaged over the bandpass) plus the offset, at `wavelengths_nm`: what was
+    /// compared with the measurement.
     pub fitted_reflectance: Vec<f64>,
     /// Root-mean-square difference of `fitted_reflectance` and the measurement.
     pub rms: f64,
@@ -165,6 +179,9 @@ type StartSpectrum = (Vec<f64>, Vec<f64>);
 #[derive(Debug, Clone)]
 pub struct SpectrumFitter {
     wavelengths_nm: Vec<f64>,
+    /// The bandpass at each wavelength and the model's wavelengths it averages over.
+    bandpass_nm: Vec<f64>,
+    sampling: Sampling,
     options: FitOptions,
     /// Indices into PARAMS of the free parameters.
     free: Vec<usize>,
@@ -272,11 +289,16 @@ impl SpectrumFitter {
             ));
         }
         crate::transport::adding_doubling::validate_streams(options.request.accuracy.streams)?;
+        crate::evaluate::validate_model(&options.request.model)?;
+        let bandpass_nm = options.bandpass.widths_nm(wavelengths_nm)?;
+        let sampling = Sampling::new(wavelengths_nm, &bandpass_nm);
         let grid = WavelengthGrid { wavelengths_nm: wavelengths_nm.to_vec() };
         let xyz_weights = grid.xyz_weights();
         let white_xyz = spectrum_to_xyz(&vec![1.0; wavelengths_nm.len()], &xyz_weights);
         let mut fitter = SpectrumFitter {
             wavelengths_nm: wavelengths_nm.to_vec(),
+            bandpass_nm,
+            sampling,
             options: options.clone(),
             free,
             base,
@@ -293,15 +315,17 @@ impl SpectrumFitter {
         Ok(fitter)
     }
 
-    /// The model's diffuse reflectance with the free parameters at `x` (None if the model rejects them, or once
-    /// `cancel` is set: the callers read it again after).
+    /// The model's diffuse reflectance with the free parameters at `x`, averaged over the instrument's bandpass at
+    /// each measured wavelength (None if the model rejects them, or once `cancel` is set: the callers read it again
+    /// after).
     fn forward(&self, x: &[f64], cancel: &AtomicBool) -> Option<Vec<f64>> {
         let mut v = self.base;
         for (&k, &value) in self.free.iter().zip(x) {
             v[k] = value;
         }
         let params = SkinParams::from_values(v).ok()?;
-        diffuse_reflectance_at(&params, &self.options.request, &self.wavelengths_nm, cancel).ok()
+        let at_nodes = diffuse_reflectance_at(&params, &self.options.request, &self.sampling.nodes_nm, cancel).ok()?;
+        Some(self.sampling.apply(&at_nodes))
     }
 
     fn build_table(&self, cancel: &AtomicBool) -> Result<Vec<StartSpectrum>, SkinError> {
@@ -447,6 +471,8 @@ impl SpectrumFitter {
             specular_offset,
             objective: self.options.objective,
             wavelengths_nm: self.wavelengths_nm.clone(),
+            bandpass: self.options.bandpass.name(),
+            bandpass_nm: self.bandpass_nm.clone(),
             fitted_reflectance: fitted,
             rms,
             delta_e00: ciede2000(lab_measured, lab_fitted),

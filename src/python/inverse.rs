@@ -4,6 +4,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
+use crate::inverse::bandpass::Bandpass;
 use crate::inverse::spectrum::{FitOptions, Objective, Specular, ALL_OBJECTIVES, MAX_SPECTRUM_WAVELENGTHS};
 use crate::skin::params::{PARAMS, PARAM_COUNT};
 
@@ -34,6 +35,10 @@ use super::errors::invalid;
 ///     specular: the surface reflection added to the model: "free" (fitted, 0..0.1; the default), "fresnel" (the
 ///         normal-incidence Fresnel reflectance of index 1.4, 0.0278) or a number (0 for a measurement with the
 ///         specular component excluded).
+///     bandpass: the measuring instrument's spectral bandpass the model is averaged over (a triangle, FWHM in nm):
+///         "spacing" (as wide as the wavelengths' spacing, at most 20 nm; ASTM E308's assumption), a number 0..20
+///         (0: the model sampled at the wavelengths themselves); None: the default (docs/measured-skin.md,
+///         Instrument bandpass).
 ///     objective: what is minimised: "reflectance" (the squared reflectance differences; the default) or
 ///         "cielab" (the squared CIELAB difference of the colours, the reflectance differences only breaking ties).
 ///     starts: how many of the start table's best entries are refined (the best fit is kept), 1..64; None: 4
@@ -45,8 +50,9 @@ use super::errors::invalid;
 ///
 /// Returns:
 ///     A dict: "params" (every model parameter, fitted and fixed, by name), "free" (the fitted names), "specular"
-///     ("free", "fresnel" or "fixed"), "specular_offset", "objective", "wavelengths_nm" (K,), "fitted_reflectance"
-///     (K,) (model plus offset), "rms" (root-mean-square difference from the measurement), "delta_e00" (CIEDE2000
+///     ("free", "fresnel" or "fixed"), "specular_offset", "objective", "wavelengths_nm" (K,), "bandpass" ("spacing"
+///     or "fwhm"), "bandpass_nm" (the FWHM at each wavelength), "fitted_reflectance" (K,) (model, averaged over the
+///     bandpass, plus offset), "rms" (root-mean-square difference from the measurement), "delta_e00" (CIEDE2000
 ///     of the two spectra's colours under D65), "lab_measured", "lab_fitted", "starts", "evaluations", "transport",
 ///     "streams".
 ///
@@ -54,14 +60,14 @@ use super::errors::invalid;
 ///     SpectralSkinError: wavelengths outside 380..780 nm, not increasing or too few; a reflectance that is not one
 ///         finite value in 0..1 per wavelength; an unknown or repeated free parameter, or "oiliness"; a fixed value
 ///         out of range or for a free parameter; a paper parameter neither free nor fixed; an unknown specular or
-///         objective; a specular number outside 0..0.1.
+///         objective; a specular number outside 0..0.1; an unknown bandpass or a number outside 0..20.
 ///     TypeError: an argument of the wrong type.
 #[pyfunction]
 #[pyo3(
     name = "fit_spectrum",
     signature = (
         wavelengths_nm, reflectance, *, free = None, fixed = None, specular = None, objective = "reflectance",
-        starts = None, transport = "adding_doubling", streams = None
+        starts = None, transport = "adding_doubling", streams = None, bandpass = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -76,6 +82,7 @@ pub(super) fn fit_spectrum_py<'py>(
     starts: Option<&Bound<'py, PyAny>>,
     transport: &str,
     streams: Option<&Bound<'py, PyAny>>,
+    bandpass: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     const NUMBERS: &str = "a 1-D sequence or array of numbers";
     let wavelengths = real_vector("wavelengths_nm", wavelengths_nm, NUMBERS, MAX_SPECTRUM_WAVELENGTHS)?;
@@ -112,6 +119,14 @@ pub(super) fn fit_spectrum_py<'py>(
             other => return Err(invalid("specular", format!("unknown {other:?}; \"free\", \"fresnel\" or a number"))),
         },
         Some(s) => Specular::Fixed(real_of("specular", s)?.0),
+    };
+    options.bandpass = match bandpass.filter(|b| !b.is_none()) {
+        None => options.bandpass,
+        Some(b) if b.is_instance_of::<PyString>() => match b.extract::<String>()?.as_str() {
+            "spacing" => Bandpass::Spacing,
+            other => return Err(invalid("bandpass", format!("unknown {other:?}; \"spacing\" or a number"))),
+        },
+        Some(b) => Bandpass::FwhmNm(real_of("bandpass", b)?.0),
     };
     options.objective = by_name::<Objective>("objective", objective, &ALL_OBJECTIVES)?;
     if let Some(n) = count_arg("starts", starts)? {

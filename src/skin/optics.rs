@@ -23,6 +23,15 @@ pub struct SkinModel {
     /// In JSON an infinite thickness is the string "inf".
     #[serde(with = "finite_or_inf")]
     pub dermis_thickness_mm: f64,
+    /// Radius of the dermal blood vessels the blood is confined to, mm, for the packaging correction
+    /// ([`vessel_packaging_factor`]); 0 (the default, DJ2006's eq. 7) spreads the blood evenly through the dermis.
+    /// At most [`MAX_VESSEL_RADIUS_MM`]. Absent from JSON when 0 (docs/model.md, Vessel packaging).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub blood_vessel_radius_mm: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// Serde for a length that may be infinite: a number, or the string "inf" (JSON has no infinity).
@@ -54,7 +63,7 @@ mod finite_or_inf {
 
 impl Default for SkinModel {
     fn default() -> Self {
-        SkinModel { eumelanin_k_per_mm: K_EM_PER_MM, dermis_thickness_mm: f64::INFINITY }
+        SkinModel { eumelanin_k_per_mm: K_EM_PER_MM, dermis_thickness_mm: f64::INFINITY, blood_vessel_radius_mm: 0.0 }
     }
 }
 
@@ -71,12 +80,13 @@ pub fn sigma_a_epidermis_per_mm(p: &SkinParams, wavelength_nm: f64, k_em_per_mm:
 }
 
 /// `sigma_a_derm(lambda)`, mm^-1: oxygenated/deoxygenated blood blend (gamma = the blood oxygenation) plus baseline
-/// (DJ2006 eq. 7).
-pub fn sigma_a_dermis_per_mm(p: &SkinParams, wavelength_nm: f64) -> f64 {
+/// (DJ2006 eq. 7), the blood's term times the packaging factor of vessels of radius `vessel_radius_mm` (1 at 0).
+pub fn sigma_a_dermis_per_mm(p: &SkinParams, wavelength_nm: f64, vessel_radius_mm: f64) -> f64 {
     let gamma = p.blood_oxygenation;
     let blood =
         gamma * sigma_a_oxy_blood_per_mm(wavelength_nm) + (1.0 - gamma) * sigma_a_deoxy_blood_per_mm(wavelength_nm);
-    p.hemoglobin * blood + (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(p, wavelength_nm)
+    let packed = blood * vessel_packaging_factor(blood, vessel_radius_mm);
+    p.hemoglobin * packed + (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(p, wavelength_nm)
 }
 
 /// The two layers, top to bottom, at one wavelength: epidermis over dermis, both with index 1.4.
@@ -90,7 +100,7 @@ pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [La
         },
         Layer {
             thickness_mm: model.dermis_thickness_mm,
-            sigma_a_per_mm: sigma_a_dermis_per_mm(p, wavelength_nm),
+            sigma_a_per_mm: sigma_a_dermis_per_mm(p, wavelength_nm, model.blood_vessel_radius_mm),
             sigma_s_reduced_per_mm: sigma_s_reduced_dermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,
         },
@@ -107,6 +117,35 @@ mod tests {
         let text = serde_json::to_string(&m).unwrap();
         assert!(text.contains("\"dermis_thickness_mm\":\"inf\""), "{text}");
         assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m);
+    }
+
+    /// The packaging option is absent from a default model's JSON (so earlier JSON and cache keys read the same) and
+    /// round-trips when set.
+    #[test]
+    fn vessel_radius_is_absent_from_json_unless_set() {
+        let text = serde_json::to_string(&SkinModel::default()).unwrap();
+        assert!(!text.contains("blood_vessel_radius_mm"), "{text}");
+        let packed = SkinModel { blood_vessel_radius_mm: 0.02, ..SkinModel::default() };
+        let text = serde_json::to_string(&packed).unwrap();
+        assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), packed);
+    }
+
+    /// Packaging scales the dermis's blood term alone, by the factor of the blood's own absorption: the epidermis and
+    /// the bloodless part of the dermis are unchanged.
+    #[test]
+    fn packaging_scales_only_the_blood() {
+        let p = SkinParams::preset("caucasian").unwrap();
+        let packed = SkinModel { blood_vessel_radius_mm: 0.015, ..SkinModel::default() };
+        for w in [414.0, 542.0, 560.0, 650.0] {
+            let [epi0, derm0] = skin_layers(&p, &SkinModel::default(), w);
+            let [epi1, derm1] = skin_layers(&p, &packed, w);
+            assert_eq!(epi0, epi1);
+            let tissue = (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(&p, w);
+            let blood = 0.75 * sigma_a_oxy_blood_per_mm(w) + 0.25 * sigma_a_deoxy_blood_per_mm(w);
+            let factor = (derm1.sigma_a_per_mm - tissue) / (derm0.sigma_a_per_mm - tissue);
+            assert!((factor - vessel_packaging_factor(blood, 0.015)).abs() < 1e-12, "{w} nm: {factor}");
+            assert!(factor < 1.0 && derm1.sigma_s_reduced_per_mm == derm0.sigma_s_reduced_per_mm);
+        }
     }
 
     /// Independently computed values, Caucasian at 550 nm (docs/model.md, section Reference numbers).

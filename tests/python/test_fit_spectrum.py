@@ -22,8 +22,10 @@ def _model_spectrum(offset: float) -> tuple[np.ndarray, np.ndarray]:
 
 def test_round_trip_recovers_parameters_and_offset() -> None:
     wavelengths, measured = _model_spectrum(0.03)
-    fit = spectral_skin.fit_spectrum(wavelengths, measured)
+    # The model's spectrum is a point sample, so it is fitted as one (bandpass 0).
+    fit = spectral_skin.fit_spectrum(wavelengths, measured, bandpass=0.0)
     assert fit["rms"] < 2e-5 and fit["delta_e00"] < 0.01, fit
+    assert fit["bandpass"] == "fwhm" and np.all(fit["bandpass_nm"] == 0.0)
     assert fit["specular"] == "free" and abs(fit["specular_offset"] - 0.03) < 1e-3
     for name, value in TRUTH.items():
         assert fit["params"][name] == pytest.approx(value, rel=0.05), name
@@ -32,9 +34,20 @@ def test_round_trip_recovers_parameters_and_offset() -> None:
     # Fixed values and a fixed offset are taken as given.
     fixed = spectral_skin.fit_spectrum(wavelengths, measured, free=["melanin", "hemoglobin"],
                                        fixed={"melanin_blend": 0.4, "epidermis_thickness_mm": 0.08,
-                                              "baseline_absorption_scale": 2.0}, specular=0.03)
+                                              "baseline_absorption_scale": 2.0}, specular=0.03, bandpass=0)
     assert fixed["specular_offset"] == 0.03 and fixed["params"]["melanin_blend"] == 0.4
     assert fixed["params"]["melanin"] == pytest.approx(0.04, rel=0.01) and fixed["rms"] < 1e-4
+
+
+def test_default_bandpass_is_one_and_a_half_spacings() -> None:
+    """docs/measured-skin.md, Instrument bandpass: the model is averaged over a triangle 1.5 times the 10 nm spacing
+    wide; fitting a point spectrum so leaves a residual the point fit does not."""
+    wavelengths, measured = _model_spectrum(0.0)
+    fit = spectral_skin.fit_spectrum(wavelengths, measured)
+    assert fit["bandpass"] == "spacing" and np.allclose(fit["bandpass_nm"], 15.0)
+    assert fit["rms"] > 1e-4
+    assert spectral_skin.fit_spectrum(wavelengths, measured, bandpass="spacing")["rms"] == fit["rms"]
+    assert spectral_skin.fit_spectrum(wavelengths, measured, bandpass=15)["rms"] == pytest.approx(fit["rms"])
 
 
 def test_bad_input_names_the_argument() -> None:
@@ -51,6 +64,10 @@ def test_bad_input_names_the_argument() -> None:
         spectral_skin.fit_spectrum(wavelengths, measured, free=["melanin", "oiliness"])
     with pytest.raises(spectral_skin.SpectralSkinError, match="specular"):
         spectral_skin.fit_spectrum(wavelengths, measured, specular="glossy")
+    with pytest.raises(spectral_skin.SpectralSkinError, match="bandpass.*wide"):
+        spectral_skin.fit_spectrum(wavelengths, measured, bandpass="wide")
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"bandpass.*\[0, 20\].*25"):
+        spectral_skin.fit_spectrum(wavelengths, measured, bandpass=25.0)
     with pytest.raises(TypeError, match="free"):
         spectral_skin.fit_spectrum(wavelengths, measured, free="melanin")
 

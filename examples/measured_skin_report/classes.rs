@@ -1,0 +1,139 @@
+//! The fits grouped by skin type: the individual typology angle ITA = atan((L* - 50) / b*) of the measured colour,
+//! with Chardon, Cretois & Hourseau's bounds (Int. J. Cosmet. Sci. 13:191, 1991), and per group the fit quality, the
+//! mean residual in haemoglobin's Q bands and the fitted physiology (docs/measured-skin.md, By skin type).
+
+use spectral_skin::inverse::SpectrumFit;
+
+/// The ITA classes (name, lower bound, upper bound in degrees), lightest first.
+pub const CLASSES: [(&str, f64, f64); 6] = [
+    ("very light (> 55°)", 55.0, f64::INFINITY),
+    ("light (41–55°)", 41.0, 55.0),
+    ("intermediate (28–41°)", 28.0, 41.0),
+    ("tan (10–28°)", 10.0, 28.0),
+    ("brown (−30–10°)", -30.0, 10.0),
+    ("dark (< −30°)", f64::NEG_INFINITY, -30.0),
+];
+
+/// The wavelengths where the residual of oxyhaemoglobin's "W" is read: its two Q-band peaks (542 and 577 nm in
+/// Prahl's table) and the trough between them (560 nm), as the 10 nm data sample them.
+pub const Q_BAND_NM: [f64; 3] = [540.0, 560.0, 580.0];
+
+/// A class needs this many spectra for its median to count towards the worst/best ratio (issue 39's criterion).
+pub const MIN_CLASS_SPECTRA: usize = 20;
+
+pub fn quantile(values: &[f64], q: f64) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let pos = q * (v.len() - 1) as f64;
+    let (i, t) = (pos.floor() as usize, pos.fract());
+    if i + 1 < v.len() {
+        v[i] * (1.0 - t) + v[i + 1] * t
+    } else {
+        v[i]
+    }
+}
+
+/// ITA° of a CIELAB colour.
+pub fn ita_deg(lab: [f64; 3]) -> f64 {
+    (lab[0] - 50.0).atan2(lab[2]).to_degrees()
+}
+
+/// One class's figures.
+pub struct ClassRow {
+    pub name: &'static str,
+    pub n: usize,
+    pub median_de: f64,
+    pub p90_de: f64,
+    pub median_rms: f64,
+    /// Mean of measured - fitted at [`Q_BAND_NM`].
+    pub q_residual: [f64; 3],
+    /// Root mean square over 530-590 nm of the class's mean residual (measured - fitted).
+    pub q_rms: f64,
+    /// Median fitted melanin, epidermis thickness (mm), haemoglobin, oxygenation, offset.
+    pub medians: [f64; 5],
+    /// p10 and p90 of the fitted epidermis thickness, mm.
+    pub thickness_p10_p90: (f64, f64),
+}
+
+/// The rows of the classes that have spectra; `measured[i]` is the spectrum `fits[i]` fitted, on `wl`.
+pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Vec<ClassRow> {
+    let at = |nm: f64| wl.iter().position(|&w| (w - nm).abs() < 1e-9).expect("Q-band wavelength in the data");
+    let q_index = Q_BAND_NM.map(at);
+    let band: Vec<usize> = (0..wl.len()).filter(|&k| (530.0..=590.0).contains(&wl[k])).collect();
+    let mut rows = Vec::new();
+    for (name, lo, hi) in CLASSES {
+        let members: Vec<usize> =
+            (0..fits.len()).filter(|&i| (lo..hi).contains(&ita_deg(fits[i].lab_measured))).collect();
+        if members.is_empty() {
+            continue;
+        }
+        let n = members.len();
+        let mean_residual =
+            |k: usize| members.iter().map(|&i| measured[i][k] - fits[i].fitted_reflectance[k]).sum::<f64>() / n as f64;
+        let q_rms = (band.iter().map(|&k| mean_residual(k).powi(2)).sum::<f64>() / band.len() as f64).sqrt();
+        let of = |f: &dyn Fn(&SpectrumFit) -> f64| members.iter().map(|&i| f(&fits[i])).collect::<Vec<f64>>();
+        let de = of(&|f| f.delta_e00);
+        let thickness = of(&|f| f.params.epidermis_thickness_mm);
+        rows.push(ClassRow {
+            name,
+            n,
+            median_de: quantile(&de, 0.5),
+            p90_de: quantile(&de, 0.9),
+            median_rms: quantile(&of(&|f| f.rms), 0.5),
+            q_residual: q_index.map(mean_residual),
+            q_rms,
+            medians: [
+                quantile(&of(&|f| f.params.melanin), 0.5),
+                quantile(&thickness, 0.5),
+                quantile(&of(&|f| f.params.hemoglobin), 0.5),
+                quantile(&of(&|f| f.params.blood_oxygenation), 0.5),
+                quantile(&of(&|f| f.specular_offset), 0.5),
+            ],
+            thickness_p10_p90: (quantile(&thickness, 0.1), quantile(&thickness, 0.9)),
+        });
+    }
+    rows
+}
+
+/// The worst class median ΔE00 over the best, among classes of at least [`MIN_CLASS_SPECTRA`] spectra.
+pub fn worst_over_best(rows: &[ClassRow]) -> f64 {
+    let medians: Vec<f64> = rows.iter().filter(|r| r.n >= MIN_CLASS_SPECTRA).map(|r| r.median_de).collect();
+    let (lo, hi) = medians.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    hi / lo
+}
+
+/// The markdown table of `rows`.
+pub fn print_class_table(rows: &[ClassRow]) {
+    println!(
+        "| group (ITA) | spectra | median ΔE00 | p90 ΔE00 | median RMS | residual 540 / 560 / 580 nm | Q-band rms | melanin | \
+         epidermis mm (p10 / median / p90) | haemoglobin | oxygenation | offset |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for r in rows {
+        let [m, t, h, g, o] = r.medians;
+        println!(
+            "| {} | {} | {:.2} | {:.2} | {:.4} | {:+.4} / {:+.4} / {:+.4} | {:.4} | {:.3} | {:.3} / {:.3} / {:.3} | {:.4} | \
+             {:.2} | {:.3} |",
+            r.name,
+            r.n,
+            r.median_de,
+            r.p90_de,
+            r.median_rms,
+            r.q_residual[0],
+            r.q_residual[1],
+            r.q_residual[2],
+            r.q_rms,
+            m,
+            r.thickness_p10_p90.0,
+            t,
+            r.thickness_p10_p90.1,
+            h,
+            g,
+            o
+        );
+    }
+    println!(
+        "\nWorst / best class median ΔE00 (classes of {MIN_CLASS_SPECTRA} or more spectra): {:.2}",
+        worst_over_best(rows)
+    );
+}

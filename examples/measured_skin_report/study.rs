@@ -1,0 +1,141 @@
+//! Issue 39's study (`--study`): what leaves light skin's Q-band residual. The fit with the model sampled at the
+//! measured wavelengths (as before the bandpass), then each candidate cause alone and in pairs (the instrument's
+//! bandpass, a free blood oxygenation, vessel packaging), and what the fitted epidermis thickness trades against, each
+//! on the same spectra, printed per ITA class (docs/measured-skin.md, Skin types and the Q bands).
+
+use spectral_skin::inverse::{Bandpass, FitOptions, Specular};
+
+use super::classes::{class_rows, print_class_table, quantile, worst_over_best};
+use super::run;
+
+/// The vessel radii tried, mm: the superficial dermal plexus's capillaries and venules (about 0.005 to 0.05 mm in
+/// radius; Braverman 2000, src/skin/chromophores.rs).
+const RADII_MM: [f64; 3] = [0.005, 0.015, 0.04];
+
+fn with_oxygenation(mut o: FitOptions) -> FitOptions {
+    o.free.push("blood_oxygenation".to_string());
+    o
+}
+
+fn with_radius(mut o: FitOptions, radius_mm: f64) -> FitOptions {
+    o.request.model.blood_vessel_radius_mm = radius_mm;
+    o
+}
+
+/// The candidates: (label, options).
+fn candidates() -> Vec<(String, FitOptions)> {
+    let fwhm = |w: f64| FitOptions { bandpass: Bandpass::FwhmNm(w), ..FitOptions::default() };
+    let points = fwhm(0.0);
+    let default = FitOptions::default();
+    let mut list = vec![
+        ("points (the fit before)".to_string(), points.clone()),
+        ("points + oxygenation".to_string(), with_oxygenation(points.clone())),
+    ];
+    // The bandpass scan: does the residual keep falling as the modelled bandpass widens (something beside it
+    // flattens the bands) or turn (it explains what it can)?
+    for w in [10.0, 12.5, 15.0, 17.5, 20.0] {
+        list.push((format!("bandpass {w} nm"), fwhm(w)));
+    }
+    list.push(("default (bandpass 1.5 x spacing)".to_string(), default.clone()));
+    list.push(("bandpass 10 nm + oxygenation".to_string(), with_oxygenation(fwhm(10.0))));
+    list.push(("default + oxygenation".to_string(), with_oxygenation(default.clone())));
+    for r in RADII_MM {
+        list.push((format!("points + packaging R {r} mm"), with_radius(points.clone(), r)));
+        list.push((format!("default + packaging R {r} mm"), with_radius(default.clone(), r)));
+    }
+    // What the thin epidermis of many fits buys: the thickness held at a published value (0.08 mm: Sandby-Møller et
+    // al. 2003's 0.05-0.1 mm), and the surface reflection held at Fresnel's (the free offset trades against it).
+    let held = |mut o: FitOptions| {
+        o.free.retain(|n| n != "epidermis_thickness_mm");
+        o.fixed[4] = Some(0.08);
+        o
+    };
+    let fresnel = |o: FitOptions| FitOptions { specular: Specular::Fresnel, ..o };
+    list.push(("default, thickness 0.08 mm".to_string(), held(default.clone())));
+    list.push(("default + oxygenation, thickness 0.08 mm".to_string(), held(with_oxygenation(default.clone()))));
+    list.push(("default, fresnel".to_string(), fresnel(default.clone())));
+    list.push(("default + oxygenation, fresnel".to_string(), fresnel(with_oxygenation(default))));
+    list
+}
+
+/// Run the candidates named in `only` (labels separated by ';'; all when None) on `spectra` and print each one's
+/// class table, then a summary line per candidate.
+pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) {
+    let wanted: Option<Vec<&str>> = only.map(|o| o.split(';').map(str::trim).collect());
+    let mut summary = Vec::new();
+    for (label, options) in candidates() {
+        if wanted.as_ref().is_some_and(|w| !w.contains(&label.as_str())) {
+            continue;
+        }
+        let r = run(&label, wl, spectra, &options);
+        let rows = class_rows(&r.fits, spectra, wl);
+        println!("\n### {label}\n");
+        print_class_table(&rows);
+        print_residual_spectra(&r.fits, spectra, wl);
+        let de: Vec<f64> = r.fits.iter().map(|f| f.delta_e00).collect();
+        let rms: Vec<f64> = r.fits.iter().map(|f| f.rms).collect();
+        let thickness: Vec<f64> = r.fits.iter().map(|f| f.params.epidermis_thickness_mm).collect();
+        let light_dark = (rows.first().map_or(0.0, |r| r.q_rms), rows.last().map_or(0.0, |r| r.q_rms));
+        let worst = rows.iter().filter(|r| r.n >= 20).map(|r| r.median_de).fold(0.0, f64::max);
+        summary.push(format!(
+            "| {label} | {:.4} | {:.2} | {worst:.2} | {:.2} | {:.4} / {:.4} | {:.3} / {:.3} / {:.3} | {:.0} |",
+            quantile(&rms, 0.5),
+            quantile(&de, 0.5),
+            worst_over_best(&rows),
+            light_dark.0,
+            light_dark.1,
+            quantile(&thickness, 0.1),
+            quantile(&thickness, 0.5),
+            quantile(&thickness, 0.9),
+            r.seconds
+        ));
+    }
+    println!("\n### Summary\n");
+    println!(
+        "| fit | median RMS | median ΔE00 | worst class median | worst / best | Q-band rms lightest / darkest class | \
+         epidermis mm p10 / median / p90 | s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for line in summary {
+        println!("{line}");
+    }
+}
+
+/// Each class's mean residual (measured - fitted) at every wavelength, in thousandths.
+fn print_residual_spectra(fits: &[spectral_skin::inverse::SpectrumFit], spectra: &[Vec<f64>], wl: &[f64]) {
+    println!("\nMean residual per class, 1e-3 (wavelengths {} to {} nm):\n", wl[0], wl[wl.len() - 1]);
+    for (name, lo, hi) in super::classes::CLASSES {
+        let members: Vec<usize> =
+            (0..fits.len()).filter(|&i| (lo..hi).contains(&super::classes::ita_deg(fits[i].lab_measured))).collect();
+        if members.is_empty() {
+            continue;
+        }
+        let cells: Vec<String> = (0..wl.len())
+            .map(|k| {
+                let mean = members.iter().map(|&i| spectra[i][k] - fits[i].fitted_reflectance[k]).sum::<f64>()
+                    / members.len() as f64;
+                format!("{:+.1}", 1e3 * mean)
+            })
+            .collect();
+        let lab_bias: Vec<String> = (0..3)
+            .map(|c| {
+                let d: Vec<f64> = members.iter().map(|&i| fits[i].lab_measured[c] - fits[i].lab_fitted[c]).collect();
+                format!(
+                    "{:+.2} (|{:.2}|)",
+                    d.iter().sum::<f64>() / d.len() as f64,
+                    quantile(&d.iter().map(|v| v.abs()).collect::<Vec<_>>(), 0.5)
+                )
+            })
+            .collect();
+        println!("    {name:<22} {}   ΔL*, Δa*, Δb* mean (median |.|): {}", cells.join(" "), lab_bias.join(", "));
+    }
+}
+
+/// The per-class tables of docs/measured-skin.md (Skin types and the Q bands): the fit before the bandpass, the
+/// default fit, and the default with the oxygenation free (with a free and with a Fresnel surface reflection).
+pub fn by_class(wl: &[f64], spectra: &[Vec<f64>]) {
+    let labels =
+        "points (the fit before);default (bandpass 1.5 x spacing);default + oxygenation;default + oxygenation, \
+                  fresnel";
+    study(wl, spectra, Some(labels));
+}
