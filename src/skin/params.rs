@@ -374,32 +374,32 @@ pub const PRESETS: &[Preset] = &[
     palette(
         "ita-very-light",
         "median of the 66 in-vivo spectra of ITA class very light (> 55°) (Xiao et al. 2016); docs/measured-skin.md",
-        [0.0098, 1.000, 0.0041, 0.110, 1.00, 0.75],
+        [0.0096, 1.000, 0.0043, 0.110, 1.00, 0.75],
     ),
     palette(
         "ita-light",
         "median of the 749 in-vivo spectra of ITA class light (41–55°) (Xiao et al. 2016); docs/measured-skin.md",
-        [0.0173, 0.456, 0.0061, 0.110, 1.00, 0.75],
+        [0.0171, 0.445, 0.0064, 0.110, 1.00, 0.75],
     ),
     palette(
         "ita-intermediate",
         "median of the 1492 in-vivo spectra of ITA class intermediate (28–41°) (Xiao et al. 2016); docs/measured-skin.md",
-        [0.0263, 0.319, 0.0078, 0.110, 1.00, 0.75],
+        [0.0260, 0.313, 0.0082, 0.110, 1.00, 0.75],
     ),
     palette(
         "ita-tan",
         "median of the 1467 in-vivo spectra of ITA class tan (10–28°) (Xiao et al. 2016); docs/measured-skin.md",
-        [0.0368, 0.313, 0.0103, 0.110, 1.00, 0.75],
+        [0.0365, 0.309, 0.0107, 0.110, 1.00, 0.75],
     ),
     palette(
         "ita-brown",
         "median of the 531 in-vivo spectra of ITA class brown (−30–10°) (Xiao et al. 2016); docs/measured-skin.md",
-        [0.0492, 0.690, 0.0111, 0.110, 1.00, 0.75],
+        [0.0490, 0.688, 0.0115, 0.110, 1.00, 0.75],
     ),
     palette(
         "ita-dark",
         "median of the 87 in-vivo spectra of ITA class dark (< −30°) (Xiao et al. 2016); docs/measured-skin.md",
-        [0.1155, 1.000, 0.0063, 0.110, 1.00, 0.75],
+        [0.1154, 1.000, 0.0064, 0.110, 1.00, 0.75],
     ),
     // END palette
 ];
