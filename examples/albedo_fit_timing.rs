@@ -2,15 +2,16 @@
 //! parameter map's albedo (by the fit's forward table), as 8-bit sRGB (as a painted or photographed texture: colours
 //! repeat), as float, as float with 2 % multiplicative noise per channel (as a scan: hundreds of thousands of
 //! distinct colours), and as a photograph: the albedo over-exposed (x 1.4) under a warm light (R x 1.25, B x 0.75), as
-//! 8-bit sRGB (every texel outside skin's colours until the gains undo the light); cold (tables built) once, then with the tables cached in the process, with and without the
-//! exposure and white-balance gains estimated (`auto_gains`, Python `rgb_gains="auto"`). Each cached run is repeated
-//! REPEATS times (default 3) and the median printed.
+//! 8-bit sRGB (most of its texels outside skin's colours until the gains undo the light); cold (tables built) once,
+//! then with the tables cached in the process, with and without the exposure and white-balance gains estimated
+//! (`auto_gains`, Python `rgb_gains="auto"`). Each cached run is repeated REPEATS times (default 3) and the median
+//! printed.
 //!
 //!     cargo run --release --example albedo_fit_timing -- [SIZE] [REPEATS] [TEXTURE [RUN]]
 //!
-//! TEXTURE (8-bit, float, noisy or photo) and RUN (held, chosen or auto) time that one texture and run alone, once cold and
-//! REPEATS times cached: what `/usr/bin/time -v` measures the peak memory of (the process holds that texture and
-//! one fit at a time).
+//! TEXTURE (8-bit, float, noisy or photo) and RUN (held, chosen or auto) time that one texture and run alone, once
+//! cold and REPEATS times cached: what `/usr/bin/time -v` measures the peak memory of (the process holds that texture
+//! and one fit at a time).
 //!
 //! Figures: docs/skin-atlas.md, "Fitting a texture". RAYON_NUM_THREADS sets the cores.
 
@@ -54,7 +55,8 @@ fn checksum(fit: &AlbedoMapFit) -> u64 {
 fn describe(fit: &AlbedoMapFit) -> String {
     let s = fit.stats;
     format!(
-        "maps {:016x}, thickness {} mm, {} distinct colours, gains {:?}, ΔE00 mean {:.4} max {:.4}, {} outside skin's colours",
+        "maps {:016x}, thickness {} mm, {} distinct colours, gains {:?}, ΔE00 mean {:.4} max {:.4}, {} outside skin's \
+         colours",
         checksum(fit),
         fit.extended[0],
         s.distinct_colours,

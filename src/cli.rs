@@ -1189,7 +1189,8 @@ mod fit_maps {
         }
         println!(
             "wrote {} and {} ({size}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
-             {} texel(s) outside skin's colours (more than {OUTSIDE_SKIN_DELTA_E00} ΔE00 from every colour skin can have)",
+             {} texel(s) outside skin's colours (more than {OUTSIDE_SKIN_DELTA_E00} ΔE00 from every colour skin \
+             can have)",
             args.out.display(),
             residual_path.display(),
             s.distinct_colours,

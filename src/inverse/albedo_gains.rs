@@ -176,9 +176,9 @@ fn cheapest(candidates: &[Candidate], conv: &LabConverter) -> Candidate {
 }
 
 /// The exposure and white-balance gains that bring the most of a texture's texels inside skin's colours, the exposure
-/// changed only as far as that pays ([`EXPOSURE_PRICE_PER_STOP`]), at the options' extended physiology with each epidermis thickness of `thicknesses_mm` in
-/// turn (the gains and the thickness are found together: a thinner epidermis is a redder skin); any gains already in
-/// the options are replaced.
+/// changed only as far as that pays ([`EXPOSURE_PRICE_PER_STOP`]), at the options' extended physiology with each
+/// epidermis thickness of `thicknesses_mm` in turn (the gains and the thickness are found together: a thinner
+/// epidermis is a redder skin); any gains already in the options are replaced.
 pub fn estimate_gains(
     texels: &[[f32; 3]],
     options: &AlbedoFitOptions,
@@ -260,8 +260,8 @@ fn typical_brightness_gain(sample: &[([f32; 3], u32)], conv: &LabConverter) -> f
 }
 
 /// Fit, then solve the gains, from `start` (`first`: the sample fitted with them), until they settle: every round's
-/// gains with its figures, for [`cheapest`]. Each round refits the colours from the round before (the gains
-/// move little from round to round: [`refit_on_table`]).
+/// gains with its figures, for [`cheapest`]. Each round refits the colours from the round before (the gains move
+/// little from round to round: [`refit_on_table`]).
 fn calibrate(
     table: &AlbedoTable,
     sample: &[([f32; 3], u32)],

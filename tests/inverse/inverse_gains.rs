@@ -17,7 +17,10 @@ const SIZE: usize = 32;
 /// The fair face's melanin per texel and its albedo (linear Rec.709).
 fn fair_face() -> (Vec<f64>, Vec<[f64; 3]>) {
     let params = face_params(SIZE);
-    let request = Request::new(Outputs { albedo: true, ..Outputs::default() });
+    let request = Request {
+        working_space: WorkingSpace::LinearRec709,
+        ..Request::new(Outputs { albedo: true, ..Outputs::default() })
+    };
     (0..SIZE * SIZE)
         .map(|i| {
             let t = params.texel(i);
@@ -91,7 +94,8 @@ fn an_over_exposed_warm_photograph_comes_back_towards_its_light() {
     let (fitted, made) = mean_melanin(&fit, &truth, |_| true);
     let stops = -(0.2126 * light[0] + 0.7152 * light[1] + 0.0722 * light[2]).log2(); // Rec.709 luminance (BT.709)
     println!(
-        "over-exposed, warm: gains {:?} ({:+.3} stops, applied {stops:+.3}), mean melanin {fitted:.5} against {made:.5}",
+        "over-exposed, warm: gains {:?} ({:+.3} stops, applied {stops:+.3}), mean melanin {fitted:.5} against \
+         {made:.5}",
         g.rgb_gains, g.exposure_stops
     );
     for (c, name) in [(0, "R/G"), (2, "B/G")] {
