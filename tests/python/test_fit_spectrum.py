@@ -25,7 +25,7 @@ def test_round_trip_recovers_parameters_and_offset() -> None:
     # The model's spectrum is a point sample, so it is fitted as one (bandpass 0).
     fit = spectral_skin.fit_spectrum(wavelengths, measured, bandpass=0.0)
     assert fit["rms"] < 2e-5 and fit["delta_e00"] < 0.01, fit
-    assert fit["bandpass"] == "fwhm" and np.all(fit["bandpass_nm"] == 0.0)
+    assert fit["bandpass"] == "fwhm" and np.all(np.asarray(fit["bandpass_nm"]) == 0.0)
     assert fit["specular"] == "free" and abs(fit["specular_offset"] - 0.03) < 1e-3
     for name, value in TRUTH.items():
         assert fit["params"][name] == pytest.approx(value, rel=0.05), name
