@@ -182,7 +182,7 @@ mod tests {
         assert_eq!(Sampling::new(&wl, &vec![15.0; 31]).nodes_nm.len(), 331);
         // A narrow bandpass gets nodes half its width apart.
         let fine: Vec<f64> = (0..11).map(|i| 500.0 + i as f64).collect();
-        let narrow = Sampling::new(&fine, &vec![1.5; 11]);
+        let narrow = Sampling::new(&fine, &[1.5; 11]);
         assert!((narrow.nodes_nm[1] - narrow.nodes_nm[0] - 0.75).abs() < 1e-12, "{:?}", &narrow.nodes_nm[..3]);
         let p = Sampling::new(&wl, &vec![0.0; 31]);
         assert_eq!(p.nodes_nm, wl);
