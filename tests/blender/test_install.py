@@ -56,7 +56,7 @@ def test_the_documented_install_lasts_into_a_new_process(tmp_path, extension_zip
     first = _run(f"ZIP = {str(extension_zip)!r}\n" + install, user, tmp_path)
     assert first.returncode == 0, first.stdout + first.stderr
     assert (user / "config" / "userpref.blend").exists(), "the preferences were not saved"
-    # A process that does not read the preferences has no add-on (the bpy module starts from factory preferences):
+    # A process that does not enable it has no add-on (the bpy module starts from factory preferences):
     # what the doc's second block is for.
     bare = _run("import bpy\nprint(hasattr(bpy.types, 'SPECTRAL_SKIN_OT_apply'))", user, tmp_path)
     assert bare.returncode == 0 and bare.stdout.strip().splitlines()[-1] == "False", bare.stdout + bare.stderr
