@@ -16,7 +16,7 @@ per material; a flag overrides the preset's value).
 
 (``batch.py in.blend out.blend --material ...`` without a subcommand still means ``apply``.)
 
-Apply is the operator's own path (ops.apply_skins): the scene decides which effects each material needs
+Apply is the operator's own path (apply.apply_skins): the scene decides which effects each material needs
 (blender_addon/core/scene.py: subsurface scattering no camera can resolve is dropped, zero oiliness writes no specular
 map, ...); the decisions are printed, one line each, and stored on the material. A parameter keyframed or driven on a
 material's Spectral Skin settings follows that animation (the value given here for it is not used): a
@@ -76,7 +76,7 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     ``settings.scale_length`` by the scene's unit scale. Raises spectral_skin.SpectralSkinError / ValueError / OSError; nothing is saved then.
     """
     nodes = _addon_module("nodes")
-    ops = _addon_module("ops")
+    apply = _addon_module("apply")
     core = _addon_module("core")
     analysis = _addon_module("core.scene")
     _open(blend_path)
@@ -89,7 +89,7 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     items = [(bpy.data.materials[name],
               settings.replace(file_prefix=core.texture_prefix(blend_path, name), output_dir=output_dir,
                                scale_length=scene.unit_settings.scale_length)) for name in material_names]
-    plans = dict(zip(material_names, ops.apply_skins(items, scene), strict=True))
+    plans = dict(zip(material_names, apply.apply_skins(items, scene), strict=True))
     for name, plan in plans.items():
         for line in analysis.describe(plan.effects):
             print(f"spectral-skin batch: {name}: {line}", flush=True)
@@ -100,7 +100,9 @@ def apply_to_materials(blend_path: str, material_names: list[str], settings: Any
     out_blend = os.path.abspath(out_blend)
     os.makedirs(os.path.dirname(out_blend), exist_ok=True)
     bpy.ops.wm.save_as_mainfile(filepath=out_blend, relative_remap=True)
-    _write_sidecar(out_blend, plans)
+    stored_textures = _addon_module("props").stored_textures
+    _write_sidecar(out_blend, {name: {**plan.as_json(), "textures": stored_textures(bpy.data.materials[name])}
+                               for name, plan in plans.items()})
     return plans
 
 
@@ -109,16 +111,16 @@ def sidecar_path(out_blend: str) -> str:
     return os.path.splitext(os.path.abspath(out_blend))[0] + ".spectral_skin.json"
 
 
-def _write_sidecar(out_blend: str, plans: dict[str, Any]) -> None:
-    """Per material: the target, the transport and the extended physiology computed with (``transport``,
-    ``extended``), the decisions (``effects``),
-    the core's work (``work``: what was computed, the counts the operator stores on the material), the texture files
-    and the per-frame values of an animated constant material (``animation``, or null), as JSON next to the .blend."""
+def _write_sidecar(out_blend: str, plans: dict[str, dict[str, Any]]) -> None:
+    """Per material (``plans``: each plan's JSON, with the texture files the core wrote): the target, the transport
+    and the extended physiology computed with (``transport``, ``extended``), the decisions (``effects``), the core's
+    work (``work``: what was computed, the counts the operator stores on the material), the texture files
+    (``textures``) and the per-frame values of an animated constant material (``animation``, or null), as JSON next
+    to the .blend."""
     import json
 
     keys = ("target", "method", "transport", "extended", "effects", "work", "textures", "animation")
-    content = {name: {key: value for key, value in plan.as_json().items() if key in keys}
-               for name, plan in plans.items()}
+    content = {name: {key: value for key, value in plan.items() if key in keys} for name, plan in plans.items()}
     path = sidecar_path(out_blend)
     tmp = f"{path}.{os.getpid()}.tmp"
     with open(tmp, "w", encoding="utf-8") as file:

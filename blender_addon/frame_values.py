@@ -14,12 +14,12 @@ import bpy
 
 from . import anim
 from .core import MaterialPlan
+from .core.maps import PLAN_INPUTS
 
 # Per-frame values of an Apply before they became F-curves (JSON on the material): removed at the next Apply.
 LEGACY_PROPERTY = "spectral_skin_frames"
-# Plan key -> Principled input.
-SOCKETS = {"base_color": "Base Color", "radius": "Subsurface Radius", "specular_ior_level": "Specular IOR Level",
-           "coat_weight": "Coat Weight", "coat_roughness": "Coat Roughness"}
+# The plan's field -> the Principled input it sets.
+SOCKETS = PLAN_INPUTS
 
 
 def _paths(node: bpy.types.Node) -> set[str]:

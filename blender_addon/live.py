@@ -28,13 +28,15 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Mapping
 from typing import Any
 
 import bpy
 import numpy as np
 
 from . import anim, nodes
-from .core import PARAMETER_INFO, PARAMETERS, MaterialPlan
+from .core import NON_COLOR, PARAMETER_INFO, PARAMETERS, MaterialPlan
+from .core.maps import map_kinds, split_tiles
 
 GROUP_NAME = "Spectral Skin"
 # The group's layout version, stored on the group: a group of another version (such as an EEVEE group from before
@@ -48,9 +50,9 @@ OUTPUTS = (
     ("Coat Weight", "NodeSocketFloat"),
     ("Coat Roughness", "NodeSocketFloat"),
 )
-# Group output -> the key of its values in ``spectral_skin.surface_input_nodes``.
-SURFACE_OUTPUTS = {"Specular IOR Level": "specular_ior_level", "Coat Weight": "coat_weight",
-                   "Coat Roughness": "coat_roughness"}
+# Group output -> the key of its values in ``spectral_skin.surface_input_nodes``: the surface's single-channel map
+# kinds (core/maps.py), by the Principled input each feeds.
+SURFACE_OUTPUTS = {kind.principled_input: kind.field for kind in map_kinds() if kind.scalar}
 
 
 def table_image(name: str, log_rgb: np.ndarray) -> Any:
@@ -63,7 +65,7 @@ def table_image(name: str, log_rgb: np.ndarray) -> Any:
         image = None
     if image is None:
         image = bpy.data.images.new(name, width=w, height=h, alpha=False, float_buffer=True)
-    image.colorspace_settings.name = "Non-Color"
+    image.colorspace_settings.name = NON_COLOR
     rgba = np.ones((h, w, 4), dtype=np.float32)
     rgba[:, :, :3] = log_rgb[::-1]
     image.pixels.foreach_set(rgba.ravel())
@@ -113,8 +115,8 @@ class _Nodes:
         return tex.outputs["Color"]
 
 
-def build_group(table: dict[str, Any], name: str = GROUP_NAME, exact: bool | None = None,
-                surface_nodes: dict[str, Any] | None = None) -> Any:
+def build_group(table: Mapping[str, Any], name: str = GROUP_NAME, exact: bool | None = None,
+                surface_nodes: Mapping[str, Any] | None = None) -> Any:
     """The node group for a ``spectral_skin.shader_table`` result (created, or rebuilt in place if it exists).
     Its images are named ``<name> Base Color`` and ``<name> Radius``. ``exact``: bilinear weights computed in the
     group from four Closest lookups per slice (8 texture reads per output instead of 2), as EEVEE needs (GPU
@@ -212,7 +214,7 @@ def _table_outputs(build: _Nodes, meta: dict[str, Any], exact: bool, group_in: A
         build.links.new(combine.outputs["Vector"], group_out.inputs[output])
 
 
-def _surface_outputs(build: _Nodes, surface_nodes: dict[str, Any], group_in: Any, group_out: Any) -> None:
+def _surface_outputs(build: _Nodes, surface_nodes: Mapping[str, Any], group_in: Any, group_out: Any) -> None:
     """The surface's inputs, linear in the oiliness between the core's nodes o_k (exact for the level and the Coat
     Weight; the Coat Roughness within 6e-5: spectral_skin.surface_input_nodes): v(o) = v_0 + sum over segments of
     clamp((o - o_k) / (o_k+1 - o_k), 0, 1) (v_k+1 - v_k). The paper's one segment is 0.5 * clamp(oiliness, 0, 1)."""
@@ -242,20 +244,20 @@ def has_group(name: str) -> bool:
 def _packed(image: Any) -> Any:
     """Pack a generated float image into the .blend (so nothing depends on a temporary file)."""
     image.pack()
-    image.colorspace_settings.name = "Non-Color"
+    image.colorspace_settings.name = NON_COLOR
     return image
 
 
 def _non_color(image: Any) -> None:
     """Tag a parameter image Non-Color (raw values), keeping the pixels of one Blender holds only in memory
     (generated, or painted and not saved), which a colour space change would regenerate or reload."""
-    if image.colorspace_settings.name == "Non-Color":
+    if image.colorspace_settings.name == NON_COLOR:
         return
     keep = None
     if image.source == "GENERATED" or image.is_dirty:
         keep = np.empty(len(image.pixels), dtype=np.float32)
         image.pixels.foreach_get(keep)
-    image.colorspace_settings.name = "Non-Color"
+    image.colorspace_settings.name = NON_COLOR
     if keep is not None:
         image.pixels.foreach_set(keep)
         image.update()
@@ -286,7 +288,7 @@ def _direct(image: Any) -> bool | None:
     return None
 
 
-def _parameter_image(material: Any, param: str, maps: dict[str, Any]) -> tuple[Any, bool] | None:
+def _parameter_image(material: Any, param: str, maps: Mapping[str, Any]) -> tuple[Any, bool] | None:
     """The image a parameter's input reads and whether its values are normalized; None for the constant. The
     material's own image where Blender reads it as the core does, else (an EXR file, or maps a batch script gave) a
     packed float copy of the core's reading ``maps[param]``."""
@@ -309,17 +311,15 @@ def _parameter_image(material: Any, param: str, maps: dict[str, Any]) -> tuple[A
 def tiled_copy(name: str, pixels: np.ndarray, tiles: tuple[tuple[int, int], ...]) -> Any:
     """A packed float UDIM image (Non-Color, grey) holding a tile set's values: ``pixels`` (H, W) are the tiles
     stacked top to bottom, ``tiles`` each tile's (number, rows), as the core reads a tile set
-    (core.read_tile_set). Blender's Python API sets the pixels of a tiled image's first tile only, so each tile is
+    (core.read_tile_set; split by core.maps.split_tiles). Blender's Python API sets the pixels of a tiled image's first tile only, so each tile is
     written by Blender as a 32-bit float EXR into a temporary folder, loaded as one tiled image and packed into the
     .blend (Blender packs every tile); the folder is then removed: nothing depends on it."""
     old = bpy.data.images.get(name)
     if old is not None:
         bpy.data.images.remove(old)
     with tempfile.TemporaryDirectory(prefix="spectral-skin-") as folder:
-        first = 0
-        for tile, rows in tiles:
-            part = table_image(f"{name} {tile}", np.repeat(pixels[first:first + rows, :, None], 3, axis=2))
-            first += rows
+        for tile, rows in split_tiles(pixels, tiles):
+            part = table_image(f"{name} {tile}", np.repeat(rows[:, :, None], 3, axis=2))
             part.filepath_raw = os.path.join(folder, f"copy.{tile}.exr")
             part.file_format = "OPEN_EXR"
             part.use_half_precision = False  # the core's reading, not rounded
@@ -332,7 +332,7 @@ def tiled_copy(name: str, pixels: np.ndarray, tiles: tuple[tuple[int, int], ...]
             raise RuntimeError(f"{name}: Blender loaded the tiles {found}, expected {[t for t, _ in tiles]}")
         image.pack()
     image.name = name
-    image.colorspace_settings.name = "Non-Color"
+    image.colorspace_settings.name = NON_COLOR
     return image
 
 
@@ -377,8 +377,44 @@ def carry_animation(material: Any, param: str, socket: Any) -> list[str]:
     return copied
 
 
+def _wire_parameter_image(material: Any, node: Any, index: int, param: str, socket: Any,
+                          maps: Mapping[str, Any]) -> None:
+    """The Image Texture that feeds a group input ``socket`` with the parameter's map (:func:`_parameter_image`; its
+    first channel, scaled onto the parameter's range when its values are normalized); nothing for a constant."""
+    source = _parameter_image(material, param, maps)
+    if source is None:
+        return
+    tree = material.node_tree
+    image, normalized = source
+    _non_color(image)
+    role, channel_role, range_role = _roles(param)
+    y = node.location.y - 260 * index
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    nodes._tag(tex, role)
+    tex.image = image
+    tex.interpolation = "Linear"
+    tex.extension = "EXTEND"
+    tex.location = (node.location.x - 620, y)
+    channel = tree.nodes.new("ShaderNodeSeparateColor")
+    nodes._tag(channel, channel_role)
+    channel.location = (node.location.x - 340, y)
+    tree.links.new(tex.outputs["Color"], channel.inputs["Color"])
+    value = channel.outputs[0]  # the first channel, as the baked path reads it
+    if normalized:
+        low, high = PARAMETER_INFO[param][:2]
+        scale = tree.nodes.new("ShaderNodeMath")
+        nodes._tag(scale, range_role)
+        scale.operation = "MULTIPLY_ADD"
+        scale.inputs[1].default_value = high - low
+        scale.inputs[2].default_value = low
+        scale.location = (node.location.x - 180, y)
+        tree.links.new(value, scale.inputs[0])
+        value = scale.outputs[0]
+    tree.links.new(value, socket)
+
+
 def wire(material: Any, plan: MaterialPlan) -> Any:
-    """Live mode's last step (main thread): the group (built from ``plan.live["table"]``, its images packed, or
+    """Live mode's last step (main thread): the group (built from ``plan.live.table``, its images packed, or
     the blend file's), its node wired into the tagged Principled BSDF, its inputs set (see the module's docstring).
     Returns the group node."""
     info = plan.live
@@ -386,9 +422,9 @@ def wire(material: Any, plan: MaterialPlan) -> Any:
         raise ValueError("the plan is not a Live plan (core/live.py live_plan)")
     tree = material.node_tree
     principled = nodes.tagged_nodes(tree, "principled")[0]
-    name = info["group"]
-    if info["table"] is not None:
-        group = build_group(info["table"], name, surface_nodes=dict(info["surface_nodes"]))
+    name = info.group
+    if info.table is not None:
+        group = build_group(info.table, name, surface_nodes=dict(info.surface_nodes))
         for kind in ("Base Color", "Radius"):
             _packed(bpy.data.images[f"{name} {kind}"])
     elif has_group(name):
@@ -403,45 +439,17 @@ def wire(material: Any, plan: MaterialPlan) -> Any:
     node.node_tree = group
     node.width = 200
     for index, (param, socket_name) in enumerate(zip(PARAMETERS, INPUTS, strict=True)):
-        node.inputs[socket_name].default_value = float(info["constants"][param])
+        node.inputs[socket_name].default_value = float(info.constants[param])
         for role in _roles(param):
             for stale in nodes.tagged_nodes(tree, role):
                 tree.nodes.remove(stale)
         socket = chain_head(node.inputs[socket_name])
-        socket.default_value = float(info["constants"][param])
+        socket.default_value = float(info.constants[param])
         carry_animation(material, param, socket)
-        source = _parameter_image(material, param, info["maps"])
-        if source is None:
-            continue
-        image, normalized = source
-        _non_color(image)
-        role, channel_role, range_role = _roles(param)
-        y = node.location.y - 260 * index
-        tex = tree.nodes.new("ShaderNodeTexImage")
-        nodes._tag(tex, role)
-        tex.image = image
-        tex.interpolation = "Linear"
-        tex.extension = "EXTEND"
-        tex.location = (node.location.x - 620, y)
-        channel = tree.nodes.new("ShaderNodeSeparateColor")
-        nodes._tag(channel, channel_role)
-        channel.location = (node.location.x - 340, y)
-        tree.links.new(tex.outputs["Color"], channel.inputs["Color"])
-        value = channel.outputs[0]  # the first channel, as the baked path reads it
-        if normalized:
-            low, high = PARAMETER_INFO[param][:2]
-            scale = tree.nodes.new("ShaderNodeMath")
-            nodes._tag(scale, range_role)
-            scale.operation = "MULTIPLY_ADD"
-            scale.inputs[1].default_value = high - low
-            scale.inputs[2].default_value = low
-            scale.location = (node.location.x - 180, y)
-            tree.links.new(value, scale.inputs[0])
-            value = scale.outputs[0]
-        tree.links.new(value, socket)
+        _wire_parameter_image(material, node, index, param, socket, info.maps)
     pack_painted(tree)
-    outputs = [("Base Color", True), ("Subsurface Radius", info["subsurface"]),
-               *((output, info["specular"]) for output in SURFACE_OUTPUTS)]
+    outputs = [("Base Color", True), ("Subsurface Radius", info.subsurface),
+               *((output, info.specular) for output in SURFACE_OUTPUTS)]
     for output, used in outputs:
         target = nodes._socket(principled.inputs, output)
         if used:

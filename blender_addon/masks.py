@@ -17,7 +17,7 @@ import bpy
 import numpy as np
 
 from . import live, nodes
-from .core import PARAMETERS
+from .core import NON_COLOR, PARAMETERS
 from .core.masks import (
     MASK_KINDS,
     check_mask,
@@ -78,7 +78,7 @@ def _mask_image(material: Any, kind: str) -> Any:
     width, height = mask_size(_map_sizes(material))
     name = mask_name(material.name, kind, (i.name for i in bpy.data.images))
     image = bpy.data.images.new(name, width=width, height=height, alpha=False, float_buffer=False)
-    image.colorspace_settings.name = "Non-Color"
+    image.colorspace_settings.name = NON_COLOR
     black = np.zeros((height, width, 4), dtype=np.float32)
     black[..., 3] = 1.0
     image.pixels.foreach_set(black.ravel())  # pixels of its own: Blender packs a generated image only once changed

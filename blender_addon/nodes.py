@@ -8,34 +8,25 @@ and puts back the Surface link the material had before.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from typing import Any
 
 import bpy
 
 from . import frame_values
-from .core import UDIM_TOKEN, MaterialPlan
+from .core import DEFAULT_WORKING_SPACE, NON_COLOR, UDIM_TOKEN, MaterialPlan, map_kinds
 
 TAG = "spectral_skin"
 NAME_PREFIX = "SpectralSkin"
 # Custom property of the material output: [node name, socket identifier] of the Surface link before Apply.
 PREVIOUS_SURFACE = "spectral_skin_previous_surface"
 
-# Texture role -> (Principled input, image colour space); None: the plan's working space (the albedo is linear RGB
-# in the scene's working space, whose OCIO colour space has the same name: Linear Rec.709, Linear Rec.2020, ACEScg).
-TEXTURE_INPUTS = {
-    "albedo": ("Base Color", None),
-    "radius": ("Subsurface Radius", "Non-Color"),
-    "specular": ("Specular IOR Level", "Non-Color"),
-    "coat_weight": ("Coat Weight", "Non-Color"),
-    "coat_roughness": ("Coat Roughness", "Non-Color"),
-}
-
 
 def scene_working_space() -> str:
     """The blend file's scene-linear working space: ``bpy.data.colorspace.working_space`` in Blender 5.0
     ('Linear Rec.709', 'Linear Rec.2020' or 'ACEScg'); 'Linear Rec.709' where it does not exist (Blender 4.x)."""
     colorspace = getattr(bpy.data, "colorspace", None)
-    return str(getattr(colorspace, "working_space", "") or "Linear Rec.709")
+    return str(getattr(colorspace, "working_space", "") or DEFAULT_WORKING_SPACE)
 
 
 def scene_target(scene: bpy.types.Scene) -> dict[str, str]:
@@ -136,22 +127,9 @@ def _texture_node(tree: bpy.types.NodeTree, role: str, path: str, colorspace: st
     return node
 
 
-def apply_plan(material: bpy.types.Material, plan: MaterialPlan) -> bpy.types.Node:
-    """Make (or update) the add-on's Principled BSDF and texture nodes from a computed plan; returns the Principled.
-
-    A constant Base Color is taken as it is, so the plan must be in the scene's working space (ValueError if not);
-    the albedo texture is tagged with the plan's working space, which Blender converts to the scene's.
-    """
-    working_space = plan.working_space
-    if plan.base_color is not None and working_space != scene_working_space():
-        raise ValueError(f"the plan's Base Color is in {working_space} but the scene's working space is "
-                         f"{scene_working_space()}: compute the plan with working_space={scene_working_space()!r}")
-    if material.node_tree is None:
-        material.use_nodes = True
-    tree = material.node_tree
-    node = _principled(tree)
-    inputs = node.inputs
-    values = {
+def _principled_values(plan: MaterialPlan) -> dict[str, Any]:
+    """The plan's value of each Principled input it sets (None: a texture feeds it)."""
+    return {
         "Base Color": None if plan.base_color is None else [*plan.base_color, 1.0],
         "Subsurface Radius": None if plan.radius is None else list(plan.radius),
         "Specular IOR Level": plan.specular_ior_level,
@@ -166,23 +144,49 @@ def apply_plan(material: bpy.types.Material, plan: MaterialPlan) -> bpy.types.No
         "Coat Roughness": plan.coat_roughness,
         "Coat IOR": plan.coat_ior,
     }
-    for name, value in values.items():
-        socket = _socket(inputs, name)
+
+
+def _link_textures(tree: bpy.types.NodeTree, node: bpy.types.Node, files: Mapping[str, str],
+                   working_space: str) -> None:
+    """An Image Texture per file the core wrote, feeding its map kind's Principled input (the albedo tagged with the
+    working space, the rest Non-Color); the add-on's texture nodes of kinds without a file removed."""
+    for index, kind in enumerate(map_kinds()):
+        path = files.get(kind.name)
+        if path is None:
+            for stale in tagged_nodes(tree, kind.name):
+                tree.nodes.remove(stale)
+            continue
+        colorspace = working_space if kind.colour else NON_COLOR
+        texture = _texture_node(tree, kind.name, os.path.abspath(path), colorspace, node, index)
+        tree.links.new(texture.outputs["Color"], _socket(node.inputs, kind.principled_input))
+
+
+def apply_plan(material: bpy.types.Material, plan: MaterialPlan,
+               files: Mapping[str, str] | None = None) -> bpy.types.Node:
+    """Make (or update) the add-on's Principled BSDF and texture nodes from a computed plan and the files the core
+    wrote for its textures (``files``: {map name: path}, :func:`~core.material_plan.write_textures`); returns the
+    Principled. Each texture feeds the Principled input of its map kind (core/maps.py).
+
+    A constant Base Color is taken as it is, so the plan must be in the scene's working space (ValueError if not);
+    the albedo texture is tagged with the plan's working space, which Blender converts to the scene's; every other
+    texture is data (Non-Color).
+    """
+    working_space = plan.working_space
+    if plan.base_color is not None and working_space != scene_working_space():
+        raise ValueError(f"the plan's Base Color is in {working_space} but the scene's working space is "
+                         f"{scene_working_space()}: compute the plan with working_space={scene_working_space()!r}")
+    if material.node_tree is None:
+        material.use_nodes = True
+    tree = material.node_tree
+    node = _principled(tree)
+    for name, value in _principled_values(plan).items():
+        socket = _socket(node.inputs, name)
         _unlink(tree, socket)
         if value is not None:
             socket.default_value = value
     # Set after the values: the method hides sockets it does not use.
     node.subsurface_method = plan.method
-
-    for index, (role, (input_name, colorspace)) in enumerate(TEXTURE_INPUTS.items()):
-        path = plan.textures.get(role)
-        if path is None:
-            for stale in tagged_nodes(tree, role):
-                tree.nodes.remove(stale)
-            continue
-        texture = _texture_node(tree, role, os.path.abspath(path), colorspace or working_space, node, index)
-        tree.links.new(texture.outputs["Color"], _socket(inputs, input_name))
-
+    _link_textures(tree, node, files or {}, working_space)
     output = _output_node(tree)
     surface = _socket(output.inputs, "Surface")
     if not any(link.from_node == node for link in surface.links):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from collections.abc import Mapping
 from typing import Any
 
 import bpy
@@ -257,6 +258,9 @@ class SpectralSkinSettings(bpy.types.PropertyGroup):
         "override}] (core/scene.py)")
     result_work: bpy.props.StringProperty(
         name="Work", description="What the core computed for the last Apply, as JSON (the plan's work: core/plan.py)")
+    result_textures: bpy.props.StringProperty(
+        name="Textures", description="The texture files the core wrote for the last Apply, as JSON: {map name: "
+        "path} (empty without parameter maps)")
 
 
 def _image_parameter_maps(image: bpy.types.Image, name: str | None) -> dict[str, ParameterMap]:
@@ -348,7 +352,9 @@ def settings_from_material(material: bpy.types.Material, scene: bpy.types.Scene)
         blender=target["blender"], engine=target["engine"], mode=props.mode).with_maps(maps)
 
 
-def store_result(material: bpy.types.Material, plan: MaterialPlan) -> None:
+def store_result(material: bpy.types.Material, plan: MaterialPlan, files: Mapping[str, str]) -> None:
+    """The plan's summary, decisions and work, and the texture ``files`` the core wrote for it, stored on the
+    material (what the panel shows and the batch's sidecar records)."""
     props = material.spectral_skin
     summary = plan.summary
     props.has_result = True
@@ -362,12 +368,19 @@ def store_result(material: bpy.types.Material, plan: MaterialPlan) -> None:
     json_plan = plan.as_json()
     props.result_effects = json.dumps(json_plan["effects"], default=float)
     props.result_work = json.dumps(json_plan["work"])
+    props.result_textures = json.dumps(dict(files))
     update_swatch(props)  # in the working space of this Apply (the blend file's may have changed since a slider moved)
 
 
 def stored_work(material: bpy.types.Material) -> dict:
     """What the core computed for the material's last Apply (the plan's ``work``; empty before the first)."""
     text = material.spectral_skin.result_work
+    return dict(json.loads(text)) if text else {}
+
+
+def stored_textures(material: bpy.types.Material) -> dict[str, str]:
+    """The texture files the core wrote for the material's last Apply ({map name: path}; empty without maps)."""
+    text = material.spectral_skin.result_textures
     return dict(json.loads(text)) if text else {}
 
 

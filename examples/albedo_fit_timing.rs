@@ -1,15 +1,17 @@
 //! Time the albedo-texture fit (src/inverse/albedo_maps.rs) on a SIZE² texture (default 4096²): the face-like example
 //! parameter map's albedo (by the fit's forward table), as 8-bit sRGB (as a painted or photographed texture: colours
-//! repeat), as float, and as float with 2 % multiplicative noise per channel (as a scan: hundreds of thousands of
-//! distinct colours); cold (tables built) once, then with the tables cached in the process, with and without the
-//! exposure and white-balance gains estimated (`auto_gains`, Python `rgb_gains="auto"`). Each cached run is repeated
-//! REPEATS times (default 3) and the median printed.
+//! repeat), as float, as float with 2 % multiplicative noise per channel (as a scan: hundreds of thousands of
+//! distinct colours), and as a photograph: the albedo over-exposed (x 1.4) under a warm light (R x 1.25, B x 0.75), as
+//! 8-bit sRGB (most of its texels outside skin's colours until the gains undo the light); cold (tables built) once,
+//! then with the tables cached in the process, with and without the exposure and white-balance gains estimated
+//! (`auto_gains`, Python `rgb_gains="auto"`). Each cached run is repeated REPEATS times (default 3) and the median
+//! printed.
 //!
 //!     cargo run --release --example albedo_fit_timing -- [SIZE] [REPEATS] [TEXTURE [RUN]]
 //!
-//! TEXTURE (8-bit, float or noisy) and RUN (held, chosen or auto) time that one texture and run alone, once cold and
-//! REPEATS times cached: what `/usr/bin/time -v` measures the peak memory of (the process holds that texture and
-//! one fit at a time).
+//! TEXTURE (8-bit, float, noisy or photo) and RUN (held, chosen or auto) time that one texture and run alone, once
+//! cold and REPEATS times cached: what `/usr/bin/time -v` measures the peak memory of (the process holds that texture
+//! and one fit at a time).
 //!
 //! Figures: docs/skin-atlas.md, "Fitting a texture". RAYON_NUM_THREADS sets the cores.
 
@@ -53,14 +55,15 @@ fn checksum(fit: &AlbedoMapFit) -> u64 {
 fn describe(fit: &AlbedoMapFit) -> String {
     let s = fit.stats;
     format!(
-        "maps {:016x}, thickness {} mm, {} distinct colours, gains {:?}, ΔE00 mean {:.4} max {:.4}, {} out of gamut",
+        "maps {:016x}, thickness {} mm, {} distinct colours, gains {:?}, ΔE00 mean {:.4} max {:.4}, {} outside skin's \
+         colours",
         checksum(fit),
         fit.extended[0],
         s.distinct_colours,
         fit.gains.as_ref().map(|g| g.rgb_gains.map(|v| (v * 1e4).round() / 1e4)),
         s.mean_delta_e00,
         s.max_delta_e00,
-        s.out_of_gamut_texels
+        s.outside_skin_texels
     )
 }
 
@@ -92,6 +95,13 @@ fn main() {
     } else {
         Vec::new()
     };
+    // The photograph's light: exposure x 1.4, warm (tests/inverse/inverse_gains.rs lights the fair face so).
+    let light = [1.4 * 1.25, 1.4, 1.4 * 0.75];
+    let photo: Vec<[f32; 3]> = if wanted("photo") {
+        float.iter().map(|c| [0, 1, 2].map(|k| from_8bit(to_8bit(c[k] * light[k])))).collect()
+    } else {
+        Vec::new()
+    };
     let float = if wanted("float") {
         float
     } else {
@@ -108,7 +118,12 @@ fn main() {
         ("auto", "thickness chosen, rgb_gains auto", auto),
     ];
     let runs: Vec<_> = runs.into_iter().filter(|r| only_run.as_deref().map_or(true, |o| o == r.0)).collect();
-    let textures = [("8-bit", "8-bit", &eight), ("float", "float", &float), ("noisy", "float + 2 % noise", &noisy)];
+    let textures = [
+        ("8-bit", "8-bit", &eight),
+        ("float", "float", &float),
+        ("noisy", "float + 2 % noise", &noisy),
+        ("photo", "photograph (8-bit, x 1.4, warm)", &photo),
+    ];
     let textures: Vec<_> = textures.into_iter().filter(|t| wanted(t.0)).collect();
     // Cold: the tables built (held: one; chosen: five more).
     for &(_, run, texture) in runs.iter().take(2) {

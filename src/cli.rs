@@ -16,7 +16,8 @@ use crate::evaluate::{evaluate, Evaluation, MaterialOutput, Outputs, Request};
 use crate::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::fit::{SubsurfaceMethod, DEFAULT_METHOD};
 use crate::maps::example::{write_example_params_encoded, ExampleKind, EXAMPLE_EXR};
-use crate::maps::io::{Compression, ExrOptions, ParamInputs, ParamSource, Precision};
+use crate::maps::io::{Compression, ExrOptions, Precision};
+use crate::maps::request::{Combined, ParamRequest, Source};
 use crate::maps::{MapSettings, StrategyChoice};
 use crate::skin::params::{
     ParamSpec, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN,
@@ -165,13 +166,13 @@ struct FitArgs {
 struct MapsArgs {
     #[arg(long, help = params_help(), conflicts_with_all = ["melanin_map", "melanin_blend_map", "hemoglobin_map", "oiliness_map"])]
     params: Option<PathBuf>,
-    #[arg(long, help = map_help(&MELANIN))]
+    #[arg(long, help = map_help(&MELANIN), conflicts_with = "melanin")]
     melanin_map: Option<PathBuf>,
-    #[arg(long, help = map_help(&MELANIN_BLEND))]
+    #[arg(long, help = map_help(&MELANIN_BLEND), conflicts_with = "melanin_blend")]
     melanin_blend_map: Option<PathBuf>,
-    #[arg(long, help = map_help(&HEMOGLOBIN))]
+    #[arg(long, help = map_help(&HEMOGLOBIN), conflicts_with = "hemoglobin")]
     hemoglobin_map: Option<PathBuf>,
-    #[arg(long, help = map_help(&OILINESS))]
+    #[arg(long, help = map_help(&OILINESS), conflicts_with = "oiliness")]
     oiliness_map: Option<PathBuf>,
     #[arg(long, help = constant_help(&MELANIN))]
     melanin: Option<f64>,
@@ -181,11 +182,11 @@ struct MapsArgs {
     hemoglobin: Option<f64>,
     #[arg(long, help = constant_help(&OILINESS))]
     oiliness: Option<f64>,
-    #[arg(long, help = extended_map_help(&EPIDERMIS_THICKNESS))]
+    #[arg(long, help = extended_map_help(&EPIDERMIS_THICKNESS), conflicts_with = "epidermis_thickness_mm")]
     epidermis_thickness_mm_map: Option<PathBuf>,
-    #[arg(long, help = extended_map_help(&BASELINE_ABSORPTION_SCALE))]
+    #[arg(long, help = extended_map_help(&BASELINE_ABSORPTION_SCALE), conflicts_with = "baseline_absorption_scale")]
     baseline_absorption_scale_map: Option<PathBuf>,
-    #[arg(long, help = extended_map_help(&BLOOD_OXYGENATION))]
+    #[arg(long, help = extended_map_help(&BLOOD_OXYGENATION), conflicts_with = "blood_oxygenation")]
     blood_oxygenation_map: Option<PathBuf>,
     #[command(flatten)]
     extended: ExtendedArgs,
@@ -629,58 +630,54 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let constants = [args.melanin, args.melanin_blend, args.hemoglobin, args.oiliness];
-    let inputs = match &args.params {
-        Some(path) => ParamInputs::Multi { path: path.clone(), constants },
-        None => {
-            let files = [&args.melanin_map, &args.melanin_blend_map, &args.hemoglobin_map, &args.oiliness_map];
-            let mut sources = Vec::new();
-            for (k, (file, constant)) in files.iter().zip(constants).enumerate() {
-                sources.push(match (file, constant) {
-                    (Some(f), None) => ParamSource::File(f.to_path_buf()),
-                    (None, Some(v)) => ParamSource::Constant(v),
-                    (Some(_), Some(_)) => {
-                        return Err(format!("give either --{0}-map or --{0}, not both", flag(&PARAMS[k])).into())
-                    }
-                    (None, None) => {
-                        return Err(format!("missing {0}: give --params, --{0}-map or --{0}", flag(&PARAMS[k])).into())
-                    }
-                });
+impl MapsArgs {
+    /// The parameter sources, translated: `--params`, and per parameter its map (`--melanin-map`) or its constant
+    /// (`--melanin`); the core's request holds the rules (`crate::maps::request`).
+    fn param_request(&self) -> ParamRequest {
+        let maps = [
+            &self.melanin_map,
+            &self.melanin_blend_map,
+            &self.hemoglobin_map,
+            &self.oiliness_map,
+            &self.epidermis_thickness_mm_map,
+            &self.baseline_absorption_scale_map,
+            &self.blood_oxygenation_map,
+        ];
+        let [e0, e1, e2] = self.extended.values();
+        let constants = [self.melanin, self.melanin_blend, self.hemoglobin, self.oiliness, e0, e1, e2];
+        let mut request = ParamRequest::new(self.params.clone().map(Combined::File));
+        for ((spec, map), constant) in PARAMS.iter().zip(maps).zip(constants) {
+            match (map, constant) {
+                (Some(file), _) => request = request.with(spec, Source::File(file.clone())),
+                (None, Some(value)) => request = request.with(spec, Source::Constant(value)),
+                (None, None) => {}
             }
-            ParamInputs::Separate(sources.try_into().map_err(|_| "four sources")?)
         }
-    };
-    // The extended physiology: a map, a constant, or (neither) the channel of --params or the default.
-    let extended_files =
-        [&args.epidermis_thickness_mm_map, &args.baseline_absorption_scale_map, &args.blood_oxygenation_map];
-    let mut extended = Vec::new();
-    for (k, (file, constant)) in extended_files.iter().zip(args.extended.values()).enumerate() {
-        extended.push(match (file, constant) {
-            (Some(f), None) => Some(ParamSource::File(f.to_path_buf())),
-            (None, Some(v)) => Some(ParamSource::Constant(v)),
-            (Some(_), Some(_)) => {
-                return Err(format!("give either --{0}-map or --{0}, not both", flag(&EXTENDED_PARAMS[k])).into())
-            }
-            (None, None) => None,
-        });
+        request
     }
-    let inputs = ParamInputs::Extended {
-        inputs: Box::new(inputs),
-        extended: extended.try_into().map_err(|_| "three extended sources")?,
-    };
-    let target = args.target.target();
-    target.method_entry(args.method)?;
-    let mut settings = MapSettings {
-        method: args.method,
-        strategy: if args.exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
-        clamp: args.clamp,
-        table_check_samples: args.table_check as usize,
-        table_cache: if args.no_cache { None } else { crate::maps::lut::default_cache_dir() },
-        ..MapSettings::default()
-    };
-    settings.request =
-        Request { target, surface: args.surface.surface, ..args.accuracy.request(Outputs::of_material(&args.outputs)) };
+
+    /// The run's settings: method, strategy, clamping, table and request.
+    fn settings(&self) -> Result<MapSettings, SkinError> {
+        let target = self.target.target();
+        target.method_entry(self.method)?;
+        let outputs = Outputs::of_material(&self.outputs);
+        Ok(MapSettings {
+            method: self.method,
+            strategy: if self.exact { StrategyChoice::Exact } else { StrategyChoice::Auto },
+            clamp: self.clamp,
+            table_check_samples: self.table_check as usize,
+            table_cache: if self.no_cache { None } else { crate::maps::lut::default_cache_dir() },
+            request: Request { target, surface: self.surface.surface, ..self.accuracy.request(outputs) },
+            ..MapSettings::default()
+        })
+    }
+}
+
+fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
+    // The settings first: a target that lacks the method is refused before the inputs are looked at.
+    let settings = args.settings()?;
+    let clamp_advice = |e: SkinError| e.with_clamp_advice("use --clamp");
+    let inputs = args.param_request().file_inputs(args.clamp).map_err(clamp_advice)?;
     let exr = ExrOptions { precision: args.precision, compression: args.compression };
     // A progress bar for work that lasts over a second (hidden until then).
     let bar = ProgressBar::hidden();
@@ -708,7 +705,7 @@ fn run_maps(args: MapsArgs) -> Result<(), Box<dyn std::error::Error>> {
         Some(&progress),
         &ctrl_c::INTERRUPTED,
     )
-    .map_err(|e| e.with_clamp_advice("use --clamp"))?;
+    .map_err(clamp_advice)?;
     bar.finish_and_clear();
     for note in &report.input_notes {
         eprintln!("warning: {note}");
@@ -974,6 +971,7 @@ mod fit_maps {
     use std::path::{Path, PathBuf};
 
     use crate::inverse::albedo::AlbedoFitOptions;
+    use crate::inverse::albedo_gains::OUTSIDE_SKIN_DELTA_E00;
     use crate::inverse::albedo_maps::{
         fit_albedo_tiles_cancellable, AlbedoMapFit, AlbedoMapStats, AlbedoTile, EpidermisThickness, TextureFit,
     };
@@ -1023,7 +1021,7 @@ mod fit_maps {
             staged.extend(fit.stage(&at(&args.out), Some(&at(&residual_path)))?);
         }
         commit_all(staged)?;
-        report(&args, &residual_path, &tiles, &fits, &options, seconds);
+        report(&args, &residual_path, &tiles, &fits, seconds);
         Ok(())
     }
 
@@ -1137,8 +1135,8 @@ mod fit_maps {
         Ok(options.validated()?)
     }
 
-    /// The tiles' statistics as one texture's: texels and out-of-gamut counts summed, the worst ΔE00, the mean
-    /// weighted by texels.
+    /// The tiles' statistics as one texture's: texels and the texels outside skin's colours summed, the worst ΔE00,
+    /// the mean weighted by texels.
     fn combined_stats(fits: &[AlbedoMapFit]) -> AlbedoMapStats {
         let texels: usize = fits.iter().map(|f| f.stats.texels).sum();
         let mut s = fits[0].stats;
@@ -1146,7 +1144,7 @@ mod fit_maps {
         s.max_delta_e00 = fits.iter().map(|f| f.stats.max_delta_e00).fold(0.0, f64::max);
         s.mean_delta_e00 =
             fits.iter().map(|f| f.stats.mean_delta_e00 * f.stats.texels as f64).sum::<f64>() / texels as f64;
-        s.out_of_gamut_texels = fits.iter().map(|f| f.stats.out_of_gamut_texels).sum();
+        s.outside_skin_texels = fits.iter().map(|f| f.stats.outside_skin_texels).sum();
         s
     }
 
@@ -1156,7 +1154,6 @@ mod fit_maps {
         residual_path: &Path,
         tiles: &Option<Vec<u32>>,
         fits: &[AlbedoMapFit],
-        options: &AlbedoFitOptions,
         seconds: f64,
     ) {
         let fit = &fits[0];
@@ -1171,14 +1168,15 @@ mod fit_maps {
         }
         if let Some(g) = fit.gains.as_ref().filter(|_| args.auto_gains) {
             eprintln!(
-                "applied gains R G B x {:.4} {:.4} {:.4} ({:+.2} stops): share of sampled texels outside skin's \
-                 colours {:.0} % -> {:.0} %",
+                "applied gains R G B x {:.4} {:.4} {:.4} ({:+.2} stops): median ΔE00 of {} sampled texels {:.2} -> \
+                 {:.2}",
                 g.rgb_gains[0],
                 g.rgb_gains[1],
                 g.rgb_gains[2],
                 g.exposure_stops,
-                100.0 * g.outside_share_before,
-                100.0 * g.outside_share_after
+                g.sampled_texels,
+                g.median_delta_e00_before,
+                g.median_delta_e00_after
             );
         }
         if args.json {
@@ -1191,14 +1189,14 @@ mod fit_maps {
         }
         println!(
             "wrote {} and {} ({size}, {} distinct colours, {seconds:.2} s): ΔE00 mean {:.3}, max {:.3}; \
-             {} texel(s) out of the model's gamut (ΔE00 > {})",
+             {} texel(s) outside skin's colours (more than {OUTSIDE_SKIN_DELTA_E00} ΔE00 from every colour skin \
+             can have)",
             args.out.display(),
             residual_path.display(),
             s.distinct_colours,
             s.mean_delta_e00,
             s.max_delta_e00,
-            s.out_of_gamut_texels,
-            options.ambiguity_delta_e
+            s.outside_skin_texels,
         );
         if let Some(choice) = &fit.thickness {
             println!(

@@ -37,6 +37,10 @@ pub enum SkinError {
         /// The first few bad texels as (x, y), y = 0 at the top row.
         first: Vec<(usize, usize)>,
     },
+    /// A parameter given as one value for every texel of a map is NaN, infinite or out of range, and clamping is off.
+    /// As [`SkinError::BadTexels`], each front words its own way to enable clamping.
+    #[error("{}", bad_constant_message(.parameter, *.min, *.max, *.value, "enable clamping"))]
+    BadConstant { parameter: &'static str, min: f64, max: f64, value: f64 },
 }
 
 impl SkinError {
@@ -103,6 +107,11 @@ impl PartialEq for IoSource {
     }
 }
 
+/// The message of [`SkinError::BadConstant`], with `enable` saying how to enable clamping.
+fn bad_constant_message(parameter: &str, min: f64, max: f64, value: f64, enable: &str) -> String {
+    format!("invalid {parameter}: must be in [{min}, {max}]; got {value} ({enable} to clamp it)")
+}
+
 /// The message of [`SkinError::BadTexels`], with `enable` saying how to enable clamping (e.g. "pass clamp=True").
 fn bad_texels_message(
     parameter: &str,
@@ -119,12 +128,15 @@ fn bad_texels_message(
 }
 
 impl SkinError {
-    /// The message, with the advice on clamping (for [`SkinError::BadTexels`]) worded for a front: `enable` is how
+    /// The message, with the advice on clamping (for [`SkinError::BadTexels`] and [`SkinError::BadConstant`]) worded for a front: `enable` is how
     /// to enable clamping there ("pass clamp=True", "use --clamp"). Other errors: their usual message.
     pub fn with_clamp_advice(&self, enable: &str) -> String {
         match self {
             SkinError::BadTexels { parameter, min, max, nan, infinite, out_of_range, first } => {
                 bad_texels_message(parameter, *min, *max, [*nan, *infinite, *out_of_range], first, enable)
+            }
+            SkinError::BadConstant { parameter, min, max, value } => {
+                bad_constant_message(parameter, *min, *max, *value, enable)
             }
             other => other.to_string(),
         }

@@ -434,63 +434,9 @@ pub fn evaluate_cancellable(
     };
 
     let profile = if out.profile_rgb || out.profile_spectral {
-        let radii = acc.profile_grid.radii_mm();
-        let (spectral, negative_lobe) = match (&optics.shapes, &optics.stacks) {
-            (Some(shapes), _) => (exact_profiles(shapes, &all_totals.total, &radii, cancel)?, None),
-            (None, None) => {
-                unreachable!("Optics::of keeps the stacks where a shape is needed and no exact one is held")
-            }
-            (None, Some(stacks)) => {
-                let clamped = clamped_reflectance_profiles_cancellable(
-                    stacks,
-                    &radii,
-                    request.combination,
-                    acc.multipole_terms,
-                    &acc.hankel,
-                    cancel,
-                )?;
-                let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
-                    wavelength_nm: prepared.colour.grid.wavelengths_nm[l.profile],
-                    boundaries: l.boundaries,
-                    radius_mm: l.radius_mm,
-                    relative_to_peak: l.relative_to_peak,
-                });
-                // Each wavelength's profile keeps the multipole's shape, scaled to its total (x 1 with diffusion). The
-                // clamp and the lobe's depth relative to the peak do not change under a positive scale.
-                let spectral: Vec<Vec<f64>> = clamped
-                    .per_mm2
-                    .into_iter()
-                    .enumerate()
-                    .map(|(w, p)| {
-                        let k = all_totals.scale_of(w);
-                        if k == 1.0 {
-                            p
-                        } else {
-                            p.into_iter().map(|v| v * k).collect()
-                        }
-                    })
-                    .collect();
-                (spectral, negative_lobe)
-            }
-        };
-        work.radial_profiles = spectral.len();
-        let rgb = out.profile_rgb.then(|| {
-            (0..radii.len())
-                .map(|i| {
-                    let rgb = spectrum_to_rgb(
-                        &spectral.iter().map(|p| p[i]).collect::<Vec<_>>(),
-                        &prepared.colour.rgb_weights,
-                    );
-                    request.rgb_mapping.apply(rgb, prepared.colour.luminance)
-                })
-                .collect()
-        });
-        Some(RadialProfile {
-            radii_mm: radii,
-            rgb_per_mm2: rgb,
-            spectral_per_mm2: out.profile_spectral.then_some(spectral),
-            negative_lobe,
-        })
+        let profile = radial_profile(&prepared, &optics, &all_totals, cancel)?;
+        work.radial_profiles = profile.spectral_count;
+        Some(profile.profile)
     } else {
         None
     };
@@ -522,6 +468,81 @@ pub fn evaluate_cancellable(
         work,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// A radial profile and how many spectral profiles it was made of.
+struct ProfileStep {
+    profile: RadialProfile,
+    spectral_count: usize,
+}
+
+/// The radial profile `prepared.request` asks for (RGB and/or spectral) of one parameter set: each wavelength's exact
+/// profile where the profile table holds its stack, else the multipole's, clamped at 0 (a negative lobe reported) and
+/// scaled to the wavelength's total.
+fn radial_profile(
+    prepared: &Prepared,
+    optics: &Optics,
+    all_totals: &Totals,
+    cancel: &AtomicBool,
+) -> Result<ProfileStep, SkinError> {
+    let request = &prepared.request;
+    let (out, acc) = (request.outputs, &request.accuracy);
+    let radii = acc.profile_grid.radii_mm();
+    let (spectral, negative_lobe) = match (&optics.shapes, &optics.stacks) {
+        (Some(shapes), _) => (exact_profiles(shapes, &all_totals.total, &radii, cancel)?, None),
+        (None, None) => {
+            unreachable!("Optics::of keeps the stacks where a shape is needed and no exact one is held")
+        }
+        (None, Some(stacks)) => {
+            let clamped = clamped_reflectance_profiles_cancellable(
+                stacks,
+                &radii,
+                request.combination,
+                acc.multipole_terms,
+                &acc.hankel,
+                cancel,
+            )?;
+            let negative_lobe = clamped.negative_lobe.map(|l| SpectralLobe {
+                wavelength_nm: prepared.colour.grid.wavelengths_nm[l.profile],
+                boundaries: l.boundaries,
+                radius_mm: l.radius_mm,
+                relative_to_peak: l.relative_to_peak,
+            });
+            // Each wavelength's profile keeps the multipole's shape, scaled to its total (x 1 with diffusion). The
+            // clamp and the lobe's depth relative to the peak do not change under a positive scale.
+            let spectral: Vec<Vec<f64>> = clamped
+                .per_mm2
+                .into_iter()
+                .enumerate()
+                .map(|(w, p)| {
+                    let k = all_totals.scale_of(w);
+                    if k == 1.0 {
+                        p
+                    } else {
+                        p.into_iter().map(|v| v * k).collect()
+                    }
+                })
+                .collect();
+            (spectral, negative_lobe)
+        }
+    };
+    let rgb = out.profile_rgb.then(|| {
+        (0..radii.len())
+            .map(|i| {
+                let rgb =
+                    spectrum_to_rgb(&spectral.iter().map(|p| p[i]).collect::<Vec<_>>(), &prepared.colour.rgb_weights);
+                request.rgb_mapping.apply(rgb, prepared.colour.luminance)
+            })
+            .collect()
+    });
+    let spectral_count = spectral.len();
+    let profile = RadialProfile {
+        radii_mm: radii,
+        rgb_per_mm2: rgb,
+        spectral_per_mm2: out.profile_spectral.then_some(spectral),
+        negative_lobe,
+    };
+    Ok(ProfileStep { profile, spectral_count })
 }
 
 /// The layers of one parameter set at each wavelength (what the exact solver and its tables take), with what the

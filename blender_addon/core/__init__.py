@@ -1,14 +1,16 @@
-"""The add-on's portable part: settings and the material plan, computed by spectral_skin. No bpy imports."""
+"""The add-on's portable part: settings, the core's answer and the material plan built from it, computed by
+spectral_skin. No bpy imports."""
 
-from .material_plan import MaterialPlan, PlanSummary, freeze
-from .plan import describe_error, make_plan, subsurface_scale, texture_prefix, write_textures
+from .colour import DEFAULT_WORKING_SPACE, NON_COLOR, WORKING_SPACES
+from .maps import UDIM_TOKEN, map_kinds
+from .material_plan import Decision, MaterialPlan, PlanSummary, build_plan, write_textures
+from .plan import Computed, compute, describe_error, subsurface_scale, texture_prefix
 from .settings import (
     ACCURACY_DESCRIPTIONS,
     ACCURACY_LEVELS,
     DEFAULT_PRESET,
     DEFAULT_SURFACE,
     DEFAULT_TRANSPORT,
-    DEFAULT_WORKING_SPACE,
     EXTENDED_DEFAULTS,
     EXTENDED_PARAMETERS,
     MODES,
@@ -19,8 +21,6 @@ from .settings import (
     SURFACES,
     TRANSPORT_DESCRIPTIONS,
     TRANSPORTS,
-    UDIM_TOKEN,
-    WORKING_SPACES,
     ParameterMap,
     SkinSettings,
     check,
@@ -52,10 +52,14 @@ __all__ = [
     "check",
     "describe_error",
     "engine_name",
-    "make_plan",
+    "Computed",
+    "Decision",
     "MaterialPlan",
+    "NON_COLOR",
     "PlanSummary",
-    "freeze",
+    "build_plan",
+    "compute",
+    "map_kinds",
     "method_name",
     "methods",
     "UDIM_TOKEN",

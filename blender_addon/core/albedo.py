@@ -18,12 +18,9 @@ from typing import Any
 
 import spectral_skin
 
-from .settings import DEFAULT_TRANSPORT, EXTENDED_PARAMETERS, TRANSPORTS, UDIM_TOKEN, WORKING_SPACES
-
-# Blender's names of the image colour spaces whose 8/16-bit values are sRGB-encoded Rec.709.
-SRGB_NAMES = ("sRGB",)
-# Blender's names of the linear colour spaces the core knows (Blender 4.x calls Linear Rec.709 "Linear").
-LINEAR_NAMES = {**{name: name for name in WORKING_SPACES}, "Linear": "Linear Rec.709"}
+from .colour import LINEAR_NAMES, LINEAR_REC709, SRGB_NAMES
+from .maps import UDIM_TOKEN
+from .settings import DEFAULT_TRANSPORT, EXTENDED_PARAMETERS, TRANSPORTS
 
 
 def available() -> bool:
@@ -36,7 +33,8 @@ UNAVAILABLE = ("needs a spectral_skin with fit_albedo_map (the albedo-texture fi
 
 
 def srgb_to_linear(encoded: Any) -> Any:
-    """The sRGB decoding (IEC 61966-2-1: linear below 0.04045, else a 2.4 power), as float32."""
+    """The sRGB decoding (IEC 61966-2-1: linear below 0.04045, else a 2.4 power), as float32: the add-on's one (the
+    core's is inside its file reader, which Blender's in-memory pixels never reach)."""
     import numpy as np
 
     v = np.asarray(encoded, dtype=np.float32)
@@ -55,7 +53,7 @@ def linear_albedo(pixels: Any, colorspace: str, is_float: bool, scene_space: str
     if is_float:
         return rgb, scene_space
     if colorspace in SRGB_NAMES:
-        return srgb_to_linear(rgb), "Linear Rec.709"
+        return srgb_to_linear(rgb), LINEAR_REC709
     if colorspace in LINEAR_NAMES:
         return rgb, LINEAR_NAMES[colorspace]
     raise ValueError(f"the Base Color image is in the colour space {colorspace!r}; From Albedo Texture reads an "
@@ -73,7 +71,8 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
     the operator needs of it: {"fit": the core's ``AlbedoMapFit`` (``write(path)`` writes the parameter EXR),
     "extended": the extended physiology the parameters hold for, "thickness": how the thickness was chosen (None:
     held), "gains" (applied, or measured as the diagnosis' remedy; None), "diagnosis" (why the texture does not look
-    like an albedo; None), "median_delta_e00", "max_delta_e00" (over the masked texels), "out_of_gamut_texels",
+    like an albedo; None), "median_delta_e00", "max_delta_e00" (over the masked texels), "outside_skin_texels" (the
+    core's count of texels outside skin's colours, the one the diagnosis judges),
     "masked_out_texels"}. The core's warning about a
     texture that is not an albedo is not raised here: it is the "diagnosis". ``progress(done, total)`` is the core's
     callback (returning False cancels: InterruptedError). Raises
@@ -103,7 +102,7 @@ def fit(albedo: Any, working_space: str, epidermis_thickness_mm: float | None,
     return {"fit": result, "extended": extended, "thickness": result.thickness,
             "gains": getattr(result, "gains", None), "diagnosis": getattr(result, "diagnosis", None),
             "median_delta_e00": float(np.median(skin)), "max_delta_e00": float(np.max(skin)),
-            "out_of_gamut_texels": int(result.stats["out_of_gamut_texels"]),
+            "outside_skin_texels": int(result.stats["outside_skin_texels"]),
             "masked_out_texels": int(result.stats.get("masked_out_texels", 0))}
 
 

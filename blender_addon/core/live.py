@@ -19,10 +19,15 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from types import MappingProxyType
 from typing import Any
 
-from .material_plan import MaterialPlan, freeze
+import spectral_skin
+
+from .colour import DEFAULT_WORKING_SPACE
+from .material_plan import LivePart, MaterialPlan
 from .plan import extended_keywords
+from .scene import scene_plan
 from .settings import (
     ACCURACY_LEVELS,
     DEFAULT_SURFACE,
@@ -62,7 +67,7 @@ def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
         parts.append(settings.accuracy.lower())
     if settings.transport != DEFAULT_TRANSPORT:
         parts.append(TRANSPORTS[settings.transport])
-    if settings.working_space != "Linear Rec.709":
+    if settings.working_space != DEFAULT_WORKING_SPACE:
         parts.append(settings.working_space.removeprefix("Linear "))
     if settings.surface != DEFAULT_SURFACE:  # the group computes the surface's inputs (the layout version changed
         parts.append(settings.surface_name())  # with the default, so an older group of no surface name is rebuilt)
@@ -80,8 +85,6 @@ def table_name(settings: SkinSettings, overrides: dict[str, str] | None) -> str:
 def shader_table(settings: SkinSettings, overrides: dict[str, str] | None) -> dict[str, Any]:
     """The core's shader table for the material's target (``spectral_skin.shader_table``, default resolution), baked
     with the settings' extended physiology (one value per material: the group's inputs are the four)."""
-    import spectral_skin
-
     extended = extended_keywords(spectral_skin.shader_table, settings, "extended physiology in Live mode")
     return dict(spectral_skin.shader_table(method=table_method(settings, overrides), blender=settings.blender,
                                            engine=settings.engine, accuracy=ACCURACY_LEVELS[settings.accuracy],
@@ -89,36 +92,32 @@ def shader_table(settings: SkinSettings, overrides: dict[str, str] | None) -> di
                                            working_space=settings.working_space, **extended))
 
 
+def live_part(settings: SkinSettings, overrides: dict[str, str] | None, table_needed: bool) -> LivePart:
+    """Live mode's part of a material plan: the node group's name, the shader table (None when ``table_needed`` is
+    False: the blend file has it), the parameter maps as the core read them (for the files Blender cannot read), the
+    panel's constants, the surface's inputs at the oiliness nodes the group interpolates (built into the group), and
+    whether subsurface and specular are kept."""
+    return LivePart(
+        group=table_name(settings, overrides),
+        table=shader_table(settings, overrides) if table_needed else None,
+        maps=MappingProxyType(dict(settings.maps)),
+        constants=MappingProxyType(settings.constants()),
+        surface_nodes=MappingProxyType(dict(spectral_skin.surface_input_nodes(
+            settings.surface_name(), blender=settings.blender, engine=settings.engine))),
+        subsurface=kept(overrides, "subsurface"),
+        specular=kept(overrides, "specular"))
+
+
 def live_plan(settings: SkinSettings, facts: Any, overrides: dict[str, str] | None, table_needed: bool,
               progress: Any = None) -> MaterialPlan:
     """The plan of a Live material (frozen: :class:`~core.material_plan.MaterialPlan`): the scene plan of the panel's
-    constants (no maps, no per-frame values, subsurface and specular kept unless forced off), with ``plan.live``:
-    {"group": the node group's name, "table": the shader table, or None when ``table_needed`` is False (the blend
-    file has it), "maps": the parameter maps as the core read them (for the files Blender cannot read),
-    "constants", "surface_nodes" (the surface's inputs at the oiliness nodes the group interpolates), "subsurface",
-    "specular"}."""
-    import spectral_skin
-
-    from .scene import scene_draft
-
+    constants (no maps, no per-frame values, subsurface and specular kept unless forced off) with its
+    :func:`live_part` (``plan.live``)."""
     check(settings)  # with its maps: a varying extended-physiology map has no place in a Live group
     forced = {**(overrides or {}),
               "subsurface": "ON" if kept(overrides, "subsurface") else "OFF",
               "specular": "ON" if kept(overrides, "specular") else "OFF"}
     if facts is not None and getattr(facts, "animation", None) is not None:
         facts = dataclasses.replace(facts, animation=None)
-    plan = scene_draft(settings.replace(maps={}, output_dir=""), facts, forced, progress)
-    plan["live"] = {
-        "group": table_name(settings, overrides),
-        "table": shader_table(settings, overrides) if table_needed else None,
-        "maps": dict(settings.maps),
-        "constants": settings.constants(),
-        # The surface's inputs at the oiliness nodes the group interpolates between (built into the group).
-        "surface_nodes": dict(spectral_skin.surface_input_nodes(settings.surface_name(), blender=settings.blender,
-                                                                engine=settings.engine)),
-        "subsurface": kept(overrides, "subsurface"),
-        "specular": kept(overrides, "specular"),
-    }
-    plan["summary"]["computed"] += ("; live node group, shader table " +
-                                    ("computed" if table_needed else "reused from the blend file"))
-    return freeze(plan)
+    return scene_plan(settings.replace(maps={}, output_dir=""), facts, forced, progress,
+                      live=lambda: live_part(settings, overrides, table_needed))

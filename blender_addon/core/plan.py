@@ -1,13 +1,10 @@
-"""What the skin material needs, computed by the core before anything in Blender changes (no bpy here).
+"""The core's answer for one material, computed before anything in Blender changes (no bpy here).
 
-:func:`make_plan` computes a material's values with the core and returns them as a plain dict, the draft of the
-material plan (:class:`~core.material_plan.MaterialPlan`: its keys are the plan's fields, documented there). The scene
-analysis (core/scene.py) and Live mode (core/live.py) change the draft as their decisions say and freeze it; nothing
-changes a plan after that.
-
-Maps are written only by :func:`write_textures`, from a frozen plan, by the core's writer
-(``spectral_skin.write_maps``): first to temporary files in the output folder, then renamed into place together, so a
-failure leaves existing files as they were.
+:func:`compute` asks the core once (``spectral_skin.evaluate`` for constants, ``spectral_skin.maps`` for parameter
+maps) for only the outputs asked for, and gathers the answer into a :class:`Computed`: frozen, typed, the core's
+``Maps`` result held as it came (its texels are never copied into Python's own arrays). The scene analysis
+(core/scene.py) decides from it, and :func:`~core.material_plan.build_plan` builds the material plan from it and the
+decisions. Nothing changes it.
 """
 
 from __future__ import annotations
@@ -15,11 +12,14 @@ from __future__ import annotations
 import inspect
 import os
 import re
-import time
-from collections.abc import Callable
+from collections.abc import Callable, Collection, Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any
 
-from .material_plan import FIELD_OF_TEXTURE, SURFACE_TEXTURES, MaterialPlan
+import spectral_skin
+
+from .maps import map_kinds
 from .settings import (
     ACCURACY_LEVELS,
     DEFAULT_TRANSPORT,
@@ -27,7 +27,6 @@ from .settings import (
     PARAMETER_INFO,
     PARAMETERS,
     TRANSPORTS,
-    UDIM_TOKEN,
     SkinSettings,
     check,
 )
@@ -58,8 +57,6 @@ def extended_keywords(function: Callable[..., Any], settings: SkinSettings, what
     ``function`` does not take the extended keywords (``what``: what needs them, for the message)."""
     changed = settings.changed_extended()
     if changed and not _takes_extended(function):
-        import spectral_skin
-
         name = getattr(function, "__name__", "the core")
         raise spectral_skin.SpectralSkinError(
             f"{what} needs a spectral_skin whose {name}() takes "
@@ -73,22 +70,21 @@ def swatch_albedo(values: dict[str, float], working_space: str, transport: str =
     """The panel's albedo swatch: the skin's total diffuse reflectance (``evaluate(outputs=["albedo"])``, linear RGB
     in ``working_space``, with ``transport``, a key of TRANSPORTS) of constant values (the four parameters and the
     extended physiology; an extended one left out takes its default)."""
-    import spectral_skin
-
     keywords: dict[str, Any] = {p: values[p] for p in EXTENDED_PARAMETERS if p in values}
     if transport != DEFAULT_TRANSPORT:
         keywords["transport"] = TRANSPORTS[transport]
     ev = spectral_skin.evaluate(*(values[p] for p in PARAMETERS), outputs=["albedo"], working_space=working_space,
                                 **keywords)
-    return _rgb(ev["diffuse_reflectance_rgb"])
+    return list(_rgb(ev["diffuse_reflectance_rgb"]))
+
 
 def subsurface_scale(scale_length: float) -> float:
     """Principled Subsurface Scale for radii in mm: scene units per mm (scale_length is metres per scene unit)."""
     return METRES_PER_MM / scale_length
 
 
-def _rgb(values: Any) -> list[float]:
-    return [float(v) for v in values]
+def _rgb(values: Any) -> tuple[float, ...]:
+    return tuple(float(v) for v in values)
 
 
 def texture_prefix(blend_path: str, material_name: str) -> str:
@@ -113,93 +109,130 @@ def describe_error(error: BaseException) -> str:
             "left. Tick 'Clamp Out-of-Range Texels' to clamp them into range, or correct the map.")
 
 
-def make_plan(settings: SkinSettings, progress: Any = None, *, radius: bool = True,
-              specular: bool = True) -> dict[str, Any]:
-    """Compute what the material needs; raises ``spectral_skin.SpectralSkinError`` (a ValueError) on bad input.
+@dataclass(frozen=True)
+class SurfaceInputs:
+    """The Principled surface inputs the core gives: the surface model ("measured" or "paper"), IOR, Roughness and
+    Coat IOR (constants: no parameter changes them), and the oiliness-dependent Specular IOR Level, Coat Weight and
+    Coat Roughness, each None where one of the core's maps supplies it (a varying oiliness)."""
+
+    surface: str
+    ior: float
+    roughness: float
+    coat_ior: float
+    specular_ior_level: float | None
+    coat_weight: float | None
+    coat_roughness: float | None
+
+
+@dataclass(frozen=True)
+class Computed:
+    """What the core computed for one parameter set, as it answered.
+
+    Constants (one ``evaluate``): ``base_color`` (the method's; the albedo without the radius), ``radius`` (the
+    method's, mm; None without the radius), ``albedo`` (the skin's total diffuse reflectance) and
+    ``extent_radius_mm`` (the same skin's Burley radius, which the scene analysis compares whatever the method; None
+    without the radius). Maps (one ``maps``): ``maps``, the core's ``Maps`` result, and the UDIM ``tiles`` it was
+    stacked from. ``mean_albedo`` and ``mean_radius_mm``: Base Color and radius, averaged over the maps (zeros
+    without the radius). ``work``: the core's own count of what it computed."""
+
+    target: Mapping[str, Any]
+    work: Mapping[str, Any]
+    # The Principled subsurface method id the core computed for: the material's, or BURLEY without the radius.
+    method: str
+    radius_computed: bool
+    specular_computed: bool
+    surface: SurfaceInputs
+    mean_albedo: tuple[float, ...]
+    mean_radius_mm: tuple[float, ...]
+    # What was computed, one sentence (the panel's "computed" line before the target), and what the core clamped.
+    description: str
+    warnings: tuple[str, ...] = ()
+    base_color: tuple[float, ...] | None = None
+    radius: tuple[float, ...] | None = None
+    albedo: tuple[float, ...] | None = None
+    extent_radius_mm: tuple[float, ...] | None = None
+    maps: spectral_skin.Maps | None = None
+    tiles: tuple[tuple[int, int], ...] = ()
+
+    def images(self) -> dict[str, Any]:
+        """The core's maps this answer holds: {map name: read-only float32 texels}, in the core's map order."""
+        held = self.maps
+        if held is None:
+            return {}
+        return {kind.name: held[kind.name] for kind in map_kinds() if kind.name in held}
+
+    def largest_radius_mm(self) -> float:
+        """The largest radius, mm, of any channel and texel (the method's); ValueError without the radius."""
+        import numpy as np
+
+        radius = self.radius if self.maps is None else self.maps.radius
+        if radius is None:
+            raise ValueError("no radius was computed")
+        return float(np.max(np.asarray(radius, dtype=np.float64)))
+
+
+def compute(settings: SkinSettings, progress: Any = None, *, radius: bool = True, specular: bool = True) -> Computed:
+    """What the core computes for ``settings``; raises ``spectral_skin.SpectralSkinError`` (a ValueError) on bad
+    input.
 
     ``progress``: None, or ``progress(done, total)`` told the texels done by the core (see ``spectral_skin.maps``);
     returning False cancels (InterruptedError). ``radius=False``: subsurface is off, so the core is not asked for the
-    radius: Base Color is the skin's total diffuse reflectance (the albedo, whatever the method) and ``radius`` is
-    None. ``specular=False``: the specular lobe is off: Specular IOR Level 0, no specular texture, and the core is
-    not asked for it (IOR and Roughness are the surface's constants, which no parameter changes). With maps the core
-    (``spectral_skin.maps(outputs=...)``) likewise computes only those outputs: no radius fit without the radius, no
-    specular input without specular (``plan["work"]`` counts it).
+    radius: Base Color is the skin's total diffuse reflectance (the albedo, whatever the method). ``specular=False``:
+    the specular lobe is off: the core is not asked for it (Specular IOR Level 0 and no Coat: IOR and Roughness are
+    the surface's constants, which no parameter changes). With maps the core (``spectral_skin.maps(outputs=...)``)
+    likewise computes only those outputs: no radius fit without the radius, no specular input without specular
+    (``work`` counts it).
     """
     check(settings)
-    start = time.perf_counter()
     if settings.maps:
-        plan = _plan_from_maps(settings, progress, radius, specular)
-    else:
-        plan = _plan_from_constants(settings, radius, specular)
-    plan["computed"] = {"radius": radius, "specular": specular}
-    plan["extended"] = settings.extended()
-    plan["method"] = settings.method
-    plan["transport"] = TRANSPORTS[settings.transport]
-    plan["working_space"] = settings.working_space
-    plan["scale"] = subsurface_scale(settings.scale_length)
-    target = plan["target"]
-    plan["summary"]["computed"] += f" for Blender {target['blender']} {target['engine'].upper()}"
-    # What the core's reader ignored in the map files (an alpha channel, a misspelt channel), once per note.
-    for note in dict.fromkeys((*settings.notes, *(n for m in settings.maps.values() for n in m.notes))):
-        plan["summary"]["warnings"].append(note)
-    if not target["tested"]:
-        plan["summary"]["warnings"].append(target["untested_reason"])
-    plan["summary"]["seconds"] = time.perf_counter() - start
-    return plan
+        return _from_maps(settings, progress, radius, specular)
+    return _from_constants(settings, radius, specular)
 
 
-def _plan_from_constants(settings: SkinSettings, radius: bool, specular: bool) -> dict[str, Any]:
-    import spectral_skin
+def _outputs(radius: bool, specular: bool) -> list[str]:
+    return ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]
 
+
+def _surface(constants: Mapping[str, Any], specular: Mapping[str, Any] | None,
+             mapped: Collection[str] = ()) -> SurfaceInputs:
+    """The surface inputs from the core's surface constants and its specular inputs (None: not computed, so no lobe
+    and no Coat, the Coat Roughness unused at weight 0); ``mapped``: the fields one of the core's maps supplies."""
+    def value(key: str) -> float | None:
+        if specular is None:
+            return float(constants["roughness"]) if key == "coat_roughness" else 0.0
+        return None if key in mapped else float(specular[key])
+
+    return SurfaceInputs(surface=str(constants["surface"]), ior=float(constants["ior"]),
+                         roughness=float(constants["roughness"]), coat_ior=float(constants["coat_ior"]),
+                         specular_ior_level=value("specular_ior_level"), coat_weight=value("coat_weight"),
+                         coat_roughness=value("coat_roughness"))
+
+
+def _from_constants(settings: SkinSettings, radius: bool, specular: bool) -> Computed:
     c = settings.constants()
-    outputs = ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]
-    ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"], outputs=outputs,
-                                accuracy=ACCURACY_LEVELS[settings.accuracy], working_space=settings.working_space,
-                                blender=settings.blender, engine=settings.engine, **settings.transport_keywords(),
+    ev = spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"],
+                                outputs=_outputs(radius, specular), accuracy=ACCURACY_LEVELS[settings.accuracy],
+                                working_space=settings.working_space, blender=settings.blender,
+                                engine=settings.engine, **settings.transport_keywords(),
                                 surface=settings.surface_name(), **settings.extended())
     albedo = _rgb(ev["diffuse_reflectance_rgb"])
-    radius_mm: list[float] | None = None
-    base_color = albedo
+    base_color, radius_mm, extent = albedo, None, None
     if radius:
         name = method_name(settings.method)
         if name not in ev["methods"]:
             raise spectral_skin.SpectralSkinError(
                 f"Blender {ev['target']['blender']} has no subsurface method {settings.method}; it offers "
                 f"{', '.join(ev['methods'])}")
-        method = ev["methods"][name]
-        base_color = _rgb(method["base_color"])
-        radius_mm = _rgb(method["subsurface_radius_mm"])
-    surface = ev["surface"]
-    # Without specular: no lobe and no Coat (the surface's constants for the rest).
-    spec = ev["specular"] if specular else {"specular_ior_level": 0.0, "coat_weight": 0.0,
-                                            "coat_roughness": surface["roughness"]}
-    return {
-        "base_color": base_color,
-        "radius": radius_mm,
-        # The same skin's Burley radius: the physical extent the scene analysis compares for every method
-        # (core/scene.py, extent_mm).
-        "extent_radius_mm": _rgb(ev["methods"]["burley"]["subsurface_radius_mm"]) if radius else None,
-        "albedo": albedo,
-        "ior": float(surface["ior"]),
-        "subsurface_ior": float(surface["ior"]),
-        "specular_ior_level": float(spec["specular_ior_level"]),
-        "roughness": float(surface["roughness"]),
-        "coat_weight": float(spec["coat_weight"]),
-        "coat_roughness": float(spec["coat_roughness"]),
-        "coat_ior": float(surface["coat_ior"]),
-        "surface": str(surface["surface"]),
-        "target": dict(ev["target"]),
-        "textures": {},
-        "images": {},
-        "work": dict(ev["work"]),
-        "summary": {
-            "albedo": base_color,
-            "radius_mm": radius_mm if radius_mm is not None else [0.0, 0.0, 0.0],
-            "computed": f"one evaluation ({ev['work']['wavelengths']} wavelengths"
-                        f"{'' if radius else ', no radius'}{'' if specular else ', no specular'})",
-            "warnings": [],
-        },
-    }
+        base_color = _rgb(ev["methods"][name]["base_color"])
+        radius_mm = _rgb(ev["methods"][name]["subsurface_radius_mm"])
+        extent = _rgb(ev["methods"]["burley"]["subsurface_radius_mm"])
+    skipped = f"{'' if radius else ', no radius'}{'' if specular else ', no specular'}"
+    return Computed(target=_frozen(ev["target"]), work=_frozen(ev["work"]),
+                    method=settings.method if radius else "BURLEY", radius_computed=radius,
+                    specular_computed=specular, surface=_surface(ev["surface"], ev["specular"] if specular else None),
+                    mean_albedo=base_color, mean_radius_mm=radius_mm or (0.0, 0.0, 0.0),
+                    description=f"one evaluation ({ev['work']['wavelengths']} wavelengths{skipped})",
+                    base_color=base_color, radius=radius_mm, albedo=albedo, extent_radius_mm=extent)
 
 
 def _map_input(settings: SkinSettings, name: str) -> Any:
@@ -215,13 +248,8 @@ def _map_input(settings: SkinSettings, name: str) -> Any:
     return np.ascontiguousarray(pixels)
 
 
-def _safe_name(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "skin"
-
-
-def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specular: bool) -> dict[str, Any]:
+def _from_maps(settings: SkinSettings, progress: Any, radius: bool, specular: bool) -> Computed:
     import numpy as np
-    import spectral_skin
 
     inputs = {name: _map_input(settings, name) for name in PARAMETERS}
     extended = extended_keywords(spectral_skin.maps, settings, "extended physiology with parameter maps")
@@ -229,100 +257,62 @@ def _plan_from_maps(settings: SkinSettings, progress: Any, radius: bool, specula
     extended.update({name: _map_input(settings, name) for name in EXTENDED_PARAMETERS if name in settings.maps})
     # Without subsurface the core fits no radius and Base Color is the albedo (Burley's Base Color), whatever the
     # material's method.
-    outputs = ["albedo", *(["radius"] if radius else []), *(["specular"] if specular else [])]
     result = spectral_skin.maps(**inputs, method=method_name(settings.method if radius else "BURLEY"),
-                                outputs=outputs, accuracy=ACCURACY_LEVELS[settings.accuracy],
+                                outputs=_outputs(radius, specular), accuracy=ACCURACY_LEVELS[settings.accuracy],
                                 working_space=settings.working_space, clamp=settings.clamp, progress=progress,
                                 blender=settings.blender, engine=settings.engine, **settings.transport_keywords(),
                                 surface=settings.surface_name(), **extended)
-    report = result["report"]
-    prefix = _safe_name(settings.file_prefix)
-    folder = os.path.abspath(settings.output_dir)
-    # The maps by their one name: the output asked for, the result's key, the texture's file (<prefix>_<name>.exr).
-    images: dict[str, Any] = {"albedo": result["albedo"]}
-    if radius:
-        images["radius"] = result["radius"]
-    # Roughness and IOR always (without specular: the surface's constants, which an evaluation of no output gives);
-    # each oiliness-dependent input (the level, and the Coat's weight and roughness) is a map of its own when the
-    # oiliness varies (None here), else a value.
-    surface_inputs: dict[str, float | None] = {"specular_ior_level": 0.0, "coat_weight": 0.0}
-    if not specular:
-        c = settings.constants()
-        constants: dict[str, Any] = dict(spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"],
-                                                                c["oiliness"], outputs=(),
-                                                                surface=settings.surface_name())["surface"])
-        surface_inputs["coat_roughness"] = float(constants["roughness"])
+    report = result.report
+    # The surface's constants: the result's, or without specular an evaluation of no output (IOR and Roughness).
+    held = result.specular_constants
+    if held is None:
+        surface = _surface(_surface_constants(settings), None)
     else:
-        constants = dict(result["specular_constants"])
-        for name in SURFACE_TEXTURES:
-            field = FIELD_OF_TEXTURE[name]
-            if name in result:
-                images[name] = result[name]
-                surface_inputs[field] = None
-            else:
-                surface_inputs[field] = float(constants[field])
-    roughness = float(constants["roughness"])
-    ior = float(constants["ior"])
+        surface = _surface(held, held, {kind.field for kind in map_kinds() if kind.name in result})
     # A UDIM tile set (every map has the same tiles: check) is computed as one texture and written tile by tile.
     tiles = next(iter(settings.maps.values())).tiles
-    udim = f".{UDIM_TOKEN}" if tiles else ""
+
+    def mean(image: Any) -> tuple[float, ...]:
+        return _rgb(np.asarray(image, dtype=np.float64).reshape(-1, 3).mean(axis=0))
+
+    return Computed(target=_frozen(report["target"]), work=_frozen(report["work"]),
+                    method=settings.method if radius else "BURLEY", radius_computed=radius,
+                    specular_computed=specular,
+                    surface=surface,
+                    mean_albedo=mean(result.albedo), mean_radius_mm=mean(result.radius) if radius else (0.0, 0.0, 0.0),
+                    description=_maps_description(report, tiles),
+                    warnings=tuple(f"{c['parameter']}: {c['nan']} NaN, {c['infinite']} infinite, "
+                                   f"{c['out_of_range']} out-of-range texels clamped" for c in report.get("clamped", [])),
+                    maps=result, tiles=tiles)
+
+
+def _surface_constants(settings: SkinSettings) -> Mapping[str, Any]:
+    """The surface's constants (IOR, Roughness, Coat IOR: no parameter changes them) where the core computed no
+    specular input: an evaluation of no output."""
+    c = settings.constants()
+    return spectral_skin.evaluate(c["melanin"], c["melanin_blend"], c["hemoglobin"], c["oiliness"], outputs=(),
+                                  surface=settings.surface_name())["surface"]
+
+
+def _maps_description(report: Mapping[str, Any], tiles: tuple[tuple[int, int], ...]) -> str:
     strategy = report["strategy"]
     computed = f"{report['width']}×{report['height']} maps, strategy {strategy['name']}"
     if tiles:
         computed += f" (UDIM tiles {', '.join(str(t) for t, _ in tiles)})"
     if "tuples" in strategy:
         computed += f" ({strategy['tuples']} distinct parameter sets)"
-    warnings = [
-        f"{c['parameter']}: {c['nan']} NaN, {c['infinite']} infinite, {c['out_of_range']} out-of-range texels clamped"
-        for c in report.get("clamped", [])
-    ]
-    return {
-        "base_color": None,
-        "radius": None,
-        "ior": ior,
-        "subsurface_ior": ior,
-        **surface_inputs,
-        "roughness": roughness,
-        "coat_ior": float(constants["coat_ior"]),
-        "surface": str(constants["surface"]),
-        "target": dict(report["target"]),
-        "folder": folder,
-        "prefix": prefix,
-        "textures": {kind: os.path.join(folder, f"{prefix}_{kind}{udim}.exr") for kind in images},
-        "tiles": tiles,
-        "images": images,
-        "work": dict(report["work"]),
-        "summary": {
-            "albedo": _rgb(np.asarray(result["albedo"], dtype=np.float64).reshape(-1, 3).mean(axis=0)),
-            "radius_mm": _rgb(np.asarray(result["radius"], dtype=np.float64).reshape(-1, 3).mean(axis=0))
-            if radius else [0.0, 0.0, 0.0],
-            "computed": computed,
-            "warnings": warnings,
-        },
-    }
+    return computed
 
 
-def write_textures(plan: MaterialPlan) -> None:
-    """Write the plan's maps with ``spectral_skin.write_maps`` (the core's writer: half-float EXRs, compression chosen
-    per file, staged as temporary files and renamed into place together), as ``<prefix>_albedo.exr`` etc. in the
-    plan's folder (a UDIM tile set: ``<prefix>_albedo.1001.exr`` etc., every tile's files staged and then all renamed
-    together); an earlier texture of this prefix (and tiles) that the plan no longer has is removed.
+def _frozen(value: Any) -> Any:
+    """A read-only copy of the core's plain answer: mappings as read-only views, lists as tuples."""
+    if isinstance(value, Mapping):
+        return MappingProxyType({k: _frozen(v) for k, v in value.items()})
+    if type(value) in (list, tuple):
+        return tuple(_frozen(v) for v in value)
+    return value
 
-    One call for the plan's images, which need not be one ``maps()`` result's (the scene analysis may take the albedo
-    of another computation and drop textures): the core reads the plan's read-only arrays in place.
 
-    Raises spectral_skin.SpectralSkinIOError (an OSError naming the file) when a file cannot be written; the final paths are then
-    untouched.
-    """
-    if not plan.textures:
-        return
-    import spectral_skin
-
-    if plan.folder is None:
-        raise ValueError("a plan with textures has a folder (core/plan.py _plan_from_maps)")
-
-    result = {kind: plan.images[kind] for kind in plan.textures}
-    written = {kind: str(path) for kind, path in spectral_skin.write_maps(
-        result, plan.folder, plan.prefix, tiles=list(plan.tiles) or None).items()}
-    if written != dict(plan.textures):
-        raise RuntimeError(f"spectral_skin.write_maps wrote {written}, expected {dict(plan.textures)}")
+def safe_name(name: str) -> str:
+    """A file-name part the core accepts as a prefix (no path separator, not empty)."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "skin"

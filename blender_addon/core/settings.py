@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import spectral_skin
 
+from .colour import DEFAULT_WORKING_SPACE, WORKING_SPACES
+from .maps import UDIM_TOKEN, stack_tiles
 from .targets import method_name
 
 if TYPE_CHECKING:
@@ -29,11 +31,6 @@ PARAMETERS = tuple(p["name"] for p in _SPECS if p["default"] is None)
 EXTENDED_PARAMETERS = tuple(p["name"] for p in _SPECS if p["default"] is not None)
 # The extended parameters' defaults: the paper's values (the model of Donner & Jensen 2006 unless one is changed).
 EXTENDED_DEFAULTS: dict[str, float] = {p["name"]: float(p["default"]) for p in _SPECS if p["default"] is not None}
-
-# Blender 5.0's scene-linear working spaces (``bpy.data.colorspace.working_space``), which are also the names of
-# their OCIO colour spaces and the core's ``working_space`` names. Blender before 5.0 has only Linear Rec.709.
-WORKING_SPACES = ("Linear Rec.709", "Linear Rec.2020", "ACEScg")
-DEFAULT_WORKING_SPACE = "Linear Rec.709"
 
 # How Apply sets up the material: "BAKED" computes Base Color, Subsurface Radius and Specular IOR Level (values, or
 # texture maps from parameter maps) with the core; "LIVE" wires the "Spectral Skin" node group (blender_addon/live.py),
@@ -112,17 +109,11 @@ class ParameterMap:
     tiles: tuple[tuple[int, int], ...] = ()
 
 
-# The token that stands for a UDIM tile number in a file name (the core's src/maps/udim.rs: UDIM_TOKEN).
-UDIM_TOKEN = "<UDIM>"
-
-
 def read_tile_set(pattern: str, tiles: list[int], name: str | None = None) -> dict[str, ParameterMap]:
     """A UDIM tile set's parameter maps (``pattern`` holds ``<UDIM>``; ``tiles`` its tile numbers, as Blender lists a
     tiled image's), each tile read by :func:`read_map_file`, stacked top to bottom in tile order into one map per
-    parameter (the core computes a tile set as one texture) with ``tiles`` recording each tile's rows. ValueError when
-    the tiles' widths differ (naming them)."""
-    import numpy as np
-
+    parameter (the core computes a tile set as one texture, :func:`~core.maps.stack_tiles`) with ``tiles`` recording
+    each tile's rows. ValueError when a tile lacks a map or the tiles' widths differ (naming them)."""
     if UDIM_TOKEN not in os.path.basename(pattern):
         raise ValueError(f"{pattern}: a tile set's file name holds {UDIM_TOKEN}")
     read = [(tile, read_map_file(pattern.replace(UDIM_TOKEN, str(tile)), name)) for tile in sorted(tiles)]
@@ -131,15 +122,12 @@ def read_tile_set(pattern: str, tiles: list[int], name: str | None = None) -> di
     stacked: dict[str, ParameterMap] = {}
     for parameter in read[0][1]:
         planes = [(tile, maps[parameter]) for tile, maps in read if parameter in maps]
-        widths = {np.asarray(m.pixels).shape[1] for _, m in planes}
-        if len(planes) != len(read) or len(widths) != 1:
-            raise ValueError(f"{pattern}: every tile must have the {parameter} map, all of one width, to be computed "
-                             f"as one texture; found widths {sorted(widths)} in {len(planes)} of {len(read)} tiles")
-        stacked[parameter] = ParameterMap(
-            pixels=np.ascontiguousarray(np.concatenate([np.asarray(m.pixels) for _, m in planes], axis=0)),
-            normalized=planes[0][1].normalized, name=pattern,
-            notes=tuple(dict.fromkeys(n for _, m in planes for n in m.notes)),
-            tiles=tuple((tile, int(np.asarray(m.pixels).shape[0])) for tile, m in planes))
+        if len(planes) != len(read):
+            raise ValueError(f"{pattern}: every tile must have the {parameter} map to be computed as one texture; found "
+                             f"it in {len(planes)} of {len(read)} tiles")
+        pixels, rows = stack_tiles([(tile, m.pixels) for tile, m in planes], f"{pattern} ({parameter})")
+        stacked[parameter] = ParameterMap(pixels=pixels, normalized=planes[0][1].normalized, name=pattern,
+                                          notes=tuple(dict.fromkeys(n for _, m in planes for n in m.notes)), tiles=rows)
     return stacked
 
 

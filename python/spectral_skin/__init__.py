@@ -16,6 +16,7 @@ Functions:
     layered_reflectance: the layered solver alone (exact total, multipole profile), for checks against other solvers.
     maps: Base Color, Subsurface Radius and specular texture maps from per-texel parameter maps (numpy arrays), as a
         read-only :class:`Maps` that writes itself (``Maps.write``: one image or a UDIM tile set).
+    map_kinds: the kinds of texture map (name, file, channels, unit, Principled input, colour space, output).
     blender_targets: the Blender versions, engines and subsurface methods the mappings target.
     read_parameter_map: parameter maps read from an EXR, PNG, TIFF or JPEG file by the CLI's rules.
     write_maps: a maps() result (or a dict of images) written as EXRs, atomically, by the CLI's writer.
@@ -52,6 +53,7 @@ from ._core import (
     fit_albedo_map,
     fit_spectrum,
     layered_reflectance,
+    map_kinds,
     maps,
     parameter_ranges,
     parameters,
@@ -84,6 +86,7 @@ __all__ = [
     "fit_albedo_map",
     "fit_spectrum",
     "layered_reflectance",
+    "map_kinds",
     "maps",
     "parameter_ranges",
     "parameters",

@@ -31,6 +31,7 @@ __all__ = [
     "fit_albedo_map",
     "fit_spectrum",
     "layered_reflectance",
+    "map_kinds",
     "maps",
     "parameter_ranges",
     "parameters",
@@ -393,6 +394,18 @@ def write_shader_table(
     result: Mapping[str, Any], folder: str | os.PathLike[str], prefix: str | None = None
 ) -> dict[str, pathlib.Path]:
     """Documented once, in the compiled module: ``help(spectral_skin.write_shader_table)``."""
+
+class _MapKindSpec(TypedDict):
+    name: _MapName
+    file: str
+    channels: list[str]
+    unit: str
+    principled_input: str
+    color_space: Literal["Non-Color"] | None
+    output: _MapOutputName
+
+def map_kinds() -> list[_MapKindSpec]:
+    """Documented once, in the compiled module: ``help(spectral_skin.map_kinds)``."""
 
 def read_parameter_map(
     path: str | os.PathLike[str], name: _Parameter | _ExtendedParameter | str | None = None

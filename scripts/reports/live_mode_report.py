@@ -4,7 +4,7 @@ render time of a Live material against its Baked twin in the same scene (Cycles)
 
 Scene: the flat slab of tests/blender/test_live_mode.py (thick slab, white world, orthographic top camera over
 100 mm of it; Burley, oiliness 0; Cycles CPU, fixed seed, no adaptive sampling or denoising, threads AUTO), with one
-material at a time, applied by the add-on's own path (ops.apply_skins):
+material at a time, applied by the add-on's own path (apply.apply_skins):
 
 - constants: caucasian's parameters as values (Live: the "Spectral Skin" group with constant inputs, four table
   lookups per shading point; Baked: Base Color and Radius as values);
@@ -125,7 +125,7 @@ def _painted_hemoglobin() -> Any:
 def _scene(variant: str, folder: str) -> tuple[Any, dict[str, Any], dict[str, float]]:
     """A fresh scene with the slab, a Live and a Baked material applied (timed), the slab UV-mapped over the view."""
     from blender_addon import nodes
-    from blender_addon.ops import apply_skins
+    from blender_addon.apply import apply_skins
     from blender_addon.props import settings_from_material
 
     _register()
@@ -224,7 +224,7 @@ def markdown(data: dict[str, Any]) -> str:
     for method, row in data["table"].items():
         lines.append(f"| {method} | {row['image'][0]} × {row['image'][1]} | {row['cold_s']:.2f} s | "
                      f"{row['warm_s'] * 1000:.1f} ms |")
-    lines += ["", "Apply through the add-on (ops.apply_skins, one run each) in the render scenes below, with an empty",
+    lines += ["", "Apply through the add-on (apply.apply_skins, one run each) in the render scenes below, with an empty",
               "table cache: Live (the table built), Live again (the table reused from the .blend: no evaluation),",
               "then Baked (for the map: the map pipeline's strategy, texture writing):", "",
               "| scene | Apply Live | Apply Live again | Apply Baked |", "|---|---:|---:|---:|"]

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The look-dev sheet: the six presets (lightest to darkest albedo) as head-sized spheres under one studio light,
+"""The look-dev sheet: every preset (lightest to darkest albedo) as head-sized spheres under one studio light,
 applied by the add-on with the paper's surface (top row) and the measured surface (bottom row, the default), rendered
 by Cycles and saved in Blender's Standard and AgX view transforms; and the render-time cost of the measured surface's
 Coat (the same spheres rendered with Coat Weight 0, the rest unchanged). Writes docs/images/lookdev-*.png and
@@ -154,7 +154,8 @@ def main(argv: list[str] | None = None) -> None:
         "    .venv/bin/python scripts/reports/lookdev_sheet.py",
         "",
         f"Blender {bpy.app.version_string}, Cycles CPU, {args.samples} samples, no denoising, {args.width}×{height}. "
-        f"The six presets, lightest albedo first ({', '.join(presets)}), as spheres of radius {RADIUS_M * 100:.0f} cm "
+        f"The {len(presets)} presets (the paper's three, the measured thirds and the ITA palette), lightest albedo "
+        f"first ({', '.join(presets)}), as spheres of radius {RADIUS_M * 100:.0f} cm "
         "(a head's half-width) under one 0.6 m softbox up and to the left and a dim grey world. Each material is "
         "applied by the add-on (Subsurface Method Burley); **top row: the paper's surface** (Donner & Jensen's oil "
         "layer: one lobe scaled by the oiliness, 0.3 in every preset), **bottom row: the measured surface** (the "

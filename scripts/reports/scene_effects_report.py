@@ -155,7 +155,7 @@ def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_s
     import bpy
 
     import blender_addon
-    from blender_addon import nodes, ops
+    from blender_addon import apply, nodes
     from blender_addon.core import SkinSettings, read_map_file
 
     maps = read_map_file(str(map_path))
@@ -172,7 +172,7 @@ def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_s
         spp = int(min(max_samples, max(samples, samples * size * size / max(region_px, 1.0))))
         settings = SkinSettings.from_preset("caucasian").replace(maps=maps, output_dir=str(maps_dir),
                                                                   file_prefix="Head")
-        plan = ops.apply_skin(material, settings)  # Auto: the scene decides
+        plan = apply.apply_skin(material, settings)  # Auto: the scene decides
         decision = next(e for e in plan.effects if e["effect"] == "subsurface")
         principled = nodes.tagged_nodes(material.node_tree, "principled")[0]
         decided_weight = principled.inputs["Subsurface Weight"].default_value
@@ -180,10 +180,10 @@ def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_s
         blender_scenes.render(scene, samples=1)  # warm-up: kernel loading and the first sync are not timed
         for override in ("ON", "OFF"):
             material.spectral_skin.override_subsurface = override
-            ops.apply_skin(material, settings)
+            apply.apply_skin(material, settings)
             images[override], times[override] = _timed_render(blender_scenes, scene, spp, repeats)
         material.spectral_skin.override_subsurface = "ON"
-        ops.apply_skin(material, settings)
+        apply.apply_skin(material, settings)
         noise = blender_scenes.render(scene, samples=spp, seed=2, alpha=True)
         dropped = not decision["enabled"]
         assert decided_weight == (0.0 if dropped else 1.0), (distance, decided_weight)
@@ -203,15 +203,15 @@ def head_rows(cases: Sequence[tuple[str, float]], size: int, samples: int, max_s
 def apply_times(shape: str, distance: float, size: int, map_path: Path, maps_dir: Path,
                 repeats: int) -> dict[str, float]:
     """The add-on's Apply on the head scene at ``distance`` (the shortest of ``repeats``, after a warm-up apply that
-    fills the lookup-table cache): with the analysis (ops.apply_skin: the scene's facts gathered, the decisions
-    taken and applied), its parts, and without it (the plan, its maps written and the material edited, no facts,
-    no decisions: core.make_plan frozen, core.write_textures, ops.finish)."""
+    fills the lookup-table cache): with the analysis (apply.apply_skin: the scene's facts gathered, the decisions
+    taken, the plan built), its parts, and without it (the plan, its maps written and the material edited, no
+    facts: core.scene.scene_plan of no facts, core.write_textures, apply.finish)."""
     import blender_scenes
     import bpy
 
     import blender_addon
-    from blender_addon import ops, scene_facts
-    from blender_addon.core import SkinSettings, freeze, make_plan, read_map_file, write_textures
+    from blender_addon import apply, scene_facts
+    from blender_addon.core import SkinSettings, build_plan, compute, read_map_file, write_textures
     from blender_addon.core import scene as analysis
 
     scene = blender_scenes.reset_scene()
@@ -221,8 +221,8 @@ def apply_times(shape: str, distance: float, size: int, map_path: Path, maps_dir
     blender_scenes.head_scene(scene, material, distance, size, size, shape)
     settings = SkinSettings.from_preset("caucasian").replace(maps=read_map_file(str(map_path)),
                                                               output_dir=str(maps_dir), file_prefix="Head")
-    ops.apply_skin(material, settings)  # warm-up
-    job_settings = ops.prepare(material, settings, scene).settings
+    apply.apply_skin(material, settings)  # warm-up
+    job_settings = apply.prepare(material, settings, scene).settings
 
     def best(action) -> float:
         times = []
@@ -233,27 +233,25 @@ def apply_times(shape: str, distance: float, size: int, map_path: Path, maps_dir
         return min(times)
 
     facts = scene_facts.gather(scene, material)
-    plan = make_plan(job_settings)
+    computed = compute(job_settings)
     overrides = scene_facts.overrides(material)
 
     def without() -> None:
-        bare = freeze(make_plan(job_settings))
-        write_textures(bare)
-        ops.finish(material, bare)
+        bare = analysis.scene_plan(job_settings, None)
+        apply.finish(material, apply.Applied(bare, write_textures(bare)))
 
-    return {"with": best(lambda: ops.apply_skin(material, settings)),
+    return {"with": best(lambda: apply.apply_skin(material, settings)),
             "gather": best(lambda: scene_facts.gather(scene, material)),
-            "decide": best(lambda: analysis.apply_decisions(
-                {**plan, "images": dict(plan["images"]), "textures": dict(plan["textures"])},
-                analysis.decide(plan, job_settings, facts, overrides))),
-            "without": best(without), "plan": best(lambda: make_plan(job_settings))}
+            "decide": best(lambda: build_plan(job_settings, computed,
+                                              analysis.decide(computed, job_settings, facts, overrides))),
+            "without": best(without), "plan": best(lambda: compute(job_settings))}
 
 
 # The rest of the report: what the analysis decides besides dropping subsurface (no measurement of this script).
 DECISIONS_TEXT = """## What is not computed
 
 A dropped effect is not computed at all, and the core's count of its work (`plan.work`: `evaluate(...)["work"]`,
-or `maps(...)["report"]["work"]`; stored per material with its decisions, `result_work`) shows it:
+or `maps(...).report["work"]`; stored per material with its decisions, `result_work`) shows it:
 
 - Subsurface is decided before anything is computed when the largest radius of *any* skin is already under the
   threshold: the largest radius over a grid of melanin fractions (dense at small ones) and types without blood
@@ -399,7 +397,7 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         "",
         "A head-sized object with the example face parameter map (`spectral-skin example --kind face`, "
         f"{HEAD_MAP_SIZE}² texels, caucasian preset otherwise) applied through the add-on's own Apply "
-        "(`ops.apply_skin`), in a metre scene (`head_scene` of scripts/lib/blender_scenes.py): a closed UV sphere "
+        "(`apply.apply_skin`), in a metre scene (`head_scene` of scripts/lib/blender_scenes.py): a closed UV sphere "
         "0.2 m across, and Suzanne (an open mesh with thin ears) scaled to 0.2 m wide; a sun from the front left "
         f"above (hard shadows) and a dim world; a 50 mm lens on a 36 mm sensor, {size}×{size} px frames, Cycles CPU. "
         "Per distance (camera to the object's centre) the add-on decides; then the object is rendered with subsurface "
@@ -465,11 +463,11 @@ def head_section(rows: list[dict], applies: dict[float, dict[str, float]], size:
         "### Apply time with and without the analysis",
         "",
         f"The add-on's Apply on the sphere scene (the same face map, {size}×{size} px), shortest of 5 after a "
-        "warm-up apply (the lookup table cached): *with* the analysis is `ops.apply_skin` (the scene's facts "
-        "gathered with bpy: cameras, frames, bounds, shapes; the decisions taken and applied); *without* it the "
-        "plan, its maps written and the material edited, no facts and no decisions (`core.make_plan`, "
-        "`core.write_textures`, `ops.finish`). The analysis's own parts: *gather* = `scene_facts.gather`, "
-        "*decide* = `core.scene.decide` + `apply_decisions` on a computed plan.",
+        "warm-up apply (the lookup table cached): *with* the analysis is `apply.apply_skin` (the scene's facts "
+        "gathered with bpy: cameras, frames, bounds, shapes; the decisions taken, the plan built); *without* it the "
+        "plan, its maps written and the material edited, no facts (`core.scene.scene_plan` of no facts, "
+        "`core.write_textures`, `apply.finish`). The analysis's own parts: *gather* = `scene_facts.gather`, "
+        "*decide* = `core.scene.decide` + `build_plan` on the core's answer; *the plan* = `core.compute`.",
         "",
         "| distance (m) | subsurface | apply with analysis (s) | apply without (s) | of which the plan (s) | gather (s) "
         "| decide (s) | analysis / apply |",

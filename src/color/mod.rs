@@ -3,6 +3,7 @@
 pub mod cmf;
 pub mod difference;
 pub mod gamut;
+pub mod ita;
 pub mod rgb;
 pub mod spectrum;
 

@@ -11,7 +11,7 @@ use serde::Serialize;
 
 use super::albedo::{cached_albedo_table_ticking, colour_key, fit_on_table, AlbedoFitOptions, AlbedoTable};
 use super::albedo_gains::{
-    estimate_gains_of_sample, not_albedo_diagnosis, spread_sample_of, GainEstimate, GAIN_SAMPLE, NOT_ALBEDO_DELTA_E00,
+    estimate_gains_of_sample, not_albedo_diagnosis, outside_skin, spread_sample_of, GainEstimate, GAIN_SAMPLE,
 };
 use crate::error::SkinError;
 use crate::maps::io::{
@@ -141,8 +141,10 @@ pub struct AlbedoMapStats {
     pub table_from_cache: bool,
     pub max_delta_e00: f64,
     pub mean_delta_e00: f64,
-    /// Texels farther than the ambiguity ΔE00 from every reachable colour (a green texel, a tattoo).
-    pub out_of_gamut_texels: usize,
+    /// Texels outside skin's colours (a green texel, a tattoo, a photograph's highlight), of those that count (the
+    /// mask's skin): farther than [`super::albedo_gains::OUTSIDE_SKIN_DELTA_E00`] from every colour skin can have
+    /// ([`outside_skin`]). The diagnosis judges this count.
+    pub outside_skin_texels: usize,
     pub options: AlbedoFitOptions,
 }
 
@@ -337,16 +339,13 @@ pub fn fit_albedo_tiles_with_progress(
         }
     };
     // The diagnosis of the whole set, with the remedy measured when the gains were not estimated already.
-    let far = fits
-        .iter()
-        .zip(&counts)
-        .filter(|(f, _)| f.1 as f64 > NOT_ALBEDO_DELTA_E00)
-        .map(|(_, &c)| c as usize)
-        .sum::<usize>();
-    let mut diagnosis = not_albedo_diagnosis(far, set.skin, gains.as_ref(), texture.auto_gains);
+    // The set's texels outside skin's colours: the sum of its tiles' `outside_skin_texels`.
+    let outside =
+        fits.iter().zip(&counts).filter(|(f, _)| outside_skin(f.1 as f64)).map(|(_, &c)| c as usize).sum::<usize>();
+    let mut diagnosis = not_albedo_diagnosis(outside, set.skin, gains.as_ref(), texture.auto_gains);
     if diagnosis.is_some() && gains.is_none() {
         let estimate = estimate_gains_of_sample(&skin_sample(), &given, &thicknesses, &|_| ticks.tick(), cancel)?;
-        diagnosis = not_albedo_diagnosis(far, set.skin, Some(&estimate), false);
+        diagnosis = not_albedo_diagnosis(outside, set.skin, Some(&estimate), false);
         gains = Some(estimate);
     }
     let shared = SetFit { options, choice, gains, diagnosis, distinct_colours: colours.len(), table_from_cache };
@@ -579,9 +578,8 @@ fn tile_fit(
     filled: &(dyn Fn(usize) + Sync),
 ) -> AlbedoMapFit {
     let oil = set.options.oiliness as f32;
-    let ambiguity = set.options.ambiguity_delta_e;
     let step = (BLOCK_TEXELS / tile.width).max(1) * tile.width;
-    // (sum, max, count above the ambiguity ΔE00, count) of the ΔE00 of the texels that count.
+    // (sum, max, count outside skin's colours, count) of the ΔE00 of the texels that count.
     let (sum, max, outside, counted) = params
         .par_chunks_mut(step)
         .zip(residual.par_chunks_mut(step))
@@ -594,7 +592,7 @@ fn tile_fit(
                 *r = de;
                 if tile.mask.map_or(true, |m| m[b * step + k]) {
                     let d = de as f64;
-                    figures = (figures.0 + d, figures.1.max(d), figures.2 + (d > ambiguity) as usize, figures.3 + 1);
+                    figures = (figures.0 + d, figures.1.max(d), figures.2 + outside_skin(d) as usize, figures.3 + 1);
                 }
             }
             filled(params.len());
@@ -617,7 +615,7 @@ fn tile_fit(
             table_from_cache: set.table_from_cache,
             max_delta_e00: max,
             mean_delta_e00: if counted == 0 { 0.0 } else { sum / counted as f64 },
-            out_of_gamut_texels: outside,
+            outside_skin_texels: outside,
             options: set.options,
         },
     }

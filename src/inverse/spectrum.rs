@@ -371,7 +371,8 @@ impl SpectrumFitter {
         }
     }
 
-    fn lab(&self, spectrum: &[f64]) -> [f64; 3] {
+    /// CIELAB (D65, CIE 1931 2°) of a spectrum on the fitter's wavelengths, as the fit's `lab_measured`.
+    pub fn lab(&self, spectrum: &[f64]) -> [f64; 3] {
         lab_from_xyz(spectrum_to_xyz(spectrum, &self.xyz_weights), self.white_xyz)
     }
 

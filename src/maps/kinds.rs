@@ -1,6 +1,12 @@
 //! The kinds of texture map a run writes: each one's name on every front, file, channels, unit and Principled
 //! input, defined once.
 
+use crate::evaluate::MaterialOutput;
+
+/// The colour space of a map's values as Blender loads the image: the scene's working space the Base Color was
+/// computed in (linear RGB), or raw data.
+pub const NON_COLOR: &str = "Non-Color";
+
 /// One kind of texture map: its one name on every front (the `outputs` request, the key of the Python result and of
 /// `write_maps`' images and written files, the add-on's texture, the file stem), its file, channels and unit, and
 /// the Principled BSDF input it feeds.
@@ -12,6 +18,11 @@ pub struct MapKind {
     /// The values' unit ("" for a dimensionless one).
     pub unit: &'static str,
     pub principled_input: &'static str,
+    /// The colour space to load the image in: None for the run's working space (the colour of the Base Color),
+    /// [`NON_COLOR`] for data.
+    pub color_space: Option<&'static str>,
+    /// The output (`outputs=`, `--outputs`) that computes it.
+    pub output: MaterialOutput,
 }
 
 /// Principled Base Color for the method (the albedo itself without the radius output), linear RGB.
@@ -21,6 +32,8 @@ pub const ALBEDO_MAP: MapKind = MapKind {
     channels: &["R", "G", "B"],
     unit: "",
     principled_input: "Base Color",
+    color_space: None,
+    output: MaterialOutput::Albedo,
 };
 /// Principled Subsurface Radius x Subsurface Scale for the method, mm.
 pub const RADIUS_MAP: MapKind = MapKind {
@@ -29,6 +42,8 @@ pub const RADIUS_MAP: MapKind = MapKind {
     channels: &["R", "G", "B"],
     unit: "mm",
     principled_input: "Subsurface Radius",
+    color_space: Some(NON_COLOR),
+    output: MaterialOutput::Radius,
 };
 /// Principled Specular IOR Level per texel (written only when the oiliness varies).
 pub const SPECULAR_MAP: MapKind = MapKind {
@@ -37,6 +52,8 @@ pub const SPECULAR_MAP: MapKind = MapKind {
     channels: &["Y"],
     unit: "",
     principled_input: "Specular IOR Level",
+    color_space: Some(NON_COLOR),
+    output: MaterialOutput::Specular,
 };
 /// Principled Coat Weight per texel (the `measured` surface's sharp lobe; written only when the oiliness varies).
 pub const COAT_WEIGHT_MAP: MapKind = MapKind {
@@ -45,6 +62,8 @@ pub const COAT_WEIGHT_MAP: MapKind = MapKind {
     channels: &["Y"],
     unit: "",
     principled_input: "Coat Weight",
+    color_space: Some(NON_COLOR),
+    output: MaterialOutput::Specular,
 };
 /// Principled Coat Roughness per texel (as [`COAT_WEIGHT_MAP`]).
 pub const COAT_ROUGHNESS_MAP: MapKind = MapKind {
@@ -53,6 +72,8 @@ pub const COAT_ROUGHNESS_MAP: MapKind = MapKind {
     channels: &["Y"],
     unit: "",
     principled_input: "Coat Roughness",
+    color_space: Some(NON_COLOR),
+    output: MaterialOutput::Specular,
 };
 /// Every map kind, in the order results list them.
 pub const MAP_KINDS: [MapKind; 5] = [ALBEDO_MAP, RADIUS_MAP, SPECULAR_MAP, COAT_WEIGHT_MAP, COAT_ROUGHNESS_MAP];

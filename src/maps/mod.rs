@@ -8,6 +8,7 @@ pub mod output;
 pub mod pipeline;
 pub mod plan;
 pub mod report;
+pub mod request;
 pub mod shader_table;
 pub mod summary;
 pub mod thickness_tables;

@@ -8,7 +8,7 @@ use super::io::{
     commit_all, create_output_dir, stage_files, Compression, ExrOptions, ParamInputs, PlaneFile, Staged,
     EXTENDED_CHANNELS, PARAM_CHANNELS,
 };
-use super::kinds::{MapKind, ALBEDO_FILE, MAP_KINDS, RADIUS_FILE, SIDECAR_FILE, SURFACE_MAP_KINDS};
+use super::kinds::{MapKind, ALBEDO_FILE, MAP_KINDS, RADIUS_FILE, RADIUS_MAP, SIDECAR_FILE, SURFACE_MAP_KINDS};
 use super::plan::SurfacePlan;
 use super::report::MapReport;
 use super::udim::{tile_file_name, tile_set_file_name};
@@ -180,7 +180,7 @@ pub(crate) fn sidecar_json(
     }
     if report.request.outputs.radius {
         outputs[radius_key.as_str()] = serde_json::json!({"channels": ["R", "G", "B"],
-            "meaning": "Principled BSDF Subsurface Radius x Subsurface Scale", "units": "mm", "color_space": "Non-Color"});
+            "meaning": "Principled BSDF Subsurface Radius x Subsurface Scale", "units": "mm", "color_space": RADIUS_MAP.color_space});
     }
     match surface {
         None => {}
@@ -188,7 +188,7 @@ pub(crate) fn sidecar_json(
             for kind in if coat { &SURFACE_MAP_KINDS[..] } else { &SURFACE_MAP_KINDS[..1] } {
                 outputs[key(kind.file).as_str()] = serde_json::json!({"channels": kind.channels,
                     "meaning": format!("Principled {}", kind.principled_input), "units": "dimensionless",
-                    "color_space": "Non-Color", "surface": constants.surface, "roughness": constants.roughness,
+                    "color_space": kind.color_space, "surface": constants.surface, "roughness": constants.roughness,
                     "ior": constants.ior, "coat_ior": constants.coat_ior});
             }
         }

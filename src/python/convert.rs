@@ -1,27 +1,23 @@
 //! The conversion rules for arguments (numbers, sequences, names, arrays) and for results (JSON values, arrays).
 
-use numpy::ndarray::{Array2, ArrayView2, Axis, Ix2, Ix3};
+use numpy::ndarray::{Array2, Array3, ArrayView2, Axis, Ix2, Ix3};
 use numpy::{
-    AllowTypeChange, Element, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayLike1, PyArrayMethods, PyUntypedArray,
-    PyUntypedArrayMethods,
+    AllowTypeChange, Element, PyArray, PyArray2, PyArray3, PyArrayDescrMethods, PyArrayDyn, PyArrayLike1,
+    PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyString};
+use rayon::prelude::*;
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::accuracy::{Accuracy, AccuracyLevel};
-use crate::color::{ALL_RGB_MAPPINGS, ALL_WAVELENGTH_PLACEMENTS, ALL_WORKING_SPACES};
-use crate::diffusion::{MultipoleTerms, ALL_BOUNDARIES, ALL_COMBINATIONS};
 use crate::error::SkinError;
-use crate::evaluate::ProfileGrid;
-use crate::evaluate::{Outputs, Request};
+use crate::evaluate::Outputs;
 use crate::fit::blender_target::{BlenderVersion, Engine, Target, CURRENT_RELEASE};
 use crate::maps::io::PARAM_CHANNELS;
-use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS};
+use crate::skin::params::EXTENDED_DEFAULTS;
 use crate::skin::{SkinParams, PRESETS};
-use crate::surface::lobes::{SurfaceModel, ALL_SURFACE_MODELS};
 use crate::transport::{Transport, ALL_TRANSPORTS, STREAMS_RANGE};
 
 use super::errors::{internal, invalid};
@@ -198,28 +194,6 @@ pub(super) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Outp
         .map_err(|e| PyRuntimeError::new_err(format!("spectral-skin internal error: {e}")))
 }
 
-/// The four parameter arguments (in [`PARAM_CHANNELS`] order), the extended physiology's (in [`EXTENDED_PARAMS`] order;
-/// None: the preset's, else the default) and a preset to [`SkinParams`] ([`resolve_params`]).
-pub(super) fn params_arg(
-    preset: Option<&str>,
-    args: [Option<&Bound<'_, PyAny>>; 4],
-    extended: [Option<&Bound<'_, PyAny>>; 3],
-) -> PyResult<SkinParams> {
-    let mut values = [None; 4];
-    for ((value, name), obj) in values.iter_mut().zip(PARAM_CHANNELS).zip(args) {
-        *value = real_arg(name, obj)?;
-    }
-    let mut params = resolve_params(preset, values)?;
-    let mut all = params.values();
-    for ((spec, obj), value) in EXTENDED_PARAMS.iter().zip(extended).zip(&mut all[4..]) {
-        if let Some(v) = real_arg(spec.name, obj)? {
-            *value = v.0;
-        }
-    }
-    params = SkinParams::from_values(all)?;
-    Ok(params)
-}
-
 /// A preset and/or the four parameters: explicit parameters override the preset's; without a preset all four are
 /// required. The extended physiology is the preset's (the defaults). The core validates the ranges.
 pub(super) fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) -> PyResult<SkinParams> {
@@ -247,11 +221,6 @@ pub(super) fn resolve_params(preset: Option<&str>, explicit: [Option<Real>; 4]) 
 
 /// `blender=` and `engine=` to a [`Target`]: the version as "MAJOR.MINOR" (or "MAJOR.MINOR.PATCH") or a tuple of
 /// ints such as `bpy.app.version`; None is the current release. The core validates both and names the range.
-/// The `surface=` keyword: a surface model's name, or None for the core's default (`SurfaceModel::default`).
-pub(super) fn surface_arg(surface: Option<&str>) -> PyResult<SurfaceModel> {
-    surface.map_or(Ok(SurfaceModel::default()), |name| by_name("surface", name, &ALL_SURFACE_MODELS))
-}
-
 pub(super) fn target_from(blender: Option<&Bound<'_, PyAny>>, engine: &str) -> PyResult<Target> {
     const EXPECTED: &str = "blender must be a version string such as \"5.3\" or a tuple such as (5, 3, 0)";
     let version = match blender {
@@ -290,132 +259,6 @@ pub(super) fn streams_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usi
         .map_err(|_| invalid("streams", format!("must be an even count in [{lo}, {hi}]; got {n}")))?;
     crate::transport::adding_doubling::validate_streams(streams)?;
     Ok(Some(streams))
-}
-
-/// The accuracy and model choices common to `evaluate` and `profile`.
-pub(super) struct Knobs<'a> {
-    /// A named level (draft, default, reference); the knobs below override it where given.
-    pub(super) accuracy: &'a str,
-    pub(super) wavelength_step_nm: Option<Real>,
-    pub(super) wavelength_placement: Option<&'a str>,
-    pub(super) multipole_pairs: Option<Count>,
-    pub(super) profile_r_min_mm: Option<Real>,
-    pub(super) profile_r_max_mm: Option<Real>,
-    pub(super) profile_count: Option<Count>,
-    pub(super) combination: &'a str,
-    pub(super) working_space: &'a str,
-    pub(super) rgb_mapping: &'a str,
-    pub(super) boundaries: &'a str,
-    pub(super) target: Target,
-    /// Where the totals come from (a [`Transport`] serde name).
-    pub(super) transport: &'a str,
-    /// Adding-doubling streams; None: the level's.
-    pub(super) streams: Option<usize>,
-}
-
-impl<'a> Knobs<'a> {
-    /// The knobs of `evaluate` and `profile` from their keyword arguments (converted and named here).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn from_args(
-        accuracy: &'a str,
-        wavelength_step_nm: Option<&Bound<'_, PyAny>>,
-        wavelength_placement: Option<&'a str>,
-        multipole_pairs: Option<&Bound<'_, PyAny>>,
-        profile_r_min_mm: Option<&Bound<'_, PyAny>>,
-        profile_r_max_mm: Option<&Bound<'_, PyAny>>,
-        profile_count: Option<&Bound<'_, PyAny>>,
-        combination: &'a str,
-        working_space: &'a str,
-        rgb_mapping: &'a str,
-        boundaries: &'a str,
-        target: Target,
-        transport: &'a str,
-        streams: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Self> {
-        Ok(Knobs {
-            accuracy,
-            wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
-            wavelength_placement,
-            multipole_pairs: count_arg("multipole_pairs", multipole_pairs)?,
-            profile_r_min_mm: real_arg("profile_r_min_mm", profile_r_min_mm)?,
-            profile_r_max_mm: real_arg("profile_r_max_mm", profile_r_max_mm)?,
-            profile_count: count_arg("profile_count", profile_count)?,
-            combination,
-            working_space,
-            rgb_mapping,
-            boundaries,
-            target,
-            transport,
-            streams: streams_arg(streams)?,
-        })
-    }
-
-    /// The knobs of a material table or map (`maps`, `shader_table`): no profile, the directional combination and
-    /// the linear RGB mapping; the level's wavelength grid and streams unless a caller overrides them.
-    pub(super) fn material(
-        accuracy: &'a str,
-        working_space: &'a str,
-        boundaries: &'a str,
-        target: Target,
-        transport: &'a str,
-    ) -> Self {
-        Knobs {
-            accuracy,
-            wavelength_step_nm: None,
-            wavelength_placement: None,
-            multipole_pairs: None,
-            profile_r_min_mm: None,
-            profile_r_max_mm: None,
-            profile_count: None,
-            combination: "directional",
-            working_space,
-            rgb_mapping: "linear",
-            boundaries,
-            target,
-            transport,
-            streams: None,
-        }
-    }
-
-    pub(super) fn request(&self, outputs: Outputs) -> PyResult<Request> {
-        let level = AccuracyLevel::from_name(self.accuracy)?.accuracy();
-        let defaults = level.profile_grid;
-        let count = match self.profile_count {
-            Some(Count(n)) => to_u32("profile_count", "number of profile radii", n)? as usize,
-            None => defaults.count,
-        };
-        let multipole_terms = match self.multipole_pairs {
-            Some(Count(n)) => MultipoleTerms::Pairs(to_u32("multipole_pairs", "image pairs per side", n)?),
-            None => level.multipole_terms,
-        };
-        let accuracy = Accuracy {
-            wavelength_step_nm: self.wavelength_step_nm.map_or(level.wavelength_step_nm, |r| r.0),
-            wavelength_placement: match self.wavelength_placement {
-                Some(name) => by_name("wavelength_placement", name, &ALL_WAVELENGTH_PLACEMENTS)?,
-                None => level.wavelength_placement,
-            },
-            multipole_terms,
-            profile_grid: ProfileGrid {
-                r_min_mm: self.profile_r_min_mm.map_or(defaults.r_min_mm, |r| r.0),
-                r_max_mm: self.profile_r_max_mm.map_or(defaults.r_max_mm, |r| r.0),
-                count,
-            },
-            ..level
-        };
-        // Streams given ask for solved totals at them; else the level's (the table, or the reference's solves).
-        let accuracy = self.streams.map_or(accuracy, |n| accuracy.solved_at(n));
-        Ok(Request {
-            outputs,
-            accuracy,
-            combination: by_name("combination", self.combination, &ALL_COMBINATIONS)?,
-            working_space: by_name("working_space", self.working_space, &ALL_WORKING_SPACES)?,
-            rgb_mapping: by_name("rgb_mapping", self.rgb_mapping, &ALL_RGB_MAPPINGS)?,
-            boundaries: by_name("boundaries", self.boundaries, &ALL_BOUNDARIES)?,
-            target: self.target,
-            transport: transport_arg(self.transport)?,
-            ..Request::default()
-        })
-    }
 }
 
 /// serde_json `Value` to plain Python objects (dict, list, str, int, float, bool, None), by pythonize. Results go
@@ -512,6 +355,32 @@ pub(super) fn plane_of<T: Element + Copy>(
         Some(values) => values.iter().map(|&v| convert(v)).collect(),
         None => view.iter().map(|&v| convert(v)).collect(),
     })
+}
+
+/// Planar RGB to one row-major (H, W, 3) buffer, rows in parallel.
+pub(super) fn interleave(width: usize, planes: [Vec<f32>; 3]) -> Vec<f32> {
+    let [p0, p1, p2] = planes;
+    let mut out = vec![0f32; 3 * p0.len()];
+    out.par_chunks_mut(3 * width).enumerate().for_each(|(y, row)| {
+        let start = y * width;
+        let (r0, r1, r2) = (&p0[start..start + width], &p1[start..start + width], &p2[start..start + width]);
+        for (x, texel) in row.chunks_exact_mut(3).enumerate() {
+            texel[0] = r0[x];
+            texel[1] = r1[x];
+            texel[2] = r2[x];
+        }
+    });
+    out
+}
+
+/// An interleaved (H, W, 3) buffer to numpy, without copying it.
+pub(super) fn rgb_image(
+    py: Python<'_>,
+    height: usize,
+    width: usize,
+    data: Vec<f32>,
+) -> PyResult<Bound<'_, PyArray3<f32>>> {
+    Ok(PyArray::from_owned_array(py, Array3::from_shape_vec((height, width, 3), data).map_err(internal)?))
 }
 
 /// A shape as Python prints it: (8, 8, 4).

@@ -8,16 +8,17 @@ use pyo3::types::PyDict;
 use serde_json::Value;
 
 use crate::accuracy::{MAX_LAYERS, MAX_PROFILE_RADII};
-use crate::diffusion::ALL_BOUNDARIES;
+use crate::color::WavelengthPlacement;
 use crate::evaluate::Outputs;
-use crate::evaluate::{Evaluation, MethodParams, Request};
-use crate::fit::blender_target::Target;
+use crate::evaluate::{Evaluation, MethodParams};
 use crate::layer::Layer;
 use crate::reflectance::LayeredOptions;
+use crate::surface::lobes::SurfaceModel;
 
+use super::args::{named, streams_of, Choice, Knobs, ParamArgs, Streams};
 use super::convert::{
-    by_name, json_to_py, nested_rows, params_arg, parse_outputs, real_sequence, real_vector, reject_string, rgb_rows,
-    streams_arg, surface_arg, target_from, to_py, transport_arg, Knobs,
+    count_arg, json_to_py, nested_rows, parse_outputs, real_arg, real_sequence, real_vector, reject_string, rgb_rows,
+    target_from, to_py,
 };
 use super::detach::detached_interruptible;
 use super::errors::{internal, invalid, warn_lobe};
@@ -200,7 +201,7 @@ pub(super) fn evaluate_py<'py>(
     outputs: Option<&Bound<'py, PyAny>>,
     accuracy: &str,
     wavelength_step_nm: Option<&Bound<'py, PyAny>>,
-    wavelength_placement: Option<&str>,
+    wavelength_placement: Option<Choice<WavelengthPlacement>>,
     multipole_pairs: Option<&Bound<'py, PyAny>>,
     profile_r_min_mm: Option<&Bound<'py, PyAny>>,
     profile_r_max_mm: Option<&Bound<'py, PyAny>>,
@@ -212,31 +213,32 @@ pub(super) fn evaluate_py<'py>(
     rgb_mapping: &str,
     boundaries: &str,
     transport: &str,
-    streams: Option<&Bound<'py, PyAny>>,
-    surface: Option<&str>,
+    streams: Option<Streams>,
+    surface: Option<Choice<SurfaceModel>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let params = params_arg(
-        preset,
+    let params = ParamArgs::new(
         [melanin, melanin_blend, hemoglobin, oiliness],
         [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation],
-    )?;
-    let knobs = Knobs::from_args(
-        accuracy,
-        wavelength_step_nm,
-        wavelength_placement,
-        multipole_pairs,
-        profile_r_min_mm,
-        profile_r_max_mm,
-        profile_count,
-        combination,
-        working_space,
-        rgb_mapping,
-        boundaries,
-        target_from(blender, engine)?,
-        transport,
-        streams,
-    )?;
-    let request = Request { surface: surface_arg(surface)?, ..knobs.request(parse_outputs(outputs)?)? };
+    )
+    .skin_params(preset)?;
+    let knobs = Knobs {
+        accuracy: named(accuracy)?,
+        wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
+        wavelength_placement: wavelength_placement.map(|c| c.0),
+        multipole_pairs: count_arg("multipole_pairs", multipole_pairs)?,
+        profile_r_min_mm: real_arg("profile_r_min_mm", profile_r_min_mm)?,
+        profile_r_max_mm: real_arg("profile_r_max_mm", profile_r_max_mm)?,
+        profile_count: count_arg("profile_count", profile_count)?,
+        combination: named(combination)?,
+        working_space: named(working_space)?,
+        rgb_mapping: named(rgb_mapping)?,
+        boundaries: named(boundaries)?,
+        target: target_from(blender, engine)?,
+        transport: named(transport)?,
+        streams: streams_of(streams),
+        surface: surface.map(|c| c.0).unwrap_or_default(),
+    };
+    let request = knobs.request(parse_outputs(outputs)?)?;
     let cancel = AtomicBool::new(false);
     let evaluation =
         detached_interruptible(py, &cancel, || crate::evaluate::evaluate_cancellable(&params, &request, &cancel))?;
@@ -300,7 +302,7 @@ pub(super) fn profile_py<'py>(
     spectral: bool,
     accuracy: &str,
     wavelength_step_nm: Option<&Bound<'py, PyAny>>,
-    wavelength_placement: Option<&str>,
+    wavelength_placement: Option<Choice<WavelengthPlacement>>,
     multipole_pairs: Option<&Bound<'py, PyAny>>,
     profile_r_min_mm: Option<&Bound<'py, PyAny>>,
     profile_r_max_mm: Option<&Bound<'py, PyAny>>,
@@ -310,29 +312,29 @@ pub(super) fn profile_py<'py>(
     rgb_mapping: &str,
     boundaries: &str,
     transport: &str,
-    streams: Option<&Bound<'py, PyAny>>,
+    streams: Option<Streams>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let params = params_arg(
-        preset,
+    let params = ParamArgs::new(
         [melanin, melanin_blend, hemoglobin, oiliness],
         [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation],
-    )?;
-    let knobs = Knobs::from_args(
-        accuracy,
-        wavelength_step_nm,
-        wavelength_placement,
-        multipole_pairs,
-        profile_r_min_mm,
-        profile_r_max_mm,
-        profile_count,
-        combination,
-        working_space,
-        rgb_mapping,
-        boundaries,
-        Target::default(),
-        transport,
-        streams,
-    )?;
+    )
+    .skin_params(preset)?;
+    let knobs = Knobs {
+        accuracy: named(accuracy)?,
+        wavelength_step_nm: real_arg("wavelength_step_nm", wavelength_step_nm)?,
+        wavelength_placement: wavelength_placement.map(|c| c.0),
+        multipole_pairs: count_arg("multipole_pairs", multipole_pairs)?,
+        profile_r_min_mm: real_arg("profile_r_min_mm", profile_r_min_mm)?,
+        profile_r_max_mm: real_arg("profile_r_max_mm", profile_r_max_mm)?,
+        profile_count: count_arg("profile_count", profile_count)?,
+        combination: named(combination)?,
+        working_space: named(working_space)?,
+        rgb_mapping: named(rgb_mapping)?,
+        boundaries: named(boundaries)?,
+        transport: named(transport)?,
+        streams: streams_of(streams),
+        ..Knobs::default()
+    };
     let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
     let request = knobs.request(outputs)?;
     let cancel = AtomicBool::new(false);
@@ -405,7 +407,7 @@ pub(super) fn layered_reflectance_py<'py>(
     radii_mm: &Bound<'py, PyAny>,
     boundaries: &str,
     transport: &str,
-    streams: Option<&Bound<'py, PyAny>>,
+    streams: Option<Streams>,
 ) -> PyResult<(f64, Bound<'py, PyArray1<f64>>)> {
     reject_string(layers, &format!("layers must be a list of tuples {LAYER_FIELDS}"))?;
     let layers: Vec<Layer> = layers
@@ -420,9 +422,9 @@ pub(super) fn layered_reflectance_py<'py>(
     let radii = real_vector("radii_mm", radii_mm, "a 1-D array-like of radii in mm", MAX_PROFILE_RADII)?;
     let defaults = LayeredOptions::default();
     let options = LayeredOptions {
-        boundaries: by_name("boundaries", boundaries, &ALL_BOUNDARIES)?,
-        transport: transport_arg(transport)?,
-        streams: streams_arg(streams)?.unwrap_or(defaults.streams),
+        boundaries: named(boundaries)?,
+        transport: named(transport)?,
+        streams: streams_of(streams).unwrap_or(defaults.streams),
     };
     let cancel = AtomicBool::new(false);
     let r = detached_interruptible(py, &cancel, || {

@@ -233,8 +233,9 @@ pub(super) fn fit_albedo_py<'py>(
 ///         with the least mean ΔE00 over its texels, never worse on it than the paper's 0.25; a number: held for
 ///         every texel (mm, 0.01..0.5).
 ///     rgb_gains: None, 3 factors (R, G, B) the texture is multiplied by before the fit (exposure and white
-///         balance), or "auto": the gains that bring the most texels inside skin's colours, estimated on the texture
-///         (for a photograph) and applied; ``AlbedoMapFit.gains`` reports them.
+///         balance), or "auto": the least gains that bring the most texels inside skin's colours (none for a texture
+///         inside them already: its exposure and melanin stay), estimated on the texture (for a photograph) and
+///         applied; ``AlbedoMapFit.gains`` reports them.
 ///     mask: None, or an (H, W) array, True (bool) or non-zero (float) where the texel is skin: only those take part
 ///         in the thickness choice, the gains, the diagnosis and the figures (``stats``); the others (hair, eyes,
 ///         background) are fitted too, each to the skin colour nearest it.
@@ -259,9 +260,9 @@ pub(super) fn fit_albedo_py<'py>(
 ///     InterruptedError: the progress callback returned False.
 ///
 /// Warns:
-///     SpectralSkinWarning: the texture does not look like an albedo (over a quarter of its texels more than 2
-///         ΔE00 from every skin colour): the message gives the likely reasons and the gains measured on it
-///         (``AlbedoMapFit.diagnosis``, ``.gains``).
+///     SpectralSkinWarning: the texture does not look like an albedo (over a quarter of its texels outside skin's
+///         colours, ``stats["outside_skin_texels"]``): the message gives the likely reasons and the gains measured on
+///         it (``AlbedoMapFit.diagnosis``, ``.gains``).
 #[pyfunction]
 #[pyo3(
     name = "fit_albedo_map",
@@ -388,8 +389,9 @@ impl AlbedoMapFitPy {
         Ok(extended)
     }
 
-    /// {"texels", "distinct_colours", "table_from_cache", "max_delta_e00", "mean_delta_e00", "out_of_gamut_texels",
-    /// "options" (with "transport" and "streams")}.
+    /// {"texels", "masked_out_texels", "distinct_colours", "table_from_cache", "max_delta_e00", "mean_delta_e00",
+    /// "outside_skin_texels" (the texels outside skin's colours, more than 2 ΔE00 from every colour skin can have,
+    /// of those the mask marks: the count ``diagnosis`` judges), "options" (with "transport" and "streams")}.
     #[getter]
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.fit.stats)
@@ -403,15 +405,15 @@ impl AlbedoMapFitPy {
     }
 
     /// The exposure and white-balance gains estimated on the texture ({"rgb_gains", "exposure_stops",
-    /// "epidermis_thickness_mm", "outside_share_before", "outside_share_after", "median_delta_e00_before",
-    /// "median_delta_e00_after", "sampled_texels"}): applied with ``rgb_gains="auto"``, else measured as the remedy of
-    /// ``diagnosis``; None when neither.
+    /// "epidermis_thickness_mm", "median_delta_e00_before", "median_delta_e00_after", "sampled_texels"}): the least
+    /// correction that brings the most sampled texels inside skin's colours (none for a texture inside them already),
+    /// applied with ``rgb_gains="auto"``, else measured as the remedy of ``diagnosis``; None when neither.
     #[getter]
     fn gains<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.fit.gains)
     }
 
-    /// Why the texture does not look like an albedo (the share far outside skin's colours, the likely reasons, the
+    /// Why the texture does not look like an albedo (its texels outside skin's colours, the likely reasons, the
     /// remedies with the gains measured), or None.
     #[getter]
     fn diagnosis(&self) -> Option<String> {

@@ -2,6 +2,7 @@
 //! reads its arguments under the GIL, makes one core call with the GIL released, and converts the result. No physics
 //! lives here; names of outputs, combinations and working spaces come from the core's serde names.
 
+mod args;
 mod catalog;
 #[cfg(feature = "cli")]
 mod cli;
@@ -13,6 +14,8 @@ mod evaluate;
 mod inverse;
 mod inverse_albedo;
 mod maps;
+mod maps_result;
+mod maps_write;
 mod progress;
 mod shader_table;
 mod surface;
@@ -28,7 +31,8 @@ use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
 use inverse::fit_spectrum_py;
 use inverse_albedo::{fit_albedo_map_py, fit_albedo_py, AlbedoMapFitPy};
-use maps::{maps_py, read_parameter_map_py, write_maps_py, MapsPy};
+use maps::{map_kinds_py, maps_py, read_parameter_map_py};
+use maps_result::{write_maps_py, MapsPy};
 use shader_table::{shader_table_py, write_shader_table_py};
 use surface::{surface_albedo_py, surface_brdf_py, surface_input_nodes_py};
 
@@ -49,6 +53,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(surface_models_py, m)?)?;
     m.add_function(wrap_pyfunction!(layered_reflectance_py, m)?)?;
     m.add_function(wrap_pyfunction!(maps_py, m)?)?;
+    m.add_function(wrap_pyfunction!(map_kinds_py, m)?)?;
     m.add_function(wrap_pyfunction!(blender_targets_py, m)?)?;
     m.add_function(wrap_pyfunction!(read_parameter_map_py, m)?)?;
     m.add_function(wrap_pyfunction!(write_maps_py, m)?)?;

@@ -9,10 +9,12 @@ use crate::evaluate::Outputs;
 use crate::fit::SubsurfaceMethod;
 use crate::maps::shader_table::{ShaderTable, ShaderTableMeta, DEFAULT_SHADER_TABLE_RESOLUTION, SHADER_TABLE_EXR};
 
-use super::convert::{json_to_py, real_arg, streams_arg, target_from, type_name, Knobs};
+use super::args::{named, streams_of, Knobs, ParamArgs, Streams};
+use super::convert::{interleave, json_to_py, rgb_image, target_from, type_name};
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
-use super::maps::{interleave, result_planes, rgb_image, table_resolution};
+use super::maps::table_resolution;
+use super::maps_write::result_planes;
 
 /// Base Color and Subsurface Radius tabulated as two images for Blender's shader: the node group samples them with
 /// the Image Texture node (Linear interpolation, Extend, Non-Color) from live melanin, melanin blend and haemoglobin
@@ -85,21 +87,20 @@ pub(super) fn shader_table_py<'py>(
     baseline_absorption_scale: Option<&Bound<'py, PyAny>>,
     blood_oxygenation: Option<&Bound<'py, PyAny>>,
     transport: &str,
-    streams: Option<&Bound<'py, PyAny>>,
+    streams: Option<Streams>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use crate::skin::params::{EXTENDED_DEFAULTS, EXTENDED_PARAMS};
-    let given = [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation];
-    let mut extended = EXTENDED_DEFAULTS;
-    for (k, value) in given.into_iter().enumerate() {
-        if let Some(v) = real_arg(EXTENDED_PARAMS[k].name, value)? {
-            extended[k] = EXTENDED_PARAMS[k].check(v.0)?;
-        }
-    }
+    let extended =
+        ParamArgs::new([None; 4], [epidermis_thickness_mm, baseline_absorption_scale, blood_oxygenation]).extended()?;
     let knobs = Knobs {
-        streams: streams_arg(streams)?,
-        ..Knobs::material(accuracy, working_space, boundaries, target_from(blender, engine)?, transport)
+        accuracy: named(accuracy)?,
+        working_space: named(working_space)?,
+        boundaries: named(boundaries)?,
+        target: target_from(blender, engine)?,
+        transport: named(transport)?,
+        streams: streams_of(streams),
+        ..Knobs::default()
     };
-    let method = SubsurfaceMethod::from_name(method)?;
+    let method: SubsurfaceMethod = named(method)?;
     knobs.target.method_entry(method)?;
     let request = knobs.request(Outputs::material())?;
     let resolution = match resolution {

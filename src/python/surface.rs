@@ -13,10 +13,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::maps::io::check_texel_count;
-use crate::surface::lobes::{SurfaceModel, SurfaceReflection, ALL_SURFACE_MODELS};
+use crate::surface::lobes::{SurfaceModel, SurfaceReflection};
 use crate::surface::principled::surface_input_nodes;
 
-use super::convert::{by_name, real_arg, shape_text, surface_arg, target_from};
+use super::args::{named, Choice};
+use super::convert::{real_arg, shape_text, target_from};
 use super::detach::{detached, detached_interruptible};
 use super::errors::{internal, invalid};
 
@@ -83,7 +84,7 @@ fn broadcast_values(view: ArrayViewD<'_, f64>, shape: &[usize]) -> PyResult<Vec<
 
 /// The model named `surface` at `oiliness` (None: 0.3).
 fn reflection(surface: &str, oiliness: Option<&Bound<'_, PyAny>>) -> PyResult<SurfaceReflection> {
-    let model: SurfaceModel = by_name("surface", surface, &ALL_SURFACE_MODELS)?;
+    let model: SurfaceModel = named(surface)?;
     let oiliness = real_arg("oiliness", oiliness)?.map_or(DEFAULT_OILINESS, |r| r.0);
     Ok(SurfaceReflection::new(model, oiliness)?)
 }
@@ -204,11 +205,11 @@ pub(super) fn surface_albedo_py<'py>(
 #[pyo3(name = "surface_input_nodes", signature = (surface = None, *, blender = None, engine = "cycles"))]
 pub(super) fn surface_input_nodes_py<'py>(
     py: Python<'py>,
-    surface: Option<&str>,
+    surface: Option<Choice<SurfaceModel>>,
     blender: Option<&Bound<'py, PyAny>>,
     engine: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let model = surface_arg(surface)?;
+    let model = surface.map(|c| c.0).unwrap_or_default();
     let target = target_from(blender, engine)?;
     let nodes = surface_input_nodes(model, target.engine);
     let dict = PyDict::new(py);

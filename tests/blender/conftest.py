@@ -1,19 +1,23 @@
 """pytest fixtures of the Blender render tests, and their import path. The scene helpers they use (blender_scenes.py)
 and the random-walk reference (walk_reference.py) live in scripts/lib/, shared with the measurement scripts: put on
-sys.path here, with the repository root and scripts/tools, before any test module imports them."""
+sys.path here, with the repository root, scripts/tools and tests/python (the tests' shared color_difference), before
+any test module imports them."""
 
 from __future__ import annotations
 
+import platform
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 # The one place the Blender tests' import path is set: the repository root (blender_addon), scripts/lib (the scene
-# helpers) and scripts/tools (render_blend); this folder's helper modules (live_scene, eevee_scene, farm_worker) are
-# on it as pytest puts it there.
-for _folder in (REPO / "scripts" / "tools", REPO, REPO / "scripts" / "lib"):
+# helpers), scripts/tools (render_blend) and tests/python's shared helper modules (color_difference: the tests'
+# independent CIEDE2000); this folder's helper modules (live_scene, eevee_scene, farm_worker) are on it as pytest
+# puts it there.
+for _folder in (REPO / "tests" / "python", REPO / "scripts" / "tools", REPO, REPO / "scripts" / "lib"):
     if str(_folder) not in sys.path:
         sys.path.insert(0, str(_folder))
 
@@ -92,3 +96,17 @@ def draw_panel():
         return drawn
 
     return draw
+
+
+@pytest.fixture
+def extension_zip() -> Path:
+    """This machine's extension zip from scripts/build_addon.sh (Blender's `--split-platforms` name: the manifest's
+    id and version, then the platform); the test is skipped when it has not been built."""
+    manifest = tomllib.loads((REPO / "blender_addon" / "blender_manifest.toml").read_text())
+    system = {"Linux": "linux", "Darwin": "macos", "Windows": "windows"}.get(platform.system(), platform.system())
+    machine = {"x86_64": "x64", "AMD64": "x64", "aarch64": "arm64", "ARM64": "arm64"}.get(platform.machine(),
+                                                                                         platform.machine())
+    path = REPO / "dist" / f"{manifest['id']}-{manifest['version']}-{system}_{machine}.zip"
+    if not path.exists():
+        pytest.skip(f"no {path.relative_to(REPO)}: run bash scripts/build_addon.sh")
+    return path

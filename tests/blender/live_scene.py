@@ -13,7 +13,7 @@ spectral_skin = pytest.importorskip("spectral_skin")
 import blender_scenes  # noqa: E402
 from blender_scenes import add_slab, add_top_camera, assign, set_world  # noqa: E402
 
-from blender_addon.ops import apply_skins  # noqa: E402
+from blender_addon.apply import apply_skins  # noqa: E402
 from blender_addon.props import settings_from_material  # noqa: E402
 
 TABLE_ERROR = 0.00450  # docs/shader-table.md, burley, 33x9x17, Base Color

@@ -8,7 +8,6 @@ from __future__ import annotations
 import json
 import os
 import pathlib
-import platform
 import subprocess
 import sys
 import textwrap
@@ -25,13 +24,9 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 from blender_scenes import material_snapshot  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
+from blender_addon.apply import apply_skin, apply_skins  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
-from blender_addon.ops import apply_skin, apply_skins  # noqa: E402
 
-# scripts/build_addon.sh builds one zip per platform (Blender's `--split-platforms` names): this machine's.
-SYSTEM = {"Linux": "linux", "Darwin": "macos", "Windows": "windows"}.get(platform.system(), platform.system())
-MACHINE = {"x86_64": "x64", "AMD64": "x64", "aarch64": "arm64", "ARM64": "arm64"}.get(platform.machine(), platform.machine())
-ZIP = REPO / "dist" / f"spectral_skin-0.1.0-{SYSTEM}_{MACHINE}.zip"
 BLENDER_EXT = pathlib.Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"
 
 
@@ -213,22 +208,21 @@ INSTALL_SCRIPT = textwrap.dedent("""
 """)
 
 
-@pytest.mark.skipif(not ZIP.exists(), reason=f"no {ZIP.relative_to(REPO)}: run bash scripts/build_addon.sh")
-def test_built_zip_validates_and_installs(tmp_path):
+def test_built_zip_validates_and_installs(tmp_path, extension_zip):
     # The add-on's own files, without the render-only script (scripts/tools/render_blend.py needs no add-on).
     import zipfile
 
-    with zipfile.ZipFile(ZIP) as archive:
+    with zipfile.ZipFile(extension_zip) as archive:
         sources = {name: archive.read(name) for name in archive.namelist() if name.endswith(".py")}
     assert {"batch.py", "ops.py", "frame_values.py", "scene_facts.py", "core/scene.py"} <= set(sources)
     assert not [name for name, text in sources.items() if b"bpy.ops.render.render" in text]
-    validate = subprocess.run([sys.executable, str(BLENDER_EXT), "validate", str(ZIP)],
+    validate = subprocess.run([sys.executable, str(BLENDER_EXT), "validate", str(extension_zip)],
                               capture_output=True, text=True)
     assert validate.returncode == 0, validate.stdout + validate.stderr
     user = tmp_path / "user"
     user.mkdir()
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    run = subprocess.run([sys.executable, "-c", INSTALL_SCRIPT, str(user), str(ZIP)], capture_output=True,
+    run = subprocess.run([sys.executable, "-c", INSTALL_SCRIPT, str(user), str(extension_zip)], capture_output=True,
                          text=True, cwd=tmp_path, env=env, timeout=120)
     assert run.returncode == 0, run.stdout + run.stderr
     report = json.loads(run.stdout.strip().splitlines()[-1])

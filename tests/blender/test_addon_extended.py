@@ -21,8 +21,9 @@ import spectral_skin  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 
+from blender_addon import albedo as addon_albedo  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
-from blender_addon import ops as addon_ops  # noqa: E402
+from blender_addon.work import Work  # noqa: E402
 
 SPECS = {p["name"]: p for p in spectral_skin.parameters()}
 EXTENDED = [n for n, p in SPECS.items() if p["default"] is not None]
@@ -247,10 +248,10 @@ def test_from_albedo_texture_with_a_skin_mask(addon, tmp_path, monkeypatch):
 
 
 def test_from_albedo_texture_worker_reports_progress_and_cancels_leaving_the_material(addon, tmp_path):
-    """From Albedo Texture started from the panel runs the fit in the worker Apply uses (ops._Work): cancelled before
+    """From Albedo Texture started from the panel runs the fit in the worker Apply uses (work.Work): cancelled before
     it starts (Esc at once) or part-way (Esc once texels are done: the core's progress callback answers False), it
     ends with InterruptedError, no result, no file written and the material as it was; run through, its progress
-    reaches 1, the parameter and residual EXRs are written, and only the operator's last step (ops.finish_albedo, on
+    reaches 1, the parameter and residual EXRs are written, and only the operator's last step (albedo.finish_albedo, on
     the main thread) sets the material's Parameter Map."""
     codes = np.array([[[200, 150, 120], [90, 60, 40], [180, 120, 100]],
                       [[150, 105, 80], [120, 90, 70], [230, 190, 170]]], dtype=np.uint8)
@@ -261,18 +262,18 @@ def test_from_albedo_texture_worker_reports_progress_and_cancels_leaving_the_mat
         return (props.params_map, props.epidermis_thickness_mm, sorted(p.name for p in tmp_path.iterdir()))
 
     before = state()
-    job = addon_ops.prepare_albedo(material)
+    job = addon_albedo.prepare_albedo(material)
     assert job.image == "Albedo" and job.albedo.shape == (2, 3, 3) and job.epidermis_thickness_mm is None
-    at_once = addon_ops._Work(addon_ops.albedo_task(job))
+    at_once = Work(addon_albedo.albedo_task(job))
     at_once.cancel.set()
-    part_way = addon_ops._Work(addon_ops.albedo_task(job))
+    part_way = Work(addon_albedo.albedo_task(job))
     reported: list[tuple[int, int]] = []
 
     def esc_once_texels_are_done(done: int, total: int, work=part_way) -> bool:
         reported.append((done, total))
         if done > 0:
             work.cancel.set()
-        return addon_ops._Work._progress(work, done, total)
+        return Work._progress(work, done, total)
 
     part_way._progress = esc_once_texels_are_done
     for work in (at_once, part_way):
@@ -283,13 +284,13 @@ def test_from_albedo_texture_worker_reports_progress_and_cancels_leaving_the_mat
         assert not work.writing and state() == before
     assert reported[0] == (0, 6) and reported[-1][0] > 0, reported
 
-    work = addon_ops._Work(addon_ops.albedo_task(job))
+    work = Work(addon_albedo.albedo_task(job))
     work.thread.start()
     work.thread.join(120)
     assert work.error is None and work.result is not None and work.fraction == 1.0 and work.writing
     assert pathlib.Path(job.path).is_file() and pathlib.Path(job.residual_path).is_file()
     assert props.params_map == before[0]  # the worker changed no Blender data
-    summary = addon_ops.finish_albedo(material, job, work.result)
+    summary = addon_albedo.finish_albedo(material, job, work.result)
     assert props.params_map is not None and pathlib.Path(bpy.path.abspath(props.params_map.filepath)) == pathlib.Path(
         job.path)
     assert summary["image"] == "Albedo" and props.epidermis_thickness_mm == pytest.approx(

@@ -25,8 +25,9 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 from blender_scenes import material_snapshot, read_exr  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
+from blender_addon.apply import Job, apply_task  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
-from blender_addon.ops import Job, _Work, apply_task  # noqa: E402
+from blender_addon.work import Work  # noqa: E402
 
 CLI = REPO / "target" / "release" / "spectral-skin"
 PARAMETERS = ("melanin", "melanin_blend", "hemoglobin", "oiliness")
@@ -260,13 +261,13 @@ def test_worker_reports_progress_and_cancels_with_nothing_written(addon, tmp_pat
     params = face(64, 48)
     maps = {p: ParameterMap(np.ascontiguousarray(params[:, :, c]), normalized=False) for c, p in enumerate(PARAMETERS)}
     settings = SkinSettings(maps=maps, output_dir=str(tmp_path / "maps"), file_prefix="Skin", surface="PAPER")
-    work = _Work(apply_task(Job(settings, None, {})))
+    work = Work(apply_task(Job(settings, None, {})))
     work.thread.start()
     work.thread.join(120)
     assert work.error is None and work.result is not None and work.fraction == 1.0
     assert sorted(p.name for p in (tmp_path / "maps").iterdir()) == ["Skin_albedo.exr", "Skin_radius.exr",
                                                                      "Skin_specular.exr"]
-    cancelled = _Work(apply_task(Job(settings.replace(output_dir=str(tmp_path / "cancelled")), None, {})))
+    cancelled = Work(apply_task(Job(settings.replace(output_dir=str(tmp_path / "cancelled")), None, {})))
     cancelled.cancel.set()
     cancelled.thread.start()
     cancelled.thread.join(120)

@@ -10,7 +10,6 @@ Headless, no rendering. Run: .venv-blender/5.3/bin/python -m pytest tests/blende
 
 from __future__ import annotations
 
-import importlib.util
 import pathlib
 
 import pytest
@@ -23,12 +22,9 @@ import spectral_skin  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 
-from blender_addon import nodes as addon_nodes  # noqa: E402
+import color_difference  # noqa: E402  (tests/python/color_difference.py, on the path: conftest.py)
 
-_spec = importlib.util.spec_from_file_location("_color_difference", REPO / "tests" / "python" / "color_difference.py")
-assert _spec is not None and _spec.loader is not None
-color_difference = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(color_difference)
+from blender_addon import nodes as addon_nodes  # noqa: E402
 
 TILES = (1001, 1002, 1011, 1012)
 

@@ -30,7 +30,7 @@ from blender_scenes import add_box, add_top_camera, assign, eevee_engine_id, set
 from farm_worker import only_in_edge_versions, worker_render  # noqa: E402
 
 from blender_addon import masks  # noqa: E402
-from blender_addon.ops import apply_skins  # noqa: E402
+from blender_addon.apply import apply_skins  # noqa: E402
 from blender_addon.props import settings_from_material  # noqa: E402
 
 pytestmark = only_in_edge_versions(bpy.app.version)

@@ -1,6 +1,6 @@
 """The EEVEE half-lit subsurface edge of a Live material (the "Spectral Skin" node group, EEVEE's table with its
 radius compensation inside) against its Baked twin (the core's EEVEE Base Color and compensated radius as values),
-both applied by the add-on (ops.apply_skins) in test_eevee_edge.py's scene: a hard-edged spot lighting the half-plane
+both applied by the add-on (apply.apply_skins) in test_eevee_edge.py's scene: a hard-edged spot lighting the half-plane
 x < 0 of a thick slab, seen by an orthographic top camera, in a world unit of U mm (the scene's unit scale, so the
 add-on's Subsurface Scale converts its millimetres into it).
 

@@ -1,4 +1,4 @@
-"""Live mode through the add-on's one Apply path (ops.apply_skins, as the panel's Apply in Live mode): the "Spectral
+"""Live mode through the add-on's one Apply path (apply.apply_skins, as the panel's Apply in Live mode): the "Spectral
 Skin" node group wired into the tagged Principled BSDF renders, in Cycles (CPU, Burley, a thick flat slab under a
 white world, Specular IOR Level 0 from oiliness 0: tests/blender/test_renders.py's setup), the core's albedo
 

@@ -30,8 +30,8 @@ from blender_scenes import add_box, assign  # noqa: E402
 
 from blender_addon import anim, batch  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
+from blender_addon.apply import apply_skin  # noqa: E402
 from blender_addon.core import ParameterMap, SkinSettings  # noqa: E402
-from blender_addon.ops import apply_skin  # noqa: E402
 from blender_addon.props import stored_effects, stored_work  # noqa: E402
 
 # 640 px across a 36 mm sensor behind a 50 mm lens: 36 / 50 / 640 m = 1.125 mm per pixel per metre of depth. The

@@ -28,8 +28,10 @@ spectral_skin = pytest.importorskip("spectral_skin")
 from blender_scenes import add_slab, add_top_camera, assign, render, reset_scene, set_world  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
-from blender_addon.core import WORKING_SPACES, ParameterMap, SkinSettings, freeze, make_plan  # noqa: E402
-from blender_addon.ops import apply_skin, scene_working_space  # noqa: E402
+from blender_addon.apply import apply_skin  # noqa: E402
+from blender_addon.core import WORKING_SPACES, ParameterMap, SkinSettings, compute  # noqa: E402
+from blender_addon.core.scene import scene_plan  # noqa: E402
+from blender_addon.nodes import scene_working_space  # noqa: E402
 
 PRESET = "caucasian"
 # 256 spp: Cycles' Burley flat-slab estimate with unequal RGB radii has a correlated error of about 0.12 % at 64-256
@@ -148,14 +150,14 @@ def test_plan_in_another_space_is_refused():
         pytest.skip("this Blender has only Linear Rec.709")
     _scene_in(other[0])
     material = bpy.data.materials.new("Mismatch")
-    plan = freeze(make_plan(SkinSettings.from_preset(PRESET)))  # working_space defaults to Linear Rec.709
+    plan = scene_plan(SkinSettings.from_preset(PRESET), None)  # working_space defaults to Linear Rec.709
     with pytest.raises(ValueError, match="working space"):
         addon_nodes.apply_plan(material, plan)
 
 
 def test_settings_reject_unknown_space():
     with pytest.raises(spectral_skin.SpectralSkinError, match="working space"):
-        make_plan(SkinSettings.from_preset(PRESET, working_space="sRGB"))
+        compute(SkinSettings.from_preset(PRESET, working_space="sRGB"))
 
 
 def test_fallback_without_colorspace(monkeypatch):

@@ -915,3 +915,25 @@ fn a_non_utf8_argument_is_named() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.code() == Some(2) && err.contains("the value of --preset") && err.contains("UTF-8"), "{err}");
 }
+
+/// `maps` translates its flags into the core's request (src/maps/request.rs): a parameter takes a map or a constant,
+/// not both (the flags conflict), each of the four needs one (the error lists the missing), and a constant out of range
+/// names the parameter, its range and the flag that clamps; nothing is written.
+#[test]
+fn maps_sources_follow_the_request_rules() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = example_params(dir.path());
+    let out_dir = dir.path().join("maps");
+    let file = params.to_str().unwrap();
+    let both = run(&["maps", "--melanin-map", file, "--melanin", "0.1", "--out", out_dir.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&both.stderr);
+    assert!(both.status.code() == Some(2) && err.contains("--melanin-map") && err.contains("--melanin "), "{err}");
+    let missing = run(&["maps", "--melanin-map", file, "--oiliness", "0.3", "--out", out_dir.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&missing.stderr);
+    assert!(missing.status.code() == Some(2) && err.contains("missing: melanin_blend, hemoglobin"), "{err}");
+    let out = run(&["maps", "--params", file, "--oiliness", "1.5", "--out", out_dir.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.code() == Some(2) && err.contains("invalid oiliness: must be in [0, 1]; got 1.5"), "{err}");
+    assert!(err.contains("use --clamp"), "{err}");
+    assert!(!out_dir.exists(), "nothing written on bad input");
+}

@@ -163,6 +163,11 @@ fn residual_figures(r: &[f32]) -> [f64; 2] {
     [v[v.len() / 2], v[v.len() * 9 / 10]]
 }
 
+/// Texels a fit does not reproduce: residual above the ambiguity ΔE00 (0.5).
+fn not_reproduced(fit: &spectral_skin::inverse::albedo_maps::AlbedoMapFit) -> usize {
+    fit.residual_delta_e00.iter().filter(|&&d| d as f64 > fit.stats.options.ambiguity_delta_e).count()
+}
+
 /// 200 measured skin colours (eight ethnic groups) by the defaults: within 0.5 ΔE00 median, and the chosen thickness
 /// is never worse on the texture than the paper's 0.25 mm held (the earlier default: a median of about 3).
 #[test]
@@ -201,10 +206,10 @@ fn a_photograph_is_diagnosed_and_the_gains_bring_it_inside() {
     println!(
         "photograph: {message}\nplain: outside {} of 200, median, p90 {p:?}; with gains {:?} ({:+.2} stops): outside \
          {}, median, p90 {q:?}, thickness {} mm",
-        plain.stats.out_of_gamut_texels,
+        not_reproduced(&plain),
         g.rgb_gains,
         g.exposure_stops,
-        gained.stats.out_of_gamut_texels,
+        not_reproduced(&gained),
         gained.extended[0]
     );
     assert_eq!(gained.stats.options.rgb_gains, g.rgb_gains);
@@ -216,7 +221,7 @@ fn a_photograph_is_diagnosed_and_the_gains_bring_it_inside() {
         let (found, truth) = (g.rgb_gains[c] / g.rgb_gains[1], white[1] / white[c]);
         assert!((found / truth - 1.0).abs() < 0.15, "{name}: {found} against the lamp's {truth}");
     }
-    assert!(gained.stats.out_of_gamut_texels * 10 <= 4 * 200, "{:?}", gained.stats);
+    assert!(not_reproduced(&gained) * 10 <= 4 * 200, "{:?}", gained.stats);
     assert!(q[0] <= 0.5, "median ΔE00 with the gains {}", q[0]);
 }
 

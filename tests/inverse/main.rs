@@ -1,4 +1,5 @@
-//! Fits from colours and spectra back to physiology: albedo inversion, recovery of known parameters, measured in-vivo spectra.
+//! Fits from colours and spectra back to physiology: albedo inversion, the exposure and white-balance gains, recovery
+//! of known parameters, measured in-vivo spectra.
 //!
 //! One test crate of several modules: linked once (see docs/tests.md).
 
@@ -6,5 +7,7 @@
 mod support;
 
 mod inverse_albedo;
+mod inverse_gains;
 mod inverse_recovery;
 mod measured_spectra;
+mod palette;

@@ -10,6 +10,7 @@ mod maps_io;
 mod maps_lookup_rows;
 mod maps_outputs;
 mod maps_pipeline;
+mod maps_request;
 mod maps_streaming;
 mod shader_table;
 mod truncated_images;

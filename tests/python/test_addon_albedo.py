@@ -51,7 +51,7 @@ class _StandIn:
         self.residual_delta_e00 = np.arange(h * w, dtype=np.float32).reshape(h, w)
         self.extended = {**core.EXTENDED_DEFAULTS, "epidermis_thickness_mm": 0.12}
         self.thickness = thickness
-        self.stats = {"out_of_gamut_texels": 2}
+        self.stats = {"outside_skin_texels": 2}
         self.written: list[str] = []
 
     def write(self, path: str) -> None:
@@ -71,7 +71,7 @@ def test_fit_passes_the_albedo_and_summarises(monkeypatch):
     result = albedo.fit(rgb, "ACEScg", None)
     assert calls[0][0] is rgb and calls[0][1:] == ("ACEScg", None)
     assert result["median_delta_e00"] == 7.0 and result["max_delta_e00"] == 14.0
-    assert result["out_of_gamut_texels"] == 2 and result["thickness"] == {"chosen_mm": 0.12}
+    assert result["outside_skin_texels"] == 2 and result["thickness"] == {"chosen_mm": 0.12}
     # The extended physiology is the fit's (what the parameters hold for), by name.
     assert result["extended"] == {**core.EXTENDED_DEFAULTS, "epidermis_thickness_mm": 0.12}
     assert albedo.fit(rgb, "ACEScg", 0.08)["thickness"] is None and calls[-1][2] == 0.08

@@ -16,6 +16,7 @@ from addon_helpers import load_core
 core = load_core()
 plan_module = importlib.import_module("addon_core.plan")
 live = importlib.import_module("addon_core.live")
+scene = importlib.import_module("addon_core.scene")
 
 SPECS = {p["name"]: p for p in spectral_skin.parameters()}
 THIN = {"epidermis_thickness_mm": 0.1, "baseline_absorption_scale": 2.0, "blood_oxygenation": 0.5}
@@ -53,15 +54,15 @@ def test_presets_carry_their_extended_values():
 
 def test_constant_plan_uses_the_extended_values():
     settings = _settings(**THIN)
-    plan = core.make_plan(settings)
-    assert plan["extended"] == THIN
+    plan = scene.scene_plan(settings, None)
+    assert plan.extended == THIN
     ev = spectral_skin.evaluate(preset="caucasian", blender="5.0", engine="cycles", **THIN)
-    np.testing.assert_allclose(plan["base_color"], ev["methods"]["burley"]["base_color"], rtol=1e-12)
-    np.testing.assert_allclose(plan["radius"], ev["methods"]["burley"]["subsurface_radius_mm"], rtol=1e-12)
+    np.testing.assert_allclose(plan.base_color, ev["methods"]["burley"]["base_color"], rtol=1e-12)
+    np.testing.assert_allclose(plan.radius, ev["methods"]["burley"]["subsurface_radius_mm"], rtol=1e-12)
     # Not the paper's: a thinner epidermis with more baseline absorption and less oxygen changes the colour.
     paper = spectral_skin.evaluate(preset="caucasian", blender="5.0", engine="cycles")
-    assert np.max(np.abs(np.subtract(plan["base_color"], paper["methods"]["burley"]["base_color"]))) > 0.01
-    assert core.make_plan(_settings())["extended"] == core.EXTENDED_DEFAULTS
+    assert np.max(np.abs(np.subtract(plan.base_color, paper["methods"]["burley"]["base_color"]))) > 0.01
+    assert scene.scene_plan(_settings(), None).extended == core.EXTENDED_DEFAULTS
 
 
 def test_swatch_is_evaluates_albedo():
@@ -95,8 +96,8 @@ def test_maps_get_only_changed_extended_values(tmp_path, monkeypatch):
         return real(params, **kw)
 
     monkeypatch.setattr(spectral_skin, "maps", maps)
-    core.make_plan(_constant_maps(_settings(), tmp_path))
-    core.make_plan(_constant_maps(_settings(epidermis_thickness_mm=0.1), tmp_path))
+    core.compute(_constant_maps(_settings(), tmp_path))
+    core.compute(_constant_maps(_settings(epidermis_thickness_mm=0.1), tmp_path))
     assert calls == [{"epidermis_thickness_mm": None, "baseline_absorption_scale": None, "blood_oxygenation": None},
                      {"epidermis_thickness_mm": 0.1, "baseline_absorption_scale": None, "blood_oxygenation": None}]
 
@@ -108,11 +109,11 @@ def test_maps_with_extended_values(tmp_path):
     if "epidermis_thickness_mm" not in inspect.signature(spectral_skin.maps).parameters:
         with pytest.raises(spectral_skin.SpectralSkinError,
                            match="extended physiology with parameter maps needs a spectral_skin whose maps"):
-            core.make_plan(settings)
+            core.compute(settings)
         return
-    plan = core.make_plan(settings)
+    plan = core.compute(settings)
     ev = spectral_skin.evaluate(preset="caucasian", blender="5.0", engine="cycles", epidermis_thickness_mm=0.1)
-    base_color = np.asarray(plan["images"]["albedo"], dtype=np.float64).reshape(-1, 3)
+    base_color = np.asarray(plan.maps.albedo, dtype=np.float64).reshape(-1, 3)
     np.testing.assert_allclose(base_color, np.broadcast_to(ev["methods"]["random_walk"]["base_color"], (6, 3)),
                                rtol=2e-3)  # the table strategy's interpolation (docs/maps-performance.md)
 

@@ -56,12 +56,12 @@ def test_nearest_depth_of_a_box():
 
 
 def _constant_plan(**kw):
-    return core.make_plan(core.SkinSettings.from_preset("caucasian", **kw))
+    return core.compute(core.SkinSettings.from_preset("caucasian", **kw))
 
 
 def test_far_object_drops_subsurface_close_keeps_it():
     plan = _constant_plan()
-    largest = max(plan["radius"])  # mm
+    largest = max(plan.radius)  # mm
     # Footprint at depth d: 0.375 mm per metre; choose d so the largest radius is 0.1 px (far) and 5 px (close).
     far_depth = largest / 0.1 / 0.375
     close_depth = largest / 5 / 0.375
@@ -159,7 +159,7 @@ def test_constant_maps_override_off_keeps_the_textures(tmp_path):
 
 def test_thin_closed_object_gets_a_random_walk_open_one_burley():
     plan = _constant_plan()
-    largest = max(plan["radius"])  # mm
+    largest = max(plan.radius)  # mm
     settings = core.SkinSettings.from_preset("caucasian")
     shapes = (scene.ShapeFacts("Ear", 2.9 * largest, True), scene.ShapeFacts("Head", 3.1 * largest, True),
               scene.ShapeFacts("Scalp", 50 * largest, False, 12))
@@ -190,7 +190,7 @@ def test_no_method_advice_where_subsurface_is_off_or_in_eevee():
     off = effect_entry(scene.decide(plan, settings, with_changes(scene_facts(0.5), shapes=shapes), {"subsurface": "OFF"}),
                  "subsurface method")
     assert off["enabled"] and "subsurface is off" in off["reason"]
-    eevee = core.make_plan(settings.replace(engine="eevee"))
+    eevee = core.compute(settings.replace(engine="eevee"))
     entry = effect_entry(scene.decide(eevee, settings, with_changes(scene_facts(0.5), shapes=shapes)), "subsurface method")
     assert entry["enabled"] and "EEVEE" in entry["reason"] and entry["figures"]["objects"] == {}
 
@@ -246,7 +246,7 @@ def test_animation_with_parameter_maps_is_reported_not_applied(tmp_path):
     assert not entry["enabled"] and "per-frame maps or the live shader" in entry["reason"]
     # The maps are computed with the current frame's haemoglobin.
     expected = spectral_skin.evaluate(0.01, settings.melanin_blend, 0.05, settings.oiliness)["methods"]["burley"]
-    np.testing.assert_allclose(np.asarray(plan.images["albedo"])[0, 0], expected["base_color"], rtol=1e-4)
+    np.testing.assert_allclose(np.asarray(plan.textures["albedo"])[0, 0], expected["base_color"], rtol=1e-4)
     # Without animation: an entry that says so.
     still = effect_entry(scene.scene_plan(core.SkinSettings(), None).effects, "animation")
     assert not still["enabled"] and "no keyframed or driven" in still["reason"]
@@ -268,8 +268,8 @@ def test_plan_textures_written_by_the_core_and_specular_constants_from_maps(tmp_
     assert sorted(p.name for p in tmp_path.iterdir()) == ["Skin_albedo.exr", "Skin_radius.exr", "Skin_specular.exr"]
     level = spectral_skin.read_parameter_map(tmp_path / "Skin_specular.exr", "oiliness")["oiliness"]
     # The file holds the plan's values as half floats (write_maps' default precision).
-    np.testing.assert_array_equal(level, plan.images["specular"].astype(np.float16).astype(np.float32))
-    np.testing.assert_allclose(plan.images["specular"], oiliness / 2, rtol=1e-6)  # Specular IOR Level = oil / 2
+    np.testing.assert_array_equal(level, plan.textures["specular"].astype(np.float16).astype(np.float32))
+    np.testing.assert_allclose(plan.textures["specular"], oiliness / 2, rtol=1e-6)  # Specular IOR Level = oil / 2
     # Specular forced off: no specular texture, and the previous one is gone.
     off = scene.scene_plan(settings, None, {"specular": "OFF"})
     core.write_textures(off)
@@ -350,14 +350,14 @@ def test_dropped_effects_with_maps_are_not_kept(tmp_path, method):
     # A map run holds every parameter as float32, the constants too: evaluate() gets the same float32 values.
     as_map = [float(np.float32(v)) for v in (c["melanin"], c["melanin_blend"], levels.flat[5])]
     albedo = spectral_skin.evaluate(*as_map, 0.0, outputs=("albedo",))["diffuse_reflectance_rgb"]
-    np.testing.assert_array_equal(np.asarray(plan.images["albedo"]).reshape(-1, 3)[5], np.float32(albedo))
+    np.testing.assert_array_equal(np.asarray(plan.textures["albedo"]).reshape(-1, 3)[5], np.float32(albedo))
 
 
 def test_thin_parts_of_a_thick_object_by_area():
     """Per-part thickness decides over the bounding box: 5 % of the area at 2 mm in a 160 mm thick object is thin
     (a random walk, the reason naming the parts); 0.5 % is not (under THIN_AREA_FRACTION); no samples: the bounds."""
     plan = _constant_plan()
-    largest = max(plan["radius"])
+    largest = max(plan.radius)
     settings = core.SkinSettings.from_preset("caucasian")
 
     def head(thin_area: float) -> scene.ShapeFacts:
@@ -386,7 +386,7 @@ def test_dropped_after_computing_the_radius_costs_one_evaluation():
     computed (three fits) and then dropped; a random walk's Base Color becomes the albedo that came with that one
     evaluation (no second one)."""
     settings = core.SkinSettings.from_preset("african", method="RANDOM_WALK")
-    own_mm = max(core.make_plan(settings)["extent_radius_mm"])  # compared as Burley's radius, whatever the method
+    own_mm = max(core.compute(settings).extent_radius_mm)  # compared as Burley's radius, whatever the method
     bound_mm, _work = scene.radius_bound_mm(settings)
     depth = own_mm / 0.2 / 0.375  # the material's largest extent at 0.2 px
     assert bound_mm / own_mm > scene.SUBSURFACE_MIN_RADIUS_PX / 0.2  # the bound alone does not drop it
@@ -402,7 +402,7 @@ def test_thin_parts_keep_subsurface_however_far():
     """Far away a thick object drops subsurface; one with thin parts (by the part-by-part measure or, without
     samples, its bounds) keeps it, the reason naming the object, and the radius is computed (no early drop)."""
     plan = _constant_plan()
-    largest = max(plan["radius"])
+    largest = max(plan.radius)
     settings = core.SkinSettings.from_preset("caucasian")
     parts = ((2.0, 5.0, (0.1, 0.0, 0.0)), (160.0, 95.0, (0.0, 0.0, 0.08)))
     thick = scene.ShapeFacts("Ball", 160.0, True, parts=((160.0, 1.0, (0.0, 0.0, 0.0)),), sampled_faces=1)
@@ -413,7 +413,7 @@ def test_thin_parts_keep_subsurface_however_far():
         assert entry["figures"]["largest_radius_px"] < scene.SUBSURFACE_MIN_RADIUS_PX
         assert entry["enabled"] is kept, entry["reason"]
         if kept:
-            assert entry["figures"]["thin_objects"] == [shapes[-1].object_name]
+            assert list(entry["figures"]["thin_objects"]) == [shapes[-1].object_name]
             assert shapes[-1].object_name in entry["reason"] and "thinner than 3 radii" in entry["reason"]
         planned = scene.scene_plan(settings, with_changes(scene_facts(1e4), shapes=shapes))
         assert (planned.work["radius_fits"] > 0) is kept, planned.work
@@ -451,14 +451,14 @@ def test_the_plan_is_read_only(tmp_path):
 
     maps = {"melanin": core.ParameterMap(np.linspace(0.01, 0.2, 16, dtype=np.float32).reshape(4, 4), False)}
     plan = scene.scene_plan(core.SkinSettings.from_preset("caucasian", maps=maps, output_dir=str(tmp_path)), None)
-    assert sorted(plan.images) == ["albedo", "radius"], sorted(plan.images)
+    assert sorted(plan.textures) == ["albedo", "radius"], sorted(plan.textures)
     with pytest.raises(dataclasses.FrozenInstanceError):
         plan.roughness = 0.1  # type: ignore[misc]
     with pytest.raises(TypeError):
         plan.textures["albedo"] = "elsewhere.exr"  # type: ignore[index]
     with pytest.raises(TypeError):
         plan.target["blender"] = "4.2"  # type: ignore[index]
-    for name, image in plan.images.items():
+    for name, image in plan.textures.items():
         assert not image.flags.writeable, name
         with pytest.raises(ValueError):
             image[0, 0] = 0.0

@@ -27,7 +27,7 @@ def test_surface_choices_come_from_the_core():
     assert core.SURFACES[core.DEFAULT_SURFACE] == next(m["name"] for m in spectral_skin.surface_models()
                                                         if m["default"])
     with pytest.raises(spectral_skin.SpectralSkinError, match="surface must be one of.*MEASURED"):
-        core.make_plan(core.SkinSettings(surface="GLOSSY"))
+        core.compute(core.SkinSettings(surface="GLOSSY"))
 
 
 @pytest.mark.parametrize("engine", ["cycles", "eevee"])
@@ -73,7 +73,7 @@ def test_varying_oiliness_writes_the_coat_textures(tmp_path):
         expected = _specular(float(oiliness[y, x]))
         for texture, field in (("specular", "specular_ior_level"), ("coat_weight", "coat_weight"),
                                ("coat_roughness", "coat_roughness")):
-            assert plan.images[texture][y, x] == pytest.approx(expected[field], rel=1e-6), (texture, y, x)
+            assert plan.textures[texture][y, x] == pytest.approx(expected[field], rel=1e-6), (texture, y, x)
     core.write_textures(plan)
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"Skin_{k}.exr" for k in sorted(plan.textures)]
     # Specular forced off: no surface texture is kept, and the files of the earlier write are removed.

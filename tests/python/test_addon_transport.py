@@ -32,17 +32,17 @@ def test_choices_are_the_cores():
 
 def test_a_bad_transport_is_refused():
     with pytest.raises(spectral_skin.SpectralSkinError, match="transport must be one of ADDING_DOUBLING, ADDING_DOUBLING_DIFFUSION_SHAPE, DIFFUSION"):
-        core.make_plan(_settings(transport="MONTE_CARLO"))
+        core.compute(_settings(transport="MONTE_CARLO"))
 
 
 @pytest.mark.parametrize("key", list(core.TRANSPORTS))
 def test_constant_plan_and_swatch_follow_the_transport(key):
     name = core.TRANSPORTS[key]
-    plan = core.make_plan(_settings(transport=key))
-    assert plan["transport"] == name
+    plan = scene.scene_plan(_settings(transport=key), None)
+    assert plan.transport == name
     ev = spectral_skin.evaluate(preset="african", blender="5.0", engine="cycles", transport=name)
-    np.testing.assert_allclose(plan["base_color"], ev["methods"]["burley"]["base_color"], rtol=1e-12)
-    np.testing.assert_allclose(plan["radius"], ev["methods"]["burley"]["subsurface_radius_mm"], rtol=1e-12)
+    np.testing.assert_allclose(plan.base_color, ev["methods"]["burley"]["base_color"], rtol=1e-12)
+    np.testing.assert_allclose(plan.radius, ev["methods"]["burley"]["subsurface_radius_mm"], rtol=1e-12)
     values = {n: getattr(_settings(), n) for n in (*core.PARAMETERS, *core.EXTENDED_PARAMETERS)}
     swatch = plan_module.swatch_albedo(values, "Linear Rec.709", key)
     np.testing.assert_allclose(swatch, spectral_skin.evaluate(preset="african", outputs=["albedo"], transport=name)[
@@ -71,7 +71,7 @@ def test_every_core_call_gets_the_transport(monkeypatch, tmp_path):
         seen.clear()
         expected = None if key == core.DEFAULT_TRANSPORT else core.TRANSPORTS[key]
         settings = _settings(transport=key)
-        core.make_plan(settings.replace(maps={"melanin": melanin}, output_dir=str(tmp_path)))
+        core.compute(settings.replace(maps={"melanin": melanin}, output_dir=str(tmp_path)))
         live.shader_table(settings, {})
         scene.radius_bound_mm(settings)
         albedo.fit(skin, "Linear Rec.709", None, key)

@@ -12,6 +12,8 @@ from spectral_skin import SpectralSkinError
 PRESET_NAMES = ("caucasian", "asian", "african")
 # Median fits of the thirds of the Xiao et al. 2016 spectra by L* (docs/measured-skin.md, section Presets).
 MEASURED_PRESET_NAMES = ("measured-light", "measured-medium", "measured-dark")
+# The palette: one preset per ITA class of the same spectra, lightest first (docs/measured-skin.md, section Palette).
+PALETTE_PRESET_NAMES = ("ita-very-light", "ita-light", "ita-intermediate", "ita-tan", "ita-brown", "ita-dark")
 ALL_OUTPUTS = ("albedo", "radius", "profile_rgb", "profile_spectral", "spectrum", "specular")
 # Rec.709 luminance weights (ITU-R BT.709-6), for ordering the presets by lightness.
 REC709_LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -92,7 +94,7 @@ def test_layered_reflectance_accepts_array_likes():
 
 def test_presets():
     presets = spectral_skin.presets()
-    assert list(presets) == [*PRESET_NAMES, *MEASURED_PRESET_NAMES]
+    assert list(presets) == [*PRESET_NAMES, *MEASURED_PRESET_NAMES, *PALETTE_PRESET_NAMES]
     for name, p in presets.items():
         specs = spectral_skin.parameters()
         assert set(p) == {s["name"] for s in specs} | {"description"}
@@ -175,6 +177,12 @@ def test_preset_albedos_ordered_by_lightness():
         assert "methods" not in ev and "specular" not in ev
         luma[name] = float(REC709_LUMA @ rgb)
     assert luma["african"] < luma["asian"] < luma["caucasian"], luma
+
+
+def test_palette_runs_from_light_to_dark():
+    luma = [float(REC709_LUMA @ spectral_skin.evaluate(preset=name, outputs=("albedo",))["diffuse_reflectance_rgb"])
+            for name in PALETTE_PRESET_NAMES]
+    assert luma == sorted(luma, reverse=True), luma
 
 
 def test_model_choices_are_passed_through():
@@ -265,7 +273,7 @@ def test_error_and_warning_classes_are_exported():
     assert issubclass(spectral_skin.SpectralSkinIOError, OSError)
     assert set(spectral_skin.__all__) == {
         "AlbedoMapFit", "Maps", "SpectralSkinError", "SpectralSkinIOError", "SpectralSkinWarning", "__version__", "blender_targets", "cielab", "delta_e00", "evaluate",
-        "fit_albedo", "fit_albedo_map", "fit_spectrum", "layered_reflectance", "maps",
+        "fit_albedo", "fit_albedo_map", "fit_spectrum", "layered_reflectance", "map_kinds", "maps",
         "parameter_ranges", "parameters", "accuracy_levels", "presets", "profile", "read_parameter_map", "shader_table",
         "surface_albedo", "surface_brdf", "surface_input_nodes", "surface_models", "transports", "write_maps",
         "write_shader_table"

@@ -7,16 +7,10 @@ L*a*b* (D65) of 53.24, 80.09, 67.20 (B. Lindbloom's RGB/XYZ and XYZ/Lab equation
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
+import color_difference
 import numpy as np
-
-SCRIPT = Path(__file__).resolve().parent / "color_difference.py"
-_spec = importlib.util.spec_from_file_location("_color_difference", SCRIPT)
-assert _spec is not None and _spec.loader is not None
-color_difference = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(color_difference)
 
 # Sharma et al. (2005), Table 1: L1, a1, b1, L2, a2, b2, ΔE00 (the file's first line names the source).
 SHARMA_TABLE_1 = np.loadtxt(Path(__file__).resolve().parents[2] / "data" / "sharma2005_ciede2000_pairs.csv",

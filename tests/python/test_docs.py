@@ -14,13 +14,14 @@ import spectral_skin
 STUB = Path(spectral_skin.__file__).resolve().parent / "_core.pyi"
 FUNCTIONS = sorted(name for name in spectral_skin.__all__ if inspect.isroutine(getattr(spectral_skin, name)))
 # Functions without arguments have nothing to raise on.
-NO_RAISES = {"accuracy_levels", "blender_targets", "parameter_ranges", "parameters", "presets", "surface_models",
+NO_RAISES = {"accuracy_levels", "blender_targets", "map_kinds", "parameter_ranges", "parameters", "presets",
+             "surface_models",
              "transports"}
 
 
 def test_every_public_function_is_checked() -> None:
     assert FUNCTIONS == ["accuracy_levels", "blender_targets", "cielab", "delta_e00", "evaluate", "fit_albedo", "fit_albedo_map",
-                         "fit_spectrum", "layered_reflectance", "maps",
+                         "fit_spectrum", "layered_reflectance", "map_kinds", "maps",
                          "parameter_ranges", "parameters", "presets", "profile", "read_parameter_map", "shader_table",
                          "surface_albedo", "surface_brdf", "surface_input_nodes", "surface_models", "transports",
                          "write_maps", "write_shader_table"]

@@ -205,3 +205,19 @@ def test_a_failed_tile_set_write_changes_nothing(result: spectral_skin.Maps, tmp
 
 def test_write_releases_the_gil(result: spectral_skin.Maps, tmp_path: Path, assert_releases_gil) -> None:
     assert_releases_gil(lambda: result.write(tmp_path, tiles=TILES))
+
+
+def test_map_kinds_name_every_map_a_result_holds_and_write_makes(result: spectral_skin.Maps, tmp_path: Path) -> None:
+    kinds = spectral_skin.map_kinds()
+    assert [k["name"] for k in kinds] == [k for k in result.keys() if k in FILES] == list(FILES)
+    for kind in kinds:
+        assert kind["file"] == f"{kind['name']}.exr" and tuple(kind["channels"]) == FILES[kind["name"]]
+        assert kind["principled_input"] and kind["output"] in ("albedo", "radius", "specular")
+        # Base Color is colour in the run's working space; every other map is data.
+        assert kind["color_space"] == (None if kind["name"] == "albedo" else "Non-Color")
+    assert {k["name"]: k["unit"] for k in kinds}["radius"] == "mm"
+    # The output that asks for a map computes it: "specular" brings the level and the Coat's maps.
+    only = spectral_skin.maps(params(), exact=True, outputs=["specular"])
+    assert sorted(k for k in only.keys() if k in FILES) == sorted(k["name"] for k in kinds if k["output"] == "specular")
+    written = result.write(tmp_path)
+    assert {name: Path(path).name for name, path in written.items()} == {k["name"]: k["file"] for k in kinds}

@@ -92,6 +92,11 @@ pub const ALBEDO_IMAGE_FORMS: &str = "an EXR with channels R, G, B (or <layer>.R
      layer; A ignored), linear in the working space; or an 8- or 16-bit RGB(A) or greyscale PNG, TIFF or JPEG, \
      sRGB-encoded (decoded to linear with the sRGB formula, IEC 61966-2-1; alpha ignored)";
 
+/// Why a request of constants alone is refused (the reader's and [`super::request`]'s one message): a map gives the
+/// size of the outputs.
+pub const NO_MAP_GIVEN: &str = "every parameter is a constant, so there is no map size: expected at least one map \
+     (params, or a parameter's own map: at least one array or file); for one material, evaluate it instead";
+
 /// The largest image accepted or written, in texels (16384 x 16384). Larger headers are rejected before any
 /// allocation, so a corrupt size field gives an error instead of an out-of-memory abort.
 pub const MAX_TEXELS: usize = 1 << 28;

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 
 use super::{
     guard, ParamImage, ParamInputs, ParamSource, Plane, ALBEDO_IMAGE_FORMS, ALL_CHANNELS, ALL_RANGES,
-    EXTENDED_CHANNELS, PARAM_CHANNELS, PARAM_IMAGE_FORMS,
+    EXTENDED_CHANNELS, NO_MAP_GIVEN, PARAM_CHANNELS, PARAM_IMAGE_FORMS,
 };
 use crate::error::SkinError;
 use crate::skin::params::EXTENDED_DEFAULTS;
@@ -368,10 +368,7 @@ fn read_separate(sources: &[Input<'_>; 7]) -> Result<ParamImage, SkinError> {
         }
     }
     let Some((_, _, first)) = probes.first() else {
-        return Err(SkinError::invalid(
-            "parameter inputs",
-            "every parameter is a constant; expected at least one map (a file) to give the output size",
-        ));
+        return Err(SkinError::invalid("parameters", NO_MAP_GIVEN));
     };
     let (width, height) = (first.width(), first.height());
     if probes.iter().any(|(_, _, probe)| probe.width() != width || probe.height() != height) {

@@ -1,7 +1,6 @@
 //! Atomic output: each file is written to a hidden temporary file beside its destination and renamed into place only
 //! once every output is complete.
 
-use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -90,7 +89,7 @@ pub fn commit_all(staged: Vec<Staged>) -> Result<(), SkinError> {
     // Make the renames durable (best effort; not supported everywhere).
     #[cfg(unix)]
     for dir in dirs {
-        if let Ok(d) = File::open(&dir) {
+        if let Ok(d) = std::fs::File::open(&dir) {
             let _ = d.sync_all();
         }
     }
