@@ -1,18 +1,9 @@
-//! The fits grouped by skin type: the individual typology angle ITA = atan((L* - 50) / b*) of the measured colour,
-//! with Chardon, Cretois & Hourseau's bounds (Int. J. Cosmet. Sci. 13:191, 1991), and per group the fit quality, the
-//! mean residual in haemoglobin's Q bands and the fitted physiology (docs/measured-skin.md, By skin type).
+//! The fits grouped by skin type: the ITA° class of the measured colour (`color::ita`), and per group the fit quality,
+//! the mean residual in haemoglobin's Q bands and the fitted physiology (docs/measured-skin.md, Skin types and the Q
+//! bands).
 
+use spectral_skin::color::ita::{ita_class, ita_degrees, ItaClass, ITA_CLASSES};
 use spectral_skin::inverse::SpectrumFit;
-
-/// The ITA classes (name, lower bound, upper bound in degrees), lightest first.
-pub const CLASSES: [(&str, f64, f64); 6] = [
-    ("very light (> 55°)", 55.0, f64::INFINITY),
-    ("light (41–55°)", 41.0, 55.0),
-    ("intermediate (28–41°)", 28.0, 41.0),
-    ("tan (10–28°)", 10.0, 28.0),
-    ("brown (−30–10°)", -30.0, 10.0),
-    ("dark (< −30°)", f64::NEG_INFINITY, -30.0),
-];
 
 /// The wavelengths where the residual of oxyhaemoglobin's "W" is read: its two Q-band peaks (542 and 577 nm in
 /// Prahl's table) and the trough between them (560 nm), as the 10 nm data sample them.
@@ -33,9 +24,9 @@ pub fn quantile(values: &[f64], q: f64) -> f64 {
     }
 }
 
-/// ITA° of a CIELAB colour.
-pub fn ita_deg(lab: [f64; 3]) -> f64 {
-    (lab[0] - 50.0).atan2(lab[2]).to_degrees()
+/// The indices of the fits whose measured colour is of `class`.
+pub fn members(fits: &[SpectrumFit], class: &ItaClass) -> Vec<usize> {
+    (0..fits.len()).filter(|&i| ita_class(ita_degrees(fits[i].lab_measured)) == Some(class)).collect()
 }
 
 /// One class's figures.
@@ -61,9 +52,8 @@ pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Ve
     let q_index = Q_BAND_NM.map(at);
     let band: Vec<usize> = (0..wl.len()).filter(|&k| (530.0..=590.0).contains(&wl[k])).collect();
     let mut rows = Vec::new();
-    for (name, lo, hi) in CLASSES {
-        let members: Vec<usize> =
-            (0..fits.len()).filter(|&i| (lo..hi).contains(&ita_deg(fits[i].lab_measured))).collect();
+    for class in &ITA_CLASSES {
+        let members = members(fits, class);
         if members.is_empty() {
             continue;
         }
@@ -75,7 +65,7 @@ pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Ve
         let de = of(&|f| f.delta_e00);
         let thickness = of(&|f| f.params.epidermis_thickness_mm);
         rows.push(ClassRow {
-            name,
+            name: class.label,
             n,
             median_de: quantile(&de, 0.5),
             p90_de: quantile(&de, 0.9),

@@ -104,9 +104,8 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) {
 /// Each class's mean residual (measured - fitted) at every wavelength, in thousandths.
 fn print_residual_spectra(fits: &[spectral_skin::inverse::SpectrumFit], spectra: &[Vec<f64>], wl: &[f64]) {
     println!("\nMean residual per class, 1e-3 (wavelengths {} to {} nm):\n", wl[0], wl[wl.len() - 1]);
-    for (name, lo, hi) in super::classes::CLASSES {
-        let members: Vec<usize> =
-            (0..fits.len()).filter(|&i| (lo..hi).contains(&super::classes::ita_deg(fits[i].lab_measured))).collect();
+    for class in &spectral_skin::color::ita::ITA_CLASSES {
+        let (name, members) = (class.label, super::classes::members(fits, class));
         if members.is_empty() {
             continue;
         }
