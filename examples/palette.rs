@@ -10,6 +10,10 @@
 //!
 //! cargo run --release --example palette [-- --write]
 
+#[path = "measured_skin_report/data.rs"]
+mod data;
+
+use data::{quantile, read_data};
 use spectral_skin::color::ita::{ita_class, ita_degrees, ItaClass, ITA_CLASSES};
 use spectral_skin::inverse::spectrum::PAPER_FREE;
 use spectral_skin::inverse::{FitOptions, SpectrumFit, SpectrumFitter};
@@ -23,29 +27,6 @@ const MIN_SPECTRA: usize = 20;
 /// The epidermis thicknesses tried (mm): 0.05 to 0.15 mm every 0.01, the published range of adult epidermis
 /// (docs/model.md, Extended physiology).
 const THICKNESSES_MM: [f64; 11] = [0.05, 0.06, 0.07, 0.08, 0.09, 0.10, 0.11, 0.12, 0.13, 0.14, 0.15];
-
-/// The wavelengths and spectra of the data file (comment lines start with '#'; then a header `index,R400,...`).
-fn read_data(path: &str) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).expect("read the data file");
-    let mut lines = spectral_skin::strip_utf8_bom(&text).lines().filter(|l| !l.starts_with('#'));
-    let header = lines.next().expect("header");
-    let wavelengths = header.split(',').skip(1).map(|h| h.trim_start_matches('R').parse().unwrap()).collect();
-    let spectra = lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| l.split(',').skip(1).map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (wavelengths, spectra)
-}
-
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    if n % 2 == 1 {
-        values[n / 2]
-    } else {
-        0.5 * (values[n / 2 - 1] + values[n / 2])
-    }
-}
 
 /// A class, its spectra's count and median spectrum, and the fit of that median.
 struct Tone {
@@ -79,7 +60,7 @@ fn class_medians(wavelengths: &[f64], spectra: &[Vec<f64>]) -> Vec<(&'static Ita
             continue;
         }
         let median_spectrum: Vec<f64> =
-            (0..wavelengths.len()).map(|k| median(members.iter().map(|s| s[k]).collect())).collect();
+            (0..wavelengths.len()).map(|k| quantile(&members.iter().map(|s| s[k]).collect::<Vec<_>>(), 0.5)).collect();
         out.push((class, members.len(), median_spectrum));
     }
     out

@@ -5,24 +5,14 @@
 use spectral_skin::color::ita::{ita_class, ita_degrees, ItaClass, ITA_CLASSES};
 use spectral_skin::inverse::SpectrumFit;
 
+use super::data::quantile;
+
 /// The wavelengths where the residual of oxyhaemoglobin's "W" is read: its two Q-band peaks (542 and 577 nm in
 /// Prahl's table) and the trough between them (560 nm), as the 10 nm data sample them.
 pub const Q_BAND_NM: [f64; 3] = [540.0, 560.0, 580.0];
 
 /// A class needs this many spectra for its median to count towards the worst/best ratio (issue 39's criterion).
 pub const MIN_CLASS_SPECTRA: usize = 20;
-
-pub fn quantile(values: &[f64], q: f64) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    let pos = q * (v.len() - 1) as f64;
-    let (i, t) = (pos.floor() as usize, pos.fract());
-    if i + 1 < v.len() {
-        v[i] * (1.0 - t) + v[i + 1] * t
-    } else {
-        v[i]
-    }
-}
 
 /// The indices of the fits whose measured colour is of `class`.
 pub fn members(fits: &[SpectrumFit], class: &ItaClass) -> Vec<usize> {

@@ -9,6 +9,7 @@
 //! of the Q-band residual by skin type, every candidate (study.rs).
 
 mod classes;
+mod data;
 mod study;
 
 use std::path::Path;
@@ -18,6 +19,8 @@ use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 use spectral_skin::inverse::{FitOptions, SpectrumFit, SpectrumFitter, Specular};
 use spectral_skin::skin::params::PARAMS;
+
+use data::{quantile, read_data};
 
 const DATA: &str = "data/xiao2016_skin_reflectance_400_700nm.csv";
 const OUT: &str = "docs/images/measured-skin";
@@ -30,21 +33,6 @@ const COLORS: [RGBColor; 6] = [
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
 ];
-
-/// The wavelengths and spectra of the data file (comment lines start with '#'; then a header `index,R400,...`).
-fn read_data(path: &str) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).expect("read the data file");
-    let mut lines = spectral_skin::strip_utf8_bom(&text).lines().filter(|l| !l.starts_with('#'));
-    let header = lines.next().expect("header");
-    let wavelengths: Vec<f64> = header.split(',').skip(1).map(|h| h.trim_start_matches('R').parse().unwrap()).collect();
-    let spectra = lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| l.split(',').skip(1).map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (wavelengths, spectra)
-}
-
-use classes::quantile;
 
 struct Run {
     label: String,

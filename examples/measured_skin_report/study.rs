@@ -5,7 +5,8 @@
 
 use spectral_skin::inverse::{Bandpass, FitOptions, Specular};
 
-use super::classes::{class_rows, print_class_table, quantile, worst_over_best};
+use super::classes::{class_rows, print_class_table, worst_over_best};
+use super::data::quantile;
 use super::run;
 
 /// The vessel radii tried, mm: the superficial dermal plexus's capillaries and venules (about 0.005 to 0.05 mm in
