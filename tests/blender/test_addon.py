@@ -5,12 +5,9 @@ Headless, no rendering: each test starts from an empty factory scene. Run: .venv
 
 from __future__ import annotations
 
-import json
-import os
 import pathlib
 import subprocess
 import sys
-import textwrap
 
 import pytest
 
@@ -21,6 +18,7 @@ import spectral_skin  # noqa: E402
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 
+import extension_process  # noqa: E402
 from blender_scenes import material_snapshot  # noqa: E402
 
 from blender_addon import nodes as addon_nodes  # noqa: E402
@@ -195,19 +193,6 @@ def test_batch_saves_relative_texture_paths(addon, tmp_path):
     assert len(addon_nodes.tagged_nodes(bpy.data.materials["Skin"].node_tree, "principled")) == 1
 
 
-INSTALL_SCRIPT = textwrap.dedent("""
-    import json, os, sys
-    os.environ["BLENDER_USER_RESOURCES"] = sys.argv[1]
-    import bpy
-    bpy.ops.extensions.package_install_files(filepath=sys.argv[2], repo="user_default", enable_on_install=True)
-    mat = bpy.data.materials.new("Skin")
-    result = bpy.ops.spectral_skin.apply(material="Skin")
-    node = [n for n in mat.node_tree.nodes if n.get("spectral_skin") == "principled"][0]
-    print(json.dumps({"result": sorted(result), "base_color": list(node.inputs["Base Color"].default_value)[:3],
-                      "module": bpy.types.SPECTRAL_SKIN_OT_apply.__module__}))
-""")
-
-
 def test_built_zip_validates_and_installs(tmp_path, extension_zip):
     # The add-on's own files, without the render-only script (scripts/tools/render_blend.py needs no add-on).
     import zipfile
@@ -221,11 +206,10 @@ def test_built_zip_validates_and_installs(tmp_path, extension_zip):
     assert validate.returncode == 0, validate.stdout + validate.stderr
     user = tmp_path / "user"
     user.mkdir()
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    run = subprocess.run([sys.executable, "-c", INSTALL_SCRIPT, str(user), str(extension_zip)], capture_output=True,
-                         text=True, cwd=tmp_path, env=env, timeout=120)
-    assert run.returncode == 0, run.stdout + run.stderr
-    report = json.loads(run.stdout.strip().splitlines()[-1])
+    install = ("import bpy\nbpy.ops.extensions.package_install_files("
+               f"filepath={str(extension_zip)!r}, repo='user_default', enable_on_install=True)")
+    report = extension_process.report(extension_process.run_python(install + extension_process.APPLY_AND_REPORT,
+                                                                   user, tmp_path))
     assert report["result"] == ["FINISHED"]
     assert report["module"].startswith("bl_ext.user_default.spectral_skin")
     unpacked = list((user / "extensions" / ".local").glob("lib/python3*/site-packages/spectral_skin/__init__.py"))

@@ -4,18 +4,15 @@ nothing, applies a skin. Headless, no rendering; needs the zip of scripts/build_
 
 from __future__ import annotations
 
-import json
-import os
 import re
-import subprocess
-import sys
-import textwrap
 from pathlib import Path
 
 import pytest
 
 bpy = pytest.importorskip("bpy")
 import spectral_skin  # noqa: E402
+from extension_process import APPLY_AND_REPORT, run_python  # noqa: E402
+from extension_process import report as applied_report  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 DOC = REPO / "docs" / "blender-addon.md"
@@ -31,38 +28,20 @@ def _doc_blocks() -> dict[str, str]:
     return {block.splitlines()[0]: block for block in blocks}
 
 
-def _run(script: str, user: Path, cwd: Path) -> subprocess.CompletedProcess[str]:
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    env["BLENDER_USER_RESOURCES"] = str(user)
-    return subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=cwd, env=env,
-                          timeout=180)
-
-
-APPLY = textwrap.dedent("""
-    mat = bpy.data.materials.new("Skin")
-    result = bpy.ops.spectral_skin.apply(material="Skin")
-    node = [n for n in mat.node_tree.nodes if n.get("spectral_skin") == "principled"][0]
-    print(json.dumps({"result": sorted(result), "base_color": list(node.inputs["Base Color"].default_value)[:3],
-                      "module": bpy.types.SPECTRAL_SKIN_OT_apply.__module__}))
-""")
-
-
 def test_the_documented_install_lasts_into_a_new_process(tmp_path, extension_zip):
     blocks = _doc_blocks()
     install = next(b for first, b in blocks.items() if first.startswith("# Install once"))
     each = next(b for first, b in blocks.items() if first.startswith("# In each new process"))
     user = tmp_path / "user"
     user.mkdir()
-    first = _run(f"ZIP = {str(extension_zip)!r}\n" + install, user, tmp_path)
+    first = run_python(f"ZIP = {str(extension_zip)!r}\n" + install, user, tmp_path)
     assert first.returncode == 0, first.stdout + first.stderr
     assert (user / "config" / "userpref.blend").exists(), "the preferences were not saved"
     # A process that does not enable it has no add-on (the bpy module starts from factory preferences):
     # what the doc's second block is for.
-    bare = _run("import bpy\nprint(hasattr(bpy.types, 'SPECTRAL_SKIN_OT_apply'))", user, tmp_path)
+    bare = run_python("import bpy\nprint(hasattr(bpy.types, 'SPECTRAL_SKIN_OT_apply'))", user, tmp_path)
     assert bare.returncode == 0 and bare.stdout.strip().splitlines()[-1] == "False", bare.stdout + bare.stderr
-    second = _run("import json\n" + each + APPLY, user, tmp_path)
-    assert second.returncode == 0, second.stdout + second.stderr
-    report = json.loads(second.stdout.strip().splitlines()[-1])
+    report = applied_report(run_python(each + APPLY_AND_REPORT, user, tmp_path))
     assert report["result"] == ["FINISHED"]
     assert report["module"].startswith("bl_ext.user_default.spectral_skin")
     expected = spectral_skin.evaluate(preset="caucasian")["methods"]["burley"]["base_color"]
