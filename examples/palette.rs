@@ -13,7 +13,7 @@
 #[path = "measured_skin_report/data.rs"]
 mod data;
 
-use data::{quantile, read_data};
+use data::{quantile, read_data, MIN_CLASS_SPECTRA};
 use spectral_skin::color::ita::{ita_class, ita_degrees, ItaClass, ITA_CLASSES};
 use spectral_skin::inverse::spectrum::PAPER_FREE;
 use spectral_skin::inverse::{FitOptions, SpectrumFit, SpectrumFitter};
@@ -22,8 +22,6 @@ use spectral_skin::skin::params::PARAMS;
 const DATA: &str = "data/xiao2016_skin_reflectance_400_700nm.csv";
 const PARAMS_RS: &str = "src/skin/params.rs";
 const DOC: &str = "docs/measured-skin.md";
-/// The least spectra a class needs for its median to become a preset.
-const MIN_SPECTRA: usize = 20;
 /// The epidermis thicknesses tried (mm): 0.05 to 0.15 mm every 0.01, the published range of adult epidermis
 /// (docs/model.md, Extended physiology).
 const THICKNESSES_MM: [f64; 11] = [0.05, 0.06, 0.07, 0.08, 0.09, 0.10, 0.11, 0.12, 0.13, 0.14, 0.15];
@@ -55,8 +53,8 @@ fn class_medians(wavelengths: &[f64], spectra: &[Vec<f64>]) -> Vec<(&'static Ita
             .filter(|(_, c)| c.map(|c| c.name) == Some(class.name))
             .map(|(s, _)| s)
             .collect();
-        if members.len() < MIN_SPECTRA {
-            eprintln!("{}: {} spectra, fewer than {MIN_SPECTRA}: no preset", class.name, members.len());
+        if members.len() < MIN_CLASS_SPECTRA {
+            eprintln!("{}: {} spectra, fewer than {MIN_CLASS_SPECTRA}: no preset", class.name, members.len());
             continue;
         }
         let median_spectrum: Vec<f64> =

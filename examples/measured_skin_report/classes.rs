@@ -5,14 +5,11 @@
 use spectral_skin::color::ita::{ita_class, ita_degrees, ItaClass, ITA_CLASSES};
 use spectral_skin::inverse::SpectrumFit;
 
-use super::data::quantile;
+use super::data::{quantile, MIN_CLASS_SPECTRA};
 
 /// The wavelengths where the residual of oxyhaemoglobin's "W" is read: its two Q-band peaks (542 and 577 nm in
 /// Prahl's table) and the trough between them (560 nm), as the 10 nm data sample them.
 pub const Q_BAND_NM: [f64; 3] = [540.0, 560.0, 580.0];
-
-/// A class needs this many spectra for its median to count towards the worst/best ratio (issue 39's criterion).
-pub const MIN_CLASS_SPECTRA: usize = 20;
 
 /// The indices of the fits whose measured colour is of `class`.
 pub fn members(fits: &[SpectrumFit], class: &ItaClass) -> Vec<usize> {

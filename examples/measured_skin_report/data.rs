@@ -26,3 +26,7 @@ pub fn quantile(values: &[f64], q: f64) -> f64 {
         v[i]
     }
 }
+
+/// The least spectra an ITA class needs for its median to count (towards the report's worst/best ratio, issue 39's
+/// criterion) or to become a palette preset.
+pub const MIN_CLASS_SPECTRA: usize = 20;
