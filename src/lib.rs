@@ -21,6 +21,7 @@ pub mod maps;
 mod numeric;
 pub mod reflectance;
 pub mod skin;
+pub mod stamp;
 pub mod surface;
 mod table;
 pub mod transport;
@@ -32,6 +33,7 @@ pub use accuracy::{Accuracy, AccuracyLevel};
 pub use error::SkinError;
 pub use evaluate::{evaluate, Evaluation, MaterialOutput, Outputs, Request, ALL_MATERIAL_OUTPUTS};
 pub use skin::{SkinModel, SkinParams, PRESETS};
+pub use stamp::MODEL_VERSION;
 pub use table::strip_utf8_bom;
 
 /// One spelling of every value in every front: the CLI's value names (clap) are the serde names Python takes and

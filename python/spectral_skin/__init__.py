@@ -4,6 +4,8 @@ Four physiological parameters (melanin fraction, eumelanin share, blood fraction
 reflectance, radial profiles and the inputs of Blender's Principled BSDF out. Units: millimetres, mm^-1, mm^-2 and
 nanometres. The work runs in the compiled core (``spectral_skin._core``) with the GIL released.
 
+MODEL_VERSION: the model's version, raised whenever its numbers change (maps' sidecars and the docs' figures name it).
+
 Functions:
     evaluate: what a material needs (albedo, Subsurface Radius, specular) or any subset of the outputs.
     profile: the radial reflectance profile R(r), RGB or per wavelength.
@@ -38,6 +40,7 @@ unknown channel).
 """
 
 from ._core import (
+    MODEL_VERSION,
     AlbedoMapFit,
     Maps,
     SpectralSkinError,
@@ -71,6 +74,7 @@ from ._core import (
 )
 
 __all__ = [
+    "MODEL_VERSION",
     "AlbedoMapFit",
     "Maps",
     "SpectralSkinError",

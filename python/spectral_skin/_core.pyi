@@ -15,6 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "MODEL_VERSION",
     "AlbedoMapFit",
     "Maps",
     "SpectralSkinError",
@@ -49,6 +50,12 @@ __all__ = [
 ]
 
 __version__: str
+MODEL_VERSION: int
+
+def _markdown_stamp(command: str) -> str: ...
+def _replace_markdown_block(text: str, name: str, command: str, body: str) -> str: ...
+def _stamp_png(path: str | os.PathLike[str], command: str) -> None: ...
+def _png_stamp_version(path: str | os.PathLike[str]) -> int | None: ...
 
 _FloatArray = npt.NDArray[np.float64]
 _Float32Array = npt.NDArray[np.float32]
@@ -350,6 +357,7 @@ class _ShaderAxis(TypedDict):
 class _ShaderTableMetadata(TypedDict):
     format: str
     crate_version: str
+    model_version: int
     method: str
     blender: str
     engine: str

@@ -674,8 +674,9 @@ pub fn cache_key_text(
     // The surface model changes only the specular inputs, which no table holds.
     let request = Request { surface: SurfaceModel::Paper, ..*prepared.request() };
     let mut text = format!(
-        "{}|{}|{}|{:?}",
+        "{}|model {}|{}|{}|{:?}",
         env!("CARGO_PKG_VERSION"),
+        crate::MODEL_VERSION,
         serde_json::to_string(&request).unwrap_or_default(),
         if radius { method.name() } else { "albedo only" },
         resolution

@@ -168,6 +168,8 @@ pub struct MapResult {
 #[derive(Debug, Clone, Serialize)]
 pub struct MapReport {
     pub crate_version: &'static str,
+    /// The model's version (`crate::MODEL_VERSION`): which numbers the maps hold.
+    pub model_version: u32,
     pub width: usize,
     pub height: usize,
     pub method: SubsurfaceMethod,

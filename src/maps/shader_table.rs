@@ -82,6 +82,10 @@ pub struct ShaderAxis {
 pub struct ShaderTableMeta {
     pub format: String,
     pub crate_version: String,
+    /// The model's version (`crate::MODEL_VERSION`): the numbers the images hold. 0 in a sidecar written before it
+    /// was recorded.
+    #[serde(default)]
+    pub model_version: u32,
     /// Subsurface method the Base Color and radius are for.
     pub method: String,
     /// Blender version (MAJOR.MINOR) and engine they are for.
@@ -208,6 +212,7 @@ impl ShaderTable {
         let meta = ShaderTableMeta {
             format: SHADER_TABLE_FORMAT.to_string(),
             crate_version: env!("CARGO_PKG_VERSION").to_string(),
+            model_version: crate::MODEL_VERSION,
             method: table.method().name().to_string(),
             blender: target.blender.to_string(),
             engine: target.engine.name().to_string(),

@@ -285,7 +285,7 @@ pub(super) fn map_kinds_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
 ///     "hemispherical_albedo"} (as ``evaluate(...)["specular"]``); when it varies, the ones that do not depend on it:
 ///     {"surface", "roughness", "ior", "coat_ior", "beckmann_m"}, and for ``surface="paper"`` also "coat_weight" (0:
 ///     no Coat) and "coat_roughness" (Principled IOR and Coat IOR are 1.4 everywhere);
-///     "report": what was done: {"crate_version", "width", "height", "method", "target" ({"blender", "engine",
+///     "report": what was done: {"crate_version", "model_version", "width", "height", "method", "target" ({"blender", "engine",
 ///     "tested"}), "color_space", "strategy" ({"name":
 ///     "constant" | "distinct_tuples" | "table" | "exact" | "none" (neither Base Color nor radius asked for), with
 ///     its figures: "tuples"; "evaluations"; or

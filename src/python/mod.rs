@@ -18,6 +18,7 @@ mod maps_result;
 mod maps_write;
 mod progress;
 mod shader_table;
+mod stamp;
 mod surface;
 
 use pyo3::prelude::*;
@@ -43,6 +44,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SpectralSkinWarning", m.py().get_type::<SpectralSkinWarning>())?;
     m.add("SpectralSkinIOError", m.py().get_type::<SpectralSkinIOError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("MODEL_VERSION", crate::MODEL_VERSION)?;
+    m.add_function(wrap_pyfunction!(stamp::markdown_stamp_py, m)?)?;
+    m.add_function(wrap_pyfunction!(stamp::replace_markdown_block_py, m)?)?;
+    m.add_function(wrap_pyfunction!(stamp::stamp_png_py, m)?)?;
+    m.add_function(wrap_pyfunction!(stamp::png_stamp_version_py, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate_py, m)?)?;
     m.add_function(wrap_pyfunction!(profile_py, m)?)?;
     m.add_function(wrap_pyfunction!(presets_py, m)?)?;

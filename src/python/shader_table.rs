@@ -52,7 +52,7 @@ use super::maps_write::result_planes;
 ///
 /// Returns:
 ///     {"base_color_log": float32 (H, W, 3), ln Base Color; "radius_log": float32 (H, W, 3), ln (Subsurface Radius
-///     x Subsurface Scale in mm); "metadata": {"format", "crate_version", "method", "blender", "engine",
+///     x Subsurface Scale in mm); "metadata": {"format", "crate_version", "model_version", "method", "blender", "engine",
 ///     "color_space", "width", "height", "slice_width", "gutter", "melanin", "melanin_blend", "hemoglobin" (each
 ///     {"nodes", "min", "max", "warp": "cube_root" | "linear"}), "stored": "ln", "request" (as JSON: a semi-infinite
 ///     dermis thickness is None), "extended" ({"epidermis_thickness_mm", "baseline_absorption_scale",

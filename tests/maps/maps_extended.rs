@@ -80,8 +80,9 @@ fn cache_key_is_unchanged_for_the_paper_and_differs_otherwise() {
     let resolution = TableResolution::default();
     let method = SubsurfaceMethod::Burley;
     let text = format!(
-        "{}|{}|{}|{:?}|shapes {}",
+        "{}|model {}|{}|{}|{:?}|shapes {}",
         env!("CARGO_PKG_VERSION"),
+        spectral_skin::MODEL_VERSION,
         serde_json::to_string(&request).unwrap(),
         method.name(),
         resolution,
