@@ -1,12 +1,13 @@
 //! The skin-colour atlas (docs/skin-atlas.md): the model's albedo over melanin x haemoglobin for a few melanin blends
 //! and epidermis thicknesses, with measured skin colours (Xiao et al. 2016) placed where the albedo fit puts them.
 //!
-//!     cargo run --release --example skin_atlas -- [XIAO_CSV] [OUT_DIR]
+//!     cargo run --release --example skin_atlas -- [XIAO_CSV] [OUT_DIR] [DOC]
 //!
-//! XIAO_CSV: default data/xiao2016_skin_reflectance_400_700nm.csv; OUT_DIR: default docs/images. Writes
-//! skin-atlas-epidermis-<mm>.png per thickness (one panel per melanin blend) and prints the table of measured colours
-//! that docs/skin-atlas.md holds.
+//! XIAO_CSV: default data/xiao2016_skin_reflectance_400_700nm.csv; OUT_DIR: default docs/images; DOC: default
+//! docs/skin-atlas.md. Writes skin-atlas-epidermis-<mm>.png per thickness (one panel per melanin blend) and the table
+//! of measured colours into DOC's block `measured colours`, each stamped with the model's version.
 
+use std::fmt::Write;
 use std::path::PathBuf;
 
 use image::{Rgb, RgbImage};
@@ -22,6 +23,8 @@ const CELL_PX: usize = 4;
 const GAP_PX: usize = 8;
 /// Measured colours marked: the spectra at these percentiles of luminance.
 const PERCENTILES: [f64; 9] = [2.0, 10.0, 25.0, 40.0, 50.0, 60.0, 75.0, 90.0, 98.0];
+/// The command the stamps name.
+const REGENERATE: &str = "cargo run --release --example skin_atlas";
 
 fn srgb8(linear: f64) -> u8 {
     let v = linear.clamp(0.0, 1.0);
@@ -55,6 +58,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let csv = PathBuf::from(args.next().unwrap_or("data/xiao2016_skin_reflectance_400_700nm.csv".into()));
     let out = PathBuf::from(args.next().unwrap_or("docs/images".into()));
+    let doc = PathBuf::from(args.next().unwrap_or("docs/skin-atlas.md".into()));
     let mut measured = measured_colours(&csv);
     measured.sort_by(|a, b| {
         (0.2126 * a.1[0] + 0.7152 * a.1[1] + 0.0722 * a.1[2])
@@ -68,12 +72,14 @@ fn main() {
         })
         .collect();
     let panel = CELLS * CELL_PX;
-    println!("| percentile | spectrum | sRGB | C_m | beta_m | C_h | ΔE00 | ambiguity beta_m | ambiguity C_h |");
-    println!("|---|---|---|---|---|---|---|---|---|");
+    let mut table = String::new();
+    table.push_str("| percentile | spectrum | sRGB | C_m | beta_m | C_h | ΔE00 | ambiguity beta_m | ambiguity C_h |\n");
+    table.push_str("|---|---|---|---|---|---|---|---|---|\n");
     for (p, i, c) in &marks {
         let fit = fit_albedo(*c, &AlbedoFitOptions::default()).unwrap();
         let a = &fit.ambiguity;
-        println!(
+        let _ = writeln!(
+            table,
             "| {p} | {i} | #{:02x}{:02x}{:02x} | {:.4} | {:.2} | {:.4} | {:.2} | {:.2}-{:.2} | {:.4}-{:.4} |",
             srgb8(c[0]),
             srgb8(c[1]),
@@ -88,6 +94,10 @@ fn main() {
             a.hemoglobin[1]
         );
     }
+    let text = std::fs::read_to_string(&doc).unwrap_or_else(|e| panic!("{}: {e}", doc.display()));
+    let text = spectral_skin::stamp::replace_markdown_block(&text, "measured colours", REGENERATE, &table).unwrap();
+    spectral_skin::maps::io::write_atomic(&doc, text.as_bytes()).unwrap();
+    print!("{table}");
     for t in THICKNESSES_MM {
         let width = BLENDS.len() * panel + (BLENDS.len() - 1) * GAP_PX;
         let mut img = RgbImage::from_pixel(width as u32, panel as u32, Rgb([255, 255, 255]));
@@ -138,6 +148,7 @@ fn main() {
         }
         let path = out.join(format!("skin-atlas-epidermis-{t:.2}mm.png"));
         img.save(&path).unwrap();
+        spectral_skin::stamp::stamp_png(&path, REGENERATE).unwrap();
         eprintln!("wrote {}", path.display());
     }
 }

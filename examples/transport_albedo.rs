@@ -2,24 +2,35 @@
 //! diffusion totals against the exact adding-doubling ones, at the default accuracy and target (linear Rec.709, D65,
 //! CIE 1931 2°).
 //!
-//! `cargo run --release --example transport_albedo` prints the markdown table.
+//! `cargo run --release --example transport_albedo` writes the markdown table into docs/model.md's block
+//! `transport albedo`, stamped with the model's version, and prints it.
+
+use std::fmt::Write;
+use std::path::Path;
 
 use spectral_skin::transport::Transport;
 use spectral_skin::{evaluate, Outputs, Request, PRESETS};
 
-fn main() -> Result<(), spectral_skin::SkinError> {
+const DOC: &str = "docs/model.md";
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let albedo = |params, transport| -> Result<[f64; 3], spectral_skin::SkinError> {
         let request = Request { transport, ..Request::new(Outputs { albedo: true, ..Outputs::default() }) };
         Ok(evaluate(params, &request)?.diffuse_reflectance_rgb.unwrap_or_default())
     };
-    println!("| preset | diffusion (the paper's) | adding_doubling (default) | change R, G, B |");
-    println!("|---|---|---|---|");
+    let mut table = String::from("| preset | diffusion (the paper's) | adding_doubling (default) | change R, G, B |\n");
+    table.push_str("|---|---|---|---|\n");
     for preset in PRESETS {
         let before = albedo(&preset.params, Transport::Diffusion)?;
         let after = albedo(&preset.params, Transport::AddingDoubling)?;
         let rgb = |v: [f64; 3]| format!("{:.3}, {:.3}, {:.3}", v[0], v[1], v[2]);
         let change: Vec<String> = (0..3).map(|c| format!("{:+.1} %", 100.0 * (after[c] / before[c] - 1.0))).collect();
-        println!("| {} | {} | {} | {} |", preset.name, rgb(before), rgb(after), change.join(", "));
+        writeln!(table, "| {} | {} | {} | {} |", preset.name, rgb(before), rgb(after), change.join(", "))?;
     }
+    let command = "cargo run --release --example transport_albedo";
+    let doc = std::fs::read_to_string(DOC)?;
+    let doc = spectral_skin::stamp::replace_markdown_block(&doc, "transport albedo", command, &table)?;
+    spectral_skin::maps::io::write_atomic(Path::new(DOC), doc.as_bytes())?;
+    print!("{table}");
     Ok(())
 }

@@ -79,18 +79,18 @@ pub fn worst_over_best(rows: &[ClassRow]) -> f64 {
     hi / lo
 }
 
-/// The markdown table of `rows`.
-pub fn print_class_table(rows: &[ClassRow]) {
-    println!(
+/// The markdown table of `rows` (the body of the report's by-skin-type blocks in docs/measured-skin.md).
+pub fn class_table(rows: &[ClassRow]) -> String {
+    let mut table = String::from(
         "| group (ITA) | spectra | median ΔE00 | p90 ΔE00 | median RMS | residual 540 / 560 / 580 nm | Q-band rms | melanin | \
-         epidermis mm (p10 / median / p90) | haemoglobin | oxygenation | offset |"
+         epidermis mm (p10 / median / p90) | haemoglobin | oxygenation | offset |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in rows {
         let [m, t, h, g, o] = r.medians;
-        println!(
+        table += &format!(
             "| {} | {} | {:.2} | {:.2} | {:.4} | {:+.4} / {:+.4} / {:+.4} | {:.4} | {:.3} | {:.3} / {:.3} / {:.3} | {:.4} | \
-             {:.2} | {:.3} |",
+             {:.2} | {:.3} |\n",
             r.name,
             r.n,
             r.median_de,
@@ -109,6 +109,12 @@ pub fn print_class_table(rows: &[ClassRow]) {
             o
         );
     }
+    table
+}
+
+/// Prints the markdown table of `rows` and the worst / best ratio of their median ΔE00.
+pub fn print_class_table(rows: &[ClassRow]) {
+    print!("{}", class_table(rows));
     println!(
         "\nWorst / best class median ΔE00 (classes of {MIN_CLASS_SPECTRA} or more spectra): {:.2}",
         worst_over_best(rows)

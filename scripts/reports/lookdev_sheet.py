@@ -26,6 +26,10 @@ VIEW_TRANSFORMS = ("Standard", "AgX")
 RADIUS_M = 0.09  # a head's half-width
 SPACING_M = 0.24
 TIMING_REPEATS = 5
+KEY_WATTS = 70.0  # the softbox at the six-preset sheet's distance: the lightest skin just below white in Standard
+PX_PER_SPHERE = 150  # the sheet's default width per preset
+HEIGHT_PX = 360
+LENS_HALF_FIELD = 18.0 / 50.0  # a 50 mm lens on Blender's 36 mm sensor: half the field's width per metre away
 
 
 def _presets_light_to_dark() -> list[str]:
@@ -38,7 +42,13 @@ def _presets_light_to_dark() -> list[str]:
     return sorted(spectral_skin.presets(), key=luminance, reverse=True)
 
 
-def _scene(width: int, height: int, samples: int):
+def _camera_distance_m(presets: int) -> float:
+    """How far the camera stands so that a row of ``presets`` spheres fills the frame's width with a margin (at
+    least the 2.6 m the six-preset sheet used)."""
+    return max(2.6, (presets * SPACING_M / 2 + 0.12) / LENS_HALF_FIELD)
+
+
+def _scene(width: int, height: int, samples: int, distance_m: float):
     import bpy
     import mathutils
 
@@ -51,13 +61,15 @@ def _scene(width: int, height: int, samples: int):
     scene.cycles.samples = samples
     scene.cycles.use_denoising = False  # reproducible and free of denoiser look; noise is what samples buy
     scene.display_settings.display_device = "sRGB"
-    # One studio light: a 0.6 m square softbox 1.6 m away, up and to the left of the camera.
-    bpy.ops.object.light_add(type="AREA", location=(-0.9, -1.1, 0.9))
+    # One studio light: a softbox up and to the left of the camera, 0.6 m square 1.6 m away for the six-preset sheet,
+    # moved away and enlarged with the camera (same irradiance at the centre) so that a longer row is lit alike.
+    k = distance_m / 2.6
+    bpy.ops.object.light_add(type="AREA", location=(-0.9 * k, -1.1 * k, 0.9 * k))
     key = bpy.context.object
-    key.data.size = 0.6
-    key.data.energy = 120.0
+    key.data.size = 0.6 * k
+    key.data.energy = KEY_WATTS * k * k
     key.rotation_euler = (mathutils.Vector((0.0, 0.0, 0.0)) - key.location).to_track_quat("-Z", "Y").to_euler()
-    bpy.ops.object.camera_add(location=(0.0, -2.6, 0.0), rotation=(1.5707963, 0.0, 0.0))
+    bpy.ops.object.camera_add(location=(0.0, -distance_m, 0.0), rotation=(1.5707963, 0.0, 0.0))
     camera = bpy.context.object
     camera.data.lens = 50.0
     scene.camera = camera
@@ -100,17 +112,22 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=DOCS, help="folder for lookdev.md (images in its images/)")
     parser.add_argument("--samples", type=int, default=64)
-    parser.add_argument("--width", type=int, default=900)
+    parser.add_argument("--width", type=int, default=None, help=f"default: {PX_PER_SPHERE} px per preset")
     args = parser.parse_args(argv)
 
     import bpy
 
     sys.path.insert(0, str(ROOT))
+    sys.path.insert(0, str(LIB))
+    import doc_stamp
+
     import blender_addon
 
+    regenerate = doc_stamp.command(__file__)
     presets = _presets_light_to_dark()
-    height = args.width * 2 // 5
-    scene = _scene(args.width, height, args.samples)
+    width, height = args.width or PX_PER_SPHERE * len(presets), HEIGHT_PX
+    distance_m = _camera_distance_m(len(presets))
+    scene = _scene(width, height, args.samples, distance_m)
     blender_addon.register()
     start = time.perf_counter()
     materials = _spheres(presets)
@@ -126,6 +143,7 @@ def main(argv: list[str] | None = None) -> None:
         scene.render.image_settings.color_depth = "8"
         path = args.out / "images" / f"lookdev-{view.lower()}.png"
         bpy.data.images["Render Result"].save_render(str(path), scene=scene)
+        doc_stamp.stamp_png(path, regenerate)
         images[view] = path
 
     # The Coat's render time: only the measured row, rendered with its Coat and with Coat Weight 0, alternating.
@@ -147,16 +165,19 @@ def main(argv: list[str] | None = None) -> None:
     coat, plain = statistics.median(with_coat), statistics.median(without_coat)
 
     lines = [
+        doc_stamp.stamp(regenerate),
+        "",
         "# Look-dev sheet: paper and measured surface",
         "",
         "Written by `scripts/reports/lookdev_sheet.py`; do not edit by hand. Regenerate:",
         "",
-        "    .venv/bin/python scripts/reports/lookdev_sheet.py",
+        f"    {regenerate}",
         "",
-        f"Blender {bpy.app.version_string}, Cycles CPU, {args.samples} samples, no denoising, {args.width}×{height}. "
+        f"Blender {bpy.app.version_string}, Cycles CPU, {args.samples} samples, no denoising, {width}×{height}. "
         f"The {len(presets)} presets (the paper's three, the measured thirds and the ITA palette), lightest albedo "
         f"first ({', '.join(presets)}), as spheres of radius {RADIUS_M * 100:.0f} cm "
-        "(a head's half-width) under one 0.6 m softbox up and to the left and a dim grey world. Each material is "
+        f"(a head's half-width) under one {0.6 * distance_m / 2.6:.1f} m softbox up and to the left and a dim grey "
+        "world. Each material is "
         "applied by the add-on (Subsurface Method Burley); **top row: the paper's surface** (Donner & Jensen's oil "
         "layer: one lobe scaled by the oiliness, 0.3 in every preset), **bottom row: the measured surface** (the "
         "default: a broad base lobe and a sharp Coat that reflect like a dielectric, about 2.8 % along the normal; "
@@ -173,8 +194,8 @@ def main(argv: list[str] | None = None) -> None:
         "",
         "## Render-time cost of the Coat",
         "",
-        f"The measured row alone (six spheres, the same frame and samples), rendered {TIMING_REPEATS} times with its "
-        "Coat and with Coat Weight 0 (everything else unchanged), alternating; medians:",
+        f"The measured row alone ({len(presets)} spheres, the same frame and samples), rendered {TIMING_REPEATS} "
+        "times with its Coat and with Coat Weight 0 (everything else unchanged), alternating; medians:",
         "",
         "| set-up | median render time (s) | renders (s) |",
         "|---|---|---|",
@@ -182,11 +203,11 @@ def main(argv: list[str] | None = None) -> None:
         f"| Coat Weight 0 | {plain:.2f} | {', '.join(f'{t:.2f}' for t in without_coat)} |",
         "",
         f"Ratio: **{coat / plain:.3f}** (the Coat adds {100 * (coat / plain - 1):+.1f} % to the render time on this "
-        f"{os.cpu_count()}-core machine; medians of {TIMING_REPEATS}: the machines are noisy). Applying the twelve "
-        f"materials took {apply_seconds:.1f} s.",
+        f"{os.cpu_count()}-core machine; medians of {TIMING_REPEATS}: the machines are noisy). Applying the "
+        f"{len(materials)} materials took {apply_seconds:.1f} s.",
         "",
     ]
-    (args.out / "lookdev.md").write_text("\n".join(lines))
+    doc_stamp.write_text(args.out / "lookdev.md", "\n".join(lines))
     print("\n".join(lines))
 
 

@@ -505,6 +505,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import blender_scenes
     import bpy
+    import doc_stamp
     import spectral_skin
 
     from blender_addon.core import scene as analysis
@@ -544,11 +545,13 @@ def main(argv: list[str] | None = None) -> int:
     load_after = os.getloadavg()
     print("apply times", applies)
 
-    command = "scripts/reports/scene_effects_report.py" + (" --quick" if args.quick else "")
+    command = doc_stamp.command(__file__, *(["--quick"] if args.quick else []), python=".venv-blender/5.0/bin/python")
     lines = [
+        doc_stamp.stamp(command),
+        "",
         "# Scene effects: when subsurface scattering can be dropped",
         "",
-        f"Regenerate: `.venv-blender/5.0/bin/python {command}` (Blender {bpy.app.version_string}, Cycles CPU, "
+        f"Regenerate: `{command}` (Blender {bpy.app.version_string}, Cycles CPU, "
         f"{os.cpu_count()} CPUs, load average {load_before[0]:.1f} before and {load_after[0]:.1f} after the head "
         f"measurement (other jobs shared the machine); times are of the render call alone, after a warm-up render). "
         f"Slab: {samples} samples, {width}×{height} px.",
@@ -599,7 +602,7 @@ def main(argv: list[str] | None = None) -> int:
         "",
         DECISIONS_TEXT,
     ]
-    Path(args.out).write_text("\n".join(lines))
+    doc_stamp.write_text(Path(args.out), "\n".join(lines))
     print(f"wrote {args.out}; chosen {chosen}")
     return 0
 

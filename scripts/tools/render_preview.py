@@ -1,9 +1,10 @@
-"""Render the README preview: three spheres with the caucasian, asian and african presets, applied by the add-on.
+"""Render the README preview: a sphere per preset of the core (the paper's three, the measured thirds, then the ITA
+palette: rows of six in the core's order, the first row at the back), applied by the add-on with its defaults (the measured surface).
 
 Headless (bpy as a Python module, no Blender UI): Cycles CPU, Christensen-Burley subsurface, a sun and a dim sky,
-256x128 px, 128 samples, written as an sRGB PNG (Standard view transform).
+480x200 px, 128 samples, written as an sRGB PNG (Standard view transform) stamped with the model's version.
 
-    .venv/bin/python scripts/tools/render_preview.py [--out docs/images/presets.png] [--samples 128] [--size 256x128]
+    .venv/bin/python scripts/tools/render_preview.py [--out docs/images/presets.png] [--samples 128] [--size 480x240]
 """
 
 from __future__ import annotations
@@ -17,13 +18,18 @@ import time
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "scripts" / "lib"))
 
 import bpy  # noqa: E402
+import doc_stamp  # noqa: E402
+import spectral_skin  # noqa: E402
 
 import blender_addon  # noqa: E402
 
-PRESETS = ("caucasian", "asian", "african")
 RADIUS = 0.06  # sphere radius, metres (skin's mean free paths are ~mm: a head-sized curvature)
+PER_ROW = 6
+SPACING = 2.6 * RADIUS  # centre to centre along a row
+ROW_SPACING = 3.4 * RADIUS  # between rows, so that the back row shows above the front one
 
 
 def build_scene(width: int, height: int, samples: int) -> bpy.types.Scene:
@@ -70,15 +76,18 @@ def build_scene(width: int, height: int, samples: int) -> bpy.types.Scene:
     bpy.ops.mesh.primitive_plane_add(size=4.0, location=(0.0, 0.0, 0.0))
     bpy.context.object.data.materials.append(floor_mat)
 
-    for index, preset in enumerate(PRESETS):
+    presets = list(spectral_skin.presets())
+    rows = math.ceil(len(presets) / PER_ROW)
+    for index, preset in enumerate(presets):
+        row, column = divmod(index, PER_ROW)
+        location = ((column - (PER_ROW - 1) / 2) * SPACING, ((rows - 1) / 2 - row) * ROW_SPACING, RADIUS)
         material = bpy.data.materials.new(f"Skin {preset.title()}")
         settings = material.spectral_skin
         settings.preset = preset.upper()  # sets the four parameters
         settings.method = "BURLEY"
         result = bpy.ops.spectral_skin.apply(material=material.name)
         assert result == {"FINISHED"}, result
-        bpy.ops.mesh.primitive_uv_sphere_add(radius=RADIUS, segments=48, ring_count=24,
-                                             location=((index - 1) * 2.6 * RADIUS, 0.0, RADIUS))
+        bpy.ops.mesh.primitive_uv_sphere_add(radius=RADIUS, segments=48, ring_count=24, location=location)
         sphere = bpy.context.object
         sphere.name = f"Sphere {preset}"
         bpy.ops.object.shade_smooth()
@@ -87,8 +96,8 @@ def build_scene(width: int, height: int, samples: int) -> bpy.types.Scene:
     cam_data = bpy.data.cameras.new("Camera")
     cam_data.lens = 50.0
     camera = bpy.data.objects.new("Camera", cam_data)
-    camera.location = (0.0, -0.62, 0.2)
-    camera.rotation_euler = (math.radians(78.0), 0.0, 0.0)
+    camera.location = (0.0, -1.2, 0.78)
+    camera.rotation_euler = (math.radians(59.5), 0.0, 0.0)
     scene.collection.objects.link(camera)
     scene.camera = camera
     return scene
@@ -98,7 +107,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default=str(REPO / "docs" / "images" / "presets.png"))
     parser.add_argument("--samples", type=int, default=128)
-    parser.add_argument("--size", default="256x128")
+    parser.add_argument("--size", default="480x200")
     args = parser.parse_args()
     width, height = (int(v) for v in args.size.split("x"))
     start = time.perf_counter()
@@ -110,6 +119,7 @@ def main() -> int:
     scene.render.use_file_extension = False
     bpy.ops.render.render(write_still=True)
     done = time.perf_counter()
+    doc_stamp.stamp_png(pathlib.Path(out), doc_stamp.command(__file__))
     for material in bpy.data.materials:
         if material.name.startswith("Skin"):
             print(f"{material.name}: albedo {[round(c, 3) for c in material.spectral_skin.result_albedo]}, "
