@@ -676,7 +676,7 @@ pub fn cache_key_text(
     let mut text = format!(
         "{}|model {}|{}|{}|{:?}",
         env!("CARGO_PKG_VERSION"),
-        crate::MODEL_VERSION,
+        crate::stamp::MODEL_VERSION,
         serde_json::to_string(&request).unwrap_or_default(),
         if radius { method.name() } else { "albedo only" },
         resolution

@@ -151,7 +151,7 @@ impl MapPlan {
             .collect();
         let report = MapReport {
             crate_version: env!("CARGO_PKG_VERSION"),
-            model_version: crate::MODEL_VERSION,
+            model_version: crate::stamp::MODEL_VERSION,
             width: w,
             height: n / w,
             method: settings.method,

@@ -168,7 +168,7 @@ pub struct MapResult {
 #[derive(Debug, Clone, Serialize)]
 pub struct MapReport {
     pub crate_version: &'static str,
-    /// The model's version (`crate::MODEL_VERSION`): which numbers the maps hold.
+    /// The model's version (`crate::stamp::MODEL_VERSION`): which numbers the maps hold.
     pub model_version: u32,
     pub width: usize,
     pub height: usize,

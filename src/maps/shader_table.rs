@@ -82,7 +82,7 @@ pub struct ShaderAxis {
 pub struct ShaderTableMeta {
     pub format: String,
     pub crate_version: String,
-    /// The model's version (`crate::MODEL_VERSION`): the numbers the images hold. 0 in a sidecar written before it
+    /// The model's version (`crate::stamp::MODEL_VERSION`): the numbers the images hold. 0 in a sidecar written before it
     /// was recorded.
     #[serde(default)]
     pub model_version: u32,
@@ -212,7 +212,7 @@ impl ShaderTable {
         let meta = ShaderTableMeta {
             format: SHADER_TABLE_FORMAT.to_string(),
             crate_version: env!("CARGO_PKG_VERSION").to_string(),
-            model_version: crate::MODEL_VERSION,
+            model_version: crate::stamp::MODEL_VERSION,
             method: table.method().name().to_string(),
             blender: target.blender.to_string(),
             engine: target.engine.name().to_string(),
