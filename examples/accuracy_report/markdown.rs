@@ -214,12 +214,16 @@ fn equal_accuracy(sweep: &Sweep) -> Vec<(&Row, &Row, f64)> {
         .collect()
 }
 
+/// The command that regenerates the report (its stamp names it).
+pub const REGENERATE: &str = "bash scripts/accuracy_report.sh";
+
 pub fn write(out_dir: &Path, report: &Report) -> Result<(), Box<dyn std::error::Error>> {
     let images = out_dir.join("images").join("accuracy");
     std::fs::create_dir_all(&images)?;
     std::fs::create_dir_all(out_dir.join("data"))?;
     let mut md = String::new();
     let r = report;
+    let _ = writeln!(md, "{}\n", spectral_skin::stamp::markdown_stamp(REGENERATE));
     let _ = writeln!(md, "# What accuracy costs in time\n");
     let _ = writeln!(
         md,

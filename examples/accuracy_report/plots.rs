@@ -116,8 +116,9 @@ pub fn render_png(plot: &Plot) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
     Ok(png)
 }
 
-/// Render `plot` and write it atomically to `path`.
+/// Render `plot`, write it atomically to `path` and stamp it with the model's version.
 pub fn write_plot(path: &Path, plot: &Plot) -> Result<(), Box<dyn std::error::Error>> {
     spectral_skin::maps::io::write_atomic(path, &render_png(plot)?)?;
+    spectral_skin::stamp::stamp_png(path, super::markdown::REGENERATE)?;
     Ok(())
 }
