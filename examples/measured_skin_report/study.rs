@@ -25,12 +25,12 @@ fn with_shape(mut o: FitOptions, shape: EumelaninShape) -> FitOptions {
 }
 
 /// The eumelanin shapes tried beside DJ2006's λ^-3.33 (src/skin/chromophores.rs, `EumelaninShape`): Jacques' melanosome
-/// law λ^-3.48; shallower (-2.5, -3) and steeper (-4) power laws that bracket it (brackets, not published values); and
-/// Zonios et al.'s exponential at three slopes (0.006 nm^-1 is eq. 3's local slope at 550 nm; their in-vivo slopes
-/// are steeper than in vitro).
+/// law λ^-3.48; shallower (-2, -2.5, -3) and steeper (-4) power laws that bracket it (brackets, not published
+/// values); and Zonios et al.'s exponential at three slopes (0.006 nm^-1 is eq. 3's local slope at 550 nm; their
+/// in-vivo slopes are steeper than in vitro).
 fn shapes() -> Vec<(String, EumelaninShape)> {
     let mut list = Vec::new();
-    for e in [-2.5, -3.0, -3.48, -4.0] {
+    for e in [-2.0, -2.5, -3.0, -3.48, -4.0] {
         list.push((format!("eumelanin λ^{e}"), EumelaninShape::PowerLaw { exponent: e }));
     }
     for k in [0.006, 0.009, 0.012] {
