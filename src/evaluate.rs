@@ -719,6 +719,15 @@ pub(crate) fn validate_model(m: &SkinModel) -> Result<(), SkinError> {
     check_range("eumelanin_k_per_mm", "eumelanin constant K_em", m.eumelanin_k_per_mm, 0.0, 1e13)?;
     let max_radius = crate::skin::chromophores::MAX_VESSEL_RADIUS_MM;
     check_range("blood_vessel_radius_mm", "dermal blood vessel radius, mm", m.blood_vessel_radius_mm, 0.0, max_radius)?;
+    match m.eumelanin_shape {
+        crate::skin::chromophores::EumelaninShape::Dj2006 => {}
+        crate::skin::chromophores::EumelaninShape::PowerLaw { exponent } => {
+            check_range("eumelanin_shape.exponent", "eumelanin power-law exponent", exponent, -8.0, 0.0)?;
+        }
+        crate::skin::chromophores::EumelaninShape::Exponential { k_per_nm } => {
+            check_range("eumelanin_shape.k_per_nm", "eumelanin exponential slope, nm^-1", k_per_nm, 0.0, 0.05)?;
+        }
+    }
     if !(m.dermis_thickness_mm.is_infinite() && m.dermis_thickness_mm > 0.0) {
         check_range("dermis_thickness_mm", "dermis thickness (or infinity)", m.dermis_thickness_mm, 1e-3, 1e4)?;
     }

@@ -4,6 +4,7 @@
 //! on the same spectra, printed per ITA class (docs/measured-skin.md, Skin types and the Q bands).
 
 use spectral_skin::inverse::{Bandpass, FitOptions, Specular};
+use spectral_skin::skin::chromophores::EumelaninShape;
 
 use super::classes::{class_rows, print_class_table, worst_over_best};
 use super::data::quantile;
@@ -16,6 +17,26 @@ const RADII_MM: [f64; 3] = [0.005, 0.015, 0.04];
 fn with_oxygenation(mut o: FitOptions) -> FitOptions {
     o.free.push("blood_oxygenation".to_string());
     o
+}
+
+fn with_shape(mut o: FitOptions, shape: EumelaninShape) -> FitOptions {
+    o.request.model.eumelanin_shape = shape;
+    o
+}
+
+/// The eumelanin shapes tried beside DJ2006's λ^-3.33 (src/skin/chromophores.rs, `EumelaninShape`): Jacques' melanosome
+/// law λ^-3.48; shallower (-2, -2.5, -3) and steeper (-4) power laws that bracket it (brackets, not published
+/// values); and Zonios et al.'s exponential at three slopes (0.006 nm^-1 is eq. 3's local slope at 550 nm; their
+/// in-vivo slopes are steeper than in vitro).
+fn shapes() -> Vec<(String, EumelaninShape)> {
+    let mut list = Vec::new();
+    for e in [-2.0, -2.5, -3.0, -3.48, -4.0] {
+        list.push((format!("eumelanin λ^{e}"), EumelaninShape::PowerLaw { exponent: e }));
+    }
+    for k in [0.006, 0.009, 0.012] {
+        list.push((format!("eumelanin exp(-{k} λ)"), EumelaninShape::Exponential { k_per_nm: k }));
+    }
+    list
 }
 
 fn with_radius(mut o: FitOptions, radius_mm: f64) -> FitOptions {
@@ -55,7 +76,16 @@ fn candidates() -> Vec<(String, FitOptions)> {
     list.push(("default, thickness 0.08 mm".to_string(), held(default.clone())));
     list.push(("default + oxygenation, thickness 0.08 mm".to_string(), held(with_oxygenation(default.clone()))));
     list.push(("default, fresnel".to_string(), fresnel(default.clone())));
-    list.push(("default + oxygenation, fresnel".to_string(), fresnel(with_oxygenation(default))));
+    list.push(("default + oxygenation, fresnel".to_string(), fresnel(with_oxygenation(default.clone()))));
+    // The melanin spectrum's shape (issue 39, What is left): the default fit and the default with the oxygenation
+    // free and a Fresnel surface, with each eumelanin shape.
+    for (name, shape) in shapes() {
+        list.push((format!("default, {name}"), with_shape(default.clone(), shape)));
+        list.push((
+            format!("default + oxygenation, fresnel, {name}"),
+            with_shape(fresnel(with_oxygenation(default.clone())), shape),
+        ));
+    }
     list
 }
 

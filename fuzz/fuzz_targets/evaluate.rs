@@ -66,6 +66,7 @@ fuzz_target!(|data: &[u8]| {
             eumelanin_k_per_mm: b.log_value(0.0, 14.0),
             dermis_thickness_mm: if b.byte() % 2 == 0 { f64::INFINITY } else { b.log_value(-4.0, 5.0) },
             blood_vessel_radius_mm: if b.byte() % 2 == 0 { 0.0 } else { b.log_value(-5.0, 1.0) },
+            ..SkinModel::default()
         };
     }
     if knobs & 32 != 0 {

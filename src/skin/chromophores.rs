@@ -2,6 +2,8 @@
 
 use std::sync::OnceLock;
 
+use serde::{Deserialize, Serialize};
+
 use crate::table::SpectralTable;
 
 /// Eumelanin constant `K_em` of DJ2006 eq. 3, in mm^-1 (with wavelength in nm). The printed 6.6e11 is Jacques' cm^-1 value;
@@ -29,6 +31,56 @@ fn hemoglobin_table() -> &'static SpectralTable {
 /// `sigma_a_em(lambda)`: eumelanin absorption, mm^-1, with the given `K_em` (DJ2006 eq. 3).
 pub fn sigma_a_eumelanin_per_mm(wavelength_nm: f64, k_em_per_mm: f64) -> f64 {
     k_em_per_mm * wavelength_nm.powf(EUMELANIN_EXPONENT)
+}
+
+/// The wavelength where an alternative eumelanin shape ([`EumelaninShape`]) equals DJ2006's eq. 3 with the same
+/// `K_em`, nm: mid-visible, so that a fitted melanin fraction keeps about its meaning. Jacques' melanosome law
+/// (1.70e12 λ^-3.48 cm^-1) and eq. 3's (6.6e11 λ^-3.33 cm^-1) already agree there within 0.1 %.
+pub const EUMELANIN_SHAPE_REFERENCE_NM: f64 = 550.0;
+
+/// The shape of the eumelanin absorption spectrum: DJ2006's eq. 3 (the default) or a published alternative, for
+/// issue 39's study of the fit's spectral misfit (examples/measured_skin_report/study.rs). An option of the model, off
+/// by default: the alternatives are scaled to equal eq. 3 (with the model's `K_em`) at
+/// [`EUMELANIN_SHAPE_REFERENCE_NM`], so only the shape changes. Pheomelanin (eq. 4) is unchanged by it.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EumelaninShape {
+    /// `K_em λ^-3.33` (DJ2006 eq. 3; Jacques 1998's skin-optics summary).
+    #[default]
+    Dj2006,
+    /// `λ^exponent`: -3.48 is Jacques' melanosome-interior law, µa = 1.70e12 λ^-3.48 cm^-1 for skin (Jacques,
+    /// Glickman & Schwartz, Proc. SPIE 2681:468, 1996; omlc.org/spectra/melanin/mua.html, 1998).
+    PowerLaw { exponent: f64 },
+    /// `exp(-k λ)`, k in nm^-1: the exponential form Zonios et al. found for in-vivo melanin by diffuse reflectance
+    /// (J. Biomed. Opt. 13:014017, 2008; Zonios & Dimou, Opt. Express 16:8263, 2008), with a steeper slope than
+    /// in vitro. For comparison, eq. 3's local slope, 3.33 / λ, is 0.0061 nm^-1 at 550 nm and 0.0048 at 700.
+    Exponential { k_per_nm: f64 },
+}
+
+impl EumelaninShape {
+    /// The shape's value relative to its value at [`EUMELANIN_SHAPE_REFERENCE_NM`] (1 there).
+    fn relative(self, wavelength_nm: f64) -> f64 {
+        let r = EUMELANIN_SHAPE_REFERENCE_NM;
+        match self {
+            EumelaninShape::Dj2006 => (wavelength_nm / r).powf(EUMELANIN_EXPONENT),
+            EumelaninShape::PowerLaw { exponent } => (wavelength_nm / r).powf(exponent),
+            EumelaninShape::Exponential { k_per_nm } => (-k_per_nm * (wavelength_nm - r)).exp(),
+        }
+    }
+
+    /// True for DJ2006's eq. 3 (the default).
+    pub fn is_default(&self) -> bool {
+        *self == EumelaninShape::Dj2006
+    }
+}
+
+/// Eumelanin absorption, mm^-1, of the given shape and `K_em`: eq. 3 itself for [`EumelaninShape::Dj2006`], else the
+/// shape scaled to eq. 3 at [`EUMELANIN_SHAPE_REFERENCE_NM`].
+pub fn sigma_a_eumelanin_shaped_per_mm(wavelength_nm: f64, k_em_per_mm: f64, shape: EumelaninShape) -> f64 {
+    match shape {
+        EumelaninShape::Dj2006 => sigma_a_eumelanin_per_mm(wavelength_nm, k_em_per_mm),
+        _ => sigma_a_eumelanin_per_mm(EUMELANIN_SHAPE_REFERENCE_NM, k_em_per_mm) * shape.relative(wavelength_nm),
+    }
 }
 
 /// `sigma_a_pm(lambda)`: pheomelanin absorption, mm^-1 (DJ2006 eq. 4).
@@ -110,6 +162,28 @@ mod tests {
         assert!((vessel_packaging_factor(1e-6, 1e-3) - 1.0).abs() < 1e-9);
         assert!((vessel_packaging_factor(25.0, 0.02) - (1.0 - (-1.0f64).exp())).abs() < 1e-12);
         assert!((vessel_packaging_factor(300.0, 0.05) * 30.0 - 1.0).abs() < 1e-9);
+    }
+
+    /// The alternative eumelanin shapes equal eq. 3 at the reference wavelength; Jacques' literal law (1.70e12
+    /// λ^-3.48 cm^-1) is the power-law shape at -3.48 within 0.2 % over 400-700 nm.
+    #[test]
+    fn eumelanin_shapes_meet_eq3_at_the_reference() {
+        let w0 = EUMELANIN_SHAPE_REFERENCE_NM;
+        let eq3 = sigma_a_eumelanin_per_mm(w0, K_EM_PER_MM);
+        for shape in [
+            EumelaninShape::Dj2006,
+            EumelaninShape::PowerLaw { exponent: -3.48 },
+            EumelaninShape::Exponential { k_per_nm: 0.01 },
+        ] {
+            assert!(close(sigma_a_eumelanin_shaped_per_mm(w0, K_EM_PER_MM, shape), eq3, 1e-12), "{shape:?}");
+        }
+        for w in [400.0, 450.0, 550.0, 650.0, 700.0] {
+            let d = EumelaninShape::Dj2006;
+            assert_eq!(sigma_a_eumelanin_shaped_per_mm(w, K_EM_PER_MM, d), sigma_a_eumelanin_per_mm(w, K_EM_PER_MM));
+            let jacques = 1.70e12 * f64::powf(w, -3.48) / 10.0;
+            let shaped = sigma_a_eumelanin_shaped_per_mm(w, K_EM_PER_MM, EumelaninShape::PowerLaw { exponent: -3.48 });
+            assert!(close(shaped, jacques, 2e-3), "{w}: {shaped} vs {jacques}");
+        }
     }
 
     /// Prahl's table peaks (docs/model.md, section Data files): HbO2 Soret at 414 nm.

@@ -28,6 +28,10 @@ pub struct SkinModel {
     /// At most [`MAX_VESSEL_RADIUS_MM`]. Absent from JSON when 0 (docs/model.md, Vessel packaging).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub blood_vessel_radius_mm: f64,
+    /// The eumelanin spectrum's shape ([`EumelaninShape`]); DJ2006's eq. 3 by default. An option for issue 39's
+    /// study; absent from JSON when the default.
+    #[serde(default, skip_serializing_if = "EumelaninShape::is_default")]
+    pub eumelanin_shape: EumelaninShape,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -63,7 +67,12 @@ mod finite_or_inf {
 
 impl Default for SkinModel {
     fn default() -> Self {
-        SkinModel { eumelanin_k_per_mm: K_EM_PER_MM, dermis_thickness_mm: f64::INFINITY, blood_vessel_radius_mm: 0.0 }
+        SkinModel {
+            eumelanin_k_per_mm: K_EM_PER_MM,
+            dermis_thickness_mm: f64::INFINITY,
+            blood_vessel_radius_mm: 0.0,
+            eumelanin_shape: EumelaninShape::Dj2006,
+        }
     }
 }
 
@@ -74,7 +83,17 @@ fn sigma_a_tissue_per_mm(p: &SkinParams, wavelength_nm: f64) -> f64 {
 
 /// `sigma_a_epi(lambda)`, mm^-1: melanin blend plus baseline (DJ2006 eq. 6). No haemoglobin in the DJ2006 epidermis.
 pub fn sigma_a_epidermis_per_mm(p: &SkinParams, wavelength_nm: f64, k_em_per_mm: f64) -> f64 {
-    let melanin = p.melanin_blend * sigma_a_eumelanin_per_mm(wavelength_nm, k_em_per_mm)
+    sigma_a_epidermis_shaped_per_mm(p, wavelength_nm, k_em_per_mm, EumelaninShape::Dj2006)
+}
+
+/// [`sigma_a_epidermis_per_mm`] with the eumelanin spectrum of `shape` ([`SkinModel::eumelanin_shape`]).
+pub fn sigma_a_epidermis_shaped_per_mm(
+    p: &SkinParams,
+    wavelength_nm: f64,
+    k_em_per_mm: f64,
+    shape: EumelaninShape,
+) -> f64 {
+    let melanin = p.melanin_blend * sigma_a_eumelanin_shaped_per_mm(wavelength_nm, k_em_per_mm, shape)
         + (1.0 - p.melanin_blend) * sigma_a_pheomelanin_per_mm(wavelength_nm);
     p.melanin * melanin + (1.0 - p.melanin) * sigma_a_tissue_per_mm(p, wavelength_nm)
 }
@@ -94,7 +113,12 @@ pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [La
     [
         Layer {
             thickness_mm: p.epidermis_thickness_mm,
-            sigma_a_per_mm: sigma_a_epidermis_per_mm(p, wavelength_nm, model.eumelanin_k_per_mm),
+            sigma_a_per_mm: sigma_a_epidermis_shaped_per_mm(
+                p,
+                wavelength_nm,
+                model.eumelanin_k_per_mm,
+                model.eumelanin_shape,
+            ),
             sigma_s_reduced_per_mm: sigma_s_reduced_epidermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,
         },
@@ -128,6 +152,18 @@ mod tests {
         let packed = SkinModel { blood_vessel_radius_mm: 0.02, ..SkinModel::default() };
         let text = serde_json::to_string(&packed).unwrap();
         assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), packed);
+    }
+
+    /// The eumelanin shape is absent from a default model's JSON and round-trips when set.
+    #[test]
+    fn eumelanin_shape_is_absent_from_json_unless_set() {
+        let text = serde_json::to_string(&SkinModel::default()).unwrap();
+        assert!(!text.contains("eumelanin_shape"), "{text}");
+        for shape in [EumelaninShape::PowerLaw { exponent: -3.48 }, EumelaninShape::Exponential { k_per_nm: 0.011 }] {
+            let m = SkinModel { eumelanin_shape: shape, ..SkinModel::default() };
+            let text = serde_json::to_string(&m).unwrap();
+            assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m, "{text}");
+        }
     }
 
     /// Packaging scales the dermis's blood term alone, by the factor of the blood's own absorption: the epidermis and
