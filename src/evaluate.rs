@@ -728,6 +728,10 @@ pub(crate) fn validate_model(m: &SkinModel) -> Result<(), SkinError> {
             check_range("eumelanin_shape.k_per_nm", "eumelanin exponential slope, nm^-1", k_per_nm, 0.0, 0.05)?;
         }
     }
+    if let crate::skin::scattering::ScatteringShape::MieRayleigh { f_ray, b_mie } = m.scattering_shape {
+        check_range("scattering_shape.f_ray", "Rayleigh fraction of the scattering at 500 nm", f_ray, 0.0, 1.0)?;
+        check_range("scattering_shape.b_mie", "Mie scattering power-law exponent", b_mie, 0.0, 4.0)?;
+    }
     if !(m.dermis_thickness_mm.is_infinite() && m.dermis_thickness_mm > 0.0) {
         check_range("dermis_thickness_mm", "dermis thickness (or infinity)", m.dermis_thickness_mm, 1e-3, 1e4)?;
     }

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::chromophores::*;
 use super::params::SkinParams;
-use super::scattering::{sigma_s_reduced_dermis_per_mm, sigma_s_reduced_epidermis_per_mm};
+use super::scattering::ScatteringShape;
 use crate::layer::Layer;
 
 /// Index of refraction of all skin, "a constant index of refraction of 1.4 throughout the skin" (DJ2006; docs/model.md,
@@ -32,6 +32,10 @@ pub struct SkinModel {
     /// study; absent from JSON when the default.
     #[serde(default, skip_serializing_if = "EumelaninShape::is_default")]
     pub eumelanin_shape: EumelaninShape,
+    /// The reduced-scattering spectrum's shape of both layers ([`ScatteringShape`]); DJ2006's eq. 8 by default. An
+    /// option for issue 39's study; absent from JSON when the default.
+    #[serde(default, skip_serializing_if = "ScatteringShape::is_default")]
+    pub scattering_shape: ScatteringShape,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -72,6 +76,7 @@ impl Default for SkinModel {
             dermis_thickness_mm: f64::INFINITY,
             blood_vessel_radius_mm: 0.0,
             eumelanin_shape: EumelaninShape::Dj2006,
+            scattering_shape: ScatteringShape::Dj2006,
         }
     }
 }
@@ -119,13 +124,13 @@ pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [La
                 model.eumelanin_k_per_mm,
                 model.eumelanin_shape,
             ),
-            sigma_s_reduced_per_mm: sigma_s_reduced_epidermis_per_mm(wavelength_nm),
+            sigma_s_reduced_per_mm: model.scattering_shape.epidermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,
         },
         Layer {
             thickness_mm: model.dermis_thickness_mm,
             sigma_a_per_mm: sigma_a_dermis_per_mm(p, wavelength_nm, model.blood_vessel_radius_mm),
-            sigma_s_reduced_per_mm: sigma_s_reduced_dermis_per_mm(wavelength_nm),
+            sigma_s_reduced_per_mm: model.scattering_shape.dermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,
         },
     ]
