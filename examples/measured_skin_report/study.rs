@@ -5,6 +5,7 @@
 
 use spectral_skin::inverse::{Bandpass, FitOptions, Specular};
 use spectral_skin::skin::chromophores::EumelaninShape;
+use spectral_skin::skin::scattering::ScatteringShape;
 
 use super::classes::{class_rows, print_class_table, worst_over_best};
 use super::data::quantile;
@@ -37,6 +38,23 @@ fn shapes() -> Vec<(String, EumelaninShape)> {
         list.push((format!("eumelanin exp(-{k} λ)"), EumelaninShape::Exponential { k_per_nm: k }));
     }
     list
+}
+
+fn with_scattering(mut o: FitOptions, shape: ScatteringShape) -> FitOptions {
+    o.request.model.scattering_shape = shape;
+    o
+}
+
+/// The reduced-scattering shapes tried beside DJ2006's eq. 8 (src/skin/scattering.rs, `ScatteringShape`; issue 39,
+/// dark skin's red-end residual): the dermis of Jacques and Li's mcxyz tissue list (62 % Rayleigh at 500 nm, Mie
+/// λ^-1.0), steeper than eq. 8 in the red; and single power laws λ^-1.0 and λ^-1.5, the range of b the brief names for
+/// skin (Jacques 2013, eq. 1), flatter than eq. 8 in the blue.
+fn scattering_shapes() -> Vec<(String, ScatteringShape)> {
+    vec![
+        ("scattering mcxyz dermis".to_string(), ScatteringShape::MieRayleigh { f_ray: 0.62, b_mie: 1.0 }),
+        ("scattering λ^-1.0".to_string(), ScatteringShape::MieRayleigh { f_ray: 0.0, b_mie: 1.0 }),
+        ("scattering λ^-1.5".to_string(), ScatteringShape::MieRayleigh { f_ray: 0.0, b_mie: 1.5 }),
+    ]
 }
 
 fn with_radius(mut o: FitOptions, radius_mm: f64) -> FitOptions {
@@ -84,6 +102,14 @@ fn candidates() -> Vec<(String, FitOptions)> {
         list.push((
             format!("default + oxygenation, fresnel, {name}"),
             with_shape(fresnel(with_oxygenation(default.clone())), shape),
+        ));
+    }
+    // The scattering spectrum's shape (issue 39, What is left: dark skin's red-end residual).
+    for (name, shape) in scattering_shapes() {
+        list.push((format!("default, {name}"), with_scattering(default.clone(), shape)));
+        list.push((
+            format!("default + oxygenation, fresnel, {name}"),
+            with_scattering(fresnel(with_oxygenation(default.clone())), shape),
         ));
     }
     list
