@@ -3,7 +3,8 @@
 //! bandpass, a free blood oxygenation, vessel packaging), and what the fitted epidermis thickness trades against, each
 //! on the same spectra, printed per ITA class (docs/measured-skin.md, Skin types and the Q bands).
 
-use spectral_skin::inverse::{Bandpass, FitOptions, Specular};
+use spectral_skin::color::difference::ciede2000;
+use spectral_skin::inverse::{Bandpass, FitOptions, SpectrumFit, SpectrumFitter, Specular};
 use spectral_skin::skin::chromophores::EumelaninShape;
 use spectral_skin::skin::scattering::ScatteringShape;
 
@@ -62,6 +63,32 @@ fn with_radius(mut o: FitOptions, radius_mm: f64) -> FitOptions {
     o
 }
 
+/// The label suffix of a candidate fitted to the spectra with their last point (700 nm) continued at the slope of the
+/// two before it ([`continued_700`]), and scored against the spectra as measured.
+const CONTINUED_700: &str = ", 700 nm continued";
+
+/// `spectrum` with its last value replaced by the straight continuation of the two before it.
+fn continued_700(spectrum: &[f64]) -> Vec<f64> {
+    let mut v = spectrum.to_vec();
+    let n = v.len();
+    v[n - 1] = 2.0 * v[n - 2] - v[n - 3];
+    v
+}
+
+/// `fits` (of altered spectra) scored against `measured`: each fit's ΔE00 recomputed from the measured spectrum's colour.
+fn scored_against(
+    mut fits: Vec<SpectrumFit>,
+    measured: &[Vec<f64>],
+    wl: &[f64],
+    options: &FitOptions,
+) -> Vec<SpectrumFit> {
+    let fitter = SpectrumFitter::new(wl, options).expect("fitter");
+    for (fit, spectrum) in fits.iter_mut().zip(measured) {
+        fit.delta_e00 = ciede2000(fitter.lab(spectrum), fitter.lab(&fit.fitted_reflectance));
+    }
+    fits
+}
+
 /// The candidates: (label, options).
 fn candidates() -> Vec<(String, FitOptions)> {
     let fwhm = |w: f64| FitOptions { bandpass: Bandpass::FwhmNm(w), ..FitOptions::default() };
@@ -104,6 +131,10 @@ fn candidates() -> Vec<(String, FitOptions)> {
             with_shape(fresnel(with_oxygenation(default.clone())), shape),
         ));
     }
+    // The measured spectra's last point (issue 39, What is left): every group flattens abruptly from 690 to 700 nm.
+    // Fitted to the spectra with 700 nm continued at the 680-690 nm slope; scored against the spectra as measured.
+    list.push((format!("default{CONTINUED_700}"), default.clone()));
+    list.push((format!("default + oxygenation, fresnel{CONTINUED_700}"), fresnel(with_oxygenation(default.clone()))));
     // The scattering spectrum's shape (issue 39, What is left: dark skin's red-end residual).
     for (name, shape) in scattering_shapes() {
         list.push((format!("default, {name}"), with_scattering(default.clone(), shape)));
@@ -124,7 +155,15 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) {
         if wanted.as_ref().is_some_and(|w| !w.contains(&label.as_str())) {
             continue;
         }
-        let r = run(&label, wl, spectra, &options);
+        let mut r = if label.ends_with(CONTINUED_700) {
+            let altered: Vec<Vec<f64>> = spectra.iter().map(|s| continued_700(s)).collect();
+            run(&label, wl, &altered, &options)
+        } else {
+            run(&label, wl, spectra, &options)
+        };
+        if label.ends_with(CONTINUED_700) {
+            r.fits = scored_against(r.fits, spectra, wl, &options);
+        }
         let rows = class_rows(&r.fits, spectra, wl);
         println!("\n### {label}\n");
         print_class_table(&rows);
