@@ -132,7 +132,7 @@ fn presets_block(tones: &[Tone]) -> String {
 }
 
 /// `text` with the lines between the line containing `begin` and the line containing `end` replaced by `body` (for
-/// params.rs; a doc's blocks are stamped: `spectral_skin::stamp::replace_markdown_block`).
+/// params.rs; a doc's blocks are stamped: `spectral_skin::stamp::write_markdown_blocks`).
 fn replace_between(text: &str, begin: &str, end: &str, body: &str) -> String {
     let start = text.find(begin).unwrap_or_else(|| panic!("marker {begin:?} not found"));
     let start = start + text[start..].find('\n').expect("line end") + 1;
@@ -153,10 +153,9 @@ fn main() {
         let rs = std::fs::read_to_string(PARAMS_RS).expect("read params.rs");
         let rs = replace_between(&rs, "// BEGIN palette", "// END palette", &presets_block(&tones));
         std::fs::write(PARAMS_RS, rs).expect("write params.rs");
-        let doc = std::fs::read_to_string(DOC).expect("read the doc");
         let command = "cargo run --release --example palette -- --write";
-        let doc = spectral_skin::stamp::replace_markdown_block(&doc, "palette table", command, &table).unwrap();
-        spectral_skin::maps::io::write_atomic(std::path::Path::new(DOC), doc.as_bytes()).expect("write the doc");
+        spectral_skin::stamp::write_markdown_blocks(std::path::Path::new(DOC), command, &[("palette table", &table)])
+            .expect("write the doc");
         eprintln!("wrote {PARAMS_RS} and {DOC}");
     }
 }

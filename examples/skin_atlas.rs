@@ -94,9 +94,7 @@ fn main() {
             a.hemoglobin[1]
         );
     }
-    let text = std::fs::read_to_string(&doc).unwrap_or_else(|e| panic!("{}: {e}", doc.display()));
-    let text = spectral_skin::stamp::replace_markdown_block(&text, "measured colours", REGENERATE, &table).unwrap();
-    spectral_skin::maps::io::write_atomic(&doc, text.as_bytes()).unwrap();
+    spectral_skin::stamp::write_markdown_blocks(&doc, REGENERATE, &[("measured colours", &table)]).unwrap();
     print!("{table}");
     for t in THICKNESSES_MM {
         let width = BLENDS.len() * panel + (BLENDS.len() - 1) * GAP_PX;

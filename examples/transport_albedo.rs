@@ -28,9 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         writeln!(table, "| {} | {} | {} | {} |", preset.name, rgb(before), rgb(after), change.join(", "))?;
     }
     let command = "cargo run --release --example transport_albedo";
-    let doc = std::fs::read_to_string(DOC)?;
-    let doc = spectral_skin::stamp::replace_markdown_block(&doc, "transport albedo", command, &table)?;
-    spectral_skin::maps::io::write_atomic(Path::new(DOC), doc.as_bytes())?;
+    spectral_skin::stamp::write_markdown_blocks(Path::new(DOC), command, &[("transport albedo", &table)])?;
     print!("{table}");
     Ok(())
 }

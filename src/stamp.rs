@@ -39,6 +39,18 @@ pub fn replace_markdown_block(text: &str, name: &str, command: &str, body: &str)
     Ok(format!("{}{begin}\n{stamp}\n{body}\n{end}{}", &text[..start], &text[stop..]))
 }
 
+/// Replaces the blocks `(name, body)` of the Markdown doc at `path` ([`replace_markdown_block`], each under the stamp
+/// of `command`) and writes it back in one atomic write (staged beside it and renamed: never half a doc). A missing
+/// marker leaves the doc as it was.
+pub fn write_markdown_blocks(path: &Path, command: &str, blocks: &[(&str, &str)]) -> Result<(), SkinError> {
+    let mut text =
+        std::fs::read_to_string(path).map_err(|e| SkinError::io_caused(path, format!("cannot read: {e}"), e))?;
+    for (name, body) in blocks {
+        text = replace_markdown_block(&text, name, command, body)?;
+    }
+    crate::maps::io::write_atomic(path, text.as_bytes())
+}
+
 /// The model versions of every stamp in a Markdown text, in order of appearance (empty when it has none). A stamp
 /// whose version does not parse is returned as `None`.
 pub fn markdown_stamp_versions(text: &str) -> Vec<Option<u32>> {
@@ -123,6 +135,13 @@ mod tests {
         assert_eq!(replace_markdown_block(&new, "maps", "a script", "new").unwrap(), new);
         let err = replace_markdown_block(doc, "palette", "a script", "x").unwrap_err().to_string();
         assert!(err.contains("BEGIN palette"), "{err}");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("doc.md");
+        std::fs::write(&path, doc).unwrap();
+        write_markdown_blocks(&path, "a script", &[("maps", "new\n")]).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), expected);
+        assert!(write_markdown_blocks(&path, "a script", &[("maps", "other"), ("palette", "x")]).is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), expected, "a missing marker changed the doc");
     }
 
     #[test]

@@ -122,12 +122,10 @@ impl Blocks {
 
     /// Rewrites every block of DOC, stamped with `command`, in one atomic write.
     fn write(&self, command: &str) {
-        let mut text = std::fs::read_to_string(DOC).unwrap_or_else(|e| panic!("{DOC}: {e}"));
-        for (name, body) in &self.0 {
-            let name = format!("measured-skin {name}");
-            text = spectral_skin::stamp::replace_markdown_block(&text, &name, command, body).unwrap();
-        }
-        spectral_skin::maps::io::write_atomic(Path::new(DOC), text.as_bytes()).unwrap();
+        let names: Vec<String> = self.0.iter().map(|(name, _)| format!("measured-skin {name}")).collect();
+        let blocks: Vec<(&str, &str)> =
+            names.iter().zip(&self.0).map(|(n, (_, body))| (n.as_str(), body.as_str())).collect();
+        spectral_skin::stamp::write_markdown_blocks(Path::new(DOC), command, &blocks).unwrap();
         eprintln!("wrote {} blocks of {DOC}", self.0.len());
     }
 }

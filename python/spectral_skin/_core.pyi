@@ -25,8 +25,8 @@ __all__ = [
     "_cli_main",
     "_markdown_stamp",
     "_png_stamp_version",
-    "_replace_markdown_block",
     "_stamp_png",
+    "_write_markdown_blocks",
     "accuracy_levels",
     "blender_targets",
     "cielab",
@@ -57,7 +57,7 @@ __version__: str
 MODEL_VERSION: int
 
 def _markdown_stamp(command: str) -> str: ...
-def _replace_markdown_block(text: str, name: str, command: str, body: str) -> str: ...
+def _write_markdown_blocks(path: str | os.PathLike[str], command: str, blocks: Sequence[tuple[str, str]]) -> None: ...
 def _stamp_png(path: str | os.PathLike[str], command: str) -> None: ...
 def _png_stamp_version(path: str | os.PathLike[str]) -> int | None: ...
 

@@ -1,6 +1,6 @@
 """The model-version stamp of the docs and figures a script writes (the core's, src/stamp.rs, through the Python
 binding): a doc written whole starts with :func:`stamp`, a block of a hand-written doc is replaced by
-:func:`write_block`, a picture gets :func:`stamp_png`. tests/physics/doc_stamps.rs fails when one is older than the
+:func:`write_blocks`, a picture gets :func:`stamp_png`. tests/physics/doc_stamps.rs fails when one is older than the
 model (docs/tests.md, Stamped docs)."""
 
 from __future__ import annotations
@@ -9,7 +9,6 @@ import os
 import sys
 from pathlib import Path
 
-import spectral_skin
 from spectral_skin import _core
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -26,11 +25,10 @@ def stamp(cmd: str) -> str:
     return _core._markdown_stamp(cmd)
 
 
-def write_block(path: Path, name: str, cmd: str, body: str) -> None:
-    """Replaces the block ``name`` of the doc at ``path`` by ``body`` under the stamp of ``cmd``; written to a
-    temporary file beside it and renamed."""
-    text = _core._replace_markdown_block(path.read_text(encoding="utf-8"), name, cmd, body)
-    write_text(path, text)
+def write_blocks(path: Path, cmd: str, blocks: dict[str, str]) -> None:
+    """Replaces the blocks ``{name: body}`` of the doc at ``path``, each under the stamp of ``cmd``, in one atomic
+    write (the core's ``stamp::write_markdown_blocks``)."""
+    _core._write_markdown_blocks(str(path), cmd, list(blocks.items()))
 
 
 def write_text(path: Path, text: str) -> None:
@@ -43,10 +41,6 @@ def write_text(path: Path, text: str) -> None:
 def stamp_png(path: Path, cmd: str) -> None:
     """Stamps the picture at ``path`` as written by ``cmd`` from this model (its pixels unchanged)."""
     _core._stamp_png(str(path), cmd)
-
-
-def model_version() -> int:
-    return spectral_skin.MODEL_VERSION
 
 
 if __name__ == "__main__":  # pragma: no cover - a look at a picture's stamp

@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts" / "lib"))
 
 import spectral_skin  # noqa: E402
-from doc_stamp import command, write_block  # noqa: E402
+from doc_stamp import command, write_blocks  # noqa: E402
 
 README = ROOT / "README.md"
 TARGETS_DOC = ROOT / "docs" / "blender-targets.md"
@@ -195,10 +195,8 @@ def presets_on_targets_table() -> str:
 
 def main() -> None:
     cmd = command(__file__)
-    write_block(README, "map files", cmd, map_files_table())
-    write_block(README, "skin types", cmd, skin_types_table())
-    write_block(TARGETS_DOC, "blender targets", cmd, targets_table())
-    write_block(TARGETS_DOC, "presets on targets", cmd, presets_on_targets_table())
+    write_blocks(README, cmd, {"map files": map_files_table(), "skin types": skin_types_table()})
+    write_blocks(TARGETS_DOC, cmd, {"blender targets": targets_table(), "presets on targets": presets_on_targets_table()})
     print(
         f"doc_tables: wrote the map files and skin types blocks of {README.name} and the blender targets and "
         f"presets on targets blocks of {TARGETS_DOC.relative_to(ROOT)} (model {spectral_skin.MODEL_VERSION})"

@@ -28,7 +28,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import OpenImageIO as oiio  # noqa: E402
 import spectral_skin  # noqa: E402
-from doc_stamp import command, write_block  # noqa: E402
+from doc_stamp import command, write_blocks  # noqa: E402
 
 import blender_addon  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
@@ -248,7 +248,7 @@ def main() -> None:
     preset = f"{props.preset.lower()}, oiliness {props.oiliness:.3g}"
     header = ["input", *found, "notes"]
     body = caption(preset) + "\n\n" + table(header, rows(found))
-    write_block(DOC, BLOCK, command(__file__, python=PYTHON), body)
+    write_blocks(DOC, command(__file__, python=PYTHON), {BLOCK: body})
     print(body)
 
 

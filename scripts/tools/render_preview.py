@@ -4,7 +4,7 @@ palette: rows of six in the core's order, the first row at the back), applied by
 Headless (bpy as a Python module, no Blender UI): Cycles CPU, Christensen-Burley subsurface, a sun and a dim sky,
 480x200 px, 128 samples, written as an sRGB PNG (Standard view transform) stamped with the model's version.
 
-    .venv/bin/python scripts/tools/render_preview.py [--out docs/images/presets.png] [--samples 128] [--size 480x240]
+    .venv/bin/python scripts/tools/render_preview.py [--out docs/images/presets.png] [--samples 128] [--size 480x200]
 """
 
 from __future__ import annotations

@@ -46,7 +46,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("MODEL_VERSION", crate::stamp::MODEL_VERSION)?;
     m.add_function(wrap_pyfunction!(stamp::markdown_stamp_py, m)?)?;
-    m.add_function(wrap_pyfunction!(stamp::replace_markdown_block_py, m)?)?;
+    m.add_function(wrap_pyfunction!(stamp::write_markdown_blocks_py, m)?)?;
     m.add_function(wrap_pyfunction!(stamp::stamp_png_py, m)?)?;
     m.add_function(wrap_pyfunction!(stamp::png_stamp_version_py, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate_py, m)?)?;

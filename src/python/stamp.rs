@@ -16,12 +16,19 @@ pub(super) fn markdown_stamp_py(command: &str) -> String {
     stamp::markdown_stamp(command)
 }
 
-/// ``text`` with its block ``name`` (between ``<!-- BEGIN name -->`` and ``<!-- END name -->``) replaced by the
-/// stamp and ``body``. Raises SpectralSkinError when the markers are missing.
+/// Replaces the blocks ``{name: body}`` of the Markdown doc at ``path`` (each between ``<!-- BEGIN name -->`` and
+/// ``<!-- END name -->``) by the stamp of ``command`` and the body, in one atomic write. Raises SpectralSkinError
+/// when a marker is missing (the doc unchanged), SpectralSkinIOError when it cannot be read or written.
 #[pyfunction]
-#[pyo3(name = "_replace_markdown_block")]
-pub(super) fn replace_markdown_block_py(text: &str, name: &str, command: &str, body: &str) -> PyResult<String> {
-    Ok(stamp::replace_markdown_block(text, name, command, body)?)
+#[pyo3(name = "_write_markdown_blocks")]
+pub(super) fn write_markdown_blocks_py(
+    py: Python<'_>,
+    path: PathBuf,
+    command: &str,
+    blocks: Vec<(String, String)>,
+) -> PyResult<()> {
+    let blocks: Vec<(&str, &str)> = blocks.iter().map(|(n, b)| (n.as_str(), b.as_str())).collect();
+    detached(py, || stamp::write_markdown_blocks(&path, command, &blocks))
 }
 
 /// Stamps the PNG at ``path`` (a text chunk; pixels unchanged; staged and renamed).

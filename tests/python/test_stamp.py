@@ -18,14 +18,17 @@ def test_model_version_is_public_and_in_a_maps_report() -> None:
     assert maps["report"]["model_version"] == spectral_skin.MODEL_VERSION
 
 
-def test_a_block_is_replaced_under_a_stamp_naming_the_model() -> None:
-    doc = "intro\n<!-- BEGIN t -->\nold\n<!-- END t -->\nend\n"
-    new = _core._replace_markdown_block(doc, "t", "python make.py", "| a |\n")
+def test_a_block_is_replaced_under_a_stamp_naming_the_model(tmp_path) -> None:
+    path = tmp_path / "doc.md"
+    path.write_text("intro\n<!-- BEGIN t -->\nold\n<!-- END t -->\nend\n")
+    _core._write_markdown_blocks(path, "python make.py", [("t", "| a |\n")])
     stamp = _core._markdown_stamp("python make.py")
-    assert new == f"intro\n<!-- BEGIN t -->\n{stamp}\n| a |\n<!-- END t -->\nend\n"
+    expected = f"intro\n<!-- BEGIN t -->\n{stamp}\n| a |\n<!-- END t -->\nend\n"
+    assert path.read_text() == expected
     assert f"model {spectral_skin.MODEL_VERSION}:" in stamp
     with pytest.raises(SpectralSkinError, match="BEGIN u"):
-        _core._replace_markdown_block(doc, "u", "python make.py", "x")
+        _core._write_markdown_blocks(path, "python make.py", [("t", "other"), ("u", "x")])
+    assert path.read_text() == expected
 
 
 def test_a_png_is_stamped_without_changing_its_pixels(tmp_path) -> None:
