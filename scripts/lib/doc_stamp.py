@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import os
 import sys
+import textwrap
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from spectral_skin import _core
@@ -23,6 +25,17 @@ def command(script_file: str, *args: str, python: str = ".venv/bin/python") -> s
 def stamp(cmd: str) -> str:
     """The stamp line of a doc written whole by ``cmd`` (put it on the doc's first line)."""
     return _core._markdown_stamp(cmd)
+
+
+def markdown_table(header: Sequence[str], rows: Iterable[Sequence[str]]) -> str:
+    """A Markdown table of ``rows`` under ``header``."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return "\n".join(lines + ["| " + " | ".join(row) + " |" for row in rows])
+
+
+def paragraph(text: str) -> str:
+    """``text`` wrapped at the docs' 120 columns, words and hyphenated names kept whole."""
+    return textwrap.fill(text, width=120, break_long_words=False, break_on_hyphens=False)
 
 
 def write_blocks(path: Path, cmd: str, blocks: dict[str, str]) -> None:

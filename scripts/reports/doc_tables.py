@@ -12,8 +12,7 @@ each target (block ``presets on targets``, from ``evaluate``).
 from __future__ import annotations
 
 import sys
-import textwrap
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +20,8 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts" / "lib"))
 
 import spectral_skin  # noqa: E402
-from doc_stamp import command, write_blocks  # noqa: E402
+from doc_stamp import command, paragraph, write_blocks  # noqa: E402
+from doc_stamp import markdown_table as table  # noqa: E402
 
 README = ROOT / "README.md"
 TARGETS_DOC = ROOT / "docs" / "blender-targets.md"
@@ -36,13 +36,6 @@ RADIUS_WORDS = {
 }
 ENGINE_WORDS = {"cycles": "Cycles", "eevee": "EEVEE"}
 RANDOM_WALK = "RANDOM_WALK"
-
-
-def table(header: Sequence[str], rows: Iterable[Sequence[str]]) -> str:
-    """A Markdown table."""
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(row) + " |" for row in rows]
-    return "\n".join(lines)
 
 
 def map_files_table() -> str:
@@ -120,7 +113,7 @@ def _targets_summary(targets: dict[str, Any]) -> str:
         f"the default target is the current release, Blender {default['blender']} with "
         f"{ENGINE_WORDS.get(default['engine'], default['engine'])} ({tested})."
     )
-    return textwrap.fill(text, width=120, break_long_words=False, break_on_hyphens=False)
+    return paragraph(text)
 
 
 def _srgb_hex(linear: Sequence[float]) -> str:

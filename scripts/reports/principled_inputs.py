@@ -15,8 +15,7 @@ from __future__ import annotations
 
 import sys
 import tempfile
-import textwrap
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +27,8 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import OpenImageIO as oiio  # noqa: E402
 import spectral_skin  # noqa: E402
-from doc_stamp import command, write_blocks  # noqa: E402
+from doc_stamp import command, paragraph, write_blocks  # noqa: E402
+from doc_stamp import markdown_table as table  # noqa: E402
 
 import blender_addon  # noqa: E402
 from blender_addon import nodes as addon_nodes  # noqa: E402
@@ -219,11 +219,6 @@ def rows(found: dict[str, dict[str, str]]) -> Iterable[list[str]]:
         yield [label, *cells, NOTES.get(name, "") + oiliness_note(name) + roughness_note(name)]
 
 
-def table(header: Sequence[str], body: Iterable[Sequence[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return "\n".join(lines + ["| " + " | ".join(row) + " |" for row in body])
-
-
 def caption(preset: str) -> str:
     text = (
         f"Read back from the add-on's Principled BSDF after Apply in bpy {bpy.app.version_string}: a new material "
@@ -232,7 +227,7 @@ def caption(preset: str) -> str:
         "inputs take the texture maps) and in Live mode (which the node group feeds; the other inputs as "
         "Baked). Inputs not listed keep the Principled BSDF's defaults."
     )
-    return textwrap.fill(text, width=120, break_long_words=False, break_on_hyphens=False)
+    return paragraph(text)
 
 
 def main() -> None:
