@@ -6,9 +6,11 @@
 pub mod albedo;
 pub mod albedo_gains;
 pub mod albedo_maps;
+pub mod aperture;
 pub mod bandpass;
 pub mod lm;
 pub mod spectrum;
 
+pub use aperture::Aperture;
 pub use bandpass::Bandpass;
 pub use spectrum::{fit_spectrum, FitOptions, Objective, SpectrumFit, SpectrumFitter, Specular, DEFAULT_FREE};

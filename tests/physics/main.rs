@@ -6,6 +6,7 @@
 mod support;
 
 mod accuracy;
+mod aperture;
 mod cancel_latency;
 mod diffusion_references;
 mod doc_stamps;
