@@ -152,6 +152,11 @@ struct FitArgs {
     /// choice of docs/measured-skin.md (Instrument bandpass).
     #[arg(long)]
     bandpass: Option<String>,
+    /// The instrument's lit and measured discs, to model the light the skin carries out of the measured one:
+    /// cm2600d-mav, cm2600d-sav or the two radii in mm, LIT,MEASURED; default: none (the skin's total reflectance;
+    /// docs/measured-skin.md, Instrument aperture).
+    #[arg(long)]
+    aperture: Option<String>,
     /// What is minimised.
     #[arg(long, value_enum, default_value_t = crate::inverse::Objective::Reflectance)]
     objective: crate::inverse::Objective,
@@ -622,6 +627,9 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
                 v.parse().map_err(|_| format!("--bandpass: expected spacing or a number; got {v:?}"))?,
             ),
         };
+    }
+    if let Some(spec) = args.aperture.as_deref() {
+        options.aperture = Some(crate::inverse::Aperture::parse(spec)?);
     }
     ctrl_c::catch();
     let fit =

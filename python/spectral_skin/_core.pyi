@@ -565,5 +565,6 @@ def fit_spectrum(
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
     bandpass: Literal["spacing"] | float | None = None,
+    aperture: Literal["cm2600d-mav", "cm2600d-sav"] | str | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_spectrum)``."""

@@ -15,14 +15,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::aperture::{Aperture, ApertureKernel};
 use super::bandpass::{Bandpass, Sampling};
 use super::lm::{minimize, LmResult, LmSettings};
 use crate::color::spectrum::VISIBLE_RANGE_NM;
 use crate::color::{ciede2000, lab_from_xyz, spectrum_to_xyz, WavelengthGrid};
 use crate::error::SkinError;
 use crate::evaluate::{diffuse_reflectance_at, Request};
-use crate::skin::optics::SKIN_IOR;
+use crate::skin::optics::{skin_layers, SKIN_IOR};
 use crate::skin::params::{SkinParams, OILINESS, PARAMS, PARAM_COUNT};
+use crate::transport::profile_table::exact_shape;
 
 /// The paper's parameters that change the diffuse reflectance (the oiliness scales only the specular lobe).
 pub const PAPER_FREE: [&str; 3] = ["melanin", "melanin_blend", "hemoglobin"];
@@ -111,6 +113,11 @@ pub struct FitOptions {
     /// The instrument's spectral bandpass the model spectrum is averaged over before it is compared with the
     /// measurement ([`Bandpass`]; docs/measured-skin.md, Instrument bandpass).
     pub bandpass: Bandpass,
+    /// The instrument's lit and measured discs, if the light the skin carries out of the measured one is modelled
+    /// ([`Aperture`]; docs/measured-skin.md, Instrument aperture): the model's diffuse reflectance at each wavelength
+    /// times the fraction of it that leaves inside the measured disc (from the exact radial profile). None (the
+    /// default): the total, an aperture large against the light's spread.
+    pub aperture: Option<Aperture>,
     /// How many of the table's best starts are refined (the best result is kept); the default 4 leaves little for
     /// more starts to find on the measured skin spectra (docs/measured-skin.md, the restart check).
     pub starts: usize,
@@ -127,6 +134,7 @@ impl Default for FitOptions {
             specular: Specular::Free,
             objective: Objective::Reflectance,
             bandpass: DEFAULT_BANDPASS,
+            aperture: None,
             starts: DEFAULT_STARTS,
             request: Request::default(),
         }
@@ -149,6 +157,8 @@ pub struct SpectrumFit {
     /// "spacing" or "fwhm" ([`Bandpass`]) and the bandpass (FWHM, nm) at each wavelength; 0: the model sampled there.
     pub bandpass: &'static str,
     pub bandpass_nm: Vec<f64>,
+    /// The instrument's discs the model's reflectance was measured through, if modelled ([`FitOptions::aperture`]).
+    pub aperture: Option<Aperture>,
     /// The model's diffuse reflectance (averaged over the bandpass) plus the offset, at `wavelengths_nm`: what was
     /// compared with the measurement.
     pub fitted_reflectance: Vec<f64>,
@@ -182,6 +192,8 @@ pub struct SpectrumFitter {
     /// The bandpass at each wavelength and the model's wavelengths it averages over.
     bandpass_nm: Vec<f64>,
     sampling: Sampling,
+    /// The aperture's quadrature, if one is modelled.
+    aperture: Option<ApertureKernel>,
     options: FitOptions,
     /// Indices into PARAMS of the free parameters.
     free: Vec<usize>,
@@ -290,6 +302,26 @@ impl SpectrumFitter {
         }
         crate::transport::adding_doubling::validate_streams(options.request.accuracy.streams)?;
         crate::evaluate::validate_model(&options.request.model)?;
+        let aperture = match options.aperture {
+            Some(a) => {
+                a.validate()?;
+                if options.request.transport != crate::transport::Transport::AddingDoubling {
+                    return Err(SkinError::invalid(
+                        "aperture",
+                        "the aperture needs the exact radial profile: transport adding_doubling",
+                    ));
+                }
+                if options.request.model.dermis_thickness_mm.is_finite() {
+                    return Err(SkinError::invalid(
+                        "aperture",
+                        "the aperture needs the exact radial profile, which is tabulated for a semi-infinite dermis \
+                         only (dermis_thickness_mm = infinity)",
+                    ));
+                }
+                Some(a.kernel())
+            }
+            None => None,
+        };
         let bandpass_nm = options.bandpass.widths_nm(wavelengths_nm)?;
         let sampling = Sampling::new(wavelengths_nm, &bandpass_nm);
         let grid = WavelengthGrid { wavelengths_nm: wavelengths_nm.to_vec() };
@@ -299,6 +331,7 @@ impl SpectrumFitter {
             wavelengths_nm: wavelengths_nm.to_vec(),
             bandpass_nm,
             sampling,
+            aperture,
             options: options.clone(),
             free,
             base,
@@ -324,7 +357,17 @@ impl SpectrumFitter {
             v[k] = value;
         }
         let params = SkinParams::from_values(v).ok()?;
-        let at_nodes = diffuse_reflectance_at(&params, &self.options.request, &self.sampling.nodes_nm, cancel).ok()?;
+        let mut at_nodes =
+            diffuse_reflectance_at(&params, &self.options.request, &self.sampling.nodes_nm, cancel).ok()?;
+        if let Some(kernel) = &self.aperture {
+            // What the instrument measures at a node: the reflectance times the fraction leaving inside its measured
+            // disc, averaged over the bandpass below. A stack the profile table does not hold (an epidermis over 10
+            // mean free paths thick) is rejected.
+            let model = &self.options.request.model;
+            let shape_at = |nm: f64| exact_shape(&skin_layers(&params, model, nm));
+            let fractions = kernel.fractions(&self.sampling.nodes_nm, shape_at)?;
+            at_nodes.iter_mut().zip(fractions).for_each(|(r, f)| *r *= f);
+        }
         Some(self.sampling.apply(&at_nodes))
     }
 
@@ -473,6 +516,7 @@ impl SpectrumFitter {
             wavelengths_nm: self.wavelengths_nm.clone(),
             bandpass: self.options.bandpass.name(),
             bandpass_nm: self.bandpass_nm.clone(),
+            aperture: self.options.aperture,
             fitted_reflectance: fitted,
             rms,
             delta_e00: ciede2000(lab_measured, lab_fitted),

@@ -4,6 +4,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
+use crate::inverse::aperture::Aperture;
 use crate::inverse::bandpass::Bandpass;
 use crate::inverse::spectrum::{FitOptions, Objective, Specular, ALL_OBJECTIVES, MAX_SPECTRUM_WAVELENGTHS};
 use crate::skin::params::{PARAMS, PARAM_COUNT};
@@ -39,6 +40,10 @@ use super::errors::invalid;
 ///         "spacing" (as wide as the wavelengths' spacing, at most 20 nm; ASTM E308's assumption), a number 0..20
 ///         (0: the model sampled at the wavelengths themselves); None: the default (docs/measured-skin.md,
 ///         Instrument bandpass).
+///     aperture: the instrument's lit and measured discs, to model the light the skin carries sideways out of the
+///         measured one (its "edge loss", largest in the red): "cm2600d-mav", "cm2600d-sav" or the two radii in mm,
+///         "LIT,MEASURED"; None: the skin's total reflectance (docs/measured-skin.md, Instrument aperture). Needs the
+///         default transport.
 ///     objective: what is minimised: "reflectance" (the squared reflectance differences; the default) or
 ///         "cielab" (the squared CIELAB difference of the colours, the reflectance differences only breaking ties).
 ///     starts: how many of the start table's best entries are refined (the best fit is kept), 1..64; None: 4
@@ -51,8 +56,8 @@ use super::errors::invalid;
 /// Returns:
 ///     A dict: "params" (every model parameter, fitted and fixed, by name), "free" (the fitted names), "specular"
 ///     ("free", "fresnel" or "fixed"), "specular_offset", "objective", "wavelengths_nm" (K,), "bandpass" ("spacing"
-///     or "fwhm"), "bandpass_nm" (the FWHM at each wavelength), "fitted_reflectance" (K,) (model, averaged over the
-///     bandpass, plus offset), "rms" (root-mean-square difference from the measurement), "delta_e00" (CIEDE2000
+///     or "fwhm"), "bandpass_nm" (the FWHM at each wavelength), "aperture" (None or the discs' radii), "fitted_reflectance"
+///     (K,) (model, averaged over the bandpass, times the aperture's measured fraction, plus offset), "rms" (root-mean-square difference from the measurement), "delta_e00" (CIEDE2000
 ///     of the two spectra's colours under D65), "lab_measured", "lab_fitted", "starts", "evaluations", "transport",
 ///     "streams".
 ///
@@ -60,14 +65,15 @@ use super::errors::invalid;
 ///     SpectralSkinError: wavelengths outside 380..780 nm, not increasing or too few; a reflectance that is not one
 ///         finite value in 0..1 per wavelength; an unknown or repeated free parameter, or "oiliness"; a fixed value
 ///         out of range or for a free parameter; a paper parameter neither free nor fixed; an unknown specular or
-///         objective; a specular number outside 0..0.1; an unknown bandpass or a number outside 0..20.
+///         objective; a specular number outside 0..0.1; an unknown bandpass or a number outside 0..20; an unknown aperture or radii outside 0..100 mm (the measured
+///         disc inside the lit one); an aperture with a transport other than "adding_doubling".
 ///     TypeError: an argument of the wrong type.
 #[pyfunction]
 #[pyo3(
     name = "fit_spectrum",
     signature = (
         wavelengths_nm, reflectance, *, free = None, fixed = None, specular = None, objective = "reflectance",
-        starts = None, transport = "adding_doubling", streams = None, bandpass = None
+        starts = None, transport = "adding_doubling", streams = None, bandpass = None, aperture = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -83,6 +89,7 @@ pub(super) fn fit_spectrum_py<'py>(
     transport: &str,
     streams: Option<&Bound<'py, PyAny>>,
     bandpass: Option<&Bound<'py, PyAny>>,
+    aperture: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
     const NUMBERS: &str = "a 1-D sequence or array of numbers";
     let wavelengths = real_vector("wavelengths_nm", wavelengths_nm, NUMBERS, MAX_SPECTRUM_WAVELENGTHS)?;
@@ -128,6 +135,7 @@ pub(super) fn fit_spectrum_py<'py>(
         },
         Some(b) => Bandpass::FwhmNm(real_of("bandpass", b)?.0),
     };
+    options.aperture = aperture.map(Aperture::parse).transpose()?;
     options.objective = by_name::<Objective>("objective", objective, &ALL_OBJECTIVES)?;
     if let Some(n) = count_arg("starts", starts)? {
         options.starts = usize::try_from(n.0).map_err(|_| invalid("starts", format!("must be >= 1; got {}", n.0)))?;

@@ -630,6 +630,18 @@ fn fit_a_measured_spectrum() {
     assert!(v["rms"].as_f64().unwrap() < 0.02 && v["delta_e00"].as_f64().unwrap() < 2.0, "{v}");
     assert_eq!(v["fitted_reflectance"].as_array().unwrap().len(), 31);
     assert!(v["params"]["epidermis_thickness_mm"].is_number() && v["specular"] == "free", "{v}");
+    assert!(v["aperture"].is_null(), "no aperture by default: {v}");
+    // The instrument's aperture by name, echoed as its radii; bad radii name the input and the range.
+    let out = run(&["fit", "--spectrum", path.to_str().unwrap(), "--aperture", "cm2600d-sav", "--specular", "fresnel"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["aperture"]["measured_radius_mm"], 1.5, "{v}");
+    assert!(v["rms"].as_f64().unwrap() < 0.02, "{v}");
+    for (spec, needle) in [("3,4", "aperture.illuminated_radius_mm"), ("mav", "cm2600d-mav")] {
+        let out = run(&["fit", "--spectrum", path.to_str().unwrap(), "--aperture", spec]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.code() == Some(2) && err.contains(needle), "{spec}: {err}");
+    }
     std::fs::write(&path, "400,0.1\n410,0.1\n").unwrap();
     let out = run(&["fit", "--spectrum", path.to_str().unwrap(), "--specular", "fresnel"]);
     let err = String::from_utf8_lossy(&out.stderr);

@@ -50,6 +50,29 @@ def test_default_bandpass_is_one_and_a_half_spacings() -> None:
     assert spectral_skin.fit_spectrum(wavelengths, measured, bandpass=15)["rms"] == pytest.approx(fit["rms"])
 
 
+def test_aperture_lowers_the_red_and_is_echoed() -> None:
+    """docs/measured-skin.md, Instrument aperture: a contact instrument's measured disc misses the light skin carries
+    out of it, most in the red; the fit models it on request and says which discs it assumed."""
+    wavelengths, measured = _model_spectrum(0.0)
+    fixed = {name: value for name, value in TRUTH.items() if name != "melanin"}
+    total = spectral_skin.fit_spectrum(wavelengths, measured, free=["melanin"], fixed=fixed, specular=0.0)
+    sav = spectral_skin.fit_spectrum(wavelengths, measured, free=["melanin"], fixed=fixed, specular=0.0,
+                                     aperture="cm2600d-sav")
+    assert total["aperture"] is None
+    assert sav["aperture"] == {"illuminated_radius_mm": 3.0, "measured_radius_mm": 1.5}
+    # The exact spectrum is the total: read through the aperture it needs less melanin to match the red.
+    assert sav["params"]["melanin"] < total["params"]["melanin"]
+    radii = spectral_skin.fit_spectrum(wavelengths, measured, free=["melanin"], fixed=fixed, specular=0.0,
+                                       aperture="3, 1.5")
+    assert radii["params"]["melanin"] == sav["params"]["melanin"]
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"aperture.*cm2600d-mav"):
+        spectral_skin.fit_spectrum(wavelengths, measured, aperture="mav")
+    with pytest.raises(spectral_skin.SpectralSkinError, match=r"aperture\.illuminated_radius_mm"):
+        spectral_skin.fit_spectrum(wavelengths, measured, aperture="1,2")
+    with pytest.raises(spectral_skin.SpectralSkinError, match="aperture.*adding_doubling"):
+        spectral_skin.fit_spectrum(wavelengths, measured, aperture="cm2600d-mav", transport="diffusion")
+
+
 def test_bad_input_names_the_argument() -> None:
     wavelengths, measured = _model_spectrum(0.0)
     bad = measured.copy()
