@@ -7,8 +7,9 @@
 //! cargo run --release --example measured_skin_report [-- --every N] (the doc's figures: `--every 16`)
 //! cargo run --release --example measured_skin_report -- --classes [--every N]: the per-class table of
 //! docs/measured-skin.md (Skin types and the Q bands): the fit before the bandpass, the default, and the options.
-//! cargo run --release --example measured_skin_report -- --study [--every N] [--only "LABEL;LABEL"]: issue 39's study
-//! of the Q-band residual by skin type, every candidate (study.rs).
+//! cargo run --release --example measured_skin_report -- --study [--every N] [--only "LABEL;LABEL"] [--class NAME]:
+//! issue 39's study of the Q-band residual by skin type, every candidate (study.rs); NAME: an ITA class
+//! (`color::ita::ITA_CLASSES`, e.g. dark), only its spectra.
 
 mod classes;
 mod data;
@@ -413,13 +414,23 @@ fn regenerate_command(every: usize) -> String {
     }
 }
 
+/// The spectra whose measured colour falls in the ITA class `name` (`color::ita::ITA_CLASSES`' names).
+fn of_class(wl: &[f64], spectra: Vec<Vec<f64>>, name: &str) -> Vec<Vec<f64>> {
+    use spectral_skin::color::ita::{ita_class, ita_degrees};
+    let fitter = SpectrumFitter::new(wl, &FitOptions::default()).expect("fitter");
+    spectra.into_iter().filter(|s| ita_class(ita_degrees(fitter.lab(s))).is_some_and(|c| c.name == name)).collect()
+}
+
 fn main() {
     static FONT: &[u8] = include_bytes!("../accuracy_report/DejaVuSans.ttf");
     let _ = register_font("sans-serif", FontStyle::Normal, FONT);
     let args: Vec<String> = std::env::args().collect();
     let every: usize = args.iter().position(|a| a == "--every").map(|i| args[i + 1].parse().unwrap()).unwrap_or(1);
     let (wl, all) = read_data(DATA);
-    let spectra: Vec<Vec<f64>> = all.iter().step_by(every).cloned().collect();
+    let mut spectra: Vec<Vec<f64>> = all.iter().step_by(every).cloned().collect();
+    if let Some(name) = args.iter().position(|a| a == "--class").map(|i| args[i + 1].as_str()) {
+        spectra = of_class(&wl, spectra, name);
+    }
     let threads = rayon::current_num_threads();
     println!(
         "{} spectra (every {every}th of {}), {} wavelengths, {threads} threads",

@@ -4,7 +4,8 @@
 //! on the same spectra, printed per ITA class (docs/measured-skin.md, Skin types and the Q bands).
 
 use spectral_skin::color::difference::ciede2000;
-use spectral_skin::inverse::{Bandpass, FitOptions, SpectrumFit, SpectrumFitter, Specular};
+use spectral_skin::inverse::aperture::{CM2600D_MAV, CM2600D_SAV};
+use spectral_skin::inverse::{Aperture, Bandpass, FitOptions, SpectrumFit, SpectrumFitter, Specular};
 use spectral_skin::skin::chromophores::EumelaninShape;
 use spectral_skin::skin::scattering::ScatteringShape;
 
@@ -56,6 +57,11 @@ fn scattering_shapes() -> Vec<(String, ScatteringShape)> {
         ("scattering λ^-1.0".to_string(), ScatteringShape::MieRayleigh { f_ray: 0.0, b_mie: 1.0 }),
         ("scattering λ^-1.5".to_string(), ScatteringShape::MieRayleigh { f_ray: 0.0, b_mie: 1.5 }),
     ]
+}
+
+fn with_aperture(mut o: FitOptions, aperture: Aperture) -> FitOptions {
+    o.aperture = Some(aperture);
+    o
 }
 
 fn with_radius(mut o: FitOptions, radius_mm: f64) -> FitOptions {
@@ -142,6 +148,21 @@ fn candidates() -> Vec<(String, FitOptions)> {
             format!("default + oxygenation, fresnel, {name}"),
             with_scattering(fresnel(with_oxygenation(default.clone())), shape),
         ));
+    }
+    // The instrument's aperture (issue 39, What is left): the light the skin carries out of the measured disc, with
+    // either of the CM-2600d's masks (the data do not say which).
+    for (name, aperture) in [("aperture MAV", CM2600D_MAV), ("aperture SAV", CM2600D_SAV)] {
+        list.push((format!("default, {name}"), with_aperture(default.clone(), aperture)));
+        list.push((
+            format!("default + oxygenation, fresnel, {name}"),
+            with_aperture(fresnel(with_oxygenation(default.clone())), aperture),
+        ));
+        for (shape_name, shape) in scattering_shapes() {
+            list.push((
+                format!("default + oxygenation, fresnel, {name}, {shape_name}"),
+                with_aperture(with_scattering(fresnel(with_oxygenation(default.clone())), shape), aperture),
+            ));
+        }
     }
     list
 }
