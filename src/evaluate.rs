@@ -719,6 +719,9 @@ pub(crate) fn validate_model(m: &SkinModel) -> Result<(), SkinError> {
     check_range("eumelanin_k_per_mm", "eumelanin constant K_em", m.eumelanin_k_per_mm, 0.0, 1e13)?;
     let max_radius = crate::skin::chromophores::MAX_VESSEL_RADIUS_MM;
     check_range("blood_vessel_radius_mm", "dermal blood vessel radius, mm", m.blood_vessel_radius_mm, 0.0, max_radius)?;
+    let max_carotene = crate::skin::chromophores::MAX_CAROTENE_UMOL_PER_L;
+    let carotene = m.epidermal_carotene_umol_per_l;
+    check_range("epidermal_carotene_umol_per_l", "epidermal beta-carotene, umol/L", carotene, 0.0, max_carotene)?;
     match m.eumelanin_shape {
         crate::skin::chromophores::EumelaninShape::Dj2006 => {}
         crate::skin::chromophores::EumelaninShape::PowerLaw { exponent } => {

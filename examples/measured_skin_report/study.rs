@@ -149,6 +149,18 @@ fn candidates() -> Vec<(String, FitOptions)> {
             with_scattering(fresnel(with_oxygenation(default.clone())), shape),
         ));
     }
+    // Epidermal β-carotene (issue 39, What is left: the blue residual's shape), at fixed concentrations.
+    for umol in [1.0, 3.0, 10.0] {
+        let carotene = |mut o: FitOptions| {
+            o.request.model.epidermal_carotene_umol_per_l = umol;
+            o
+        };
+        list.push((format!("default, carotene {umol} umol/L"), carotene(default.clone())));
+        list.push((
+            format!("default + oxygenation, fresnel, carotene {umol} umol/L"),
+            carotene(fresnel(with_oxygenation(default.clone()))),
+        ));
+    }
     // The instrument's aperture (issue 39, What is left): the light the skin carries out of the measured disc, with
     // either of the CM-2600d's masks (the data do not say which).
     for (name, aperture) in [("aperture MAV", CM2600D_MAV), ("aperture SAV", CM2600D_SAV)] {

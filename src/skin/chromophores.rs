@@ -28,6 +28,28 @@ fn hemoglobin_table() -> &'static SpectralTable {
     TABLE.get_or_init(|| SpectralTable::parse(HEMOGLOBIN_CSV))
 }
 
+const CAROTENE_CSV: &str = include_str!("../../data/beta_carotene_extinction.csv");
+
+/// The most epidermal β-carotene the model accepts, µmol/L: ten times the 10 µmol/L the study tries
+/// (examples/measured_skin_report/study.rs); skin carotenoid contents are of the order of 0.1-1 nmol per gram of
+/// tissue (about µmol/L; docs/model.md, Epidermal carotene).
+pub const MAX_CAROTENE_UMOL_PER_L: f64 = 100.0;
+
+fn carotene_table() -> &'static SpectralTable {
+    static TABLE: OnceLock<SpectralTable> = OnceLock::new();
+    TABLE.get_or_init(|| SpectralTable::parse(CAROTENE_CSV))
+}
+
+/// Absorption of β-carotene at `umol_per_l` µmol/L, mm^-1: ln(10) ε c, ε the decadic molar extinction of
+/// data/beta_carotene_extinction.csv (PhotochemCAD, in hexane; 139500 cm^-1/M at 451 nm), 0 beyond 540 nm.
+pub fn sigma_a_carotene_per_mm(wavelength_nm: f64, umol_per_l: f64) -> f64 {
+    if umol_per_l == 0.0 {
+        return 0.0;
+    }
+    let per_cm_per_molar = carotene_table().interpolate(0, wavelength_nm).max(0.0);
+    std::f64::consts::LN_10 * per_cm_per_molar * umol_per_l * 1e-6 / 10.0
+}
+
 /// `sigma_a_em(lambda)`: eumelanin absorption, mm^-1, with the given `K_em` (DJ2006 eq. 3).
 pub fn sigma_a_eumelanin_per_mm(wavelength_nm: f64, k_em_per_mm: f64) -> f64 {
     k_em_per_mm * wavelength_nm.powf(EUMELANIN_EXPONENT)
@@ -138,6 +160,17 @@ mod tests {
     }
 
     /// Independently computed values (docs/model.md, section Reference numbers).
+    /// The carotene table's peak: 139500 cm^-1/M at 451 nm (Zechmeister & Polgar's value, to which PhotochemCAD's
+    /// spectrum is scaled; the table's 1 nm means sit within 1 % of it), and nothing past 540 nm.
+    #[test]
+    fn carotene_peak_and_end() {
+        let per_mm = sigma_a_carotene_per_mm(451.0, 1.0);
+        let expected = std::f64::consts::LN_10 * 139_500.0 * 1e-6 / 10.0;
+        assert!((per_mm / expected - 1.0).abs() < 0.01, "{per_mm} vs {expected}");
+        assert_eq!(sigma_a_carotene_per_mm(600.0, 10.0), 0.0);
+        assert_eq!(sigma_a_carotene_per_mm(451.0, 0.0), 0.0);
+    }
+
     #[test]
     fn coefficients_match_spec_table() {
         let rows = [

@@ -36,6 +36,11 @@ pub struct SkinModel {
     /// option for issue 39's study; absent from JSON when the default.
     #[serde(default, skip_serializing_if = "ScatteringShape::is_default")]
     pub scattering_shape: ScatteringShape,
+    /// β-carotene in the epidermis, µmol/L ([`sigma_a_carotene_per_mm`]), added to its absorption; 0 (the default,
+    /// DJ2006) has none. At most [`MAX_CAROTENE_UMOL_PER_L`]. An option for issue 39's study; absent from JSON when 0
+    /// (docs/model.md, Epidermal carotene).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub epidermal_carotene_umol_per_l: f64,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -77,6 +82,7 @@ impl Default for SkinModel {
             blood_vessel_radius_mm: 0.0,
             eumelanin_shape: EumelaninShape::Dj2006,
             scattering_shape: ScatteringShape::Dj2006,
+            epidermal_carotene_umol_per_l: 0.0,
         }
     }
 }
@@ -123,7 +129,7 @@ pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [La
                 wavelength_nm,
                 model.eumelanin_k_per_mm,
                 model.eumelanin_shape,
-            ),
+            ) + sigma_a_carotene_per_mm(wavelength_nm, model.epidermal_carotene_umol_per_l),
             sigma_s_reduced_per_mm: model.scattering_shape.epidermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,
         },
@@ -169,6 +175,22 @@ mod tests {
             let text = serde_json::to_string(&m).unwrap();
             assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m, "{text}");
         }
+    }
+
+    /// The carotene option is absent from a default model's JSON, round-trips when set, and adds its absorption to
+    /// the epidermis alone.
+    #[test]
+    fn carotene_adds_to_the_epidermis_only() {
+        let text = serde_json::to_string(&SkinModel::default()).unwrap();
+        assert!(!text.contains("carotene"), "{text}");
+        let m = SkinModel { epidermal_carotene_umol_per_l: 3.0, ..SkinModel::default() };
+        assert_eq!(serde_json::from_str::<SkinModel>(&serde_json::to_string(&m).unwrap()).unwrap(), m);
+        let p = SkinParams::preset("caucasian").unwrap();
+        let ([epi0, derm0], [epi1, derm1]) =
+            (skin_layers(&p, &SkinModel::default(), 480.0), skin_layers(&p, &m, 480.0));
+        assert_eq!(derm0, derm1);
+        let added = epi1.sigma_a_per_mm - epi0.sigma_a_per_mm;
+        assert!((added - sigma_a_carotene_per_mm(480.0, 3.0)).abs() < 1e-12 && added > 0.0, "{added}");
     }
 
     /// Packaging scales the dermis's blood term alone, by the factor of the blood's own absorption: the epidermis and
