@@ -439,7 +439,9 @@ fn main() {
         wl.len()
     );
     if args.iter().any(|a| a == "--classes") {
-        study::by_class(&wl, &spectra);
+        let every_arg = if every == 1 { String::new() } else { format!(" --every {every}") };
+        let command = format!("cargo run --release --example measured_skin_report -- --classes{every_arg}");
+        study::by_class(&wl, &spectra, &command);
     } else if args.iter().any(|a| a == "--study") {
         study::study(&wl, &spectra, args.iter().position(|a| a == "--only").map(|i| args[i + 1].as_str()));
     } else {

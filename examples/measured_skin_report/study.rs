@@ -3,15 +3,18 @@
 //! bandpass, a free blood oxygenation, vessel packaging), and what the fitted epidermis thickness trades against, each
 //! on the same spectra, printed per ITA class (docs/measured-skin.md, Skin types and the Q bands).
 
+use std::path::Path;
+
 use spectral_skin::color::difference::ciede2000;
 use spectral_skin::inverse::aperture::{CM2600D_MAV, CM2600D_SAV};
 use spectral_skin::inverse::{Aperture, Bandpass, FitOptions, SpectrumFit, SpectrumFitter, Specular};
 use spectral_skin::skin::chromophores::EumelaninShape;
 use spectral_skin::skin::scattering::ScatteringShape;
+use spectral_skin::stamp::write_markdown_blocks;
 
-use super::classes::{class_rows, print_class_table, worst_over_best};
+use super::classes::{class_rows, class_table, print_class_table, worst_over_best};
 use super::data::quantile;
-use super::run;
+use super::{run, DOC};
 
 /// The vessel radii tried, mm: the superficial dermal plexus's capillaries and venules (about 0.005 to 0.05 mm in
 /// radius; Braverman 2000, src/skin/chromophores.rs).
@@ -180,10 +183,11 @@ fn candidates() -> Vec<(String, FitOptions)> {
 }
 
 /// Run the candidates named in `only` (labels separated by ';'; all when None) on `spectra` and print each one's
-/// class table, then a summary line per candidate.
-pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) {
+/// class table, then a summary line per candidate; returns each candidate's label and class table (markdown).
+pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(String, String)> {
     let wanted: Option<Vec<&str>> = only.map(|o| o.split(';').map(str::trim).collect());
     let mut summary = Vec::new();
+    let mut tables = Vec::new();
     for (label, options) in candidates() {
         if wanted.as_ref().is_some_and(|w| !w.contains(&label.as_str())) {
             continue;
@@ -200,6 +204,7 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) {
         let rows = class_rows(&r.fits, spectra, wl);
         println!("\n### {label}\n");
         print_class_table(&rows);
+        tables.push((label.clone(), class_table(&rows)));
         print_residual_spectra(&r.fits, spectra, wl);
         let de: Vec<f64> = r.fits.iter().map(|f| f.delta_e00).collect();
         let rms: Vec<f64> = r.fits.iter().map(|f| f.rms).collect();
@@ -228,6 +233,7 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) {
     for line in summary {
         println!("{line}");
     }
+    tables
 }
 
 /// Each class's mean residual (measured - fitted) at every wavelength, in thousandths.
@@ -259,11 +265,28 @@ fn print_residual_spectra(fits: &[spectral_skin::inverse::SpectrumFit], spectra:
     }
 }
 
-/// The per-class tables of docs/measured-skin.md (Skin types and the Q bands): the fit before the bandpass, the
-/// default fit, and the default with the oxygenation free (with a free and with a Fresnel surface reflection).
-pub fn by_class(wl: &[f64], spectra: &[Vec<f64>]) {
-    let labels =
-        "points (the fit before);default (bandpass 1.5 x spacing);default + oxygenation;default + oxygenation, \
-                  fresnel";
-    study(wl, spectra, Some(labels));
+/// The per-class tables of docs/measured-skin.md (Skin types and the Q bands; Instrument aperture), each written into
+/// its block `measured-skin classes NAME`, stamped with `command`: the fit before the bandpass, the default, the
+/// default with the oxygenation free (with a free and with a Fresnel surface reflection), and the last through the
+/// SAV aperture.
+pub fn by_class(wl: &[f64], spectra: &[Vec<f64>], command: &str) {
+    const TABLES: [(&str, &str); 5] = [
+        ("classes points", "points (the fit before)"),
+        ("classes default", "default (bandpass 1.5 x spacing)"),
+        ("classes oxygenation", "default + oxygenation"),
+        ("classes oxygenation fresnel", "default + oxygenation, fresnel"),
+        ("classes oxygenation fresnel aperture", "default + oxygenation, fresnel, aperture SAV"),
+    ];
+    let labels: Vec<&str> = TABLES.iter().map(|(_, label)| *label).collect();
+    let tables = study(wl, spectra, Some(&labels.join(";")));
+    let blocks: Vec<(String, &str)> = TABLES
+        .iter()
+        .map(|(name, label)| {
+            let table = tables.iter().find(|(l, _)| l == label).unwrap_or_else(|| panic!("no candidate {label:?}"));
+            (format!("measured-skin {name}"), table.1.as_str())
+        })
+        .collect();
+    let blocks: Vec<(&str, &str)> = blocks.iter().map(|(n, t)| (n.as_str(), *t)).collect();
+    write_markdown_blocks(Path::new(DOC), command, &blocks).unwrap();
+    eprintln!("wrote {} blocks of {DOC}", blocks.len());
 }

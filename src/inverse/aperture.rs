@@ -154,7 +154,7 @@ impl ApertureKernel {
         let mut computed: Vec<(f64, f64)> = Vec::new();
         for (i, &nm) in wavelengths_nm.iter().enumerate() {
             let last = i + 1 == wavelengths_nm.len();
-            if last || computed.last().is_none_or(|&(at, _)| nm >= at + FRACTION_STEP_NM - 1e-9) {
+            if last || computed.last().map_or(true, |&(at, _)| nm >= at + FRACTION_STEP_NM - 1e-9) {
                 computed.push((nm, self.measured_fraction(&shape_at(nm)?)));
             }
         }
