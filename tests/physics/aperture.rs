@@ -144,3 +144,22 @@ fn fractions_every_step_match_every_nanometre_through_the_bandpass() {
     println!("worst: every {FRACTION_STEP_NM} nm {worst:.1e}, at the measured wavelength only {worst_at_centre:.1e}");
     assert!(worst_at_centre > worst, "the step buys nothing: {worst_at_centre} vs {worst}");
 }
+
+/// The measured fraction grows toward 1 as the lit disc widens around a fixed measured disc (light from further out
+/// makes up for what leaves), from equal discs (the hardest case: the rim reaches the centre) to one 100 times wider.
+#[test]
+fn fraction_grows_to_one_as_the_lit_disc_widens() {
+    for preset in ["ita-very-light", "ita-dark"] {
+        for nm in [450.0, 700.0] {
+            let shape = exact_shape(&skin_layers(&SkinParams::preset(preset).unwrap(), &SkinModel::default(), nm));
+            let shape = shape.unwrap();
+            let fractions: Vec<f64> = [1.0, 1.5, 2.0, 4.0, 100.0]
+                .iter()
+                .map(|&k| Aperture { illuminated_radius_mm: k, measured_radius_mm: 1.0 })
+                .map(|a| a.kernel().measured_fraction(&shape))
+                .collect();
+            assert!(fractions.windows(2).all(|w| w[1] >= w[0]), "{preset} {nm} nm: {fractions:?}");
+            assert!(fractions[0] > 0.0 && fractions[4] > 0.999, "{preset} {nm} nm: {fractions:?}");
+        }
+    }
+}
