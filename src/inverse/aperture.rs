@@ -8,8 +8,8 @@
 //! Billmeyer 1966, Materials Research and Standards 6:564). For uniform light over a disc of radius a and a measured
 //! disc of radius b <= a, the measured fraction of the total is the radial profile weighted by the overlap of the two
 //! discs when their centres are the profile's distance d apart, over the measured disc's area:
-//! F = integral of w(d) dE(d), w(d) = A(d; a, b) / (pi b^2), E the profile's encircled energy ([`Shape::encircled_energy`]):
-//! 1 for d <= a - b, the lens area between, 0 beyond a + b.
+//! F = integral of w(d) dE(d), w(d) = A(d; a, b) / (pi b^2), E the profile's encircled energy
+//! ([`Shape::encircled_energy`]), w 1 for d <= a - b, the lens area between, 0 beyond a + b.
 //!
 //! The Konica Minolta CM-2600d of the Xiao et al. 2016 spectra has two masks (CM-2600d/CM-2500d specifications):
 //! MAV, a measured disc of 8 mm diameter lit over 11 mm ([`CM2600D_MAV`]), and SAV, 3 mm lit over 6 mm
@@ -32,8 +32,8 @@ pub const MIN_APERTURE_RADIUS_MM: f64 = 1e-3;
 /// need about 128 for 1e-5.
 const RIM_NODES: usize = 12;
 
-/// The spacing, nm, of the wavelengths where a spectrum's measured fraction is computed ([`ApertureKernel::fractions`]);
-/// between them it is interpolated by cubic Hermite pieces. A fraction costs about 5 us (the exact shape and its
+/// The spacing, nm, of the wavelengths where a spectrum's measured fraction is computed
+/// ([`ApertureKernel::fractions`]); between them it is interpolated by cubic Hermite pieces. A fraction costs about 5 us (the exact shape and its
 /// encircled energy), some twenty times a node's diffuse reflectance, and changes slowly with wavelength, except on
 /// the Q bands' steep red edge: on the presets, with both masks, a 15 nm bandpass's average of the reflectance times
 /// the fraction taken every 10 nm is within 1.4e-4 of the average with the fraction at every nanometre (every 5 nm:
@@ -75,7 +75,8 @@ impl Aperture {
         aperture.validate().map(|_| aperture)
     }
 
-    /// Both radii in [[`MIN_APERTURE_RADIUS_MM`], [`MAX_APERTURE_RADIUS_MM`]], the measured disc no larger than the lit one.
+    /// Both radii in [[`MIN_APERTURE_RADIUS_MM`], [`MAX_APERTURE_RADIUS_MM`]], the measured disc no larger than the
+    /// lit one.
     pub fn validate(&self) -> Result<(), SkinError> {
         let max = MAX_APERTURE_RADIUS_MM;
         check_range(

@@ -56,17 +56,18 @@ use super::errors::invalid;
 /// Returns:
 ///     A dict: "params" (every model parameter, fitted and fixed, by name), "free" (the fitted names), "specular"
 ///     ("free", "fresnel" or "fixed"), "specular_offset", "objective", "wavelengths_nm" (K,), "bandpass" ("spacing"
-///     or "fwhm"), "bandpass_nm" (the FWHM at each wavelength), "aperture" (None or the discs' radii), "fitted_reflectance"
-///     (K,) (model, averaged over the bandpass, times the aperture's measured fraction, plus offset), "rms" (root-mean-square difference from the measurement), "delta_e00" (CIEDE2000
-///     of the two spectra's colours under D65), "lab_measured", "lab_fitted", "starts", "evaluations", "transport",
-///     "streams".
+///     or "fwhm"), "bandpass_nm" (the FWHM at each wavelength), "aperture" (None or the discs' radii),
+///     "fitted_reflectance" (K,) (model, averaged over the bandpass, times the aperture's measured fraction, plus
+///     offset), "rms" (root-mean-square difference from the measurement), "delta_e00" (CIEDE2000 of the two spectra's
+///     colours under D65), "lab_measured", "lab_fitted", "starts", "evaluations", "transport", "streams".
 ///
 /// Raises:
 ///     SpectralSkinError: wavelengths outside 380..780 nm, not increasing or too few; a reflectance that is not one
 ///         finite value in 0..1 per wavelength; an unknown or repeated free parameter, or "oiliness"; a fixed value
 ///         out of range or for a free parameter; a paper parameter neither free nor fixed; an unknown specular or
-///         objective; a specular number outside 0..0.1; an unknown bandpass or a number outside 0..20; an unknown aperture or radii outside 0..100 mm (the measured
-///         disc inside the lit one); an aperture with a transport other than "adding_doubling".
+///         objective; a specular number outside 0..0.1; an unknown bandpass or a number outside 0..20; an unknown
+///         aperture or radii outside 0.001..100 mm (the measured disc inside the lit one); an aperture with a transport
+///         other than "adding_doubling".
 ///     TypeError: an argument of the wrong type.
 #[pyfunction]
 #[pyo3(

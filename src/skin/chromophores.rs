@@ -159,7 +159,6 @@ mod tests {
         ((a - b) / b).abs() < rel
     }
 
-    /// Independently computed values (docs/model.md, section Reference numbers).
     /// The carotene table's peak: 139500 cm^-1/M at 451 nm (Zechmeister & Polgar's value, to which PhotochemCAD's
     /// spectrum is scaled; the table's 1 nm means sit within 1 % of it), and nothing past 540 nm.
     #[test]
@@ -171,6 +170,7 @@ mod tests {
         assert_eq!(sigma_a_carotene_per_mm(451.0, 0.0), 0.0);
     }
 
+    /// Independently computed values (docs/model.md, section Reference numbers).
     #[test]
     fn coefficients_match_spec_table() {
         let rows = [

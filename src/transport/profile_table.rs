@@ -446,15 +446,8 @@ impl Shape {
     fn profile_integral(&self) -> f64 {
         *self.profile_integral.get_or_init(|| {
             let step = LN_10 / NODES_PER_DECADE;
-            let piece = |a: f64, b: f64| {
-                if a > 0.0 && b > 0.0 && (a - b).abs() > 1e-12 * a.max(b) {
-                    (b - a) / (b / a).ln()
-                } else {
-                    0.5 * (a + b)
-                }
-            };
             let q: Vec<f64> = (0..R_BINS).map(|c| self.q(c)).collect();
-            q[0] + q.windows(2).map(|w| step * piece(w[0], w[1])).sum::<f64>()
+            q[0] + q.windows(2).map(|w| step * log_linear_piece(w[0], w[1])).sum::<f64>()
         })
     }
 
@@ -538,7 +531,8 @@ fn log_linear_integral(a: f64, b: f64, t: f64) -> f64 {
     }
 }
 
-/// [`log_linear_integral`] over the whole piece (t = 1), without its exponential: (b - a) / ln(b / a).
+/// [`log_linear_integral`] over the whole piece (t = 1), without its exponential: (b - a) / ln(b / a) (the profile's
+/// integral and the encircled energy's bins).
 fn log_linear_piece(a: f64, b: f64) -> f64 {
     if a > 0.0 && b > 0.0 && (a - b).abs() > 1e-12 * a.max(b) {
         (b - a) / (b / a).ln()

@@ -6,6 +6,7 @@
 //! Run with `cargo test --release --test physics aperture -- --nocapture` to see the figures.
 
 use crate::support::mc::{log_edges, simulate, McConfig, McLayer};
+use crate::support::profile_figures::profile_energy_by_quadrature;
 use spectral_skin::inverse::aperture::{Aperture, CM2600D_MAV, CM2600D_SAV, FRACTION_STEP_NM};
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
 use spectral_skin::transport::profile_table::exact_shape;
@@ -68,15 +69,7 @@ fn encircled_energy_integrates_the_profile_and_the_rim_quadrature_converges() {
             let radii = [0.0, 1e-3, 0.05, 0.5, 1.5, 4.0, 9.5, 30.0];
             let energy = shape.encircled_energy(&radii);
             for (&r, &e) in radii.iter().zip(&energy) {
-                let n = 100_000;
-                let (lo, hi) = (1e-9f64.ln(), r.max(1e-9).ln());
-                let step = (hi - lo) / n as f64;
-                let integral: f64 = (0..n)
-                    .map(|i| {
-                        let x = (lo + step * (i as f64 + 0.5)).exp();
-                        shape.normalized_profile_per_mm2(x) * 2.0 * std::f64::consts::PI * x * x * step
-                    })
-                    .sum();
+                let integral = profile_energy_by_quadrature(&shape, 1e-9, r.max(1e-9), 100_000);
                 assert!((e - integral).abs() < 1e-5, "{preset} {nm} nm r {r}: {e} vs {integral}");
             }
             for aperture in [CM2600D_MAV, CM2600D_SAV] {

@@ -11,7 +11,7 @@
 #[path = "../../examples/profile_table/walk.rs"]
 mod walk;
 
-use crate::support::profile_figures::{model, monte_carlo, worst_profile_error};
+use crate::support::profile_figures::{model, monte_carlo, profile_energy_by_quadrature, worst_profile_error};
 use spectral_skin::layer::Layer;
 use spectral_skin::reflectance::LayeredOptions;
 use spectral_skin::skin::{skin_layers, SkinModel, SkinParams};
@@ -118,15 +118,7 @@ fn exact_shape_profile_integrates_to_one() {
         for nm in [400.0, 450.0, 550.0, 650.0, 700.0] {
             let layers = skin_layers(&SkinParams::preset(preset).unwrap(), &SkinModel::default(), nm);
             let shape = exact_shape(&layers).unwrap();
-            let n = 200_000;
-            let (lo, hi) = (1e-9f64.ln(), 1e4f64.ln());
-            let step = (hi - lo) / n as f64;
-            let integral: f64 = (0..n)
-                .map(|i| {
-                    let r = (lo + step * (i as f64 + 0.5)).exp();
-                    shape.normalized_profile_per_mm2(r) * 2.0 * std::f64::consts::PI * r * r * step
-                })
-                .sum();
+            let integral = profile_energy_by_quadrature(&shape, 1e-9, 1e4, 200_000);
             assert!((integral - 1.0).abs() < 1e-6, "{preset} {nm} nm: {integral}");
         }
     }

@@ -10,7 +10,7 @@ use spectral_skin::diffusion::{Combination, LayerStack, MultipoleTerms};
 use spectral_skin::fit::burley::{fit_burley, fit_frequencies};
 use spectral_skin::layer::Layer;
 use spectral_skin::reflectance::{layered_reflectance_with, LayeredOptions, ProfileShape};
-use spectral_skin::transport::profile_table::exact_shape;
+use spectral_skin::transport::profile_table::{exact_shape, Shape};
 
 /// Gauss-Legendre points per annulus.
 const POINTS_PER_ANNULUS: usize = 8;
@@ -192,4 +192,17 @@ pub fn gauss_legendre_01(n: usize) -> (Vec<f64>, Vec<f64>) {
         }
     }
     (x, w)
+}
+
+/// The energy `shape`'s normalised profile puts between `r_min_mm` and `r_max_mm`: the integral of
+/// `normalized_profile_per_mm2` times 2 pi r dr by the midpoint rule on `n` steps in ln r.
+pub fn profile_energy_by_quadrature(shape: &Shape, r_min_mm: f64, r_max_mm: f64, n: usize) -> f64 {
+    let (lo, hi) = (r_min_mm.ln(), r_max_mm.ln());
+    let step = (hi - lo) / n as f64;
+    (0..n)
+        .map(|i| {
+            let r = (lo + step * (i as f64 + 0.5)).exp();
+            shape.normalized_profile_per_mm2(r) * 2.0 * PI * r * r * step
+        })
+        .sum()
 }
