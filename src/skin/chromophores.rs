@@ -131,6 +131,53 @@ pub fn sigma_a_deoxy_blood_per_mm(wavelength_nm: f64) -> f64 {
     blood_sigma_a_per_mm(hemoglobin_table().interpolate(1, wavelength_nm))
 }
 
+const WHOLE_BLOOD_CSV: &str = include_str!("../../data/bosschaart2014_whole_blood_absorption.csv");
+
+fn whole_blood_table() -> &'static SpectralTable {
+    static TABLE: OnceLock<SpectralTable> = OnceLock::new();
+    TABLE.get_or_init(|| SpectralTable::parse(WHOLE_BLOOD_CSV))
+}
+
+/// Which absorption spectrum of whole blood the dermis uses: DJ2006's (haemoglobin in solution, Prahl's table at
+/// 150 g/L; the default) or measured whole blood. An option of the model for issue 39's study of the Q bands
+/// (examples/measured_skin_report/study.rs; docs/model.md, Whole-blood spectrum).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BloodSpectrum {
+    /// [`sigma_a_oxy_blood_per_mm`] and [`sigma_a_deoxy_blood_per_mm`]: Prahl's compilation of Gratzer and Kollias's
+    /// haemoglobin solution spectra, converted at 150 g/L (DJ2006).
+    #[default]
+    Dj2006,
+    /// Whole blood at haematocrit 45 % (about 150 g/L of haemoglobin, so the blood fraction keeps its meaning), the
+    /// average of the published measurements Bosschaart et al. compiled (Lasers Med. Sci. 29:453, 2014;
+    /// data/bosschaart2014_whole_blood_absorption.csv): haemoglobin packed in red cells, its strong bands flatter
+    /// than in solution (the Soret peak 118 against 280 mm^-1, the Q bands' peak-to-trough ratio 1.42 against 1.70).
+    WholeBlood2014,
+}
+
+impl BloodSpectrum {
+    /// Absorption of fully oxygenated blood, mm^-1.
+    pub fn oxy_per_mm(self, wavelength_nm: f64) -> f64 {
+        match self {
+            BloodSpectrum::Dj2006 => sigma_a_oxy_blood_per_mm(wavelength_nm),
+            BloodSpectrum::WholeBlood2014 => whole_blood_table().interpolate(0, wavelength_nm),
+        }
+    }
+
+    /// Absorption of fully deoxygenated blood, mm^-1.
+    pub fn deoxy_per_mm(self, wavelength_nm: f64) -> f64 {
+        match self {
+            BloodSpectrum::Dj2006 => sigma_a_deoxy_blood_per_mm(wavelength_nm),
+            BloodSpectrum::WholeBlood2014 => whole_blood_table().interpolate(1, wavelength_nm),
+        }
+    }
+
+    /// True for DJ2006's (the default).
+    pub fn is_default(&self) -> bool {
+        *self == BloodSpectrum::Dj2006
+    }
+}
+
 /// The largest blood vessel radius the packaging correction accepts, mm: 0.1 mm, twice the largest vessels of the
 /// superficial dermal plexus (venules up to about 0.1 mm across; Braverman, "The cutaneous microcirculation", J.
 /// Investig. Dermatol. Symp. Proc. 5:3, 2000); deeper, larger vessels lie below the light's reach in the visible.
@@ -217,6 +264,22 @@ mod tests {
             let shaped = sigma_a_eumelanin_shaped_per_mm(w, K_EM_PER_MM, EumelaninShape::PowerLaw { exponent: -3.48 });
             assert!(close(shaped, jacques, 2e-3), "{w}: {shaped} vs {jacques}");
         }
+    }
+
+    /// The whole-blood table as published (Bosschaart et al. 2014's supplementary values at 542, 560 and 576 nm and
+    /// the Soret peak), and against Prahl's solution spectrum at 150 g/L: the same in the red, flatter Q bands, a
+    /// Soret band well under half as strong.
+    #[test]
+    fn whole_blood_against_solution() {
+        let b = BloodSpectrum::WholeBlood2014;
+        assert_eq!((b.oxy_per_mm(542.0), b.oxy_per_mm(560.0), b.oxy_per_mm(576.0)), (27.31, 19.12, 27.20));
+        assert_eq!((b.oxy_per_mm(416.0), b.deoxy_per_mm(556.0)), (118.04, 26.80));
+        let d = BloodSpectrum::Dj2006;
+        let w_ratio = |s: BloodSpectrum| s.oxy_per_mm(576.0) / s.oxy_per_mm(560.0);
+        assert!(w_ratio(b) < 1.45 && w_ratio(d) > 1.65, "{} {}", w_ratio(b), w_ratio(d));
+        assert!(b.oxy_per_mm(414.0) < 0.45 * d.oxy_per_mm(414.0));
+        assert!(close(b.deoxy_per_mm(650.0), d.deoxy_per_mm(650.0), 0.15));
+        assert_eq!(d.oxy_per_mm(550.0), sigma_a_oxy_blood_per_mm(550.0));
     }
 
     /// Prahl's table peaks (docs/model.md, section Data files): HbO2 Soret at 414 nm.

@@ -41,7 +41,22 @@ pub struct SkinModel {
     /// (docs/model.md, Epidermal carotene).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub epidermal_carotene_umol_per_l: f64,
+    /// The absorption spectrum of the dermis's blood ([`BloodSpectrum`]); DJ2006's (haemoglobin in solution) by
+    /// default. An option for issue 39's study; absent from JSON when the default (docs/model.md, Whole-blood
+    /// spectrum).
+    #[serde(default, skip_serializing_if = "BloodSpectrum::is_default")]
+    pub blood_spectrum: BloodSpectrum,
+    /// Whole-blood volume fraction of the epidermis layer, `C_he` of Donner et al. 2008's epidermis (also Jimenez et
+    /// al. 2010): blood of the dermis's oxygenation and spectrum in place of as much bloodless tissue. 0 (the
+    /// default, DJ2006) has none. At most [`MAX_EPIDERMAL_HEMOGLOBIN`]. An option for issue 39's study; absent from
+    /// JSON when 0 (docs/model.md, Epidermal blood).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub epidermal_hemoglobin: f64,
 }
+
+/// The most epidermal blood [`SkinModel::epidermal_hemoglobin`] accepts: the dermis's own bound
+/// (`PARAMS`' haemoglobin, 0.1).
+pub const MAX_EPIDERMAL_HEMOGLOBIN: f64 = 0.1;
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
@@ -83,6 +98,8 @@ impl Default for SkinModel {
             eumelanin_shape: EumelaninShape::Dj2006,
             scattering_shape: ScatteringShape::Dj2006,
             epidermal_carotene_umol_per_l: 0.0,
+            blood_spectrum: BloodSpectrum::Dj2006,
+            epidermal_hemoglobin: 0.0,
         }
     }
 }
@@ -110,13 +127,29 @@ pub fn sigma_a_epidermis_shaped_per_mm(
 }
 
 /// `sigma_a_derm(lambda)`, mm^-1: oxygenated/deoxygenated blood blend (gamma = the blood oxygenation) plus baseline
-/// (DJ2006 eq. 7), the blood's term times the packaging factor of vessels of radius `vessel_radius_mm` (1 at 0).
-pub fn sigma_a_dermis_per_mm(p: &SkinParams, wavelength_nm: f64, vessel_radius_mm: f64) -> f64 {
-    let gamma = p.blood_oxygenation;
-    let blood =
-        gamma * sigma_a_oxy_blood_per_mm(wavelength_nm) + (1.0 - gamma) * sigma_a_deoxy_blood_per_mm(wavelength_nm);
-    let packed = blood * vessel_packaging_factor(blood, vessel_radius_mm);
-    p.hemoglobin * packed + (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(p, wavelength_nm)
+/// (DJ2006 eq. 7), the blood's term (of the model's [`BloodSpectrum`]) times the packaging factor of the model's
+/// vessels ([`SkinModel::blood_vessel_radius_mm`]; 1 at 0).
+pub fn sigma_a_dermis_per_mm(p: &SkinParams, wavelength_nm: f64, model: &SkinModel) -> f64 {
+    p.hemoglobin * sigma_a_packed_blood_per_mm(p, wavelength_nm, model)
+        + (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(p, wavelength_nm)
+}
+
+/// The blood's absorption, mm^-1: the oxygenation's blend of the model's [`BloodSpectrum`], times the packaging
+/// factor of the model's vessels (1 without them).
+fn sigma_a_packed_blood_per_mm(p: &SkinParams, wavelength_nm: f64, model: &SkinModel) -> f64 {
+    let (gamma, spectrum) = (p.blood_oxygenation, model.blood_spectrum);
+    let blood = gamma * spectrum.oxy_per_mm(wavelength_nm) + (1.0 - gamma) * spectrum.deoxy_per_mm(wavelength_nm);
+    blood * vessel_packaging_factor(blood, model.blood_vessel_radius_mm)
+}
+
+/// What [`SkinModel::epidermal_hemoglobin`] adds to the epidermis's absorption, mm^-1: `C_he` times blood's absorption
+/// less the bloodless tissue's it replaces (0 without it).
+fn sigma_a_epidermal_blood_per_mm(p: &SkinParams, wavelength_nm: f64, model: &SkinModel) -> f64 {
+    if model.epidermal_hemoglobin == 0.0 {
+        return 0.0;
+    }
+    let blood = sigma_a_packed_blood_per_mm(p, wavelength_nm, model);
+    model.epidermal_hemoglobin * (blood - sigma_a_tissue_per_mm(p, wavelength_nm))
 }
 
 /// The two layers, top to bottom, at one wavelength: epidermis over dermis, both with index 1.4.
@@ -129,13 +162,14 @@ pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [La
                 wavelength_nm,
                 model.eumelanin_k_per_mm,
                 model.eumelanin_shape,
-            ) + sigma_a_carotene_per_mm(wavelength_nm, model.epidermal_carotene_umol_per_l),
+            ) + sigma_a_carotene_per_mm(wavelength_nm, model.epidermal_carotene_umol_per_l)
+                + sigma_a_epidermal_blood_per_mm(p, wavelength_nm, model),
             sigma_s_reduced_per_mm: model.scattering_shape.epidermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,
         },
         Layer {
             thickness_mm: model.dermis_thickness_mm,
-            sigma_a_per_mm: sigma_a_dermis_per_mm(p, wavelength_nm, model.blood_vessel_radius_mm),
+            sigma_a_per_mm: sigma_a_dermis_per_mm(p, wavelength_nm, model),
             sigma_s_reduced_per_mm: model.scattering_shape.dermis_per_mm(wavelength_nm),
             ior: SKIN_IOR,
         },
@@ -191,6 +225,44 @@ mod tests {
         assert_eq!(derm0, derm1);
         let added = epi1.sigma_a_per_mm - epi0.sigma_a_per_mm;
         assert!((added - sigma_a_carotene_per_mm(480.0, 3.0)).abs() < 1e-12 && added > 0.0, "{added}");
+    }
+
+    /// The blood spectrum is absent from a default model's JSON, round-trips when set, and changes the dermis alone.
+    #[test]
+    fn blood_spectrum_changes_the_dermis_only() {
+        let text = serde_json::to_string(&SkinModel::default()).unwrap();
+        assert!(!text.contains("blood_spectrum"), "{text}");
+        let m = SkinModel { blood_spectrum: BloodSpectrum::WholeBlood2014, ..SkinModel::default() };
+        let text = serde_json::to_string(&m).unwrap();
+        assert!(text.contains("\"blood_spectrum\":\"whole_blood2014\""), "{text}");
+        assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m);
+        let p = SkinParams::preset("caucasian").unwrap();
+        let ([epi0, derm0], [epi1, derm1]) =
+            (skin_layers(&p, &SkinModel::default(), 576.0), skin_layers(&p, &m, 576.0));
+        assert_eq!(epi0, epi1);
+        let tissue = (1.0 - p.hemoglobin) * sigma_a_tissue_per_mm(&p, 576.0);
+        let blood = 0.75 * BloodSpectrum::WholeBlood2014.oxy_per_mm(576.0)
+            + 0.25 * BloodSpectrum::WholeBlood2014.deoxy_per_mm(576.0);
+        assert!((derm1.sigma_a_per_mm - tissue - p.hemoglobin * blood).abs() < 1e-12);
+        assert!(derm1.sigma_a_per_mm < derm0.sigma_a_per_mm);
+    }
+
+    /// Epidermal blood is absent from a default model's JSON, round-trips when set, and replaces bloodless tissue of
+    /// the epidermis by blood of the dermis's spectrum and oxygenation: the epidermis gains C_he (blood − tissue).
+    #[test]
+    fn epidermal_blood_replaces_tissue_in_the_epidermis() {
+        let text = serde_json::to_string(&SkinModel::default()).unwrap();
+        assert!(!text.contains("epidermal_hemoglobin"), "{text}");
+        let m = SkinModel { epidermal_hemoglobin: 0.01, ..SkinModel::default() };
+        assert_eq!(serde_json::from_str::<SkinModel>(&serde_json::to_string(&m).unwrap()).unwrap(), m);
+        let p = SkinParams::preset("caucasian").unwrap();
+        for w in [420.0, 576.0, 650.0] {
+            let ([epi0, derm0], [epi1, derm1]) = (skin_layers(&p, &SkinModel::default(), w), skin_layers(&p, &m, w));
+            assert_eq!(derm0, derm1);
+            let blood = 0.75 * sigma_a_oxy_blood_per_mm(w) + 0.25 * sigma_a_deoxy_blood_per_mm(w);
+            let added = 0.01 * (blood - sigma_a_tissue_per_mm(&p, w));
+            assert!((epi1.sigma_a_per_mm - epi0.sigma_a_per_mm - added).abs() < 1e-12, "{w} nm");
+        }
     }
 
     /// Packaging scales the dermis's blood term alone, by the factor of the blood's own absorption: the epidermis and

@@ -86,6 +86,10 @@ fn bad_input_names_the_input() {
     packed.request.model.blood_vessel_radius_mm = 0.5;
     let e = err(&wl, &r, &packed);
     assert!(e.contains("blood_vessel_radius_mm") && e.contains("0.5"), "{e}");
+    let mut bloody = opts.clone();
+    bloody.request.model.epidermal_hemoglobin = 0.2;
+    let e = err(&wl, &r, &bloody);
+    assert!(e.contains("epidermal_hemoglobin") && e.contains("0.2") && e.contains("0.1"), "{e}");
 }
 
 /// Degenerate spectra are refused before any work (they were fitted with confidence): wavelengths closer than the
