@@ -27,6 +27,8 @@ pub struct ClassRow {
     pub q_residual: [f64; 3],
     /// Root mean square over 530-590 nm of the class's mean residual (measured - fitted).
     pub q_rms: f64,
+    /// The class's mean measured reflectance over 530-590 nm (what the Q-band rms is read against).
+    pub q_level: f64,
     /// Median fitted melanin, epidermis thickness (mm), haemoglobin, oxygenation, offset.
     pub medians: [f64; 5],
     /// p10 and p90 of the fitted epidermis thickness, mm.
@@ -48,6 +50,8 @@ pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Ve
         let mean_residual =
             |k: usize| members.iter().map(|&i| measured[i][k] - fits[i].fitted_reflectance[k]).sum::<f64>() / n as f64;
         let q_rms = (band.iter().map(|&k| mean_residual(k).powi(2)).sum::<f64>() / band.len() as f64).sqrt();
+        let q_level = band.iter().map(|&k| members.iter().map(|&i| measured[i][k]).sum::<f64>()).sum::<f64>()
+            / (band.len() * n) as f64;
         let of = |f: &dyn Fn(&SpectrumFit) -> f64| members.iter().map(|&i| f(&fits[i])).collect::<Vec<f64>>();
         let de = of(&|f| f.delta_e00);
         let thickness = of(&|f| f.params.epidermis_thickness_mm);
@@ -59,6 +63,7 @@ pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Ve
             median_rms: quantile(&of(&|f| f.rms), 0.5),
             q_residual: q_index.map(mean_residual),
             q_rms,
+            q_level,
             medians: [
                 quantile(&of(&|f| f.params.melanin), 0.5),
                 quantile(&thickness, 0.5),
@@ -112,11 +117,15 @@ pub fn class_table(rows: &[ClassRow]) -> String {
     table
 }
 
-/// Prints the markdown table of `rows` and the worst / best ratio of their median ΔE00.
+/// Prints the markdown table of `rows`, the worst / best ratio of their median ΔE00, and each class's Q-band rms
+/// relative to its mean measured reflectance there.
 pub fn print_class_table(rows: &[ClassRow]) {
     print!("{}", class_table(rows));
     println!(
         "\nWorst / best class median ΔE00 (classes of {MIN_CLASS_SPECTRA} or more spectra): {:.2}",
         worst_over_best(rows)
     );
+    let relative: Vec<String> =
+        rows.iter().map(|r| format!("{} {:.2} %", r.name, 100.0 * r.q_rms / r.q_level)).collect();
+    println!("Q-band rms / mean measured reflectance over 530-590 nm: {}", relative.join(", "));
 }

@@ -5,12 +5,13 @@
 //! (`spectral_skin::stamp`), and prints the tables.
 //!
 //! cargo run --release --example measured_skin_report [-- --every N] (the doc's figures: `--every 16`)
-//! cargo run --release --example measured_skin_report -- --classes [--every N]: the per-class table of
-//! docs/measured-skin.md (Skin types and the Q bands): the fit before the bandpass, the default, and the options.
+//! cargo run --release --example measured_skin_report -- --classes [--every N] [--only "LABEL;LABEL"]: the per-class
+//! tables of docs/measured-skin.md (Skin types and the Q bands): the fit before the bandpass, the default, and the
+//! options (only the labelled ones with `--only`).
 //! cargo run --release --example measured_skin_report -- --study [--every N] [--only "LABEL;LABEL"] [--class NAME]:
 //! issue 39's study of the Q-band residual by skin type, every candidate (study.rs); NAME: an ITA class
 //! (`color::ita::ITA_CLASSES`, e.g. dark), only its spectra. `--red-rising` (with `--study`): only the spectra whose
-//! reflectance rises from 650 to 700 nm.
+//! reflectance rises from 650 to 700 nm; with `--classes`, the tables of those spectra (their own blocks).
 
 mod classes;
 mod data;
@@ -439,7 +440,8 @@ fn main() {
     if let Some(name) = args.iter().position(|a| a == "--class").map(|i| args[i + 1].as_str()) {
         spectra = of_class(&wl, spectra, name);
     }
-    if args.iter().any(|a| a == "--red-rising") {
+    let rising_only = args.iter().any(|a| a == "--red-rising");
+    if rising_only {
         spectra.retain(|s| red_end_rises(&wl, s));
     }
     let threads = rayon::current_num_threads();
@@ -451,8 +453,12 @@ fn main() {
     );
     if args.iter().any(|a| a == "--classes") {
         let every_arg = if every == 1 { String::new() } else { format!(" --every {every}") };
-        let command = format!("cargo run --release --example measured_skin_report -- --classes{every_arg}");
-        study::by_class(&wl, &spectra, &command);
+        let rising_arg = if rising_only { " --red-rising" } else { "" };
+        let only = args.iter().position(|a| a == "--only").map(|i| args[i + 1].as_str());
+        let only_arg = only.map(|o| format!(" --only \"{o}\"")).unwrap_or_default();
+        let command =
+            format!("cargo run --release --example measured_skin_report -- --classes{every_arg}{rising_arg}{only_arg}");
+        study::by_class(&wl, &spectra, &command, rising_only, only);
     } else if args.iter().any(|a| a == "--study") {
         study::study(&wl, &spectra, args.iter().position(|a| a == "--only").map(|i| args[i + 1].as_str()));
     } else {

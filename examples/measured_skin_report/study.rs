@@ -8,13 +8,14 @@ use std::path::Path;
 use spectral_skin::color::difference::ciede2000;
 use spectral_skin::inverse::aperture::{CM2600D_MAV, CM2600D_SAV};
 use spectral_skin::inverse::{Aperture, Bandpass, FitOptions, SpectrumFit, SpectrumFitter, Specular};
-use spectral_skin::skin::chromophores::EumelaninShape;
+use spectral_skin::skin::chromophores::{BloodSpectrum, EumelaninShape};
 use spectral_skin::skin::scattering::ScatteringShape;
+use spectral_skin::skin::SkinModel;
 use spectral_skin::stamp::write_markdown_blocks;
 
 use super::classes::{class_rows, class_table, print_class_table, worst_over_best};
 use super::data::quantile;
-use super::{run, DOC};
+use super::{run, Run, DOC};
 
 /// The vessel radii tried, mm: the superficial dermal plexus's capillaries and venules (about 0.005 to 0.05 mm in
 /// radius; Braverman 2000, src/skin/chromophores.rs).
@@ -22,11 +23,6 @@ const RADII_MM: [f64; 3] = [0.005, 0.015, 0.04];
 
 fn with_oxygenation(mut o: FitOptions) -> FitOptions {
     o.free.push("blood_oxygenation".to_string());
-    o
-}
-
-fn with_shape(mut o: FitOptions, shape: EumelaninShape) -> FitOptions {
-    o.request.model.eumelanin_shape = shape;
     o
 }
 
@@ -84,6 +80,41 @@ fn continued_700(spectrum: &[f64]) -> Vec<f64> {
     v
 }
 
+/// The label suffix of a candidate whose epidermal blood is chosen per spectrum: fitted with each of
+/// [`EPIDERMAL_BLOOD_GRID`] held, the fit of least RMS kept (a profile over C_he; [`best_over_blood_grid`]).
+const BLOOD_ON_GRID: &str = ", epidermal blood on a grid";
+
+/// The epidermal blood fractions (C_he) tried per spectrum for [`BLOOD_ON_GRID`].
+const EPIDERMAL_BLOOD_GRID: [f64; 9] = [0.0, 0.0025, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.05];
+
+/// Each spectrum's best fit (least RMS) over [`EPIDERMAL_BLOOD_GRID`], with `options` otherwise, and the C_he it
+/// was found with.
+fn best_over_blood_grid(label: &str, wl: &[f64], spectra: &[Vec<f64>], options: &FitOptions) -> (Run, Vec<f64>) {
+    let mut best: Option<(Run, Vec<f64>)> = None;
+    for fraction in EPIDERMAL_BLOOD_GRID {
+        let mut o = options.clone();
+        o.request.model.epidermal_hemoglobin = fraction;
+        let r = run(&format!("{label} (C_he {fraction})"), wl, spectra, &o);
+        best = Some(match best {
+            None => {
+                let n = r.fits.len();
+                (r, vec![fraction; n])
+            }
+            Some((mut kept, mut chosen)) => {
+                for (i, fit) in r.fits.into_iter().enumerate() {
+                    if fit.rms < kept.fits[i].rms {
+                        kept.fits[i] = fit;
+                        chosen[i] = fraction;
+                    }
+                }
+                kept.seconds += r.seconds;
+                (kept, chosen)
+            }
+        });
+    }
+    best.expect("a grid of at least one value")
+}
+
 /// `fits` (of altered spectra) scored against `measured`: each fit's ΔE00 recomputed from the measured spectrum's colour.
 fn scored_against(
     mut fits: Vec<SpectrumFit>,
@@ -96,6 +127,17 @@ fn scored_against(
         fit.delta_e00 = ciede2000(fitter.lab(spectrum), fitter.lab(&fit.fitted_reflectance));
     }
     fits
+}
+
+/// Pushes onto `list` the default fit and the default with the oxygenation free and a Fresnel surface, each with
+/// `change` made to its model, labelled "default, NAME" and "default + oxygenation, fresnel, NAME".
+fn push_both(list: &mut Vec<(String, FitOptions)>, name: &str, change: impl Fn(&mut SkinModel)) {
+    let default = FitOptions::default();
+    let oxygenation_fresnel = FitOptions { specular: Specular::Fresnel, ..with_oxygenation(default.clone()) };
+    for (prefix, mut options) in [("default", default), ("default + oxygenation, fresnel", oxygenation_fresnel)] {
+        change(&mut options.request.model);
+        list.push((format!("{prefix}, {name}"), options));
+    }
 }
 
 /// The candidates: (label, options).
@@ -134,11 +176,7 @@ fn candidates() -> Vec<(String, FitOptions)> {
     // The melanin spectrum's shape (issue 39, What is left): the default fit and the default with the oxygenation
     // free and a Fresnel surface, with each eumelanin shape.
     for (name, shape) in shapes() {
-        list.push((format!("default, {name}"), with_shape(default.clone(), shape)));
-        list.push((
-            format!("default + oxygenation, fresnel, {name}"),
-            with_shape(fresnel(with_oxygenation(default.clone())), shape),
-        ));
+        push_both(&mut list, &name, |m| m.eumelanin_shape = shape);
     }
     // The measured spectra's last point (issue 39, What is left): every group flattens abruptly from 690 to 700 nm.
     // Fitted to the spectra with 700 nm continued at the 680-690 nm slope; scored against the spectra as measured.
@@ -146,24 +184,30 @@ fn candidates() -> Vec<(String, FitOptions)> {
     list.push((format!("default + oxygenation, fresnel{CONTINUED_700}"), fresnel(with_oxygenation(default.clone()))));
     // The scattering spectrum's shape (issue 39, What is left: dark skin's red-end residual).
     for (name, shape) in scattering_shapes() {
-        list.push((format!("default, {name}"), with_scattering(default.clone(), shape)));
-        list.push((
-            format!("default + oxygenation, fresnel, {name}"),
-            with_scattering(fresnel(with_oxygenation(default.clone())), shape),
-        ));
+        push_both(&mut list, &name, |m| m.scattering_shape = shape);
     }
     // Epidermal β-carotene (issue 39, What is left: the blue residual's shape), at fixed concentrations.
     for umol in [1.0, 3.0, 10.0] {
-        let carotene = |mut o: FitOptions| {
-            o.request.model.epidermal_carotene_umol_per_l = umol;
-            o
-        };
-        list.push((format!("default, carotene {umol} umol/L"), carotene(default.clone())));
-        list.push((
-            format!("default + oxygenation, fresnel, carotene {umol} umol/L"),
-            carotene(fresnel(with_oxygenation(default.clone()))),
-        ));
+        push_both(&mut list, &format!("carotene {umol} umol/L"), |m| m.epidermal_carotene_umol_per_l = umol);
     }
+    // Whole blood's measured spectrum instead of haemoglobin in solution (issue 39: the Q bands' depth).
+    let whole_blood = |mut o: FitOptions| {
+        o.request.model.blood_spectrum = BloodSpectrum::WholeBlood2014;
+        o
+    };
+    list.push(("points, whole blood".to_string(), whole_blood(points.clone())));
+    list.push(("default, whole blood".to_string(), whole_blood(default.clone())));
+    list.push(("default + oxygenation, whole blood".to_string(), whole_blood(with_oxygenation(default.clone()))));
+    list.push(("default, fresnel, whole blood".to_string(), whole_blood(fresnel(default.clone()))));
+    list.push((
+        "default + oxygenation, fresnel, whole blood".to_string(),
+        whole_blood(fresnel(with_oxygenation(default.clone()))),
+    ));
+    // Blood in the epidermis layer (Donner et al. 2008's C_he), at fixed fractions.
+    for fraction in [0.002, 0.005, 0.01] {
+        push_both(&mut list, &format!("epidermal blood {fraction}"), |m| m.epidermal_hemoglobin = fraction);
+    }
+    list.push((format!("default + oxygenation, fresnel{BLOOD_ON_GRID}"), fresnel(with_oxygenation(default.clone()))));
     // The instrument's aperture (issue 39, What is left): the light the skin carries out of the measured disc, with
     // either of the CM-2600d's masks (the data do not say which).
     for (name, aperture) in [("aperture MAV", CM2600D_MAV), ("aperture SAV", CM2600D_SAV)] {
@@ -192,9 +236,14 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(Strin
         if wanted.as_ref().is_some_and(|w| !w.contains(&label.as_str())) {
             continue;
         }
+        let mut blood_chosen = None;
         let mut r = if label.ends_with(CONTINUED_700) {
             let altered: Vec<Vec<f64>> = spectra.iter().map(|s| continued_700(s)).collect();
             run(&label, wl, &altered, &options)
+        } else if label.ends_with(BLOOD_ON_GRID) {
+            let (r, chosen) = best_over_blood_grid(&label, wl, spectra, &options);
+            blood_chosen = Some(chosen);
+            r
         } else {
             run(&label, wl, spectra, &options)
         };
@@ -204,6 +253,9 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(Strin
         let rows = class_rows(&r.fits, spectra, wl);
         println!("\n### {label}\n");
         print_class_table(&rows);
+        if let Some(chosen) = &blood_chosen {
+            print_chosen_blood(&r.fits, chosen);
+        }
         tables.push((label.clone(), class_table(&rows)));
         print_residual_spectra(&r.fits, spectra, wl);
         let de: Vec<f64> = r.fits.iter().map(|f| f.delta_e00).collect();
@@ -236,6 +288,22 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(Strin
     tables
 }
 
+/// Each class's p10 / median / p90 of the epidermal blood fraction its spectra's best fits were found with.
+fn print_chosen_blood(fits: &[SpectrumFit], chosen: &[f64]) {
+    let cells: Vec<String> = spectral_skin::color::ita::ITA_CLASSES
+        .iter()
+        .filter_map(|class| {
+            let members = super::classes::members(fits, class);
+            let values: Vec<f64> = members.iter().map(|&i| chosen[i]).collect();
+            (!values.is_empty()).then(|| {
+                let q = |p: f64| quantile(&values, p);
+                format!("{} {:.4} / {:.4} / {:.4}", class.label, q(0.1), q(0.5), q(0.9))
+            })
+        })
+        .collect();
+    println!("Epidermal blood chosen (p10 / median / p90): {}", cells.join(", "));
+}
+
 /// Each class's mean residual (measured - fitted) at every wavelength, in thousandths.
 fn print_residual_spectra(fits: &[spectral_skin::inverse::SpectrumFit], spectra: &[Vec<f64>], wl: &[f64]) {
     println!("\nMean residual per class, 1e-3 (wavelengths {} to {} nm):\n", wl[0], wl[wl.len() - 1]);
@@ -265,28 +333,55 @@ fn print_residual_spectra(fits: &[spectral_skin::inverse::SpectrumFit], spectra:
     }
 }
 
-/// The per-class tables of docs/measured-skin.md (Skin types and the Q bands; Instrument aperture), each written into
-/// its block `measured-skin classes NAME`, stamped with `command`: the fit before the bandpass, the default, the
-/// default with the oxygenation free (with a free and with a Fresnel surface reflection), and the last through the
-/// SAV aperture.
-pub fn by_class(wl: &[f64], spectra: &[Vec<f64>], command: &str) {
-    const TABLES: [(&str, &str); 5] = [
-        ("classes points", "points (the fit before)"),
-        ("classes default", "default (bandpass 1.5 x spacing)"),
-        ("classes oxygenation", "default + oxygenation"),
-        ("classes oxygenation fresnel", "default + oxygenation, fresnel"),
-        ("classes oxygenation fresnel aperture", "default + oxygenation, fresnel, aperture SAV"),
-    ];
-    let labels: Vec<&str> = TABLES.iter().map(|(_, label)| *label).collect();
-    let tables = study(wl, spectra, Some(&labels.join(";")));
-    let blocks: Vec<(String, &str)> = TABLES
+/// The per-class tables of docs/measured-skin.md (Skin types and the Q bands; Instrument aperture; Blood in the
+/// epidermis), each written into its block `measured-skin classes NAME`, stamped with `command`: the fit before the
+/// bandpass, the default, the default with the oxygenation free (with a free and with a Fresnel surface reflection),
+/// and the last through the SAV aperture and with blood in the epidermis.
+const CLASS_TABLES: [(&str, &str); 7] = [
+    ("classes points", "points (the fit before)"),
+    ("classes default", "default (bandpass 1.5 x spacing)"),
+    ("classes oxygenation", "default + oxygenation"),
+    ("classes oxygenation fresnel", "default + oxygenation, fresnel"),
+    ("classes oxygenation fresnel aperture", "default + oxygenation, fresnel, aperture SAV"),
+    ("classes oxygenation fresnel epidermal blood", "default + oxygenation, fresnel, epidermal blood 0.005"),
+    ("classes oxygenation fresnel epidermal blood grid", "default + oxygenation, fresnel, epidermal blood on a grid"),
+];
+
+/// The tables made again on the spectra whose red end rises (`--red-rising`; docs/measured-skin.md, Which spectra),
+/// each block's name with [`RISING_SUFFIX`].
+const RISING_TABLES: [&str; 4] = [
+    "classes default",
+    "classes oxygenation fresnel",
+    "classes oxygenation fresnel epidermal blood",
+    "classes oxygenation fresnel epidermal blood grid",
+];
+
+/// The block-name suffix of the tables of the spectra whose red end rises.
+const RISING_SUFFIX: &str = " rising red";
+
+/// Fits `spectra` with each of [`CLASS_TABLES`]' candidates (only [`RISING_TABLES`]' when `rising_only`: the spectra
+/// are the screened ones; only those labelled in `only`, separated by ';', when given) and writes each class table
+/// into its block of DOC, stamped with `command`.
+pub fn by_class(wl: &[f64], spectra: &[Vec<f64>], command: &str, rising_only: bool, only: Option<&str>) {
+    let wanted: Option<Vec<&str>> = only.map(|o| o.split(';').map(str::trim).collect());
+    let tables: Vec<(String, &str)> = CLASS_TABLES
         .iter()
+        .filter(|(name, _)| !rising_only || RISING_TABLES.contains(name))
+        .filter(|(_, label)| !wanted.as_ref().is_some_and(|w| !w.contains(label)))
         .map(|(name, label)| {
-            let table = tables.iter().find(|(l, _)| l == label).unwrap_or_else(|| panic!("no candidate {label:?}"));
-            (format!("measured-skin {name}"), table.1.as_str())
+            let suffix = if rising_only { RISING_SUFFIX } else { "" };
+            (format!("measured-skin {name}{suffix}"), *label)
         })
         .collect();
-    let blocks: Vec<(&str, &str)> = blocks.iter().map(|(n, t)| (n.as_str(), *t)).collect();
+    let labels: Vec<&str> = tables.iter().map(|(_, label)| *label).collect();
+    let made = study(wl, spectra, Some(&labels.join(";")));
+    let blocks: Vec<(&str, &str)> = tables
+        .iter()
+        .map(|(name, label)| {
+            let table = made.iter().find(|(l, _)| l == label).unwrap_or_else(|| panic!("no candidate {label:?}"));
+            (name.as_str(), table.1.as_str())
+        })
+        .collect();
     write_markdown_blocks(Path::new(DOC), command, &blocks).unwrap();
     eprintln!("wrote {} blocks of {DOC}", blocks.len());
 }
