@@ -267,8 +267,8 @@ mod tests {
     }
 
     /// The whole-blood table as published (Bosschaart et al. 2014's supplementary values at 542, 560 and 576 nm and
-    /// the Soret peak), and against Prahl's solution spectrum at 150 g/L: the same in the red, flatter Q bands, a
-    /// Soret band well under half as strong.
+    /// the Soret peak), and against Prahl's solution spectrum at 150 g/L: close in the red (deoxygenated within 15 % at
+    /// 650 nm), flatter Q bands, a Soret band well under half as strong.
     #[test]
     fn whole_blood_against_solution() {
         let b = BloodSpectrum::WholeBlood2014;
