@@ -451,16 +451,16 @@ fn main() {
         all.len(),
         wl.len()
     );
+    let only = args.iter().position(|a| a == "--only").map(|i| args[i + 1].as_str());
     if args.iter().any(|a| a == "--classes") {
         let every_arg = if every == 1 { String::new() } else { format!(" --every {every}") };
         let rising_arg = if rising_only { " --red-rising" } else { "" };
-        let only = args.iter().position(|a| a == "--only").map(|i| args[i + 1].as_str());
         let only_arg = only.map(|o| format!(" --only \"{o}\"")).unwrap_or_default();
         let command =
             format!("cargo run --release --example measured_skin_report -- --classes{every_arg}{rising_arg}{only_arg}");
         study::by_class(&wl, &spectra, &command, rising_only, only);
     } else if args.iter().any(|a| a == "--study") {
-        study::study(&wl, &spectra, args.iter().position(|a| a == "--only").map(|i| args[i + 1].as_str()));
+        study::study(&wl, &spectra, only);
     } else {
         report(&wl, &spectra, &regenerate_command(every));
     }

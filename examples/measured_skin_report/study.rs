@@ -90,29 +90,25 @@ const EPIDERMAL_BLOOD_GRID: [f64; 9] = [0.0, 0.0025, 0.005, 0.0075, 0.01, 0.015,
 /// Each spectrum's best fit (least RMS) over [`EPIDERMAL_BLOOD_GRID`], with `options` otherwise, and the C_he it
 /// was found with.
 fn best_over_blood_grid(label: &str, wl: &[f64], spectra: &[Vec<f64>], options: &FitOptions) -> (Run, Vec<f64>) {
-    let mut best: Option<(Run, Vec<f64>)> = None;
-    for fraction in EPIDERMAL_BLOOD_GRID {
+    let run_at = |fraction: f64| {
         let mut o = options.clone();
         o.request.model.epidermal_hemoglobin = fraction;
-        let r = run(&format!("{label} (C_he {fraction})"), wl, spectra, &o);
-        best = Some(match best {
-            None => {
-                let n = r.fits.len();
-                (r, vec![fraction; n])
+        run(&format!("{label} (C_he {fraction})"), wl, spectra, &o)
+    };
+    let [first, rest @ ..] = EPIDERMAL_BLOOD_GRID;
+    let mut kept = run_at(first);
+    let mut chosen = vec![first; kept.fits.len()];
+    for fraction in rest {
+        let r = run_at(fraction);
+        for (i, fit) in r.fits.into_iter().enumerate() {
+            if fit.rms < kept.fits[i].rms {
+                kept.fits[i] = fit;
+                chosen[i] = fraction;
             }
-            Some((mut kept, mut chosen)) => {
-                for (i, fit) in r.fits.into_iter().enumerate() {
-                    if fit.rms < kept.fits[i].rms {
-                        kept.fits[i] = fit;
-                        chosen[i] = fraction;
-                    }
-                }
-                kept.seconds += r.seconds;
-                (kept, chosen)
-            }
-        });
+        }
+        kept.seconds += r.seconds;
     }
-    best.expect("a grid of at least one value")
+    (kept, chosen)
 }
 
 /// `fits` (of altered spectra) scored against `measured`: each fit's ΔE00 recomputed from the measured spectrum's colour.
@@ -226,10 +222,15 @@ fn candidates() -> Vec<(String, FitOptions)> {
     list
 }
 
+/// The labels of an `--only` argument (separated by ';'); None: every candidate.
+fn labels_of(only: Option<&str>) -> Option<Vec<&str>> {
+    only.map(|o| o.split(';').map(str::trim).collect())
+}
+
 /// Run the candidates named in `only` (labels separated by ';'; all when None) on `spectra` and print each one's
 /// class table, then a summary line per candidate; returns each candidate's label and class table (markdown).
 pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(String, String)> {
-    let wanted: Option<Vec<&str>> = only.map(|o| o.split(';').map(str::trim).collect());
+    let wanted = labels_of(only);
     let mut summary = Vec::new();
     let mut tables = Vec::new();
     for (label, options) in candidates() {
@@ -363,7 +364,7 @@ const RISING_SUFFIX: &str = " rising red";
 /// are the screened ones; only those labelled in `only`, separated by ';', when given) and writes each class table
 /// into its block of DOC, stamped with `command`.
 pub fn by_class(wl: &[f64], spectra: &[Vec<f64>], command: &str, rising_only: bool, only: Option<&str>) {
-    let wanted: Option<Vec<&str>> = only.map(|o| o.split(';').map(str::trim).collect());
+    let wanted = labels_of(only);
     let tables: Vec<(String, &str)> = CLASS_TABLES
         .iter()
         .filter(|(name, _)| !rising_only || RISING_TABLES.contains(name))

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::chromophores::*;
-use super::params::SkinParams;
+use super::params::{SkinParams, HEMOGLOBIN};
 use super::scattering::ScatteringShape;
 use crate::layer::Layer;
 
@@ -55,8 +55,8 @@ pub struct SkinModel {
 }
 
 /// The most epidermal blood [`SkinModel::epidermal_hemoglobin`] accepts: the dermis's own bound
-/// (`PARAMS`' haemoglobin, 0.1).
-pub const MAX_EPIDERMAL_HEMOGLOBIN: f64 = 0.1;
+/// ([`HEMOGLOBIN`]'s, 0.1).
+pub const MAX_EPIDERMAL_HEMOGLOBIN: f64 = HEMOGLOBIN.max;
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
@@ -180,6 +180,15 @@ pub fn skin_layers(p: &SkinParams, model: &SkinModel, wavelength_nm: f64) -> [La
 mod tests {
     use super::*;
 
+    /// An option's `key` is absent from a default model's JSON (so earlier JSON and cache keys read the same) and
+    /// `set`, a model with the option set, round-trips through JSON.
+    fn absent_by_default_and_round_trips(key: &str, set: &SkinModel) {
+        let text = serde_json::to_string(&SkinModel::default()).unwrap();
+        assert!(!text.contains(key), "{text}");
+        let text = serde_json::to_string(set).unwrap();
+        assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), *set, "{text}");
+    }
+
     #[test]
     fn model_json_round_trip_keeps_infinity() {
         let m = SkinModel::default();
@@ -192,22 +201,20 @@ mod tests {
     /// round-trips when set.
     #[test]
     fn vessel_radius_is_absent_from_json_unless_set() {
-        let text = serde_json::to_string(&SkinModel::default()).unwrap();
-        assert!(!text.contains("blood_vessel_radius_mm"), "{text}");
-        let packed = SkinModel { blood_vessel_radius_mm: 0.02, ..SkinModel::default() };
-        let text = serde_json::to_string(&packed).unwrap();
-        assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), packed);
+        absent_by_default_and_round_trips(
+            "blood_vessel_radius_mm",
+            &SkinModel { blood_vessel_radius_mm: 0.02, ..SkinModel::default() },
+        );
     }
 
     /// The eumelanin shape is absent from a default model's JSON and round-trips when set.
     #[test]
     fn eumelanin_shape_is_absent_from_json_unless_set() {
-        let text = serde_json::to_string(&SkinModel::default()).unwrap();
-        assert!(!text.contains("eumelanin_shape"), "{text}");
         for shape in [EumelaninShape::PowerLaw { exponent: -3.48 }, EumelaninShape::Exponential { k_per_nm: 0.011 }] {
-            let m = SkinModel { eumelanin_shape: shape, ..SkinModel::default() };
-            let text = serde_json::to_string(&m).unwrap();
-            assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m, "{text}");
+            absent_by_default_and_round_trips(
+                "eumelanin_shape",
+                &SkinModel { eumelanin_shape: shape, ..SkinModel::default() },
+            );
         }
     }
 
@@ -215,10 +222,8 @@ mod tests {
     /// the epidermis alone.
     #[test]
     fn carotene_adds_to_the_epidermis_only() {
-        let text = serde_json::to_string(&SkinModel::default()).unwrap();
-        assert!(!text.contains("carotene"), "{text}");
         let m = SkinModel { epidermal_carotene_umol_per_l: 3.0, ..SkinModel::default() };
-        assert_eq!(serde_json::from_str::<SkinModel>(&serde_json::to_string(&m).unwrap()).unwrap(), m);
+        absent_by_default_and_round_trips("carotene", &m);
         let p = SkinParams::preset("caucasian").unwrap();
         let ([epi0, derm0], [epi1, derm1]) =
             (skin_layers(&p, &SkinModel::default(), 480.0), skin_layers(&p, &m, 480.0));
@@ -230,12 +235,10 @@ mod tests {
     /// The blood spectrum is absent from a default model's JSON, round-trips when set, and changes the dermis alone.
     #[test]
     fn blood_spectrum_changes_the_dermis_only() {
-        let text = serde_json::to_string(&SkinModel::default()).unwrap();
-        assert!(!text.contains("blood_spectrum"), "{text}");
         let m = SkinModel { blood_spectrum: BloodSpectrum::WholeBlood2014, ..SkinModel::default() };
+        absent_by_default_and_round_trips("blood_spectrum", &m);
         let text = serde_json::to_string(&m).unwrap();
         assert!(text.contains("\"blood_spectrum\":\"whole_blood2014\""), "{text}");
-        assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m);
         let p = SkinParams::preset("caucasian").unwrap();
         let ([epi0, derm0], [epi1, derm1]) =
             (skin_layers(&p, &SkinModel::default(), 576.0), skin_layers(&p, &m, 576.0));
@@ -251,10 +254,8 @@ mod tests {
     /// the epidermis by blood of the dermis's spectrum and oxygenation: the epidermis gains C_he (blood − tissue).
     #[test]
     fn epidermal_blood_replaces_tissue_in_the_epidermis() {
-        let text = serde_json::to_string(&SkinModel::default()).unwrap();
-        assert!(!text.contains("epidermal_hemoglobin"), "{text}");
         let m = SkinModel { epidermal_hemoglobin: 0.01, ..SkinModel::default() };
-        assert_eq!(serde_json::from_str::<SkinModel>(&serde_json::to_string(&m).unwrap()).unwrap(), m);
+        absent_by_default_and_round_trips("epidermal_hemoglobin", &m);
         let p = SkinParams::preset("caucasian").unwrap();
         for w in [420.0, 576.0, 650.0] {
             let ([epi0, derm0], [epi1, derm1]) = (skin_layers(&p, &SkinModel::default(), w), skin_layers(&p, &m, w));
