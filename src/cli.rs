@@ -138,7 +138,8 @@ struct FitArgs {
     /// wavelengths 380..780 nm, increasing; reflectance a fraction 0..1.
     #[arg(long)]
     spectrum: PathBuf,
-    /// Comma-separated free parameters; default: the set docs/measured-skin.md chooses.
+    /// Comma-separated free parameters (the parameters but oiliness, and epidermal_hemoglobin: blood in the
+    /// epidermis, 0 when not free); default: the set docs/measured-skin.md chooses.
     #[arg(long, value_delimiter = ',')]
     free: Option<Vec<String>>,
     /// A value for a parameter that is not free, NAME=VALUE (repeatable).

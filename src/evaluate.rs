@@ -722,14 +722,7 @@ pub(crate) fn validate_model(m: &SkinModel) -> Result<(), SkinError> {
     let max_carotene = crate::skin::chromophores::MAX_CAROTENE_UMOL_PER_L;
     let carotene = m.epidermal_carotene_umol_per_l;
     check_range("epidermal_carotene_umol_per_l", "epidermal beta-carotene, umol/L", carotene, 0.0, max_carotene)?;
-    let max_blood = crate::skin::optics::MAX_EPIDERMAL_HEMOGLOBIN;
-    check_range(
-        "epidermal_hemoglobin",
-        "whole-blood volume fraction of the epidermis",
-        m.epidermal_hemoglobin,
-        0.0,
-        max_blood,
-    )?;
+    crate::skin::optics::EPIDERMAL_HEMOGLOBIN.check(m.epidermal_hemoglobin)?;
     match m.eumelanin_shape {
         crate::skin::chromophores::EumelaninShape::Dj2006 => {}
         crate::skin::chromophores::EumelaninShape::PowerLaw { exponent } => {

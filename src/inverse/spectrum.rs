@@ -22,8 +22,8 @@ use crate::color::spectrum::VISIBLE_RANGE_NM;
 use crate::color::{ciede2000, lab_from_xyz, spectrum_to_xyz, WavelengthGrid};
 use crate::error::SkinError;
 use crate::evaluate::{diffuse_reflectance_at, Request};
-use crate::skin::optics::{skin_layers, SKIN_IOR};
-use crate::skin::params::{SkinParams, OILINESS, PARAMS, PARAM_COUNT};
+use crate::skin::optics::{skin_layers, EPIDERMAL_HEMOGLOBIN, SKIN_IOR};
+use crate::skin::params::{ParamSpec, SkinParams, OILINESS, PARAMS, PARAM_COUNT};
 use crate::transport::profile_table::exact_shape;
 
 /// The paper's parameters that change the diffuse reflectance (the oiliness scales only the specular lobe).
@@ -33,6 +33,23 @@ pub const PAPER_FREE: [&str; 3] = ["melanin", "melanin_blend", "hemoglobin"];
 /// the baseline absorption scale (the choice and its figures: docs/measured-skin.md).
 pub const DEFAULT_FREE: [&str; 5] =
     ["melanin", "melanin_blend", "hemoglobin", "epidermis_thickness_mm", "baseline_absorption_scale"];
+
+/// The model options a fit can free beside the parameters ([`PARAMS`] but the oiliness), by the same names: the
+/// blood in the epidermis ([`SkinModel::epidermal_hemoglobin`](crate::skin::optics::SkinModel); docs/measured-skin.md,
+/// Blood in the epidermis). Not free, each takes the value of [`FitOptions::request`]'s model.
+pub const MODEL_FREE: [ParamSpec; 1] = [EPIDERMAL_HEMOGLOBIN];
+
+/// What a fit can hold or free: the parameters in [`PARAMS`] order, then [`MODEL_FREE`].
+const QUANTITIES: usize = PARAM_COUNT + MODEL_FREE.len();
+
+/// The spec of quantity `k` ([`QUANTITIES`]).
+fn quantity(k: usize) -> ParamSpec {
+    if k < PARAM_COUNT {
+        PARAMS[k]
+    } else {
+        MODEL_FREE[k - PARAM_COUNT]
+    }
+}
 
 /// The number of start-table entries [`fit_spectrum`] refines by default: one start alone misses the best fit of
 /// the default set on about 15 % of measured spectra, by up to 0.008 RMS (docs/measured-skin.md, the restart check).
@@ -102,7 +119,7 @@ pub const ALL_OBJECTIVES: [Objective; 2] = [Objective::Reflectance, Objective::C
 /// What to fit and how.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitOptions {
-    /// The free parameters, by name ([`PARAMS`]; not the oiliness).
+    /// The free parameters, by name ([`PARAMS`] but the oiliness, and [`MODEL_FREE`]).
     pub free: Vec<String>,
     /// Values of parameters that are not free, in [`PARAMS`] order; None takes the parameter's default (the paper's
     /// value of an extended parameter, [`DEFAULT_OILINESS`]); one of the paper's three without a default must be given
@@ -146,6 +163,10 @@ impl Default for FitOptions {
 pub struct SpectrumFit {
     /// Every model parameter, fitted and fixed.
     pub params: SkinParams,
+    /// The blood in the epidermis the fitted spectrum was computed with ([`SkinModel::epidermal_hemoglobin`]
+    /// (crate::skin::optics::SkinModel)): fitted when free, else the request's model's (0, DJ2006's, by default).
+    /// `params` and the request's model with this value reproduce `fitted_reflectance`.
+    pub epidermal_hemoglobin: f64,
     /// The names of the fitted ones.
     pub free: Vec<&'static str>,
     /// "free", "fresnel" or "fixed".
@@ -177,9 +198,9 @@ pub struct SpectrumFit {
     pub streams: usize,
 }
 
-/// The solver's unknowns: every parameter but the oiliness (a fit frees each at most once) and the offset; a fit with
+/// The solver's unknowns: every quantity but the oiliness (a fit frees each at most once) and the offset; a fit with
 /// fewer holds the rest (`lm::minimize`: equal bounds, no evaluation).
-const UNKNOWNS: usize = PARAM_COUNT;
+const UNKNOWNS: usize = QUANTITIES;
 
 /// One spectrum of the start table: the free parameters' values and the diffuse spectrum there.
 type StartSpectrum = (Vec<f64>, Vec<f64>);
@@ -195,10 +216,10 @@ pub struct SpectrumFitter {
     /// The aperture's quadrature, if one is modelled.
     aperture: Option<ApertureKernel>,
     options: FitOptions,
-    /// Indices into PARAMS of the free parameters.
+    /// Indices of the free quantities ([`quantity`]).
     free: Vec<usize>,
-    /// Every parameter's value, the free ones at the middle of their grid (replaced in each evaluation).
-    base: [f64; PARAM_COUNT],
+    /// Every quantity's value, the free ones at the middle of their grid (replaced in each evaluation).
+    base: [f64; QUANTITIES],
     xyz_weights: Vec<[f64; 3]>,
     white_xyz: [f64; 3],
     /// (free parameter values, diffuse spectrum) for the coarse start.
@@ -215,6 +236,7 @@ fn table_values(name: &str) -> &'static [f64] {
         "epidermis_thickness_mm" => &[0.02, 0.05, 0.1, 0.2, 0.4],
         "baseline_absorption_scale" => &[0.25, 1.0, 2.5, 6.0],
         "blood_oxygenation" => &[0.2, 0.5, 0.8, 1.0],
+        "epidermal_hemoglobin" => &[0.0, 0.01],
         _ => &[],
     }
 }
@@ -235,14 +257,15 @@ impl SpectrumFitter {
         check_wavelengths(wavelengths_nm)?;
         let mut free = Vec::new();
         for name in &options.free {
-            let Some(index) = PARAMS.iter().position(|p| p.name == name) else {
-                let names: Vec<&str> = PARAMS.iter().map(|p| p.name).filter(|n| *n != OILINESS.name).collect();
+            let Some(index) = (0..QUANTITIES).find(|&k| quantity(k).name == name) else {
+                let names: Vec<&str> =
+                    (0..QUANTITIES).map(|k| quantity(k).name).filter(|n| *n != OILINESS.name).collect();
                 return Err(SkinError::invalid(
                     "free",
                     format!("unknown parameter {name:?}; the parameters that can be fitted: {}", names.join(", ")),
                 ));
             };
-            if index == 3 {
+            if quantity(index).name == OILINESS.name {
                 return Err(SkinError::invalid(
                     "free",
                     "oiliness cannot be fitted: it scales the specular lobe only, not the diffuse reflectance",
@@ -251,8 +274,16 @@ impl SpectrumFitter {
             if free.contains(&index) {
                 return Err(SkinError::invalid("free", format!("{name} is listed twice")));
             }
-            if options.fixed[index].is_some() {
+            if options.fixed.get(index).is_some_and(Option::is_some) {
                 return Err(SkinError::invalid("fixed", format!("{name} is free and cannot have a fixed value too")));
+            }
+            if index >= PARAM_COUNT
+                && Some(model_values(&options.request)[index - PARAM_COUNT]) != quantity(index).default
+            {
+                return Err(SkinError::invalid(
+                    "free",
+                    format!("{name} is free and cannot have a value in the request's model too"),
+                ));
             }
             free.push(index);
         }
@@ -269,11 +300,13 @@ impl SpectrumFitter {
                 ),
             ));
         }
-        let mut base = [0.0; PARAM_COUNT];
-        for (i, spec) in PARAMS.iter().enumerate() {
-            base[i] = if let Some(&k) = free.iter().find(|&&k| k == i) {
-                let values = table_values(PARAMS[k].name);
+        let mut base = [0.0; QUANTITIES];
+        for (i, spec) in (0..QUANTITIES).map(|k| (k, quantity(k))) {
+            base[i] = if free.contains(&i) {
+                let values = table_values(spec.name);
                 values[values.len() / 2]
+            } else if i >= PARAM_COUNT {
+                model_values(&options.request)[i - PARAM_COUNT]
             } else if let Some(v) = options.fixed[i] {
                 spec.check(v)?
             } else if i == 3 {
@@ -352,18 +385,15 @@ impl SpectrumFitter {
     /// each measured wavelength (None if the model rejects them, or once `cancel` is set: the callers read it again
     /// after).
     fn forward(&self, x: &[f64], cancel: &AtomicBool) -> Option<Vec<f64>> {
-        let mut v = self.base;
-        for (&k, &value) in self.free.iter().zip(x) {
-            v[k] = value;
-        }
-        let params = SkinParams::from_values(v).ok()?;
-        let mut at_nodes =
-            diffuse_reflectance_at(&params, &self.options.request, &self.sampling.nodes_nm, cancel).ok()?;
+        let v = self.values_at(x);
+        let params = SkinParams::from_values(v[..PARAM_COUNT].try_into().ok()?).ok()?;
+        let request = with_model_values(self.options.request, &v[PARAM_COUNT..]);
+        let mut at_nodes = diffuse_reflectance_at(&params, &request, &self.sampling.nodes_nm, cancel).ok()?;
         if let Some(kernel) = &self.aperture {
             // What the instrument measures at a node: the reflectance times the fraction leaving inside its measured
             // disc, averaged over the bandpass below. A stack the profile table does not hold (an epidermis over 10
             // mean free paths thick) is rejected.
-            let model = &self.options.request.model;
+            let model = &request.model;
             let shape_at = |nm: f64| exact_shape(&skin_layers(&params, model, nm));
             let fractions = kernel.fractions(&self.sampling.nodes_nm, shape_at)?;
             at_nodes.iter_mut().zip(fractions).for_each(|(r, f)| *r *= f);
@@ -371,8 +401,17 @@ impl SpectrumFitter {
         Some(self.sampling.apply(&at_nodes))
     }
 
+    /// Every quantity's value with the free ones at `x`.
+    fn values_at(&self, x: &[f64]) -> [f64; QUANTITIES] {
+        let mut v = self.base;
+        for (&k, &value) in self.free.iter().zip(x) {
+            v[k] = value;
+        }
+        v
+    }
+
     fn build_table(&self, cancel: &AtomicBool) -> Result<Vec<StartSpectrum>, SkinError> {
-        let axes: Vec<&[f64]> = self.free.iter().map(|&k| table_values(PARAMS[k].name)).collect();
+        let axes: Vec<&[f64]> = self.free.iter().map(|&k| table_values(quantity(k).name)).collect();
         let count: usize = axes.iter().map(|a| a.len()).product();
         let spectra: Vec<Option<StartSpectrum>> = (0..count)
             .into_par_iter()
@@ -448,7 +487,7 @@ impl SpectrumFitter {
         let mut lower = [0.0; UNKNOWNS];
         let mut upper = [0.0; UNKNOWNS];
         for (q, &k) in self.free.iter().enumerate() {
-            (lower[q], upper[q]) = (PARAMS[k].min, PARAMS[k].max);
+            (lower[q], upper[q]) = quantity(k).range();
         }
         if fit_offset {
             (lower[n_free], upper[n_free]) = SPECULAR_OFFSET_RANGE;
@@ -503,13 +542,13 @@ impl SpectrumFitter {
         let rms =
             (fitted.iter().zip(reflectance).map(|(f, m)| (f - m).powi(2)).sum::<f64>() / fitted.len() as f64).sqrt();
         let lab_fitted = self.lab(&fitted);
-        let mut values = self.base;
-        for (&k, &value) in self.free.iter().zip(&best.x) {
-            values[k] = value;
-        }
+        let values = self.values_at(&best.x[..n_free]);
+        let mut params = [0.0; PARAM_COUNT];
+        params.copy_from_slice(&values[..PARAM_COUNT]);
         Ok(SpectrumFit {
-            params: SkinParams::from_values(values)?,
-            free: self.free.iter().map(|&k| PARAMS[k].name).collect(),
+            params: SkinParams::from_values(params)?,
+            epidermal_hemoglobin: values[PARAM_COUNT],
+            free: self.free.iter().map(|&k| quantity(k).name).collect(),
             specular: self.options.specular.name(),
             specular_offset,
             objective: self.options.objective,
@@ -533,6 +572,17 @@ impl SpectrumFitter {
     pub fn fit_many(&self, spectra: &[Vec<f64>]) -> Vec<Result<SpectrumFit, SkinError>> {
         spectra.par_iter().map(|s| self.fit(s)).collect()
     }
+}
+
+/// The values of [`MODEL_FREE`] in `request`'s model, in its order.
+fn model_values(request: &Request) -> [f64; MODEL_FREE.len()] {
+    [request.model.epidermal_hemoglobin]
+}
+
+/// `request` with the model options of [`MODEL_FREE`] at `values`.
+fn with_model_values(mut request: Request, values: &[f64]) -> Request {
+    request.model.epidermal_hemoglobin = values[0];
+    request
 }
 
 /// Fit one measured spectrum: [`SpectrumFitter::new`] then [`SpectrumFitter::fit`].

@@ -28,8 +28,10 @@ use super::errors::invalid;
 ///         than the free parameters).
 ///     reflectance: the measured reflectance (a fraction, 0..1), one value per wavelength.
 ///     free: names of the fitted parameters, from :func:`parameters` except "oiliness" (it does not change the
-///         diffuse reflectance); None: the default set ("melanin", "melanin_blend", "hemoglobin",
-///         "epidermis_thickness_mm", "baseline_absorption_scale"; docs/measured-skin.md says why).
+///         diffuse reflectance), and "epidermal_hemoglobin" (blood in the epidermis, 0..0.1, a model option: 0, the
+///         paper's model, when not free; docs/measured-skin.md, Blood in the epidermis); None: the default set
+///         ("melanin", "melanin_blend", "hemoglobin", "epidermis_thickness_mm", "baseline_absorption_scale";
+///         docs/measured-skin.md says why).
 ///     fixed: values of parameters that are not free, {name: value}; a parameter neither free nor given takes its
 ///         default (the paper's value of an extended parameter; oiliness 0.3, the presets' value); melanin,
 ///         melanin_blend and hemoglobin have no default and must be given when not free.
@@ -54,7 +56,8 @@ use super::errors::invalid;
 ///         None: skin's totals from the shipped table of 32-stream totals.
 ///
 /// Returns:
-///     A dict: "params" (every model parameter, fitted and fixed, by name), "free" (the fitted names), "specular"
+///     A dict: "params" (every model parameter, fitted and fixed, by name), "epidermal_hemoglobin" (the blood in the
+///         epidermis the fitted spectrum has: fitted when free, else 0), "free" (the fitted names), "specular"
 ///     ("free", "fresnel" or "fixed"), "specular_offset", "objective", "wavelengths_nm" (K,), "bandpass" ("spacing"
 ///     or "fwhm"), "bandpass_nm" (the FWHM at each wavelength), "aperture" (None or the discs' radii),
 ///     "fitted_reflectance" (K,) (model, averaged over the bandpass, times the aperture's measured fraction, plus

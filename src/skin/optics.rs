@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::chromophores::*;
-use super::params::{SkinParams, HEMOGLOBIN};
+use super::params::{ParamSpec, SkinParams, HEMOGLOBIN};
 use super::scattering::ScatteringShape;
 use crate::layer::Layer;
 
@@ -48,15 +48,27 @@ pub struct SkinModel {
     pub blood_spectrum: BloodSpectrum,
     /// Whole-blood volume fraction of the epidermis layer, `C_he` of Donner et al. 2008's epidermis (also Jimenez et
     /// al. 2010): blood of the dermis's oxygenation and spectrum in place of as much bloodless tissue. 0 (the
-    /// default, DJ2006) has none. At most [`MAX_EPIDERMAL_HEMOGLOBIN`]. An option for issue 39's study; absent from
+    /// default, DJ2006) has none. Range and meaning: [`EPIDERMAL_HEMOGLOBIN`] (`fit_spectrum` can fit it). Absent from
     /// JSON when 0 (docs/model.md, Epidermal blood).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub epidermal_hemoglobin: f64,
 }
 
-/// The most epidermal blood [`SkinModel::epidermal_hemoglobin`] accepts: the dermis's own bound
-/// ([`HEMOGLOBIN`]'s, 0.1).
-pub const MAX_EPIDERMAL_HEMOGLOBIN: f64 = HEMOGLOBIN.max;
+/// [`SkinModel::epidermal_hemoglobin`] described once: its name (the model option's JSON key and the name
+/// `fit_spectrum` frees it by), symbol, meaning and range, the dermis's own bound ([`HEMOGLOBIN`]'s, 0.1).
+pub const EPIDERMAL_HEMOGLOBIN: ParamSpec = ParamSpec {
+    name: "epidermal_hemoglobin",
+    symbol: "C_he",
+    label: "Epidermal Blood",
+    description: "whole-blood volume fraction of the epidermis",
+    effect: "blood of the dermis's oxygenation above the dermis: its Soret and Q bands seen through less melanin",
+    unit: "",
+    min: 0.0,
+    max: HEMOGLOBIN.max,
+    default: Some(0.0),
+    source: "Donner, Weyrich, d'Eon, Ramamoorthi & Rusinkiewicz 2008 (epidermis C_he); Jimenez et al. 2010; \
+             docs/model.md, Epidermal blood",
+};
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0

@@ -39,6 +39,19 @@ def test_round_trip_recovers_parameters_and_offset() -> None:
     assert fixed["params"]["melanin"] == pytest.approx(0.04, rel=0.01) and fixed["rms"] < 1e-4
 
 
+def test_epidermal_blood_is_freed_by_name_and_returned() -> None:
+    """docs/measured-skin.md, Blood in the epidermis: a model option the fit frees by name; a spectrum of skin
+    without it comes back without it, and the fit reports the value it used (0, the paper's, when not freed)."""
+    wavelengths, measured = _model_spectrum(0.0)
+    free = [*TRUTH, "epidermal_hemoglobin"]
+    fit = spectral_skin.fit_spectrum(wavelengths, measured, free=free, specular=0.0, bandpass=0)
+    assert fit["free"] == free and fit["epidermal_hemoglobin"] < 5e-4 and fit["rms"] < 1e-4, fit
+    assert "epidermal_hemoglobin" not in fit["params"]
+    assert spectral_skin.fit_spectrum(wavelengths, measured, bandpass=0)["epidermal_hemoglobin"] == 0.0
+    with pytest.raises(spectral_skin.SpectralSkinError, match="epidermal_hemoglobin"):
+        spectral_skin.fit_spectrum(wavelengths, measured, free=["melanin", "carotene"])
+
+
 def test_default_bandpass_is_one_and_a_half_spacings() -> None:
     """docs/measured-skin.md, Instrument bandpass: the model is averaged over a triangle 1.5 times the 10 nm spacing
     wide; fitting a point spectrum so leaves a residual the point fit does not."""
