@@ -9,13 +9,14 @@ use spectral_skin::color::difference::ciede2000;
 use spectral_skin::inverse::aperture::{CM2600D_MAV, CM2600D_SAV};
 use spectral_skin::inverse::{Aperture, Bandpass, FitOptions, SpectrumFit, SpectrumFitter, Specular};
 use spectral_skin::skin::chromophores::{BloodSpectrum, EumelaninShape};
+use spectral_skin::skin::optics::EPIDERMAL_HEMOGLOBIN;
 use spectral_skin::skin::scattering::ScatteringShape;
 use spectral_skin::skin::SkinModel;
 use spectral_skin::stamp::write_markdown_blocks;
 
 use super::classes::{class_rows, class_table, print_class_table, worst_over_best};
 use super::data::quantile;
-use super::{run, Run, DOC};
+use super::{run, DOC};
 
 /// The vessel radii tried, mm: the superficial dermal plexus's capillaries and venules (about 0.005 to 0.05 mm in
 /// radius; Braverman 2000, src/skin/chromophores.rs).
@@ -78,37 +79,6 @@ fn continued_700(spectrum: &[f64]) -> Vec<f64> {
     let n = v.len();
     v[n - 1] = 2.0 * v[n - 2] - v[n - 3];
     v
-}
-
-/// The label suffix of a candidate whose epidermal blood is chosen per spectrum: fitted with each of
-/// [`EPIDERMAL_BLOOD_GRID`] held, the fit of least RMS kept (a profile over C_he; [`best_over_blood_grid`]).
-const BLOOD_ON_GRID: &str = ", epidermal blood on a grid";
-
-/// The epidermal blood fractions (C_he) tried per spectrum for [`BLOOD_ON_GRID`].
-const EPIDERMAL_BLOOD_GRID: [f64; 9] = [0.0, 0.0025, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.05];
-
-/// Each spectrum's best fit (least RMS) over [`EPIDERMAL_BLOOD_GRID`], with `options` otherwise, and the C_he it
-/// was found with.
-fn best_over_blood_grid(label: &str, wl: &[f64], spectra: &[Vec<f64>], options: &FitOptions) -> (Run, Vec<f64>) {
-    let run_at = |fraction: f64| {
-        let mut o = options.clone();
-        o.request.model.epidermal_hemoglobin = fraction;
-        run(&format!("{label} (C_he {fraction})"), wl, spectra, &o)
-    };
-    let [first, rest @ ..] = EPIDERMAL_BLOOD_GRID;
-    let mut kept = run_at(first);
-    let mut chosen = vec![first; kept.fits.len()];
-    for fraction in rest {
-        let r = run_at(fraction);
-        for (i, fit) in r.fits.into_iter().enumerate() {
-            if fit.rms < kept.fits[i].rms {
-                kept.fits[i] = fit;
-                chosen[i] = fraction;
-            }
-        }
-        kept.seconds += r.seconds;
-    }
-    (kept, chosen)
 }
 
 /// `fits` (of altered spectra) scored against `measured`: each fit's ΔE00 recomputed from the measured spectrum's colour.
@@ -203,7 +173,37 @@ fn candidates() -> Vec<(String, FitOptions)> {
     for fraction in [0.002, 0.005, 0.01] {
         push_both(&mut list, &format!("epidermal blood {fraction}"), |m| m.epidermal_hemoglobin = fraction);
     }
-    list.push((format!("default + oxygenation, fresnel{BLOOD_ON_GRID}"), fresnel(with_oxygenation(default.clone()))));
+    // The same fitted per spectrum (freed by name, 0..0.1), with the oxygenation free, with a free and a Fresnel
+    // surface, and with whole blood's spectrum (its Q bands shallower, its Soret band weaker: blood in the
+    // epidermis might make up the violet).
+    let blood_fitted = |mut o: FitOptions| {
+        o.free.push(EPIDERMAL_HEMOGLOBIN.name.to_string());
+        o
+    };
+    list.push(("default, epidermal blood fitted".to_string(), blood_fitted(default.clone())));
+    list.push((
+        "default + oxygenation, fresnel, epidermal blood fitted".to_string(),
+        blood_fitted(fresnel(with_oxygenation(default.clone()))),
+    ));
+    list.push((
+        "default + oxygenation, epidermal blood fitted".to_string(),
+        blood_fitted(with_oxygenation(default.clone())),
+    ));
+    // The same with a wider bandpass (the Q bands' depth is what the bandpass scan traded against the 580 nm edge).
+    for w in [17.5, 20.0] {
+        list.push((
+            format!("bandpass {w} nm + oxygenation, fresnel, epidermal blood fitted"),
+            blood_fitted(fresnel(with_oxygenation(fwhm(w)))),
+        ));
+    }
+    list.push((
+        "default + oxygenation, fresnel, whole blood, epidermal blood fitted".to_string(),
+        whole_blood(blood_fitted(fresnel(with_oxygenation(default.clone())))),
+    ));
+    list.push((
+        "default + oxygenation, whole blood, epidermal blood fitted".to_string(),
+        whole_blood(blood_fitted(with_oxygenation(default.clone()))),
+    ));
     // The instrument's aperture (issue 39, What is left): the light the skin carries out of the measured disc, with
     // either of the CM-2600d's masks (the data do not say which).
     for (name, aperture) in [("aperture MAV", CM2600D_MAV), ("aperture SAV", CM2600D_SAV)] {
@@ -237,14 +237,9 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(Strin
         if wanted.as_ref().is_some_and(|w| !w.contains(&label.as_str())) {
             continue;
         }
-        let mut blood_chosen = None;
         let mut r = if label.ends_with(CONTINUED_700) {
             let altered: Vec<Vec<f64>> = spectra.iter().map(|s| continued_700(s)).collect();
             run(&label, wl, &altered, &options)
-        } else if label.ends_with(BLOOD_ON_GRID) {
-            let (r, chosen) = best_over_blood_grid(&label, wl, spectra, &options);
-            blood_chosen = Some(chosen);
-            r
         } else {
             run(&label, wl, spectra, &options)
         };
@@ -254,8 +249,8 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(Strin
         let rows = class_rows(&r.fits, spectra, wl);
         println!("\n### {label}\n");
         print_class_table(&rows);
-        if let Some(chosen) = &blood_chosen {
-            print_chosen_blood(&r.fits, chosen);
+        if options.free.iter().any(|n| n == EPIDERMAL_HEMOGLOBIN.name) {
+            print_fitted_blood(&r.fits);
         }
         tables.push((label.clone(), class_table(&rows)));
         print_residual_spectra(&r.fits, spectra, wl);
@@ -289,20 +284,20 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(Strin
     tables
 }
 
-/// Each class's p10 / median / p90 of the epidermal blood fraction its spectra's best fits were found with.
-fn print_chosen_blood(fits: &[SpectrumFit], chosen: &[f64]) {
+/// Each class's p10 / median / p90 of the fitted epidermal blood fraction.
+fn print_fitted_blood(fits: &[SpectrumFit]) {
     let cells: Vec<String> = spectral_skin::color::ita::ITA_CLASSES
         .iter()
         .filter_map(|class| {
             let members = super::classes::members(fits, class);
-            let values: Vec<f64> = members.iter().map(|&i| chosen[i]).collect();
+            let values: Vec<f64> = members.iter().map(|&i| fits[i].epidermal_hemoglobin).collect();
             (!values.is_empty()).then(|| {
                 let q = |p: f64| quantile(&values, p);
                 format!("{} {:.4} / {:.4} / {:.4}", class.label, q(0.1), q(0.5), q(0.9))
             })
         })
         .collect();
-    println!("Epidermal blood chosen (p10 / median / p90): {}", cells.join(", "));
+    println!("Epidermal blood fitted (p10 / median / p90): {}", cells.join(", "));
 }
 
 /// Each class's mean residual (measured - fitted) at every wavelength, in thousandths.
@@ -338,23 +333,25 @@ fn print_residual_spectra(fits: &[spectral_skin::inverse::SpectrumFit], spectra:
 /// epidermis), each written into its block `measured-skin classes NAME`, stamped with `command`: the fit before the
 /// bandpass, the default, the default with the oxygenation free (with a free and with a Fresnel surface reflection),
 /// and the last through the SAV aperture and with blood in the epidermis.
-const CLASS_TABLES: [(&str, &str); 7] = [
+const CLASS_TABLES: [(&str, &str); 8] = [
     ("classes points", "points (the fit before)"),
     ("classes default", "default (bandpass 1.5 x spacing)"),
     ("classes oxygenation", "default + oxygenation"),
     ("classes oxygenation fresnel", "default + oxygenation, fresnel"),
     ("classes oxygenation fresnel aperture", "default + oxygenation, fresnel, aperture SAV"),
     ("classes oxygenation fresnel epidermal blood", "default + oxygenation, fresnel, epidermal blood 0.005"),
-    ("classes oxygenation fresnel epidermal blood grid", "default + oxygenation, fresnel, epidermal blood on a grid"),
+    ("classes oxygenation fresnel epidermal blood fitted", "default + oxygenation, fresnel, epidermal blood fitted"),
+    ("classes oxygenation epidermal blood fitted", "default + oxygenation, epidermal blood fitted"),
 ];
 
 /// The tables made again on the spectra whose red end rises (`--red-rising`; docs/measured-skin.md, Which spectra),
 /// each block's name with [`RISING_SUFFIX`].
-const RISING_TABLES: [&str; 4] = [
+const RISING_TABLES: [&str; 5] = [
     "classes default",
     "classes oxygenation fresnel",
     "classes oxygenation fresnel epidermal blood",
-    "classes oxygenation fresnel epidermal blood grid",
+    "classes oxygenation fresnel epidermal blood fitted",
+    "classes oxygenation epidermal blood fitted",
 ];
 
 /// The block-name suffix of the tables of the spectra whose red end rises.
