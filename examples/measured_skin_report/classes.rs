@@ -29,6 +29,9 @@ pub struct ClassRow {
     pub q_rms: f64,
     /// The class's mean measured reflectance over 530-590 nm (what the Q-band rms is read against).
     pub q_level: f64,
+    /// Root mean square of the class's mean residual at the wavelengths outside 530-590 nm: the misfit the Q bands
+    /// are read against (a Q-band rms no larger than it leaves no blood signature).
+    pub rms_outside_q: f64,
     /// Median fitted melanin, epidermis thickness (mm), haemoglobin, oxygenation, offset.
     pub medians: [f64; 5],
     /// p10 and p90 of the fitted epidermis thickness, mm.
@@ -39,7 +42,7 @@ pub struct ClassRow {
 pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Vec<ClassRow> {
     let at = |nm: f64| wl.iter().position(|&w| (w - nm).abs() < 1e-9).expect("Q-band wavelength in the data");
     let q_index = Q_BAND_NM.map(at);
-    let band: Vec<usize> = (0..wl.len()).filter(|&k| (530.0..=590.0).contains(&wl[k])).collect();
+    let (band, outside): (Vec<usize>, Vec<usize>) = (0..wl.len()).partition(|&k| (530.0..=590.0).contains(&wl[k]));
     let mut rows = Vec::new();
     for class in &ITA_CLASSES {
         let members = members(fits, class);
@@ -49,7 +52,9 @@ pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Ve
         let n = members.len();
         let mean_residual =
             |k: usize| members.iter().map(|&i| measured[i][k] - fits[i].fitted_reflectance[k]).sum::<f64>() / n as f64;
-        let q_rms = (band.iter().map(|&k| mean_residual(k).powi(2)).sum::<f64>() / band.len() as f64).sqrt();
+        let rms_over =
+            |ks: &[usize]| (ks.iter().map(|&k| mean_residual(k).powi(2)).sum::<f64>() / ks.len() as f64).sqrt();
+        let q_rms = rms_over(&band);
         let q_level = band.iter().map(|&k| members.iter().map(|&i| measured[i][k]).sum::<f64>()).sum::<f64>()
             / (band.len() * n) as f64;
         let of = |f: &dyn Fn(&SpectrumFit) -> f64| members.iter().map(|&i| f(&fits[i])).collect::<Vec<f64>>();
@@ -64,6 +69,7 @@ pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Ve
             q_residual: q_index.map(mean_residual),
             q_rms,
             q_level,
+            rms_outside_q: rms_over(&outside),
             medians: [
                 quantile(&of(&|f| f.params.melanin), 0.5),
                 quantile(&thickness, 0.5),
@@ -118,7 +124,7 @@ pub fn class_table(rows: &[ClassRow]) -> String {
 }
 
 /// Prints the markdown table of `rows`, the worst / best ratio of their median ΔE00, and each class's Q-band rms
-/// relative to its mean measured reflectance there.
+/// relative to its mean measured reflectance there and against the rms of its mean residual elsewhere.
 pub fn print_class_table(rows: &[ClassRow]) {
     print!("{}", class_table(rows));
     println!(
@@ -128,4 +134,7 @@ pub fn print_class_table(rows: &[ClassRow]) {
     let relative: Vec<String> =
         rows.iter().map(|r| format!("{} {:.2} %", r.name, 100.0 * r.q_rms / r.q_level)).collect();
     println!("Q-band rms / mean measured reflectance over 530-590 nm: {}", relative.join(", "));
+    let against: Vec<String> =
+        rows.iter().map(|r| format!("{} {:.4} / {:.4}", r.name, r.q_rms, r.rms_outside_q)).collect();
+    println!("Q-band rms / rms of the mean residual outside 530-590 nm: {}", against.join(", "));
 }
