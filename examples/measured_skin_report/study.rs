@@ -22,9 +22,14 @@ use super::{run, DOC};
 /// radius; Braverman 2000, src/skin/chromophores.rs).
 const RADII_MM: [f64; 3] = [0.005, 0.015, 0.04];
 
-fn with_oxygenation(mut o: FitOptions) -> FitOptions {
-    o.free.push("blood_oxygenation".to_string());
+/// `o` with `name` freed too.
+fn freeing(mut o: FitOptions, name: &str) -> FitOptions {
+    o.free.push(name.to_string());
     o
+}
+
+fn with_oxygenation(o: FitOptions) -> FitOptions {
+    freeing(o, "blood_oxygenation")
 }
 
 /// The eumelanin shapes tried beside DJ2006's λ^-3.33 (src/skin/chromophores.rs, `EumelaninShape`): Jacques' melanosome
@@ -176,10 +181,7 @@ fn candidates() -> Vec<(String, FitOptions)> {
     // The same fitted per spectrum (freed by name, 0..0.1), with the oxygenation free, with a free and a Fresnel
     // surface, and with whole blood's spectrum (its Q bands shallower, its Soret band weaker: blood in the
     // epidermis might make up the violet).
-    let blood_fitted = |mut o: FitOptions| {
-        o.free.push(EPIDERMAL_HEMOGLOBIN.name.to_string());
-        o
-    };
+    let blood_fitted = |o: FitOptions| freeing(o, EPIDERMAL_HEMOGLOBIN.name);
     list.push(("default, epidermal blood fitted".to_string(), blood_fitted(default.clone())));
     list.push((
         "default + oxygenation, fresnel, epidermal blood fitted".to_string(),

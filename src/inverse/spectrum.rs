@@ -309,7 +309,7 @@ impl SpectrumFitter {
                 model_values(&options.request)[i - PARAM_COUNT]
             } else if let Some(v) = options.fixed[i] {
                 spec.check(v)?
-            } else if i == 3 {
+            } else if spec.name == OILINESS.name {
                 DEFAULT_OILINESS
             } else if let Some(d) = spec.default {
                 d
@@ -386,7 +386,7 @@ impl SpectrumFitter {
     /// after).
     fn forward(&self, x: &[f64], cancel: &AtomicBool) -> Option<Vec<f64>> {
         let v = self.values_at(x);
-        let params = SkinParams::from_values(v[..PARAM_COUNT].try_into().ok()?).ok()?;
+        let params = params_of(&v).ok()?;
         let request = with_model_values(self.options.request, &v[PARAM_COUNT..]);
         let mut at_nodes = diffuse_reflectance_at(&params, &request, &self.sampling.nodes_nm, cancel).ok()?;
         if let Some(kernel) = &self.aperture {
@@ -543,10 +543,8 @@ impl SpectrumFitter {
             (fitted.iter().zip(reflectance).map(|(f, m)| (f - m).powi(2)).sum::<f64>() / fitted.len() as f64).sqrt();
         let lab_fitted = self.lab(&fitted);
         let values = self.values_at(&best.x[..n_free]);
-        let mut params = [0.0; PARAM_COUNT];
-        params.copy_from_slice(&values[..PARAM_COUNT]);
         Ok(SpectrumFit {
-            params: SkinParams::from_values(params)?,
+            params: params_of(&values)?,
             epidermal_hemoglobin: values[PARAM_COUNT],
             free: self.free.iter().map(|&k| quantity(k).name).collect(),
             specular: self.options.specular.name(),
@@ -572,6 +570,13 @@ impl SpectrumFitter {
     pub fn fit_many(&self, spectra: &[Vec<f64>]) -> Vec<Result<SpectrumFit, SkinError>> {
         spectra.par_iter().map(|s| self.fit(s)).collect()
     }
+}
+
+/// The parameters among `values` (the first [`PARAM_COUNT`] quantities), validated.
+fn params_of(values: &[f64; QUANTITIES]) -> Result<SkinParams, SkinError> {
+    let mut params = [0.0; PARAM_COUNT];
+    params.copy_from_slice(&values[..PARAM_COUNT]);
+    SkinParams::from_values(params)
 }
 
 /// The values of [`MODEL_FREE`] in `request`'s model, in its order.
