@@ -23,7 +23,7 @@ use crate::skin::params::{
     ParamSpec, BASELINE_ABSORPTION_SCALE, BLOOD_OXYGENATION, EPIDERMIS_THICKNESS, EXTENDED_PARAMS, HEMOGLOBIN, MELANIN,
     MELANIN_BLEND, OILINESS, PARAMS,
 };
-use crate::skin::{SkinParams, PRESETS};
+use crate::skin::{SkinModel, SkinParams, PRESETS};
 use crate::surface::lobes::SurfaceModel;
 use crate::transport::Transport;
 use clap::{Args, Parser, Subcommand};
@@ -60,6 +60,8 @@ enum Command {
         method: Option<SubsurfaceMethod>,
         #[command(flatten)]
         surface: SurfaceArgs,
+        #[command(flatten)]
+        model: ModelArgs,
         /// Print the stable JSON interface instead of a summary.
         #[arg(long)]
         json: bool,
@@ -76,6 +78,8 @@ enum Command {
         skin: SkinArgs,
         #[command(flatten)]
         accuracy: AccuracyArgs,
+        #[command(flatten)]
+        model: ModelArgs,
         /// One column per wavelength instead of R, G, B.
         #[arg(long)]
         spectral: bool,
@@ -166,6 +170,43 @@ struct FitArgs {
     starts: usize,
     #[command(flatten)]
     transport: TransportArgs,
+    #[command(flatten)]
+    model: ModelArgs,
+}
+
+/// The model's options beyond the parameters (`skin::SkinModel`).
+#[derive(Args)]
+struct ModelArgs {
+    /// The model's options beyond the parameters, a JSON object by name (docs/model.md), e.g.
+    /// '{"epidermal_hemoglobin": 0.01}' for what `fit --free ...,epidermal_hemoglobin` fitted; options left out keep
+    /// DJ2006's model [default: DJ2006's model].
+    #[arg(long, value_name = "JSON", value_parser = parse_model)]
+    model: Option<SkinModel>,
+}
+
+impl ModelArgs {
+    fn model(&self) -> SkinModel {
+        self.model.unwrap_or_default()
+    }
+}
+
+/// `--model`'s JSON read as the model's options (an unknown name lists the known ones; the ranges are checked where
+/// the model is used).
+fn parse_model(text: &str) -> Result<SkinModel, String> {
+    let value: serde_json::Value = serde_json::from_str(text).map_err(|e| format!("not JSON: {e}"))?;
+    if !value.is_object() {
+        return Err(format!("expected a JSON object {{\"option\": value, ...}}; got {value}"));
+    }
+    serde_json::from_value(value.clone()).map_err(|e| {
+        // serde_json's error names no field: the first entry that fails alone is the one.
+        let fails_alone = |(name, v): &(&String, &serde_json::Value)| {
+            serde_json::from_value::<SkinModel>(serde_json::json!({ *name: v })).is_err()
+        };
+        match value.as_object().and_then(|entries| entries.iter().find(fails_alone)) {
+            Some((name, _)) => format!("{name}: {e}"),
+            None => e.to_string(),
+        }
+    })
 }
 
 #[derive(Args)]
@@ -522,13 +563,13 @@ mod ctrl_c {
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
-        Command::Eval { skin, accuracy, target, method, surface: SurfaceArgs { surface }, json } => {
+        Command::Eval { skin, accuracy, target, method, surface: SurfaceArgs { surface }, model, json } => {
             let params = skin.params()?;
             let target = target.target();
             if let Some(m) = method {
                 target.method_entry(m)?;
             }
-            let request = Request { target, surface, ..accuracy.request(Outputs::material()) };
+            let request = Request { target, surface, model: model.model(), ..accuracy.request(Outputs::material()) };
             let ev = evaluate(&params, &request)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&ev)?);
@@ -536,10 +577,10 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 print_summary(&ev, method);
             }
         }
-        Command::Profile { skin, accuracy, spectral, rgb_mapping, csv: _, r_min_mm, r_max_mm, count } => {
+        Command::Profile { skin, accuracy, model, spectral, rgb_mapping, csv: _, r_min_mm, r_max_mm, count } => {
             let params = skin.params()?;
             let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };
-            let mut request = Request { rgb_mapping, ..accuracy.request(outputs) };
+            let mut request = Request { rgb_mapping, model: model.model(), ..accuracy.request(outputs) };
             request.accuracy.profile_grid = ProfileGrid { r_min_mm, r_max_mm, count };
             let ev = evaluate(&params, &request)?;
             if let Some(lobe) = ev.profile.as_ref().and_then(|p| p.negative_lobe) {
@@ -605,6 +646,7 @@ fn run_fit(args: FitArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     let mut options = FitOptions { objective: args.objective, starts: args.starts, ..FitOptions::default() };
     args.transport.apply(&mut options.request);
+    options.request.model = args.model.model();
     if let Some(free) = args.free {
         options.free = free;
     }

@@ -147,6 +147,7 @@ def evaluate(
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
     surface: _SurfaceModel | str | None = None,
+    model: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.evaluate)``."""
 
@@ -174,6 +175,7 @@ def profile(
     boundaries: _Boundaries | str = "paper",
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
+    model: Mapping[str, Any] | None = None,
 ) -> dict[str, _FloatArray]:
     """Documented once, in the compiled module: ``help(spectral_skin.profile)``."""
 
@@ -566,5 +568,6 @@ def fit_spectrum(
     streams: int | None = None,
     bandpass: Literal["spacing"] | float | None = None,
     aperture: Literal["cm2600d-mav", "cm2600d-sav"] | str | None = None,
+    model: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_spectrum)``."""

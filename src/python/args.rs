@@ -21,7 +21,7 @@ use crate::fit::SubsurfaceMethod;
 use crate::maps::io::{Compression, Precision, ALL_COMPRESSIONS, ALL_PRECISIONS};
 use crate::maps::request::{ParamRequest, Source};
 use crate::skin::params::{EXTENDED_PARAMS, PARAMS, PARAM_COUNT};
-use crate::skin::SkinParams;
+use crate::skin::{SkinModel, SkinParams};
 use crate::surface::lobes::{SurfaceModel, ALL_SURFACE_MODELS};
 use crate::transport::Transport;
 
@@ -112,6 +112,44 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Streams {
     }
 }
 
+/// `model=` typed: the model's options ([`SkinModel`]) as a dict by their JSON names, the others at their defaults
+/// (the "model" of an `evaluate` result reads back as it is); an unknown name or a value of the wrong kind is an
+/// error naming it, a value out of range the core's error when the model is used. Not a dict: a TypeError.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Model(pub(super) SkinModel);
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Model {
+    type Error = PyErr;
+
+    fn extract(obj: pyo3::Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if !obj.is_instance_of::<pyo3::types::PyDict>() {
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "model must be a dict {{option: value}} (e.g. {{\"epidermal_hemoglobin\": 0.01}}); got {}",
+                super::convert::type_name(&*obj)
+            )));
+        }
+        pythonize::depythonize::<SkinModel>(&*obj).map(Model).map_err(|e| invalid(culprit(&obj), e.to_string()))
+    }
+}
+
+/// The name of the `model=` entry that does not read (pythonize's error does not say which): `model["NAME"]`, the
+/// first entry that fails alone, else `model`.
+fn culprit(model: &Bound<'_, PyAny>) -> String {
+    let Ok(dict) = model.cast::<pyo3::types::PyDict>() else { return "model".into() };
+    for (key, value) in dict.iter() {
+        let alone = pyo3::types::PyDict::new(model.py());
+        if alone.set_item(&key, value).is_ok() && pythonize::depythonize::<SkinModel>(alone.as_any()).is_err() {
+            return format!("model[{}]", key.repr().map_or_else(|_| "?".into(), |r| r.to_string()));
+        }
+    }
+    "model".into()
+}
+
+/// The model of an optional `model=`: the given options, else the defaults (DJ2006's model).
+pub(super) fn model_of(model: Option<Model>) -> SkinModel {
+    model.map(|m| m.0).unwrap_or_default()
+}
+
 /// The streams of an optional `streams=`.
 pub(super) fn streams_of(streams: Option<Streams>) -> Option<usize> {
     streams.map(|s| s.0)
@@ -139,6 +177,8 @@ pub(super) struct Knobs {
     /// Adding-doubling streams; None: the level's.
     pub(super) streams: Option<usize>,
     pub(super) surface: SurfaceModel,
+    /// The model's options (`model=`); DJ2006's by default.
+    pub(super) model: SkinModel,
 }
 
 impl Default for Knobs {
@@ -160,6 +200,7 @@ impl Default for Knobs {
             transport: request.transport,
             streams: None,
             surface: request.surface,
+            model: request.model,
         }
     }
 }
@@ -200,6 +241,7 @@ impl Knobs {
             target: self.target,
             transport: self.transport,
             surface: self.surface,
+            model: self.model,
             ..Request::default()
         })
     }

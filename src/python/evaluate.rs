@@ -15,7 +15,7 @@ use crate::layer::Layer;
 use crate::reflectance::LayeredOptions;
 use crate::surface::lobes::SurfaceModel;
 
-use super::args::{named, streams_of, Choice, Knobs, ParamArgs, Streams};
+use super::args::{model_of, named, streams_of, Choice, Knobs, Model, ParamArgs, Streams};
 use super::convert::{
     count_arg, json_to_py, nested_rows, parse_outputs, real_arg, real_sequence, real_vector, reject_string, rgb_rows,
     target_from, to_py,
@@ -144,6 +144,9 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///         and a sharp Coat, reflecting like a dielectric at every oiliness: docs/model.md, "Principled mapping of
 ///         the measured surface") or "paper" (DJ2006's oil layer, one lobe scaled by the oiliness, no reflection on
 ///         dry skin); None: the core's default, "measured" (``surface_models()``).
+///     model: the model's options beyond the parameters, a dict by name (docs/model.md, each option's section), e.g.
+///         ``{"epidermal_hemoglobin": fit["epidermal_hemoglobin"]}`` to render what :func:`fit_spectrum` fitted;
+///         options left out keep DJ2006's model, and a result's "model" reads back as it is. None: DJ2006's model.
 ///
 /// Returns:
 ///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy" (with "streams"), "model"
@@ -172,8 +175,9 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 /// Raises:
 ///     SpectralSkinError: a parameter or knob out of range or not finite, an unknown preset, output, combination,
 ///         working space or transport, or neither a preset nor all four parameters; a Blender version older than 4.2 or not
-///         MAJOR.MINOR; an unknown engine.
-///     TypeError: an argument of the wrong type (e.g. outputs given as a single string).
+///         MAJOR.MINOR; an unknown engine; an unknown model option or one out of its range.
+///     TypeError: an argument of the wrong type (e.g. outputs given as a single string, or a model that is not a
+///         dict).
 #[pyfunction]
 #[pyo3(
     name = "evaluate",
@@ -184,7 +188,7 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709", blender = None, engine = "cycles",
         rgb_mapping = "linear", boundaries = "paper", transport = "adding_doubling", streams = None,
-        surface = None
+        surface = None, model = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -215,6 +219,7 @@ pub(super) fn evaluate_py<'py>(
     transport: &str,
     streams: Option<Streams>,
     surface: Option<Choice<SurfaceModel>>,
+    model: Option<Model>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = ParamArgs::new(
         [melanin, melanin_blend, hemoglobin, oiliness],
@@ -237,6 +242,7 @@ pub(super) fn evaluate_py<'py>(
         transport: named(transport)?,
         streams: streams_of(streams),
         surface: surface.map(|c| c.0).unwrap_or_default(),
+        model: model_of(model),
     };
     let request = knobs.request(parse_outputs(outputs)?)?;
     let cancel = AtomicBool::new(false);
@@ -268,6 +274,7 @@ pub(super) fn evaluate_py<'py>(
 ///     boundaries: "paper" or "capped", as for :func:`evaluate`.
 ///     transport, streams: as for :func:`evaluate` (the profile keeps the multipole's shape, scaled per wavelength to
 ///         the transport's total).
+///     model: the model's options, as for :func:`evaluate`.
 ///
 /// Returns:
 ///     {"radii_mm": (N,), "rgb_per_mm2": (N, 3)} in mm^-2, or with spectral=True
@@ -285,7 +292,7 @@ pub(super) fn evaluate_py<'py>(
         multipole_pairs = None,
         profile_r_min_mm = None, profile_r_max_mm = None, profile_count = None,
         combination = "directional", working_space = "Linear Rec.709", rgb_mapping = "linear", boundaries = "paper",
-        transport = "adding_doubling", streams = None
+        transport = "adding_doubling", streams = None, model = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -313,6 +320,7 @@ pub(super) fn profile_py<'py>(
     boundaries: &str,
     transport: &str,
     streams: Option<Streams>,
+    model: Option<Model>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = ParamArgs::new(
         [melanin, melanin_blend, hemoglobin, oiliness],
@@ -333,6 +341,7 @@ pub(super) fn profile_py<'py>(
         boundaries: named(boundaries)?,
         transport: named(transport)?,
         streams: streams_of(streams),
+        model: model_of(model),
         ..Knobs::default()
     };
     let outputs = Outputs { profile_rgb: !spectral, profile_spectral: spectral, ..Outputs::default() };

@@ -9,6 +9,7 @@ use crate::inverse::bandpass::Bandpass;
 use crate::inverse::spectrum::{FitOptions, Objective, Specular, ALL_OBJECTIVES, MAX_SPECTRUM_WAVELENGTHS};
 use crate::skin::params::{PARAMS, PARAM_COUNT};
 
+use super::args::{model_of, Model};
 use super::convert::{
     by_name, count_arg, real_of, real_vector, reject_string, streams_arg, to_py, transport_arg, type_name,
 };
@@ -54,10 +55,13 @@ use super::errors::invalid;
 ///         for :func:`evaluate`.
 ///     streams: adding-doubling streams per hemisphere, even, 2..64; given, every exact total is solved at them;
 ///         None: skin's totals from the shipped table of 32-stream totals.
+///     model: the model fitted, its options as for :func:`evaluate` (a freed option must be left out of it); None:
+///         DJ2006's model.
 ///
 /// Returns:
 ///     A dict: "params" (every model parameter, fitted and fixed, by name), "epidermal_hemoglobin" (the blood in the
-///         epidermis the fitted spectrum has: fitted when free, else 0), "free" (the fitted names), "specular"
+///         epidermis the fitted spectrum has: fitted when free, else the model's, 0 by default; ``evaluate(...,
+///         model={"epidermal_hemoglobin": value})`` renders it), "free" (the fitted names), "specular"
 ///     ("free", "fresnel" or "fixed"), "specular_offset", "objective", "wavelengths_nm" (K,), "bandpass" ("spacing"
 ///     or "fwhm"), "bandpass_nm" (the FWHM at each wavelength), "aperture" (None or the discs' radii),
 ///     "fitted_reflectance" (K,) (model, averaged over the bandpass, times the aperture's measured fraction, plus
@@ -77,7 +81,7 @@ use super::errors::invalid;
     name = "fit_spectrum",
     signature = (
         wavelengths_nm, reflectance, *, free = None, fixed = None, specular = None, objective = "reflectance",
-        starts = None, transport = "adding_doubling", streams = None, bandpass = None, aperture = None
+        starts = None, transport = "adding_doubling", streams = None, bandpass = None, aperture = None, model = None
     )
 )]
 #[allow(clippy::too_many_arguments)]
@@ -94,6 +98,7 @@ pub(super) fn fit_spectrum_py<'py>(
     streams: Option<&Bound<'py, PyAny>>,
     bandpass: Option<&Bound<'py, PyAny>>,
     aperture: Option<&str>,
+    model: Option<Model>,
 ) -> PyResult<Bound<'py, PyDict>> {
     const NUMBERS: &str = "a 1-D sequence or array of numbers";
     let wavelengths = real_vector("wavelengths_nm", wavelengths_nm, NUMBERS, MAX_SPECTRUM_WAVELENGTHS)?;
@@ -145,6 +150,7 @@ pub(super) fn fit_spectrum_py<'py>(
         options.starts = usize::try_from(n.0).map_err(|_| invalid("starts", format!("must be >= 1; got {}", n.0)))?;
     }
     options.request.transport = transport_arg(transport)?;
+    options.request.model = model_of(model);
     if let Some(n) = streams_arg(streams)? {
         options.request.accuracy = options.request.accuracy.solved_at(n);
     }

@@ -14,7 +14,11 @@ pub const SKIN_IOR: f64 = 1.4;
 
 /// Model choices that are not accuracy settings nor physiology (the epidermis thickness is a parameter:
 /// [`super::params::EPIDERMIS_THICKNESS`]). The defaults are those of docs/model.md (Absorption, Layers).
+///
+/// Read from JSON or a Python dict (`evaluate(model=...)`), an option left out keeps its default and an unknown name
+/// is an error that lists the known ones.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SkinModel {
     /// `K_em` of DJ2006 eq. 3 in mm^-1 (default [`K_EM_PER_MM`]; 6.6e11 is the literal printed value, see
     /// docs/model.md, Absorption).
@@ -207,6 +211,17 @@ mod tests {
         let text = serde_json::to_string(&m).unwrap();
         assert!(text.contains("\"dermis_thickness_mm\":\"inf\""), "{text}");
         assert_eq!(serde_json::from_str::<SkinModel>(&text).unwrap(), m);
+    }
+
+    /// A model read from JSON (`--model`, Python's `model=`) names only the options it changes; an unknown name is an
+    /// error that lists the known ones.
+    #[test]
+    fn model_json_names_only_what_it_changes() {
+        let m: SkinModel = serde_json::from_str(r#"{"epidermal_hemoglobin": 0.01}"#).unwrap();
+        assert_eq!(m, SkinModel { epidermal_hemoglobin: 0.01, ..SkinModel::default() });
+        assert_eq!(serde_json::from_str::<SkinModel>("{}").unwrap(), SkinModel::default());
+        let err = serde_json::from_str::<SkinModel>(r#"{"epidermal_blood": 0.01}"#).unwrap_err().to_string();
+        assert!(err.contains("epidermal_blood") && err.contains("epidermal_hemoglobin"), "{err}");
     }
 
     /// The packaging option is absent from a default model's JSON (so earlier JSON and cache keys read the same) and

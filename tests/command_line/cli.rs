@@ -950,3 +950,43 @@ fn maps_sources_follow_the_request_rules() {
     assert!(err.contains("use --clamp"), "{err}");
     assert!(!out_dir.exists(), "nothing written on bad input");
 }
+
+/// `--model JSON` of eval, profile and fit: the model's options beyond the parameters (docs/cli.md). Blood in the
+/// epidermis darkens the albedo and is echoed in the JSON's model; the fit holds it; an unknown option lists the known
+/// ones, an option out of range names it and its range, each with exit status 2.
+#[test]
+fn model_options_reach_eval_profile_and_fit() {
+    let albedo = |v: &serde_json::Value| -> Vec<f64> {
+        v["diffuse_reflectance_rgb"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    };
+    let plain = eval_json("measured-medium");
+    let out = run(&["eval", "--preset", "measured-medium", "--json", "--model", r#"{"epidermal_hemoglobin": 0.02}"#]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let bloody: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(bloody["model"]["epidermal_hemoglobin"], 0.02, "{}", bloody["model"]);
+    assert!(
+        albedo(&bloody).iter().zip(albedo(&plain)).all(|(b, p)| b < &p),
+        "{:?} {:?}",
+        albedo(&bloody),
+        albedo(&plain)
+    );
+    let out = run(&[
+        "profile",
+        "--preset",
+        "measured-medium",
+        "--count",
+        "4",
+        "--model",
+        r#"{"epidermal_hemoglobin": 0.02}"#,
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for (model, needles) in [
+        (r#"{"epidermal_blood": 0.01}"#, &["--model", "epidermal_blood", "epidermal_hemoglobin"][..]),
+        (r#"{"epidermal_hemoglobin": 0.5}"#, &["epidermal_hemoglobin", "0.1"][..]),
+        ("0.01", &["--model", "JSON object"][..]),
+    ] {
+        let out = run(&["eval", "--preset", "measured-medium", "--model", model]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.code() == Some(2) && needles.iter().all(|n| err.contains(n)), "{model}: {err}");
+    }
+}
