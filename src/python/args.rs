@@ -125,10 +125,10 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Model {
         if !obj.is_instance_of::<pyo3::types::PyDict>() {
             return Err(pyo3::exceptions::PyTypeError::new_err(format!(
                 "model must be a dict {{option: value}} (e.g. {{\"epidermal_hemoglobin\": 0.01}}); got {}",
-                super::convert::type_name(&*obj)
+                super::convert::type_name(&obj)
             )));
         }
-        pythonize::depythonize::<SkinModel>(&*obj).map(Model).map_err(|e| invalid(culprit(&obj), e.to_string()))
+        pythonize::depythonize::<SkinModel>(&obj).map(Model).map_err(|e| invalid(culprit(&obj), e.to_string()))
     }
 }
 
@@ -242,7 +242,6 @@ impl Knobs {
             transport: self.transport,
             surface: self.surface,
             model: self.model,
-            ..Request::default()
         })
     }
 }
