@@ -14,6 +14,7 @@
 //! reflectance rises from 650 to 700 nm; with `--classes`, the tables of those spectra (their own blocks).
 
 mod classes;
+mod common;
 mod data;
 mod study;
 

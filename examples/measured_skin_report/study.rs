@@ -256,6 +256,7 @@ pub fn study(wl: &[f64], spectra: &[Vec<f64>], only: Option<&str>) -> Vec<(Strin
         }
         tables.push((label.clone(), class_table(&rows)));
         print_residual_spectra(&r.fits, spectra, wl);
+        super::common::print_common_residual(&r.fits, spectra, wl);
         let de: Vec<f64> = r.fits.iter().map(|f| f.delta_e00).collect();
         let rms: Vec<f64> = r.fits.iter().map(|f| f.rms).collect();
         let thickness: Vec<f64> = r.fits.iter().map(|f| f.params.epidermis_thickness_mm).collect();
