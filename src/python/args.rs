@@ -128,8 +128,28 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Model {
                 super::convert::type_name(&obj)
             )));
         }
+        reject_booleans("model", &obj)?;
         pythonize::depythonize::<SkinModel>(&obj).map(Model).map_err(|e| invalid(culprit(&obj), e.to_string()))
     }
+}
+
+/// The rule of every numeric argument inside `model=` too: True or False is no number (serde would read it as 1 or
+/// 0). `name` is the entry's path, `model["NAME"]...`.
+fn reject_booleans(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<()> {
+    use super::convert::{is_boolean, type_name};
+    if is_boolean(obj) {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{name} must be a number, a name or a dict; got {} {}",
+            type_name(obj),
+            obj.repr()?
+        )));
+    }
+    if let Ok(dict) = obj.cast::<pyo3::types::PyDict>() {
+        for (key, value) in dict.iter() {
+            reject_booleans(&format!("{name}[{}]", key.repr()?), &value)?;
+        }
+    }
+    Ok(())
 }
 
 /// The name of the `model=` entry that does not read (pythonize's error does not say which): `model["NAME"]`, the

@@ -80,6 +80,8 @@ def test_a_results_model_reads_back() -> None:
         ({"epidermal_hemoglobin": "a lot"}, spectral_skin.SpectralSkinError, r"model\[.epidermal_hemoglobin.\]"),
         ({"dermis_thickness_mm": -1.0}, spectral_skin.SpectralSkinError, "dermis_thickness_mm"),
         ([("epidermal_hemoglobin", 0.01)], TypeError, "model must be a dict"),
+        ({"blood_vessel_radius_mm": False}, TypeError, r"model\['blood_vessel_radius_mm'\].*bool"),
+        ({"eumelanin_shape": {"power_law": {"exponent": True}}}, TypeError, r"\['exponent'\].*bool"),
     ],
 )
 def test_a_bad_model_is_a_clear_error(model: object, error: type[Exception], pattern: str) -> None:
