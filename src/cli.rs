@@ -275,6 +275,8 @@ struct MapsArgs {
     accuracy: AccuracyArgs,
     #[command(flatten)]
     surface: SurfaceArgs,
+    #[command(flatten)]
+    model: ModelArgs,
 }
 
 /// The surface model of `eval` and `maps`.
@@ -718,7 +720,12 @@ impl MapsArgs {
             clamp: self.clamp,
             table_check_samples: self.table_check as usize,
             table_cache: if self.no_cache { None } else { crate::maps::lut::default_cache_dir() },
-            request: Request { target, surface: self.surface.surface, ..self.accuracy.request(outputs) },
+            request: Request {
+                target,
+                surface: self.surface.surface,
+                model: self.model.model(),
+                ..self.accuracy.request(outputs)
+            },
             ..MapSettings::default()
         })
     }

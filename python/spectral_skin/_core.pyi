@@ -340,6 +340,7 @@ def maps(
     transport: _Transport | str = "adding_doubling",
     streams: int | None = None,
     surface: _SurfaceModel | str | None = None,
+    model: Mapping[str, Any] | None = None,
 ) -> Maps:
     """Documented once, in the compiled module: ``help(spectral_skin.maps)``."""
 

@@ -21,7 +21,7 @@ use crate::maps::request::{Combined, ParamRequest, Source, Texels};
 use crate::maps::{MapSettings, StrategyChoice};
 use crate::surface::lobes::SurfaceModel;
 
-use super::args::{named, streams_of, Choice, Knobs, ParamArgs, Streams};
+use super::args::{model_of, named, streams_of, Choice, Knobs, Model, ParamArgs, Streams};
 use super::convert::{
     count_sequence, float_array, interleave, is_boolean, material_outputs, parse_outputs, real_arg, serde_name,
     shape_text, target_from,
@@ -263,6 +263,8 @@ pub(super) fn map_kinds_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
 ///         adding-doubling streams, as for :func:`evaluate` (a cached table is kept per choice).
 ///     surface: the surface reflection the specular maps stand in for, "paper" or "measured", as for
 ///         :func:`evaluate`; with "measured" the specular output also holds the Coat (maps when the oiliness varies).
+///     model: the model's options, one set for the whole map, as for :func:`evaluate` (a cached table is kept per
+///         set); None: DJ2006's model.
 ///
 /// Ctrl-C (KeyboardInterrupt, or any exception a Python signal handler raises) stops the call the same way: the
 /// calling thread checks for signals every 0.1 s while the work runs, the rows or table nodes being computed are
@@ -323,7 +325,7 @@ pub(super) fn map_kinds_py(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
         outputs = None, exact = false, clamp = false, accuracy = "default", wavelength_step_nm = None,
         wavelength_placement = None, working_space = "Linear Rec.709", table_resolution = None, table_cache = true,
         blender = None, engine = "cycles", progress = None, boundaries = "paper", transport = "adding_doubling",
-        streams = None, surface = None
+        streams = None, surface = None, model = None
     )
 )]
 #[allow(clippy::too_many_arguments)] // the keywords of the Python function
@@ -354,6 +356,7 @@ pub(super) fn maps_py<'py>(
     transport: &str,
     streams: Option<Streams>,
     surface: Option<Choice<SurfaceModel>>,
+    model: Option<Model>,
 ) -> PyResult<MapsPy> {
     let start = Instant::now();
     let progress = Progress::from_arg("maps", progress)?;
@@ -368,6 +371,7 @@ pub(super) fn maps_py<'py>(
         transport: named(transport)?,
         streams: streams_of(streams),
         surface: surface.map(|c| c.0).unwrap_or_default(),
+        model: model_of(model),
         ..Knobs::default()
     };
     let settings = MapSettings {

@@ -951,7 +951,7 @@ fn maps_sources_follow_the_request_rules() {
     assert!(!out_dir.exists(), "nothing written on bad input");
 }
 
-/// `--model JSON` of eval, profile and fit: the model's options beyond the parameters (docs/cli.md). Blood in the
+/// `--model JSON` of eval, profile, maps and fit: the model's options beyond the parameters (docs/cli.md). Blood in the
 /// epidermis darkens the albedo and is echoed in the JSON's model; the fit holds it; an unknown option lists the known
 /// ones, an option out of range names it and its range, each with exit status 2.
 #[test]
@@ -980,6 +980,17 @@ fn model_options_reach_eval_profile_and_fit() {
         r#"{"epidermal_hemoglobin": 0.02}"#,
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // maps: one set of options for the whole map, recorded in the sidecar's request.
+    let dir = tempfile::tempdir().unwrap();
+    let (params, out_dir) = (dir.path().join("p.exr"), dir.path().join("maps"));
+    assert!(run(&["example", "--size", "4", "--out", params.to_str().unwrap()]).status.success());
+    let model = r#"{"epidermal_hemoglobin": 0.02}"#;
+    let out =
+        run(&["maps", "--params", params.to_str().unwrap(), "--out", out_dir.to_str().unwrap(), "--model", model]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("skin_maps.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["report"]["request"]["model"]["epidermal_hemoglobin"], 0.02, "{}", sidecar["report"]);
     for (model, needles) in [
         (r#"{"epidermal_blood": 0.01}"#, &["--model", "epidermal_blood", "epidermal_hemoglobin"][..]),
         (r#"{"epidermal_hemoglobin": 0.5}"#, &["epidermal_hemoglobin", "0.1"][..]),

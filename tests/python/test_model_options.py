@@ -91,3 +91,20 @@ def test_a_bad_model_is_a_clear_error(model: object, error: type[Exception], pat
     ):
         with pytest.raises(error, match=pattern):
             call()
+
+
+def test_maps_render_the_model_options() -> None:
+    """maps(model=...): every texel as evaluate gives it with the same options, a constant map (one evaluation) and a
+    varying one (exact per texel) alike; the options change the maps."""
+    model = {"epidermal_hemoglobin": 0.02}
+    params = np.array([[[0.04, 0.4, 0.02, 0.3], [0.1, 0.6, 0.03, 0.3]]], dtype=np.float32)
+    varying = spectral_skin.maps(params, outputs=["albedo", "radius"], model=model, exact=True)
+    constant = spectral_skin.maps(params[:, :1].copy(), outputs=["albedo", "radius"], model=model)
+    plain = spectral_skin.maps(params, outputs=["albedo", "radius"], exact=True)
+    for x in range(2):
+        skin = [float(v) for v in params[0, x]]
+        ev = spectral_skin.evaluate(*skin, model=model)["methods"]["burley"]
+        for name, key in (("albedo", "base_color"), ("radius", "subsurface_radius_mm")):
+            assert np.allclose(varying[name][0, x], ev[key], rtol=1e-5), (name, x)
+            assert not np.allclose(plain[name][0, x], ev[key], rtol=1e-3), (name, x)
+    assert np.allclose(constant["albedo"][0, 0], varying["albedo"][0, 0], rtol=1e-5)
