@@ -108,3 +108,22 @@ def test_maps_render_the_model_options() -> None:
             assert np.allclose(varying[name][0, x], ev[key], rtol=1e-5), (name, x)
             assert not np.allclose(plain[name][0, x], ev[key], rtol=1e-3), (name, x)
     assert np.allclose(constant["albedo"][0, 0], varying["albedo"][0, 0], rtol=1e-5)
+
+
+def test_a_maps_table_is_built_with_the_model_options() -> None:
+    """A varying map read through the lookup table (the strategy of large maps) is built with the options too: its
+    texels follow evaluate with them to the table's own error, not evaluate without them."""
+    rng = np.random.default_rng(1)
+    shape = (96, 96)
+    params = np.stack([rng.uniform(0.01, 0.3, shape), rng.uniform(0.0, 1.0, shape), rng.uniform(0.002, 0.05, shape),
+                       np.full(shape, 0.3)], axis=-1).astype(np.float32)
+    model = {"epidermal_hemoglobin": 0.02}
+    got = spectral_skin.maps(params, outputs=["albedo"], model=model, table_cache=False)
+    assert got["report"]["strategy"]["name"] == "table"
+    tolerance = 2 * got["report"]["strategy"]["measured_error"]["max_albedo_relative"]
+    for y, x in ((0, 0), (5, 77), (90, 3)):
+        skin = [float(v) for v in params[y, x]]
+        with_model = spectral_skin.evaluate(*skin, model=model, outputs=["albedo"])["diffuse_reflectance_rgb"]
+        without = spectral_skin.evaluate(*skin, outputs=["albedo"])["diffuse_reflectance_rgb"]
+        assert np.allclose(got["albedo"][y, x], with_model, rtol=tolerance), (y, x)
+        assert not np.allclose(got["albedo"][y, x], without, rtol=tolerance), (y, x)
