@@ -22,7 +22,7 @@ use crate::color::spectrum::VISIBLE_RANGE_NM;
 use crate::color::{ciede2000, lab_from_xyz, spectrum_to_xyz, WavelengthGrid};
 use crate::error::SkinError;
 use crate::evaluate::{diffuse_reflectance_at, Request};
-use crate::skin::optics::{skin_layers, EPIDERMAL_HEMOGLOBIN, SKIN_IOR};
+use crate::skin::optics::{skin_layers, SkinModel, EPIDERMAL_HEMOGLOBIN, SKIN_IOR};
 use crate::skin::params::{ParamSpec, SkinParams, OILINESS, PARAMS, PARAM_COUNT};
 use crate::transport::profile_table::exact_shape;
 
@@ -167,6 +167,10 @@ pub struct SpectrumFit {
     /// (crate::skin::optics::SkinModel)): fitted when free, else the request's model's (0, DJ2006's, by default).
     /// `params` and the request's model with this value reproduce `fitted_reflectance`.
     pub epidermal_hemoglobin: f64,
+    /// The model the fitted spectrum was computed with: the request's options, those freed at their fitted values
+    /// (`epidermal_hemoglobin` above among them). `params` and this model reproduce `fitted_reflectance`
+    /// (`evaluate(**fit["params"], model=fit["model"])` in Python).
+    pub model: SkinModel,
     /// The names of the fitted ones.
     pub free: Vec<&'static str>,
     /// "free", "fresnel" or "fixed".
@@ -546,6 +550,7 @@ impl SpectrumFitter {
         Ok(SpectrumFit {
             params: params_of(&values)?,
             epidermal_hemoglobin: values[PARAM_COUNT],
+            model: with_model_values(self.options.request, &values[PARAM_COUNT..]).model,
             free: self.free.iter().map(|&k| quantity(k).name).collect(),
             specular: self.options.specular.name(),
             specular_offset,

@@ -261,6 +261,15 @@ pub(super) fn streams_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usi
     Ok(Some(streams))
 }
 
+/// `dict["model"]` (a serialised [`SkinModel`](crate::skin::SkinModel)) with the dermis thickness as a Python float:
+/// JSON has no infinity, so serde writes a semi-infinite dermis as "inf"; a Python float has one (and `model=` reads
+/// either).
+pub(super) fn float_dermis(dict: &Bound<'_, pyo3::types::PyDict>, model: &crate::skin::SkinModel) -> PyResult<()> {
+    dict.get_item("model")?
+        .ok_or_else(|| internal("no model in the result"))?
+        .set_item("dermis_thickness_mm", model.dermis_thickness_mm)
+}
+
 /// serde_json `Value` to plain Python objects (dict, list, str, int, float, bool, None), by pythonize. Results go
 /// through the `Value` (not straight from the struct) so that they are what the CLI's JSON is: keys sorted, arrays as
 /// lists, a non-finite float as None.

@@ -17,8 +17,8 @@ use crate::surface::lobes::SurfaceModel;
 
 use super::args::{model_of, named, streams_of, Choice, Knobs, Model, ParamArgs, Streams};
 use super::convert::{
-    count_arg, json_to_py, nested_rows, parse_outputs, real_arg, real_sequence, real_vector, reject_string, rgb_rows,
-    target_from, to_py,
+    count_arg, float_dermis, json_to_py, nested_rows, parse_outputs, real_arg, real_sequence, real_vector,
+    reject_string, rgb_rows, target_from, to_py,
 };
 use super::detach::detached_interruptible;
 use super::errors::{internal, invalid, warn_lobe};
@@ -44,10 +44,7 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
         map.remove(key);
     }
     let dict = json_to_py(py, &Value::Object(map))?.cast_into::<PyDict>()?;
-    // JSON has no infinity: serde_json writes a semi-infinite dermis as null. Python floats do.
-    dict.get_item("model")?
-        .ok_or_else(|| internal("no model in the evaluation"))?
-        .set_item("dermis_thickness_mm", e.model.dermis_thickness_mm)?;
+    float_dermis(&dict, &e.model)?;
     if let Some(rgb) = &e.diffuse_reflectance_rgb {
         dict.set_item("diffuse_reflectance_rgb", PyArray1::from_slice(py, rgb))?;
     }

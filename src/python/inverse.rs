@@ -11,7 +11,7 @@ use crate::skin::params::{PARAMS, PARAM_COUNT};
 
 use super::args::{model_of, Model};
 use super::convert::{
-    by_name, count_arg, real_of, real_vector, reject_string, streams_arg, to_py, transport_arg, type_name,
+    by_name, count_arg, float_dermis, real_of, real_vector, reject_string, streams_arg, to_py, transport_arg, type_name,
 };
 use super::detach::detached_interruptible;
 use super::errors::invalid;
@@ -60,8 +60,9 @@ use super::errors::invalid;
 ///
 /// Returns:
 ///     A dict: "params" (every model parameter, fitted and fixed, by name), "epidermal_hemoglobin" (the blood in the
-///         epidermis the fitted spectrum has: fitted when free, else the model's, 0 by default; ``evaluate(...,
-///         model={"epidermal_hemoglobin": value})`` renders it), "free" (the fitted names), "specular"
+///         epidermis the fitted spectrum has: fitted when free, else the model's, 0 by default), "model" (the model's
+///         options the fitted spectrum was computed with, the freed ones at their fitted values:
+///         ``evaluate(**fit["params"], model=fit["model"])`` renders the fit), "free" (the fitted names), "specular"
 ///     ("free", "fresnel" or "fixed"), "specular_offset", "objective", "wavelengths_nm" (K,), "bandpass" ("spacing"
 ///     or "fwhm"), "bandpass_nm" (the FWHM at each wavelength), "aperture" (None or the discs' radii),
 ///     "fitted_reflectance" (K,) (model, averaged over the bandpass, times the aperture's measured fraction, plus
@@ -159,6 +160,7 @@ pub(super) fn fit_spectrum_py<'py>(
         crate::inverse::spectrum::fit_spectrum_cancellable(&wavelengths, &measured, &options, &cancel)
     })?;
     let dict = to_py(py, &fit)?.cast_into::<PyDict>()?;
+    float_dermis(&dict, &fit.model)?;
     dict.set_item("wavelengths_nm", PyArray1::from_slice(py, &fit.wavelengths_nm))?;
     dict.set_item("fitted_reflectance", PyArray1::from_slice(py, &fit.fitted_reflectance))?;
     Ok(dict)

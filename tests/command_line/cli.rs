@@ -632,6 +632,7 @@ fn fit_a_measured_spectrum() {
     assert!(v["params"]["epidermis_thickness_mm"].is_number() && v["specular"] == "free", "{v}");
     assert!(v["aperture"].is_null(), "no aperture by default: {v}");
     assert_eq!(v["epidermal_hemoglobin"], 0.0, "no epidermal blood unless freed: {v}");
+    assert_eq!(v["model"]["dermis_thickness_mm"], "inf", "the model fitted, DJ2006's by default: {v}");
     // The instrument's aperture by name, echoed as its radii; bad radii name the input and the range.
     let out = run(&["fit", "--spectrum", path.to_str().unwrap(), "--aperture", "cm2600d-sav", "--specular", "fresnel"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

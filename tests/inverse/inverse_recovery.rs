@@ -200,6 +200,7 @@ fn epidermal_blood_comes_back_from_exact_spectra() {
             let p = fit.params;
             let errors = [p.melanin / melanin - 1.0, p.melanin_blend - blend, p.hemoglobin / hemoglobin - 1.0];
             let blood_error = fit.epidermal_hemoglobin - c_he;
+            assert_eq!(fit.model, SkinModel { epidermal_hemoglobin: fit.epidermal_hemoglobin, ..model }, "{name}");
             println!("{name:<8} C_he {c_he}: fitted {:.5}, paper's three {errors:+.4?}", fit.epidermal_hemoglobin);
             let blood_ok = if c_he == 0.0 { blood_error < 5e-4 } else { blood_error.abs() < 0.1 * c_he };
             if !blood_ok || errors.iter().any(|e| e.abs() > 0.05) {

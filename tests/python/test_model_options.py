@@ -36,10 +36,14 @@ def test_a_fitted_epidermal_blood_renders_as_fitted() -> None:
     fit = spectral_skin.fit_spectrum(wavelengths, measured, free=free, fixed={"epidermis_thickness_mm": 0.25,
                                      "baseline_absorption_scale": 1.0}, specular=0.0, bandpass=0)
     assert fit["epidermal_hemoglobin"] == pytest.approx(0.02, rel=0.02), fit
-    ev = spectral_skin.evaluate(**fit["params"], outputs=["spectrum"], model={"epidermal_hemoglobin":
-                                fit["epidermal_hemoglobin"]}, **WAVELENGTHS)
-    keep = (ev["wavelengths_nm"] >= 400) & (ev["wavelengths_nm"] <= 700)
-    assert np.max(np.abs(ev["spectral_reflectance"][keep] - measured)) < 1e-4
+    assert fit["model"]["epidermal_hemoglobin"] == fit["epidermal_hemoglobin"]
+    assert fit["model"]["dermis_thickness_mm"] == float("inf")
+    by_value = spectral_skin.evaluate(**fit["params"], outputs=["spectrum"], model={"epidermal_hemoglobin":
+                                      fit["epidermal_hemoglobin"]}, **WAVELENGTHS)
+    by_model = spectral_skin.evaluate(**fit["params"], outputs=["spectrum"], model=fit["model"], **WAVELENGTHS)
+    keep = (by_value["wavelengths_nm"] >= 400) & (by_value["wavelengths_nm"] <= 700)
+    assert np.max(np.abs(by_value["spectral_reflectance"][keep] - measured)) < 1e-4
+    assert np.array_equal(by_model["spectral_reflectance"], by_value["spectral_reflectance"])
 
 
 def test_a_held_option_is_fitted_under() -> None:
@@ -52,6 +56,7 @@ def test_a_held_option_is_fitted_under() -> None:
                                       model={"epidermal_hemoglobin": 0.02})
     without = spectral_skin.fit_spectrum(wavelengths, measured, free=free, fixed=fixed, specular=0.0, bandpass=0)
     assert held["epidermal_hemoglobin"] == 0.02 and held["rms"] < 1e-4 < without["rms"]
+    assert held["model"]["epidermal_hemoglobin"] == 0.02 and "epidermal_hemoglobin" not in without["model"]
     assert held["params"]["hemoglobin"] == pytest.approx(SKIN["hemoglobin"], rel=0.01)
     with pytest.raises(spectral_skin.SpectralSkinError, match="epidermal_hemoglobin"):
         spectral_skin.fit_spectrum(wavelengths, measured, free=[*free, "epidermal_hemoglobin"], fixed=fixed,
