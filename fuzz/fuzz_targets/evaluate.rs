@@ -1,4 +1,4 @@
-//! `evaluate` with parameters, model, accuracy knobs, colour space, target and outputs decoded from the input,
+//! `evaluate` with parameters, every model option, accuracy knobs, colour space, target and outputs decoded from the input,
 //! inside and beyond the accepted ranges. The knobs that set the amount of work are kept small (at most 64 image
 //! pairs, 32 profile radii, a wavelength step of 5 nm or more, the draft and default levels) so that one execution
 //! stays in milliseconds; their ranges are the property tests' and `tests/physics/accuracy.rs`' business.
@@ -14,6 +14,8 @@ use libfuzzer_sys::fuzz_target;
 use spectral_skin::color::{RgbMapping, WavelengthPlacement, ALL_RGB_MAPPINGS, ALL_WORKING_SPACES};
 use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
+use spectral_skin::skin::chromophores::{BloodSpectrum, EumelaninShape};
+use spectral_skin::skin::scattering::ScatteringShape;
 use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target};
 use spectral_skin::surface::lobes::ALL_SURFACE_MODELS;
 use spectral_skin::{evaluate, AccuracyLevel, Outputs, Request, SkinModel, SkinParams};
@@ -66,7 +68,19 @@ fuzz_target!(|data: &[u8]| {
             eumelanin_k_per_mm: b.log_value(0.0, 14.0),
             dermis_thickness_mm: if b.byte() % 2 == 0 { f64::INFINITY } else { b.log_value(-4.0, 5.0) },
             blood_vessel_radius_mm: if b.byte() % 2 == 0 { 0.0 } else { b.log_value(-5.0, 1.0) },
-            ..SkinModel::default()
+            // Every option a user can set (`--model`, Python's `model=`), inside and beyond its range.
+            eumelanin_shape: match b.byte() % 3 {
+                0 => EumelaninShape::Dj2006,
+                1 => EumelaninShape::PowerLaw { exponent: b.linear(-10.0, 2.0) },
+                _ => EumelaninShape::Exponential { k_per_nm: b.linear(-0.01, 0.1) },
+            },
+            scattering_shape: match b.byte() % 2 {
+                0 => ScatteringShape::Dj2006,
+                _ => ScatteringShape::MieRayleigh { f_ray: b.linear(-0.5, 1.5), b_mie: b.linear(-1.0, 5.0) },
+            },
+            epidermal_carotene_umol_per_l: if b.byte() % 2 == 0 { 0.0 } else { b.log_value(-3.0, 3.0) },
+            blood_spectrum: if b.byte() % 2 == 0 { BloodSpectrum::Dj2006 } else { BloodSpectrum::WholeBlood2014 },
+            epidermal_hemoglobin: if b.byte() % 2 == 0 { 0.0 } else { b.linear(-0.02, 0.15) },
         };
     }
     if knobs & 32 != 0 {
