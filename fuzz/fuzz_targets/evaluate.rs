@@ -14,9 +14,9 @@ use libfuzzer_sys::fuzz_target;
 use spectral_skin::color::{RgbMapping, WavelengthPlacement, ALL_RGB_MAPPINGS, ALL_WORKING_SPACES};
 use spectral_skin::diffusion::{Combination, MultipoleTerms};
 use spectral_skin::evaluate::ProfileGrid;
+use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target};
 use spectral_skin::skin::chromophores::{BloodSpectrum, EumelaninShape};
 use spectral_skin::skin::scattering::ScatteringShape;
-use spectral_skin::fit::blender_target::{BlenderVersion, Engine, Target};
 use spectral_skin::surface::lobes::ALL_SURFACE_MODELS;
 use spectral_skin::{evaluate, AccuracyLevel, Outputs, Request, SkinModel, SkinParams};
 
