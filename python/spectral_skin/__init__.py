@@ -27,6 +27,7 @@ Functions:
     fit_albedo: the parameters whose model albedo is closest (CIEDE2000) to an RGB colour.
     fit_albedo_map: parameter maps and a per-texel ΔE00 residual from an albedo texture.
     fit_spectrum: model parameters fitted to a measured reflectance spectrum.
+    fit_spectra: fit_spectrum for many spectra at once, with one fitter, in parallel, with progress.
     cielab, delta_e00: the core's CIELAB and CIEDE2000 colour difference of linear RGB colours (the fits' own).
     surface_brdf, surface_albedo: the skin surface's reflection (BRDF and directional albedo), the measured two-lobe
         model or the paper's oil layer.
@@ -54,6 +55,7 @@ from ._core import (
     evaluate,
     fit_albedo,
     fit_albedo_map,
+    fit_spectra,
     fit_spectrum,
     layered_reflectance,
     map_kinds,
@@ -88,6 +90,7 @@ __all__ = [
     "evaluate",
     "fit_albedo",
     "fit_albedo_map",
+    "fit_spectra",
     "fit_spectrum",
     "layered_reflectance",
     "map_kinds",

@@ -34,6 +34,7 @@ __all__ = [
     "evaluate",
     "fit_albedo",
     "fit_albedo_map",
+    "fit_spectra",
     "fit_spectrum",
     "layered_reflectance",
     "map_kinds",
@@ -572,3 +573,21 @@ def fit_spectrum(
     model: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Documented once, in the compiled module: ``help(spectral_skin.fit_spectrum)``."""
+
+def fit_spectra(
+    wavelengths_nm: npt.ArrayLike,
+    reflectances: npt.ArrayLike,
+    *,
+    free: Sequence[str] | None = None,
+    fixed: Mapping[str, float] | None = None,
+    specular: Literal["free", "fresnel"] | float | None = None,
+    objective: Literal["reflectance", "cielab"] = "reflectance",
+    starts: int | None = None,
+    transport: _Transport | str = "adding_doubling",
+    streams: int | None = None,
+    bandpass: Literal["spacing"] | float | None = None,
+    aperture: Literal["cm2600d-mav", "cm2600d-sav"] | str | None = None,
+    model: Mapping[str, Any] | None = None,
+    progress: Callable[[int, int], bool | None] | None = None,
+) -> list[dict[str, Any]]:
+    """Documented once, in the compiled module: ``help(spectral_skin.fit_spectra)``."""

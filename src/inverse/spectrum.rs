@@ -575,6 +575,28 @@ impl SpectrumFitter {
     pub fn fit_many(&self, spectra: &[Vec<f64>]) -> Vec<Result<SpectrumFit, SkinError>> {
         spectra.par_iter().map(|s| self.fit(s)).collect()
     }
+
+    /// Fit a batch of spectra with this one fitter (its start table built once), in parallel, calling `done` after
+    /// each; stops once `cancel` is set ([`SkinError::interrupted`]). Every spectrum is checked before any is fitted;
+    /// a bad one is an error naming it, `reflectances[i]`. At most [`MAX_SPECTRA`].
+    pub fn fit_batch_cancellable(
+        &self,
+        spectra: &[Vec<f64>],
+        cancel: &AtomicBool,
+        done: &(dyn Fn() + Sync),
+    ) -> Result<Vec<SpectrumFit>, SkinError> {
+        check_spectra(spectra, self.wavelengths_nm.len())?;
+        let fits: Vec<Result<SpectrumFit, SkinError>> = spectra
+            .par_iter()
+            .map(|s| {
+                let fit = self.fit_cancellable(s, cancel);
+                done();
+                fit
+            })
+            .collect();
+        SkinError::check_cancel(cancel, "fit_spectra")?;
+        fits.into_iter().collect()
+    }
 }
 
 /// The parameters among `values` (the first [`PARAM_COUNT`] quantities), validated.
@@ -624,6 +646,10 @@ pub const MIN_WAVELENGTH_SPACING_NM: f64 = 0.5;
 /// The most wavelengths a spectrum may have: the visible range at [`MIN_WAVELENGTH_SPACING_NM`] (801).
 pub const MAX_SPECTRUM_WAVELENGTHS: usize =
     ((VISIBLE_RANGE_NM.1 - VISIBLE_RANGE_NM.0) / MIN_WAVELENGTH_SPACING_NM) as usize + 1;
+/// The most spectra one batch fit takes ([`SpectrumFitter::fit_batch_cancellable`], Python's `fit_spectra`): they
+/// are held in memory, up to [`MAX_SPECTRUM_WAVELENGTHS`] values each (640 MB at both bounds), and each costs about
+/// 0.15 s of one core once the fitter's table is built (the Xiao spectra, docs/measured-skin.md).
+pub const MAX_SPECTRA: usize = 100_000;
 /// A spectrum whose values span less than this (flat white, grey or black) has no chromophore's mark to fit.
 pub const MIN_SPECTRUM_VARIATION: f64 = 1e-3;
 
@@ -672,6 +698,21 @@ fn check_wavelengths(w: &[f64]) -> Result<(), SkinError> {
 }
 
 /// The measurement must have one finite value in [0, 1] per wavelength.
+/// A batch of spectra as [`SpectrumFitter::fit_batch_cancellable`] takes them: 1 to [`MAX_SPECTRA`], each one value
+/// in [0, 1] per wavelength and not flat; a bad one is an error naming it, `reflectances[i]`. Cheap: a front checks
+/// the batch with it before it builds the fitter.
+pub fn check_spectra(spectra: &[Vec<f64>], wavelengths: usize) -> Result<(), SkinError> {
+    if spectra.is_empty() || spectra.len() > MAX_SPECTRA {
+        let reason = format!("must hold 1 to {MAX_SPECTRA} spectra; got {}", spectra.len());
+        return Err(SkinError::invalid("reflectances", reason));
+    }
+    for (i, spectrum) in spectra.iter().enumerate() {
+        check_reflectance(spectrum, wavelengths)
+            .map_err(|e| SkinError::invalid(format!("reflectances[{i}]"), e.to_string()))?;
+    }
+    Ok(())
+}
+
 fn check_reflectance(r: &[f64], wavelengths: usize) -> Result<(), SkinError> {
     if r.len() != wavelengths {
         return Err(SkinError::invalid(

@@ -6,7 +6,9 @@ use pyo3::types::{PyDict, PyString};
 
 use crate::inverse::aperture::Aperture;
 use crate::inverse::bandpass::Bandpass;
-use crate::inverse::spectrum::{FitOptions, Objective, Specular, ALL_OBJECTIVES, MAX_SPECTRUM_WAVELENGTHS};
+use crate::inverse::spectrum::{
+    FitOptions, Objective, SpectrumFit, Specular, ALL_OBJECTIVES, MAX_SPECTRUM_WAVELENGTHS,
+};
 use crate::skin::params::{PARAMS, PARAM_COUNT};
 
 use super::args::{model_of, Model};
@@ -104,6 +106,37 @@ pub(super) fn fit_spectrum_py<'py>(
     const NUMBERS: &str = "a 1-D sequence or array of numbers";
     let wavelengths = real_vector("wavelengths_nm", wavelengths_nm, NUMBERS, MAX_SPECTRUM_WAVELENGTHS)?;
     let measured = real_vector("reflectance", reflectance, NUMBERS, MAX_SPECTRUM_WAVELENGTHS)?;
+    let options = fit_options(free, fixed, specular, objective, starts, transport, streams, bandpass, aperture, model)?;
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let fit = detached_interruptible(py, &cancel, || {
+        crate::inverse::spectrum::fit_spectrum_cancellable(&wavelengths, &measured, &options, &cancel)
+    })?;
+    fit_dict(py, &fit)
+}
+
+/// A fit as the dict `fit_spectrum` returns (and `fit_spectra` one per spectrum).
+pub(super) fn fit_dict<'py>(py: Python<'py>, fit: &SpectrumFit) -> PyResult<Bound<'py, PyDict>> {
+    let dict = to_py(py, fit)?.cast_into::<PyDict>()?;
+    float_dermis(&dict, &fit.model)?;
+    dict.set_item("wavelengths_nm", PyArray1::from_slice(py, &fit.wavelengths_nm))?;
+    dict.set_item("fitted_reflectance", PyArray1::from_slice(py, &fit.fitted_reflectance))?;
+    Ok(dict)
+}
+
+/// The options of `fit_spectrum` and `fit_spectra` from their keywords (each named in its error).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn fit_options(
+    free: Option<&Bound<'_, PyAny>>,
+    fixed: Option<&Bound<'_, PyAny>>,
+    specular: Option<&Bound<'_, PyAny>>,
+    objective: &str,
+    starts: Option<&Bound<'_, PyAny>>,
+    transport: &str,
+    streams: Option<&Bound<'_, PyAny>>,
+    bandpass: Option<&Bound<'_, PyAny>>,
+    aperture: Option<&str>,
+    model: Option<Model>,
+) -> PyResult<FitOptions> {
     let mut options = FitOptions::default();
     if let Some(free) = free.filter(|f| !f.is_none()) {
         reject_string(free, "free must be a sequence of parameter names")?;
@@ -155,13 +188,5 @@ pub(super) fn fit_spectrum_py<'py>(
     if let Some(n) = streams_arg(streams)? {
         options.request.accuracy = options.request.accuracy.solved_at(n);
     }
-    let cancel = std::sync::atomic::AtomicBool::new(false);
-    let fit = detached_interruptible(py, &cancel, || {
-        crate::inverse::spectrum::fit_spectrum_cancellable(&wavelengths, &measured, &options, &cancel)
-    })?;
-    let dict = to_py(py, &fit)?.cast_into::<PyDict>()?;
-    float_dermis(&dict, &fit.model)?;
-    dict.set_item("wavelengths_nm", PyArray1::from_slice(py, &fit.wavelengths_nm))?;
-    dict.set_item("fitted_reflectance", PyArray1::from_slice(py, &fit.fitted_reflectance))?;
-    Ok(dict)
+    Ok(options)
 }

@@ -13,6 +13,7 @@ mod errors;
 mod evaluate;
 mod inverse;
 mod inverse_albedo;
+mod inverse_batch;
 mod maps;
 mod maps_result;
 mod maps_write;
@@ -32,6 +33,7 @@ use errors::{SpectralSkinError, SpectralSkinIOError, SpectralSkinWarning};
 use evaluate::{evaluate_py, layered_reflectance_py, profile_py};
 use inverse::fit_spectrum_py;
 use inverse_albedo::{fit_albedo_map_py, fit_albedo_py, AlbedoMapFitPy};
+use inverse_batch::fit_spectra_py;
 use maps::{map_kinds_py, maps_py, read_parameter_map_py};
 use maps_result::{write_maps_py, MapsPy};
 use shader_table::{shader_table_py, write_shader_table_py};
@@ -72,6 +74,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // A maps() result reads like the dict it replaced: a Mapping for isinstance (its methods are its own).
     m.py().import("collections.abc")?.getattr("Mapping")?.call_method1("register", (m.py().get_type::<MapsPy>(),))?;
     m.add_function(wrap_pyfunction!(fit_spectrum_py, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_spectra_py, m)?)?;
     m.add_function(wrap_pyfunction!(cielab_py, m)?)?;
     m.add_function(wrap_pyfunction!(delta_e00_py, m)?)?;
     m.add_function(wrap_pyfunction!(surface_brdf_py, m)?)?;

@@ -207,3 +207,30 @@ fn bandpass_quadrature_converges() {
     assert!(largest_error < 1e-4, "{largest_error}");
     assert!(largest_change > 1e-2, "the bandpass should matter in the Q bands: {largest_change}");
 }
+
+/// A batch fit (`fit_batch_cancellable`, Python's `fit_spectra`): every 400th Xiao spectrum fitted with one fitter in
+/// parallel gives, spectrum by spectrum, what that fitter's `fit` gives, and calls `done` once a spectrum; a bad row
+/// is named before any fit; a set cancel flag stops it.
+#[test]
+fn a_batch_fits_each_spectrum_as_alone() {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let (wl, spectra) = xiao_subset(400);
+    let fitter = SpectrumFitter::new(&wl, &FitOptions::default()).unwrap();
+    let count = AtomicUsize::new(0);
+    let done = || {
+        count.fetch_add(1, Ordering::Relaxed);
+    };
+    let batch = fitter.fit_batch_cancellable(&spectra, &AtomicBool::new(false), &done).unwrap();
+    assert_eq!((batch.len(), count.load(Ordering::Relaxed)), (spectra.len(), spectra.len()));
+    for (fit, spectrum) in batch.iter().zip(&spectra) {
+        assert_eq!(*fit, fitter.fit(spectrum).unwrap());
+    }
+    let mut bad = spectra.clone();
+    bad[1][3] = f64::NAN;
+    let e = fitter.fit_batch_cancellable(&bad, &AtomicBool::new(false), &|| ()).unwrap_err().to_string();
+    assert!(e.contains("reflectances[1]") && e.contains("value 3"), "{e}");
+    let e = fitter.fit_batch_cancellable(&[], &AtomicBool::new(false), &|| ()).unwrap_err().to_string();
+    assert!(e.contains("reflectances") && e.contains("1 to"), "{e}");
+    let e = fitter.fit_batch_cancellable(&spectra, &AtomicBool::new(true), &|| ()).unwrap_err().to_string();
+    assert!(e.contains("fit_spectr"), "{e}");
+}

@@ -57,6 +57,7 @@ ARGUMENTS = {
     "layers": ([1, 2], "spectral_skin.layered_reflectance(a, [1.0])"),
     "wavelengths_nm": ([1, 2], "spectral_skin.fit_spectrum(a, [0.1, 0.2, 0.3])"),
     "reflectance": ([1, 2], f"spectral_skin.fit_spectrum({WAVELENGTHS}, a)"),
+    "reflectances": ([1, 2, 3], f"spectral_skin.fit_spectra({WAVELENGTHS}, a)"),
     "rgb": ([1, 2], "spectral_skin.fit_albedo(a)"),
     "rgb_gains": ([1, 2], "spectral_skin.fit_albedo([0.3, 0.2, 0.1], rgb_gains=a)"),
     "mask": ([2, 3], f"spectral_skin.fit_albedo_map({ALBEDO}, mask=a)"),
@@ -75,6 +76,8 @@ ENDLESS = {
     "layers": "spectral_skin.layered_reflectance(itertools.repeat((float('inf'), 0.1, 1.0, 1.4)), [1.0])",
     "layers[0]": "spectral_skin.layered_reflectance([itertools.repeat(1.0)], [1.0])",
     "wavelengths_nm": "spectral_skin.fit_spectrum(itertools.count(400.0), [0.1, 0.2, 0.3])",
+    "reflectances": f"spectral_skin.fit_spectra({WAVELENGTHS}, itertools.repeat([0.1, 0.2] * 15 + [0.3]))",
+    "reflectances[0]": f"spectral_skin.fit_spectra({WAVELENGTHS}, [itertools.repeat(0.1)])",
     "rgb_gains": "spectral_skin.fit_albedo([0.3, 0.2, 0.1], rgb_gains=itertools.repeat(1.0))",
     "blender": "spectral_skin.evaluate(preset='asian', blender=itertools.repeat(5))",
     "table_resolution": "spectral_skin.maps(melanin=np.zeros((2, 2), np.float32), melanin_blend=0.5, "

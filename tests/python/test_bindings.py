@@ -273,7 +273,7 @@ def test_error_and_warning_classes_are_exported():
     assert issubclass(spectral_skin.SpectralSkinIOError, OSError)
     assert set(spectral_skin.__all__) == {
         "MODEL_VERSION", "AlbedoMapFit", "Maps", "SpectralSkinError", "SpectralSkinIOError", "SpectralSkinWarning", "__version__", "blender_targets", "cielab", "delta_e00", "evaluate",
-        "fit_albedo", "fit_albedo_map", "fit_spectrum", "layered_reflectance", "map_kinds", "maps",
+        "fit_albedo", "fit_albedo_map", "fit_spectra", "fit_spectrum", "layered_reflectance", "map_kinds", "maps",
         "parameter_ranges", "parameters", "accuracy_levels", "presets", "profile", "read_parameter_map", "shader_table",
         "surface_albedo", "surface_brdf", "surface_input_nodes", "surface_models", "transports", "write_maps",
         "write_shader_table"

@@ -21,7 +21,7 @@ NO_RAISES = {"accuracy_levels", "blender_targets", "map_kinds", "parameter_range
 
 def test_every_public_function_is_checked() -> None:
     assert FUNCTIONS == ["accuracy_levels", "blender_targets", "cielab", "delta_e00", "evaluate", "fit_albedo", "fit_albedo_map",
-                         "fit_spectrum", "layered_reflectance", "map_kinds", "maps",
+                         "fit_spectra", "fit_spectrum", "layered_reflectance", "map_kinds", "maps",
                          "parameter_ranges", "parameters", "presets", "profile", "read_parameter_map", "shader_table",
                          "surface_albedo", "surface_brdf", "surface_input_nodes", "surface_models", "transports",
                          "write_maps", "write_shader_table"]

@@ -126,6 +126,10 @@ LONG_CALLS = {
     # start's refinement): minutes; with 2000 starts it ran on for 13.8 s after SIGINT.
     "fit_spectrum": (1, "spectral_skin.fit_spectrum(np.arange(400.0, 701.0, 10.0), np.linspace(0.15, 0.45, 31), "
                         "starts=64, streams=64)"),
+    # 2000 spectra with the oxygenation and epidermal blood freed (a 32 000-spectrum table, then the batch): minutes.
+    "fit_spectra": (1, "spectral_skin.fit_spectra(np.arange(400.0, 701.0, 10.0), np.tile(np.linspace(0.15, 0.45, 31), "
+                       "(2000, 1)), free=['melanin', 'melanin_blend', 'hemoglobin', 'blood_oxygenation', "
+                       "'epidermal_hemoglobin'])"),
     # The thickness choice builds six albedo tables (about 20 s each on a small machine) before the texels' fit; the
     # table build ran on for 19 s.
     "fit_albedo_map": (64, "spectral_skin.fit_albedo_map(params[..., :3] * 0.5)"),
