@@ -640,6 +640,21 @@ pub fn fit_spectrum_cancellable(
     SpectrumFitter::new_cancellable(wavelengths_nm, options, cancel)?.fit_cancellable(reflectance, cancel)
 }
 
+/// Fit a batch of measured spectra on the same wavelengths: the inputs checked first (a bad row named before the
+/// start table is built), then one [`SpectrumFitter`] for all of them ([`SpectrumFitter::fit_batch_cancellable`],
+/// `done` called after each spectrum); stops once `cancel` is set. Python's `fit_spectra`.
+pub fn fit_spectra_cancellable(
+    wavelengths_nm: &[f64],
+    spectra: &[Vec<f64>],
+    options: &FitOptions,
+    cancel: &AtomicBool,
+    done: &(dyn Fn() + Sync),
+) -> Result<Vec<SpectrumFit>, SkinError> {
+    check_wavelengths(wavelengths_nm)?;
+    check_spectra(spectra, wavelengths_nm.len())?;
+    SpectrumFitter::new_cancellable(wavelengths_nm, options, cancel)?.fit_batch_cancellable(spectra, cancel, done)
+}
+
 /// The closest two measured wavelengths may be: spectrophotometers report every 1-10 nm; closer points carry no
 /// independent skin information (skin's chromophores vary over tens of nm) and only multiply the work.
 pub const MIN_WAVELENGTH_SPACING_NM: f64 = 0.5;
@@ -699,9 +714,8 @@ fn check_wavelengths(w: &[f64]) -> Result<(), SkinError> {
 
 /// The measurement must have one finite value in [0, 1] per wavelength.
 /// A batch of spectra as [`SpectrumFitter::fit_batch_cancellable`] takes them: 1 to [`MAX_SPECTRA`], each one value
-/// in [0, 1] per wavelength and not flat; a bad one is an error naming it, `reflectances[i]`. Cheap: a front checks
-/// the batch with it before it builds the fitter.
-pub fn check_spectra(spectra: &[Vec<f64>], wavelengths: usize) -> Result<(), SkinError> {
+/// in [0, 1] per wavelength and not flat; a bad one is an error naming it, `reflectances[i]`.
+fn check_spectra(spectra: &[Vec<f64>], wavelengths: usize) -> Result<(), SkinError> {
     if spectra.is_empty() || spectra.len() > MAX_SPECTRA {
         let reason = format!("must hold 1 to {MAX_SPECTRA} spectra; got {}", spectra.len());
         return Err(SkinError::invalid("reflectances", reason));

@@ -301,6 +301,29 @@ pub(super) fn nested_rows<'py>(py: Python<'py>, rows: &[Vec<f64>]) -> PyResult<B
     array2(py, rows.len(), cols, rows.iter().flatten().copied().collect())
 }
 
+/// The rules of a numpy array of numbers, read from its header before any copy: at most `most` elements
+/// ([`check_array_size`]), a dtype of ints or floats (else a TypeError: a bool, str or object array), `ndim`
+/// dimensions; each error names `name` and says `expected`.
+pub(super) fn check_numeric_array(
+    name: &str,
+    array: &Bound<'_, PyUntypedArray>,
+    expected: &str,
+    most: usize,
+    ndim: usize,
+) -> PyResult<()> {
+    check_array_size(name, array.as_any(), expected, most)?;
+    if !matches!(array.dtype().kind(), b'f' | b'i' | b'u') {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must be {expected}; got an array of dtype {}",
+            array.dtype()
+        )));
+    }
+    if array.ndim() != ndim {
+        return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(array.shape()))));
+    }
+    Ok(())
+}
+
 /// A 1-D numpy array of ints or floats (any strides, read-only too) or a sequence of numbers under the rule of
 /// [`Real`], of at most `most` values (checked from the shape before any copy, [`check_array_size`]). A bool, str or
 /// other dtype is a TypeError, another number of dimensions or too many values a SpectralSkinError; both name `name`.
@@ -308,17 +331,7 @@ pub(super) fn real_vector(name: &str, obj: &Bound<'_, PyAny>, expected: &str, mo
     let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
         return real_sequence(name, obj, expected, most);
     };
-    check_array_size(name, obj, expected, most)?;
-    let kind = untyped.dtype().kind();
-    if !matches!(kind, b'f' | b'i' | b'u') {
-        return Err(PyTypeError::new_err(format!(
-            "{name} must be {expected}; got an array of dtype {}",
-            untyped.dtype()
-        )));
-    }
-    if untyped.ndim() != 1 {
-        return Err(invalid(name, format!("must be {expected}; got shape {}", shape_text(untyped.shape()))));
-    }
+    check_numeric_array(name, untyped, expected, most, 1)?;
     let values = obj
         .extract::<PyArrayLike1<'_, f64, AllowTypeChange>>()
         .map_err(|e| PyTypeError::new_err(format!("{name} must be {expected}: {e}")))?;

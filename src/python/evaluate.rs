@@ -142,8 +142,9 @@ pub(super) fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<
 ///         the measured surface") or "paper" (DJ2006's oil layer, one lobe scaled by the oiliness, no reflection on
 ///         dry skin); None: the core's default, "measured" (``surface_models()``).
 ///     model: the model's options beyond the parameters, a dict by name (docs/model.md, each option's section), e.g.
-///         ``{"epidermal_hemoglobin": fit["epidermal_hemoglobin"]}`` to render what :func:`fit_spectrum` fitted;
-///         options left out keep DJ2006's model, and a result's "model" reads back as it is. None: DJ2006's model.
+///         ``{"epidermal_hemoglobin": 0.01}``; options left out keep DJ2006's model, and a result's "model" reads back
+///         as it is (a :func:`fit_spectrum` result's too: ``evaluate(**fit["params"], model=fit["model"])`` renders
+///         the fit). None: DJ2006's model.
 ///
 /// Returns:
 ///     The CLI's JSON as a dict. Always: "params", "color_space", "accuracy" (with "streams"), "model"

@@ -3,15 +3,15 @@
 
 use std::sync::atomic::AtomicBool;
 
-use numpy::{AllowTypeChange, PyArrayDescrMethods, PyArrayLike2, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{AllowTypeChange, PyArrayLike2, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 
-use crate::inverse::spectrum::{check_spectra, SpectrumFitter, MAX_SPECTRA, MAX_SPECTRUM_WAVELENGTHS};
+use crate::inverse::spectrum::{fit_spectra_cancellable, MAX_SPECTRA, MAX_SPECTRUM_WAVELENGTHS};
 
 use super::args::Model;
-use super::convert::{check_array_size, real_vector, reject_string, shape_text};
+use super::convert::{check_numeric_array, real_vector, reject_string, shape_text};
 use super::detach::detached_interruptible;
 use super::errors::{internal, invalid};
 use super::inverse::{fit_dict, fit_options};
@@ -75,8 +75,6 @@ pub(super) fn fit_spectra_py<'py>(
     let spectra = spectra_rows(reflectances)?;
     let options = fit_options(free, fixed, specular, objective, starts, transport, streams, bandpass, aperture, model)?;
     let progress = Progress::from_arg("fit_spectra", progress)?;
-    // Every row checked before the fitter's table is built.
-    check_spectra(&spectra, wavelengths.len())?;
     let hook = progress.as_ref();
     let own_flag = AtomicBool::new(false);
     let cancel = hook.map_or(&own_flag, |h| &h.stopped);
@@ -88,8 +86,7 @@ pub(super) fn fit_spectra_py<'py>(
             }
         };
         report(0);
-        Ok(SpectrumFitter::new_cancellable(&wavelengths, &options, cancel)
-            .and_then(|fitter| fitter.fit_batch_cancellable(&spectra, cancel, &|| report(1))))
+        Ok(fit_spectra_cancellable(&wavelengths, &spectra, &options, cancel, &|| report(1)))
     })?;
     if hook.is_some_and(Progress::stopped) {
         return Err(progress.map(Progress::into_error).unwrap_or_else(|| internal("stopped without a progress hook")));
@@ -117,14 +114,8 @@ fn spectra_rows(obj: &Bound<'_, PyAny>) -> PyResult<Vec<Vec<f64>>> {
         }
         return Ok(rows);
     };
-    check_array_size(NAME, obj, ROWS, MAX_SPECTRA * MAX_SPECTRUM_WAVELENGTHS)?;
-    if !matches!(untyped.dtype().kind(), b'f' | b'i' | b'u') {
-        return Err(PyTypeError::new_err(format!("{NAME} must be {ROWS}; got an array of dtype {}", untyped.dtype())));
-    }
+    check_numeric_array(NAME, untyped, ROWS, MAX_SPECTRA * MAX_SPECTRUM_WAVELENGTHS, 2)?;
     let shape = untyped.shape();
-    if shape.len() != 2 {
-        return Err(invalid(NAME, format!("must be {ROWS}; got shape {}", shape_text(shape))));
-    }
     if shape[0] > MAX_SPECTRA || shape[1] > MAX_SPECTRUM_WAVELENGTHS {
         let reason = format!(
             "must hold 1 to {MAX_SPECTRA} spectra of at most {MAX_SPECTRUM_WAVELENGTHS} values; got shape {}",
