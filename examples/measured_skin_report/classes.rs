@@ -11,6 +11,12 @@ use super::data::{quantile, MIN_CLASS_SPECTRA};
 /// Prahl's table) and the trough between them (560 nm), as the 10 nm data sample them.
 pub const Q_BAND_NM: [f64; 3] = [540.0, 560.0, 580.0];
 
+/// Whether `nm` lies in the Q bands as the report reads them (the "Q-band rms"): 530-590 nm, the two bands and the
+/// trough with a sample either side.
+pub fn in_q_bands(nm: f64) -> bool {
+    (530.0..=590.0).contains(&nm)
+}
+
 /// The indices of the fits whose measured colour is of `class`.
 pub fn members(fits: &[SpectrumFit], class: &ItaClass) -> Vec<usize> {
     (0..fits.len()).filter(|&i| ita_class(ita_degrees(fits[i].lab_measured)) == Some(class)).collect()
@@ -42,7 +48,7 @@ pub struct ClassRow {
 pub fn class_rows(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) -> Vec<ClassRow> {
     let at = |nm: f64| wl.iter().position(|&w| (w - nm).abs() < 1e-9).expect("Q-band wavelength in the data");
     let q_index = Q_BAND_NM.map(at);
-    let (band, outside): (Vec<usize>, Vec<usize>) = (0..wl.len()).partition(|&k| (530.0..=590.0).contains(&wl[k]));
+    let (band, outside): (Vec<usize>, Vec<usize>) = (0..wl.len()).partition(|&k| in_q_bands(wl[k]));
     let mut rows = Vec::new();
     for class in &ITA_CLASSES {
         let members = members(fits, class);

@@ -6,15 +6,10 @@
 use spectral_skin::color::ita::ITA_CLASSES;
 use spectral_skin::inverse::SpectrumFit;
 
-use super::classes::members;
+use super::classes::{in_q_bands, members};
 
 /// The class every other class's relative residual is compared with (its `ItaClass::name`): the one issue 39 names.
 const REFERENCE_CLASS: &str = "light";
-
-/// The Q bands, as [`super::classes::ClassRow::q_rms`] reads them.
-fn in_q_bands(nm: f64) -> bool {
-    (530.0..=590.0).contains(&nm)
-}
 
 /// The mean residual (measured − fitted) over `members` at each wavelength, relative to their mean measured
 /// reflectance there (a ratio of means: a few dark spectra's small reflectances do not dominate it).
@@ -50,8 +45,7 @@ fn q_rms(members: &[usize], fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f
 /// residual at every wavelength with the light class's, and the Q-band rms of its odd-numbered spectra before and
 /// after one correction for every class (the mean of measured / fitted over the even-numbered spectra of all classes).
 pub fn print_common_residual(fits: &[SpectrumFit], measured: &[Vec<f64>], wl: &[f64]) {
-    let all: Vec<usize> = (0..fits.len()).collect();
-    let even: Vec<usize> = all.iter().copied().filter(|i| i % 2 == 0).collect();
+    let even: Vec<usize> = (0..fits.len()).step_by(2).collect();
     let correction: Vec<f64> = (0..wl.len())
         .map(|k| even.iter().map(|&i| measured[i][k] / fits[i].fitted_reflectance[k]).sum::<f64>() / even.len() as f64)
         .collect();
